@@ -1,0 +1,196 @@
+#pragma once
+/// The ONE generic pair loop, instantiated per law (ContactModelT<Law>), and its type-erased
+/// handle. One virtual call per pass; no per-contact branching on the law.
+///
+/// A Law provides:
+///   struct Params; static ParamSpec<Params> spec();
+///   static std::vector<std::string> state_columns();   // per-contact state (history)
+///   explicit Law(const Params&);
+///   ContactForces operator()(const ContactGeometry&, const RelativeMotion&, double dt, double* state) const;
+///   double normal_stiffness(const ContactGeometry&) const;   // tangent dF/d(delta) [N/m]
+///   double tangential_stiffness(const ContactGeometry&) const; // [N/m]
+///   double rayleigh_dt(double radius, double density) const; // +inf if not applicable [s]
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/contact/geometry.hpp"
+#include "engine/state/contact_table.hpp"
+#include "engine/state/particle_store.hpp"
+#include "engine/walls/wall.hpp"
+
+namespace sparkdem {
+
+/// Per-wall totals of one wall pass.
+struct WallLoads {
+  std::vector<Vec3> force;     ///< force of the particles on each wall [N]
+  std::vector<double> normal;  ///< sum over contacts of the push against the inward normal [N]
+};
+
+class ContactModel {
+ public:
+  virtual ~ContactModel() = default;
+  virtual std::string name() const = 0;
+  virtual std::vector<std::string> state_columns() const = 0;
+  /// Particle-particle pass: fills table.force/torque/overlap rows (does not gather).
+  virtual void pair_pass(const ParticleStore& p, ContactTable& table, double dt) const = 0;
+  /// Particle-wall pass: adds forces and torques to the particles; returns wall loads.
+  /// Wall history lives in the per-particle field "wall_state/<wall name>".
+  virtual WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, double dt) const = 0;
+  /// Stable step estimate from the current state [s]: min of the law's a-priori step (Rayleigh
+  /// for Hertz laws) and 2/omega_max, with omega_max^2 bounded by Gershgorin on the mass-weighted
+  /// stiffness matrix of the current contacts:
+  ///   omega^2 <= max_i sum_j [ k_n (1/m_i + 1/sqrt(m_i m_j))
+  ///                          + k_t (1/m_i + r_i^2/I_i + 1/sqrt(m_i m_j) + r_i r_j/sqrt(I_i I_j)) ]
+  /// (normal springs couple translations; tangential springs couple translations and rotations).
+  virtual double stable_dt(const ParticleStore& p, const ContactTable& table, const std::vector<Wall>& walls) const = 0;
+};
+
+namespace detail {
+inline constexpr double kPi = 3.14159265358979323846;
+constexpr std::size_t kBlock = 1024;  // fixed reduction blocks: results independent of thread count
+}
+
+template <class Law>
+class ContactModelT final : public ContactModel {
+ public:
+  explicit ContactModelT(const typename Law::Params& params) : law_(params) {}
+  const Law& law() const { return law_; }
+  std::string name() const override { return std::string(Law::kName); }
+  std::vector<std::string> state_columns() const override { return Law::state_columns(); }
+
+  void pair_pass(const ParticleStore& p, ContactTable& t, double dt) const override {
+    const std::int64_t rows = static_cast<std::int64_t>(t.size());
+    const int w = t.state_width();
+    auto& F = t.force();
+    auto& Ti = t.torque_i();
+    auto& Tj = t.torque_j();
+    auto& ov = t.overlap();
+#pragma omp parallel for schedule(static)
+    for (std::int64_t r = 0; r < rows; ++r) {
+      const Index i = t.i(r), j = t.j(r);
+      const Vec3 d = p.position[i] - p.position[j];
+      const double dist = d.norm();
+      const double delta = p.radius[i] + p.radius[j] - dist;
+      ov[r] = delta;
+      double* state = w > 0 ? t.state(r) : nullptr;
+      if (delta <= 0.0 || dist <= 0.0) {
+        F[r].setZero(); Ti[r].setZero(); Tj[r].setZero();
+        for (int k = 0; k < w; ++k) state[k] = 0.0;
+        continue;
+      }
+      ContactGeometry g;
+      g.n = d / dist;
+      g.overlap = delta;
+      g.r_eff = p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]);
+      g.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
+      g.arm_i = p.radius[i] - 0.5 * delta;
+      g.arm_j = p.radius[j] - 0.5 * delta;
+      const RelativeMotion m = relative_motion(g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
+      const ContactForces f = law_(g, m, dt, state);
+      F[r] = f.force;
+      const Vec3 nxt = g.n.cross(f.tangential);
+      Ti[r] = -g.arm_i * nxt;
+      Tj[r] = -g.arm_j * nxt;
+    }
+  }
+
+  WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, double dt) const override {
+    WallLoads loads;
+    loads.force.assign(walls.size(), Vec3::Zero());
+    loads.normal.assign(walls.size(), 0.0);
+    if (walls.empty()) return loads;
+    const int w = static_cast<int>(Law::state_columns().size());
+    std::vector<double*> hist(walls.size(), nullptr);
+    if (w > 0)
+      for (std::size_t k = 0; k < walls.size(); ++k) hist[k] = p.fields.data("wall_state/" + walls[k].name).data();
+    const std::size_t n = p.size();
+    const std::size_t nblocks = (n + detail::kBlock - 1) / detail::kBlock;
+    std::vector<Vec3> partial(nblocks * walls.size(), Vec3::Zero());
+    std::vector<double> partial_n(nblocks * walls.size(), 0.0);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t b = 0; b < static_cast<std::int64_t>(nblocks); ++b) {
+      const std::size_t lo = b * detail::kBlock, hi = std::min(n, lo + detail::kBlock);
+      for (std::size_t i = lo; i < hi; ++i) {
+        for (std::size_t k = 0; k < walls.size(); ++k) {
+          Vec3 nrm;
+          double dist;
+          walls[k].distance(p.position[i], nrm, dist);
+          const double delta = p.radius[i] - dist;
+          double* state = w > 0 ? hist[k] + i * w : nullptr;
+          if (delta <= 0.0) {
+            for (int q = 0; q < w; ++q) state[q] = 0.0;
+            continue;
+          }
+          ContactGeometry g;
+          g.n = nrm;
+          g.overlap = delta;
+          g.r_eff = p.radius[i];
+          g.m_eff = p.mass[i];
+          g.arm_i = dist;
+          g.arm_j = 0.0;
+          const Vec3 vw = walls[k].u_dot * nrm;
+          const RelativeMotion m = relative_motion(g, p.velocity[i], vw, p.omega[i], Vec3::Zero());
+          const ContactForces f = law_(g, m, dt, state);
+          p.force[i] += f.force;
+          p.torque[i] += -g.arm_i * g.n.cross(f.tangential);
+          partial[b * walls.size() + k] -= f.force;
+          partial_n[b * walls.size() + k] += f.force.dot(g.n);
+        }
+      }
+    }
+    for (std::size_t b = 0; b < nblocks; ++b)
+      for (std::size_t k = 0; k < walls.size(); ++k) {
+        loads.force[k] += partial[b * walls.size() + k];
+        loads.normal[k] += partial_n[b * walls.size() + k];
+      }
+    return loads;
+  }
+
+  double stable_dt(const ParticleStore& p, const ContactTable& t, const std::vector<Wall>& walls) const override {
+    double dt = std::numeric_limits<double>::infinity();
+    const std::size_t n = p.size();
+    std::vector<double> row(n, 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double vol = 4.0 / 3.0 * detail::kPi * p.radius[i] * p.radius[i] * p.radius[i];
+      dt = std::min(dt, law_.rayleigh_dt(p.radius[i], p.mass[i] / vol));
+    }
+    for (std::size_t r = 0; r < t.size(); ++r) {
+      const Index i = t.i(r), j = t.j(r);
+      const double delta = p.radius[i] + p.radius[j] - (p.position[i] - p.position[j]).norm();
+      if (delta <= 0.0) continue;
+      ContactGeometry g;
+      g.overlap = delta;
+      g.r_eff = p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]);
+      g.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
+      const double kn = law_.normal_stiffness(g), kt = law_.tangential_stiffness(g);
+      const double mij = 1.0 / std::sqrt(p.mass[i] * p.mass[j]);
+      const double iij = p.radius[i] * p.radius[j] / std::sqrt(p.inertia[i] * p.inertia[j]);
+      row[i] += kn * (1.0 / p.mass[i] + mij) + kt * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i] + mij + iij);
+      row[j] += kn * (1.0 / p.mass[j] + mij) + kt * (1.0 / p.mass[j] + p.radius[j] * p.radius[j] / p.inertia[j] + mij + iij);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      for (const Wall& w : walls) {
+        Vec3 nrm;
+        double dist;
+        w.distance(p.position[i], nrm, dist);
+        if (p.radius[i] - dist <= 0.0) continue;
+        ContactGeometry g;
+        g.overlap = p.radius[i] - dist;
+        g.r_eff = p.radius[i];
+        g.m_eff = p.mass[i];
+        row[i] += law_.normal_stiffness(g) / p.mass[i] +
+                  law_.tangential_stiffness(g) * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i]);
+      }
+      if (row[i] > 0.0) dt = std::min(dt, 2.0 / std::sqrt(row[i]));
+    }
+    return dt;
+  }
+
+ private:
+  Law law_;
+};
+
+}  // namespace sparkdem

@@ -1,0 +1,38 @@
+#pragma once
+/// Geometry and relative motion of one contact, as seen by a contact law.
+/// Convention: n is the unit normal pointing from partner j (or the wall) towards particle i;
+/// the law returns the force on i (j receives the opposite).
+#include "engine/core/types.hpp"
+
+namespace sparkdem {
+
+struct ContactGeometry {
+  Vec3 n;                 ///< unit normal, j -> i
+  double overlap = 0.0;   ///< delta = r_i + r_j - d > 0 in contact [m]
+  double r_eff = 0.0;     ///< R* = r_i r_j / (r_i + r_j); r_i for a wall [m]
+  double m_eff = 0.0;     ///< m* = m_i m_j / (m_i + m_j); m_i for a wall [kg]
+  double arm_i = 0.0;     ///< centre of i to contact point [m]
+  double arm_j = 0.0;     ///< centre of j to contact point (0 for a wall) [m]
+};
+
+struct RelativeMotion {
+  Vec3 v;                 ///< velocity of i's contact point relative to j's [m/s]
+  double vn = 0.0;        ///< v . n (< 0 when approaching) [m/s]
+  Vec3 vt;                ///< tangential part v - vn n [m/s]
+};
+
+struct ContactForces {
+  Vec3 force = Vec3::Zero();       ///< total force on i [N]
+  Vec3 tangential = Vec3::Zero();  ///< tangential part (for torques) [N]
+};
+
+inline RelativeMotion relative_motion(const ContactGeometry& g, const Vec3& vi, const Vec3& vj, const Vec3& wi,
+                                      const Vec3& wj) {
+  RelativeMotion m;
+  m.v = vi - vj - (g.arm_i * wi + g.arm_j * wj).cross(g.n);
+  m.vn = m.v.dot(g.n);
+  m.vt = m.v - m.vn * g.n;
+  return m;
+}
+
+}  // namespace sparkdem

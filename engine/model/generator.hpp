@@ -1,0 +1,37 @@
+#pragma once
+/// A packing generator: a stage type that creates particles (and its container walls), then
+/// optionally lets the ordinary stage loop settle them with its own modules, wall motions and
+/// stop conditions. Generators never step the mechanics themselves, except `relax`, which is an
+/// energy minimisation (FIRE), not a dynamics.
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/model/module.hpp"
+#include "engine/simulation.hpp"
+#include "engine/state/state.hpp"
+
+namespace sparkdem {
+
+class Generator {
+ public:
+  virtual ~Generator() = default;
+  virtual std::string name() const = 0;
+  /// Insert particles and container walls into the state (deterministic from state.rng).
+  virtual void generate(State& s) = 0;
+  /// Adjust the stage that settles the packing (motions, stop conditions); default: none.
+  virtual void configure_stage(StageConfig& cfg) const { (void)cfg; }
+  /// Modules the settling stage needs (e.g. gravity); owned by the caller.
+  virtual std::vector<std::unique_ptr<Module>> modules() const { return {}; }
+  /// Monitors of the packing (density, coordination, ...).
+  virtual std::vector<std::unique_ptr<Monitor>> monitors() const { return {}; }
+  /// Particle count estimate before generation (for `sparkdem check`).
+  virtual double estimated_particles() const = 0;
+  /// Key figures of the generated packing (N, densities, coordination, overlaps, sampled sizes).
+  virtual std::map<std::string, double> report(const State& s) const = 0;
+  /// Coordination histogram (index = contacts) of the packing.
+  virtual std::vector<int> coordination_histogram(const State& s) const { (void)s; return {}; }
+};
+
+}  // namespace sparkdem

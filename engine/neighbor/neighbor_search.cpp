@@ -1,0 +1,145 @@
+#include "engine/neighbor/neighbor_search.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace sparkdem {
+
+namespace {
+
+struct Grid {
+  Vec3 lo;
+  double h = 1.0;
+  std::array<std::int64_t, 3> n{1, 1, 1};
+  double rmax = 0.0;
+  std::vector<std::int64_t> start;  // CSR over cells
+  std::vector<Index> members;
+
+  std::int64_t coord(double v, int d) const {
+    const auto c = static_cast<std::int64_t>(std::floor((v - lo[d]) / h));
+    return std::clamp<std::int64_t>(c, 0, n[d] - 1);
+  }
+  std::int64_t cell(std::int64_t a, std::int64_t b, std::int64_t c) const { return (c * n[1] + b) * n[0] + a; }
+};
+
+}  // namespace
+
+std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const std::vector<double>& r, double skin,
+                                             NeighborStats* stats) {
+  const std::size_t n = x.size();
+  std::vector<std::array<Index, 2>> out;
+  if (n < 2) return out;
+  double rmin = r[0], rmax = r[0];
+  Vec3 lo = x[0], hi = x[0];
+  for (std::size_t i = 0; i < n; ++i) {
+    rmin = std::min(rmin, r[i]);
+    rmax = std::max(rmax, r[i]);
+    lo = lo.cwiseMin(x[i]);
+    hi = hi.cwiseMax(x[i]);
+  }
+  // Size levels: level L holds radii in [rmin 2^L, rmin 2^(L+1)).
+  const int nlev = std::max(1, static_cast<int>(std::floor(std::log2(rmax / rmin))) + 1);
+  std::vector<int> level(n);
+  std::vector<std::size_t> count(nlev, 0);
+  std::vector<Grid> grids(nlev);
+  for (std::size_t i = 0; i < n; ++i) {
+    level[i] = std::min(nlev - 1, static_cast<int>(std::floor(std::log2(r[i] / rmin))));
+    ++count[level[i]];
+    grids[level[i]].rmax = std::max(grids[level[i]].rmax, r[i]);
+  }
+  std::size_t total_cells = 0;
+  for (int L = 0; L < nlev; ++L) {
+    Grid& g = grids[L];
+    if (count[L] == 0) continue;
+    g.h = 2.0 * g.rmax + skin;
+    g.lo = lo;
+    const Vec3 ext = hi - lo;
+    // Cap the number of cells at ~8 per particle of the level plus a floor, enlarging h if needed.
+    const double cap = 8.0 * static_cast<double>(count[L]) + 64.0;
+    for (;;) {
+      for (int d = 0; d < 3; ++d) g.n[d] = std::max<std::int64_t>(1, static_cast<std::int64_t>(std::floor(ext[d] / g.h)) + 1);
+      if (static_cast<double>(g.n[0]) * g.n[1] * g.n[2] <= cap) break;
+      g.h *= 1.26;
+    }
+    const std::int64_t nc = g.n[0] * g.n[1] * g.n[2];
+    total_cells += nc;
+    g.start.assign(nc + 1, 0);
+    std::vector<std::int64_t> cid;
+    std::vector<Index> who;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (level[i] != L) continue;
+      const std::int64_t c = g.cell(g.coord(x[i][0], 0), g.coord(x[i][1], 1), g.coord(x[i][2], 2));
+      cid.push_back(c);
+      who.push_back(static_cast<Index>(i));
+      ++g.start[c + 1];
+    }
+    for (std::int64_t c = 0; c < nc; ++c) g.start[c + 1] += g.start[c];
+    g.members.assign(who.size(), 0);
+    std::vector<std::int64_t> fill(g.start.begin(), g.start.end() - 1);
+    for (std::size_t k = 0; k < who.size(); ++k) g.members[fill[cid[k]]++] = who[k];  // ascending index per cell
+  }
+
+  const int nthreads = omp_get_max_threads();
+  std::vector<std::vector<std::array<Index, 2>>> local(nthreads);
+#pragma omp parallel
+  {
+    auto& buf = local[omp_get_thread_num()];
+    std::vector<Index> found;
+#pragma omp for schedule(static)
+    for (std::int64_t ii = 0; ii < static_cast<std::int64_t>(n); ++ii) {
+      const Index i = static_cast<Index>(ii);
+      found.clear();
+      for (int L = level[i]; L < nlev; ++L) {
+        const Grid& g = grids[L];
+        if (g.start.empty()) continue;
+        const double range = r[i] + g.rmax + skin;
+        std::array<std::int64_t, 3> a{}, b{};
+        for (int d = 0; d < 3; ++d) { a[d] = g.coord(x[i][d] - range, d); b[d] = g.coord(x[i][d] + range, d); }
+        for (std::int64_t cz = a[2]; cz <= b[2]; ++cz)
+          for (std::int64_t cy = a[1]; cy <= b[1]; ++cy)
+            for (std::int64_t cx = a[0]; cx <= b[0]; ++cx) {
+              const std::int64_t c = g.cell(cx, cy, cz);
+              for (std::int64_t k = g.start[c]; k < g.start[c + 1]; ++k) {
+                const Index j = g.members[k];
+                if (L == level[i] && j <= i) continue;
+                const double cut = r[i] + r[j] + skin;
+                if ((x[i] - x[j]).squaredNorm() < cut * cut) found.push_back(j);
+              }
+            }
+      }
+      std::sort(found.begin(), found.end());
+      for (Index j : found) buf.push_back({i, j});
+    }
+  }
+  std::size_t total = 0;
+  for (auto& b : local) total += b.size();
+  out.reserve(total);
+  for (auto& b : local) out.insert(out.end(), b.begin(), b.end());
+  if (stats) { stats->levels = nlev; stats->cells = total_cells; stats->pairs = out.size(); }
+  return out;
+}
+
+std::vector<std::array<Index, 2>> find_pairs_brute_force(const std::vector<Vec3>& x, const std::vector<double>& r,
+                                                         double skin) {
+  std::vector<std::array<Index, 2>> out;
+  for (std::size_t i = 0; i < x.size(); ++i)
+    for (std::size_t j = i + 1; j < x.size(); ++j) {
+      const double cut = r[i] + r[j] + skin;
+      if ((x[i] - x[j]).squaredNorm() < cut * cut) out.push_back({static_cast<Index>(i), static_cast<Index>(j)});
+    }
+  return out;
+}
+
+bool VerletTracker::needs_rebuild(const std::vector<Vec3>& x, const std::vector<double>& r, double skin) const {
+  if (x.size() != x0_.size()) return true;
+  double dmax2 = 0.0, drmax = 0.0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    dmax2 = std::max(dmax2, (x[i] - x0_[i]).squaredNorm());
+    drmax = std::max(drmax, r[i] - r0_[i]);
+  }
+  return 2.0 * (std::sqrt(dmax2) + drmax) > skin;
+}
+
+}  // namespace sparkdem

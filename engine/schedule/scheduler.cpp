@@ -1,0 +1,66 @@
+#include "engine/schedule/scheduler.hpp"
+
+#include <algorithm>
+#include <set>
+
+#include "engine/core/error.hpp"
+
+namespace sparkdem {
+
+StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields) {
+  using K = PlanItem::Kind;
+  StepPlan plan;
+  plan.items.push_back({K::IntegrateFirstHalf, "integrate_first_half", nullptr, {}});
+  plan.items.push_back({K::Walls, "walls", nullptr, {}});
+  plan.items.push_back({K::Neighbors, "neighbors", nullptr, {}});
+  plan.items.push_back({K::ZeroForces, "zero_forces", nullptr, {}});
+  plan.items.push_back({K::ContactPairs, "contact_pairs", nullptr, {}});
+  plan.items.push_back({K::ContactWalls, "contact_walls", nullptr, {}});
+
+  std::set<std::string> available(core_fields.begin(), core_fields.end());
+  std::vector<Module*> coupling;
+  for (Module* m : modules) {
+    const Clock c = m->clock();
+    if (c.n < 1) throw SetupError("module '" + m->name() + "': clock ratio must be a positive integer, found " + std::to_string(c.n));
+    Declarations d;
+    m->declare(d);
+    for (const auto& f : d.particle_fields) available.insert(f.name);
+    for (const auto& w : d.writes) available.insert(w);
+    if (m->phase() == Phase::Force) plan.items.push_back({K::Module, m->name(), m, c});
+    else coupling.push_back(m);
+  }
+  // Dangling reads.
+  for (Module* m : modules) {
+    Declarations d;
+    m->declare(d);
+    for (const auto& r : d.reads)
+      if (!available.count(r))
+        throw SetupError("module '" + m->name() + "' reads '" + r + "', which no active module or the core provides");
+  }
+  plan.items.push_back({K::IntegrateSecondHalf, "integrate_second_half", nullptr, {}});
+  // Coupling modules: topological order, writers before readers; ties keep declaration order.
+  std::vector<Module*> ordered;
+  std::vector<bool> placed(coupling.size(), false);
+  for (std::size_t round = 0; round < coupling.size(); ++round) {
+    bool progress = false;
+    for (std::size_t a = 0; a < coupling.size(); ++a) {
+      if (placed[a]) continue;
+      Declarations da;
+      coupling[a]->declare(da);
+      bool blocked = false;
+      for (std::size_t b = 0; b < coupling.size() && !blocked; ++b) {
+        if (b == a || placed[b]) continue;
+        Declarations db;
+        coupling[b]->declare(db);
+        for (const auto& r : da.reads)
+          if (std::find(db.writes.begin(), db.writes.end(), r) != db.writes.end()) blocked = true;
+      }
+      if (!blocked) { ordered.push_back(coupling[a]); placed[a] = true; progress = true; break; }
+    }
+    if (!progress) throw SetupError("coupling modules form a read/write cycle");
+  }
+  for (Module* m : ordered) plan.items.push_back({K::Module, m->name(), m, m->clock()});
+  return plan;
+}
+
+}  // namespace sparkdem

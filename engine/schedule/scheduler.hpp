@@ -1,0 +1,44 @@
+#pragma once
+/// The step plan: the ONE place that lists the sequence of a step. Built once per stage from
+/// the active modules' declarations; the simulation executes it item by item.
+///
+///   1 integrate_first_half   half kick + drift (translation and rotation)
+///   2 walls                  prescribed wall offsets at the new time; servo walls integrate
+///   3 neighbors              Verlet check; rebuild + history transfer when due
+///   4 zero_forces
+///   5 contact_pairs          the law's pair pass + per-particle gather
+///   6 contact_walls          the law's wall pass
+///   7 <force modules>        e.g. gravity, background damping (declaration order)
+///   8 integrate_second_half  half kick
+///   9 <coupling modules>     after the mechanics, ordered by reads/writes (writer before reader),
+///                            each on its own clock (every N steps or k substeps per step)
+#include <string>
+#include <vector>
+
+#include "engine/model/module.hpp"
+
+namespace sparkdem {
+
+struct PlanItem {
+  enum class Kind { IntegrateFirstHalf, Walls, Neighbors, ZeroForces, ContactPairs, ContactWalls, Module, IntegrateSecondHalf };
+  Kind kind;
+  std::string name;
+  Module* module = nullptr;  ///< for Kind::Module
+  Clock clock;
+};
+
+struct StepPlan {
+  std::vector<PlanItem> items;
+  std::vector<std::string> names() const {
+    std::vector<std::string> n;
+    for (const auto& i : items) n.push_back(i.name);
+    return n;
+  }
+};
+
+/// Build the plan; throws SetupError on a dependency cycle, a dangling read or a clock that is
+/// not a positive integer.
+/// `core_fields` are fields always present (position, velocity, ...).
+StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields);
+
+}  // namespace sparkdem

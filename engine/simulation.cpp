@@ -1,0 +1,352 @@
+#include "engine/simulation.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+
+#include "engine/core/error.hpp"
+#include "engine/core/interrupt.hpp"
+#include "engine/integrate/velocity_verlet.hpp"
+
+namespace sparkdem {
+
+namespace {
+
+const std::vector<std::string> kCoreFields = {"position", "velocity", "orientation", "omega", "force",
+                                              "torque",   "radius",   "mass",        "inertia"};
+
+/// Area a pressure-controlled plane acts on when none is given: the cross-section of the first
+/// cylinder wall (the die), or 0.
+double die_area(const std::vector<Wall>& walls) {
+  for (const auto& w : walls)
+    if (!w.is_plane()) return detail::kPi * w.cylinder_radius() * w.cylinder_radius();
+  return 0.0;
+}
+
+}  // namespace
+
+std::vector<std::string> builtin_columns(const State& s) {
+  std::vector<std::string> c = {"step", "time", "stage", "particles", "kinetic_energy", "kinetic_energy_per_mass",
+                                "max_speed", "contacts", "coordination", "max_overlap_ratio"};
+  for (const auto& w : s.walls) {
+    c.push_back("wall_" + w.name + "_offset");
+    c.push_back("wall_" + w.name + "_normal_force");
+    c.push_back("wall_" + w.name + "_fx");
+    c.push_back("wall_" + w.name + "_fy");
+    c.push_back("wall_" + w.name + "_fz");
+  }
+  return c;
+}
+
+std::vector<double> builtin_values(const State& s) {
+  const auto& p = s.particles;
+  double ke = 0.0, m = 0.0, vmax2 = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    ke += 0.5 * p.mass[i] * p.velocity[i].squaredNorm() + 0.5 * p.inertia[i] * p.omega[i].squaredNorm();
+    m += p.mass[i];
+    vmax2 = std::max(vmax2, p.velocity[i].squaredNorm());
+  }
+  std::size_t touching = 0;
+  double ovr = 0.0;
+  const auto& ov = s.contacts.overlap();
+  for (std::size_t r = 0; r < s.contacts.size(); ++r) {
+    if (ov[r] <= 0.0) continue;
+    ++touching;
+    ovr = std::max(ovr, ov[r] / std::min(p.radius[s.contacts.i(r)], p.radius[s.contacts.j(r)]));
+  }
+  for (const auto& w : s.walls)
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      Vec3 n;
+      double d;
+      w.distance(p.position[i], n, d);
+      if (d < p.radius[i]) ovr = std::max(ovr, (p.radius[i] - d) / p.radius[i]);
+    }
+  std::vector<double> v = {static_cast<double>(s.step), s.time, static_cast<double>(s.stage_index),
+                           static_cast<double>(p.size()), ke, m > 0.0 ? ke / m : 0.0, std::sqrt(vmax2),
+                           static_cast<double>(touching),
+                           p.size() ? 2.0 * static_cast<double>(touching) / static_cast<double>(p.size()) : 0.0, ovr};
+  for (const auto& w : s.walls) {
+    v.push_back(w.u);
+    v.push_back(w.normal_force);
+    v.push_back(w.force[0]);
+    v.push_back(w.force[1]);
+    v.push_back(w.force[2]);
+  }
+  return v;
+}
+
+void Simulation::sample(std::vector<std::string>& cols, std::vector<double>& vals) const {
+  cols = builtin_columns(s_);
+  vals = builtin_values(s_);
+  for (const Monitor* m : monitors_) {
+    auto c = m->columns(s_);
+    auto v = m->values(s_);
+    cols.insert(cols.end(), c.begin(), c.end());
+    vals.insert(vals.end(), v.begin(), v.end());
+  }
+}
+
+StepPlan Simulation::prepare(const StageConfig& cfg) {
+  (void)cfg;
+  // Contact law state columns (history is kept if the law's columns are unchanged).
+  if (s_.contacts.state_columns() != law_.state_columns()) s_.contacts.set_state_columns(law_.state_columns());
+  const int w = static_cast<int>(law_.state_columns().size());
+  if (w > 0)
+    for (const auto& wall : s_.walls)
+      s_.particles.fields.declare({"wall_state/" + wall.name, w, "m", 0.0, false}, s_.particles.size());
+  for (Module* m : modules_) {
+    Declarations d;
+    m->declare(d);
+    for (const auto& f : d.particle_fields) s_.particles.fields.declare(f, s_.particles.size());
+  }
+  for (Module* m : modules_) m->bind(s_);
+  plan_ = build_step_plan(modules_, kCoreFields);
+  return plan_;
+}
+
+double Simulation::mechanical_stable_dt() const { return law_.stable_dt(s_.particles, s_.contacts, s_.walls); }
+
+std::map<std::string, double> Simulation::module_stable_dts() const {
+  std::map<std::string, double> out;
+  for (const Module* m : modules_) out[m->name()] = m->stable_dt(s_);
+  return out;
+}
+
+double Simulation::resolve_dt(const StageConfig& cfg) const {
+  if (cfg.dt > 0.0) return cfg.dt;
+  const double stable = mechanical_stable_dt();
+  if (!std::isfinite(stable))
+    throw SetupError("stage '" + cfg.name + "': dt_fraction needs a finite stable step, but the contact law gives none; set dt");
+  return cfg.dt_fraction * stable;
+}
+
+void Simulation::update_neighbors(double skin, Step sort_every) {
+  auto& p = s_.particles;
+  if (!s_.verlet.needs_rebuild(p.position, p.radius, skin)) return;
+  ++s_.rebuilds;
+  if (sort_every > 0 && s_.rebuilds % sort_every == 0 && p.size() > 1) {
+    // Spatial sort (cells of one mean diameter, z-y-x order) for cache locality.
+    double rsum = 0.0;
+    Vec3 lo = p.position[0];
+    for (std::size_t i = 0; i < p.size(); ++i) { rsum += p.radius[i]; lo = lo.cwiseMin(p.position[i]); }
+    const double h = 2.0 * rsum / static_cast<double>(p.size());
+    std::vector<std::array<std::int64_t, 3>> key(p.size());
+    for (std::size_t i = 0; i < p.size(); ++i)
+      for (int d = 0; d < 3; ++d) key[i][d] = static_cast<std::int64_t>(std::floor((p.position[i][d] - lo[d]) / h));
+    std::vector<Index> perm(p.size());
+    std::iota(perm.begin(), perm.end(), 0);
+    std::stable_sort(perm.begin(), perm.end(), [&](Index a, Index b) {
+      return std::tie(key[a][2], key[a][1], key[a][0]) < std::tie(key[b][2], key[b][1], key[b][0]);
+    });
+    p.permute(perm);
+    s_.contacts.remap_after_permutation(p.id);
+  }
+  s_.contacts.rebuild(find_pairs(p.position, p.radius, skin), p.id, p.size());
+  s_.verlet.mark_built(p.position, p.radius);
+}
+
+void Simulation::compute_forces(double dt, double t_stage) {
+  auto& p = s_.particles;
+  for (auto& f : p.force) f.setZero();
+  for (auto& t : p.torque) t.setZero();
+  law_.pair_pass(p, s_.contacts, dt);
+  s_.contacts.gather(p.force, p.torque);
+  const WallLoads loads = law_.wall_pass(p, s_.walls, dt);
+  for (std::size_t k = 0; k < s_.walls.size(); ++k) {
+    s_.walls[k].force = loads.force[k];
+    s_.walls[k].normal_force = loads.normal[k];
+  }
+  for (const PlanItem& it : plan_.items)
+    if (it.kind == PlanItem::Kind::Module && it.module->phase() == Phase::Force)
+      it.module->advance(s_, StepInfo{s_.step, s_.stage_t0 + t_stage, dt});
+}
+
+void Simulation::check_finite(double dt, double blowup_speed) const {
+  const auto& p = s_.particles;
+  std::vector<Id> bad;
+  std::string what;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const bool finite = p.position[i].allFinite() && p.velocity[i].allFinite() && p.omega[i].allFinite();
+    const double vmax = blowup_speed > 0.0 ? blowup_speed : p.radius[i] / dt;
+    if (!finite) { bad.push_back(p.id[i]); what = "non-finite position or velocity"; }
+    else if (p.velocity[i].norm() > vmax) {
+      bad.push_back(p.id[i]);
+      if (what.empty()) what = "speed " + std::to_string(p.velocity[i].norm()) + " m/s exceeds the blow-up limit " + std::to_string(vmax) + " m/s (a particle moving more than its radius per step)";
+    }
+  }
+  if (!bad.empty()) throw PhysicsError(s_.step, bad, "velocity", what);
+}
+
+StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool resume) {
+  using clock = std::chrono::steady_clock;
+  const auto t_start = clock::now();
+  auto& p = s_.particles;
+  prepare(cfg);
+
+  // Wall motions of this stage (prescribed motions start from the current offset).
+  for (auto& w : s_.walls) {
+    auto it = cfg.motions.find(w.name);
+    w.motion = it != cfg.motions.end() ? it->second : WallMotion{};
+    if (!resume) w.u_start = w.u;
+  }
+  if (!resume) {
+    s_.stage_step0 = s_.step;
+    s_.stage_t0 = s_.time;
+    if (cfg.mass_scaling != 1.0)
+      for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] *= cfg.mass_scaling; p.inertia[i] *= cfg.mass_scaling; }
+  }
+  if (resume) {
+    skin_ = s_.stage_skin;
+  } else {
+    skin_ = cfg.skin;
+    if (skin_ <= 0.0) {
+      const double rmin = p.size() ? *std::min_element(p.radius.begin(), p.radius.end()) : 0.0;
+      skin_ = 0.3 * rmin;
+    }
+    s_.stage_skin = skin_;
+  }
+  if (!resume) {
+    s_.verlet = VerletTracker{};
+    update_neighbors(skin_, 0);
+  }
+
+  StageResult res;
+  res.name = cfg.name;
+  res.plan = plan_.names();
+  res.particles = p.size();
+  // On resume the stage's step comes from the checkpoint, so the continuation is exact.
+  const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
+  s_.stage_dt = dt_used;
+  res.dt = dt_used;
+  res.stable_dt_at_start = mechanical_stable_dt();
+  res.dt_fraction_used = dt_used / res.stable_dt_at_start;
+  if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt)
+    throw SetupError("stage '" + cfg.name + "': dt = " + std::to_string(dt_used) + " s is " +
+                     std::to_string(res.dt_fraction_used) + " of the stable step " +
+                     std::to_string(res.stable_dt_at_start) + " s of the contact law; lower dt or set allow_unstable_dt");
+  for (const auto& [name, sdt] : module_stable_dts()) {
+    double mdt = dt_used;
+    for (const auto& it : plan_.items)
+      if (it.module && it.module->name() == name) mdt = it.clock.dt(dt_used);
+    if (mdt > sdt && !cfg.allow_unstable_dt)
+      throw SetupError("stage '" + cfg.name + "': module '" + name + "' runs with dt = " + std::to_string(mdt) +
+                       " s above its stable step " + std::to_string(sdt) + " s");
+  }
+  const double t_area = die_area(s_.walls);
+  if (!resume) {
+    for (auto& w : s_.walls) advance_wall(w, 0.0, dt_used, t_area);
+    compute_forces(dt_used, 0.0);
+  }
+
+  std::vector<std::string> cols;
+  std::vector<double> vals;
+  auto until_holds = [&]() {
+    if (cfg.until.empty()) return false;
+    sample(cols, vals);
+    for (const auto& c : cfg.until) {
+      auto it = std::find(cols.begin(), cols.end(), c.quantity);
+      if (it == cols.end()) throw SetupError("stage '" + cfg.name + "': stop quantity '" + c.quantity + "' is not monitored");
+      const double v = vals[it - cols.begin()];
+      if (c.at_least ? !(v >= c.value) : !(v <= c.value)) return false;
+    }
+    return true;
+  };
+  if (!resume) {
+    sample(cols, vals);
+    obs.timeseries(cols, vals);
+    if (cfg.frame_every > 0) obs.frame(s_);
+  }
+
+  bool reached = false;
+  const Step log_every = cfg.log_every > 0 ? cfg.log_every : 100;
+  for (;;) {
+    const Step k = s_.step - s_.stage_step0;  // steps done in this stage
+    if (k >= cfg.max_steps || static_cast<double>(k) * dt_used >= cfg.duration * (1.0 - 1e-12)) break;
+    if (k > 0 && k % cfg.check_every == 0 && until_holds()) { reached = true; break; }
+
+    // ---- one step: execute the plan ----
+    const double t_new = static_cast<double>(k + 1) * dt_used;  // stage time at the end of the step
+    for (const PlanItem& it : plan_.items) {
+      switch (it.kind) {
+        case PlanItem::Kind::IntegrateFirstHalf: verlet_first_half(p, dt_used); break;
+        case PlanItem::Kind::Walls:
+          for (auto& w : s_.walls) advance_wall(w, t_new, dt_used, t_area);
+          break;
+        case PlanItem::Kind::Neighbors: update_neighbors(skin_, cfg.sort_every_rebuilds); break;
+        case PlanItem::Kind::ZeroForces:
+          for (auto& f : p.force) f.setZero();
+          for (auto& t : p.torque) t.setZero();
+          break;
+        case PlanItem::Kind::ContactPairs:
+          law_.pair_pass(p, s_.contacts, dt_used);
+          s_.contacts.gather(p.force, p.torque);
+          break;
+        case PlanItem::Kind::ContactWalls: {
+          const WallLoads loads = law_.wall_pass(p, s_.walls, dt_used);
+          for (std::size_t q = 0; q < s_.walls.size(); ++q) {
+            s_.walls[q].force = loads.force[q];
+            s_.walls[q].normal_force = loads.normal[q];
+          }
+          break;
+        }
+        case PlanItem::Kind::Module: {
+          const Clock& c = it.clock;
+          if (c.kind == Clock::Kind::EveryStep) {
+            it.module->advance(s_, StepInfo{s_.step + 1, s_.stage_t0 + t_new, dt_used});
+          } else if (c.kind == Clock::Kind::EveryNSteps) {
+            if ((s_.step + 1) % c.n == 0) it.module->advance(s_, StepInfo{s_.step + 1, s_.stage_t0 + t_new, c.dt(dt_used)});
+          } else {
+            for (std::int64_t q = 1; q <= c.n; ++q)
+              it.module->advance(s_, StepInfo{s_.step + 1, s_.stage_t0 + t_new - dt_used + q * c.dt(dt_used), c.dt(dt_used)});
+          }
+          break;
+        }
+        case PlanItem::Kind::IntegrateSecondHalf: verlet_second_half(p, dt_used); break;
+      }
+    }
+    ++s_.step;
+    s_.time = s_.stage_t0 + t_new;
+    // ---- bookkeeping ----
+    const Step kk = k + 1;
+    if (kk % 10 == 0) check_finite(dt_used, cfg.blowup_speed);
+    if (cfg.stability_check_every > 0 && kk % cfg.stability_check_every == 0 && !cfg.allow_unstable_dt) {
+      const double st = mechanical_stable_dt();
+      if (dt_used > st)
+        throw PhysicsError(s_.step, {}, "time step",
+                           "dt = " + std::to_string(dt_used) + " s now exceeds the stable step " + std::to_string(st) +
+                               " s of the current state (contacts stiffened); lower dt_fraction or dt");
+    }
+    if (cfg.timeseries_every > 0 && kk % cfg.timeseries_every == 0) {
+      sample(cols, vals);
+      obs.timeseries(cols, vals);
+    }
+    if (cfg.frame_every > 0 && kk % cfg.frame_every == 0) obs.frame(s_);
+    if (cfg.checkpoint_every > 0 && s_.step % cfg.checkpoint_every == 0) obs.checkpoint(s_);
+    if (kk % log_every == 0) obs.progress(s_, kk, t_new, dt_used);
+    if (interrupt_flag().load()) {
+      obs.checkpoint(s_);
+      throw Interrupted("interrupted at step " + std::to_string(s_.step) + "; checkpoint written");
+    }
+  }
+  check_finite(dt_used, cfg.blowup_speed);
+  obs.frame(s_);
+  if (!reached && !cfg.until.empty()) reached = until_holds();
+  res.until_reached = cfg.until.empty() || reached;
+  res.steps = s_.step - s_.stage_step0;
+  res.simulated_time = s_.time - s_.stage_t0;
+  sample(cols, vals);
+  obs.timeseries(cols, vals);
+  for (std::size_t q = 0; q < cols.size(); ++q) res.final_values[cols[q]] = vals[q];
+  if (cfg.mass_scaling != 1.0)
+    for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] /= cfg.mass_scaling; p.inertia[i] /= cfg.mass_scaling; }
+  res.wall_seconds = std::chrono::duration<double>(clock::now() - t_start).count();
+  res.particle_steps_per_second =
+      res.wall_seconds > 0 ? static_cast<double>(res.steps) * static_cast<double>(p.size()) / res.wall_seconds : 0.0;
+  if (cfg.require_until && !res.until_reached)
+    throw PhysicsError(s_.step, {}, "stop condition",
+                       "stage '" + cfg.name + "' reached its hard stop before its 'until' conditions held");
+  return res;
+}
+
+}  // namespace sparkdem

@@ -1,0 +1,119 @@
+#pragma once
+/// Simulation: owns nothing physics-specific. It holds the State, the active contact model,
+/// the active modules and monitors of a stage, builds the step plan once and executes it.
+#include <functional>
+#include <limits>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/contact/contact_model.hpp"
+#include "engine/model/module.hpp"
+#include "engine/schedule/scheduler.hpp"
+#include "engine/state/state.hpp"
+
+namespace sparkdem {
+
+/// A named scalar (or several) computed from the state: time-series columns and stop criteria.
+class Monitor {
+ public:
+  virtual ~Monitor() = default;
+  /// Column names, fixed for the stage.
+  virtual std::vector<std::string> columns(const State& s) const = 0;
+  virtual std::vector<double> values(const State& s) const = 0;
+};
+
+struct StopCondition {
+  std::string quantity;  ///< a monitor column
+  bool at_least = true;  ///< true: quantity >= value; false: quantity <= value
+  double value = 0.0;
+};
+
+struct StageConfig {
+  std::string name = "stage";
+  double dt = 0.0;                 ///< [s] fixed step; 0 = dt_fraction * stable step at stage start
+  double dt_fraction = 0.0;        ///< fraction of the stable step (used when dt == 0)
+  bool allow_unstable_dt = false;  ///< run above the stable step (blow-ups are still caught)
+  double duration = std::numeric_limits<double>::infinity();  ///< [s] hard stop
+  Step max_steps = std::numeric_limits<Step>::max();           ///< hard stop
+  std::vector<StopCondition> until;  ///< stop early when all hold (checked every check_every)
+  Step check_every = 100;
+  bool require_until = false;      ///< a hard stop before `until` holds is an error
+  double skin = 0.0;               ///< [m] Verlet skin; 0 = 0.3 * smallest radius
+  double mass_scaling = 1.0;       ///< multiplies masses and inertias during the stage (reported)
+  Step stability_check_every = 1000;
+  double blowup_speed = 0.0;       ///< [m/s] a speed above this is a blow-up; 0 = radius/dt rule
+  Step sort_every_rebuilds = 50;   ///< spatial sort of the particles for cache locality
+  Step frame_every = 0;            ///< 0 = only the final frame
+  Step timeseries_every = 100;
+  Step checkpoint_every = 0;
+  Step log_every = 0;              ///< progress callback cadence; 0 = auto
+  std::map<std::string, WallMotion> motions;  ///< motions of named walls during this stage
+};
+
+/// Callbacks to the I/O layer (the engine never writes files itself).
+class Observer {
+ public:
+  virtual ~Observer() = default;
+  virtual void frame(const State&) {}
+  virtual void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) { (void)cols; (void)vals; }
+  virtual void checkpoint(State&) {}
+  virtual void progress(const State&, Step stage_steps, double stage_time, double dt) { (void)stage_steps; (void)stage_time; (void)dt; }
+};
+
+struct StageResult {
+  std::string name;
+  Step steps = 0;
+  double simulated_time = 0.0;
+  double wall_seconds = 0.0;
+  double dt = 0.0;
+  double stable_dt_at_start = 0.0;
+  double dt_fraction_used = 0.0;
+  bool until_reached = true;
+  std::size_t particles = 0;
+  double particle_steps_per_second = 0.0;
+  std::vector<std::string> plan;
+  std::map<std::string, double> final_values;  ///< last monitor values
+};
+
+class Simulation {
+ public:
+  Simulation(State& state, const ContactModel& law) : s_(state), law_(law) {}
+  void add_module(Module* m) { modules_.push_back(m); }
+  void add_monitor(const Monitor* m) { monitors_.push_back(m); }
+
+  /// Allocate declared fields, bind modules, build the plan (no stepping).
+  StepPlan prepare(const StageConfig& cfg);
+  /// Run a stage to its stop condition. If `resume` is true the state comes from a checkpoint
+  /// taken inside this stage: the set-up force evaluation is skipped so the continuation is exact.
+  StageResult run_stage(const StageConfig& cfg, Observer& obs, bool resume = false);
+
+  /// Mechanical stable step of the current state [s] (contact law), and of each module.
+  double mechanical_stable_dt() const;
+  std::map<std::string, double> module_stable_dts() const;
+  /// The step a stage would use [s].
+  double resolve_dt(const StageConfig& cfg) const;
+
+  /// Current monitor columns and values (built-in ones first).
+  void sample(std::vector<std::string>& cols, std::vector<double>& vals) const;
+
+  const StepPlan& plan() const { return plan_; }
+
+ private:
+  void compute_forces(double dt, double t_stage);
+  void update_neighbors(double skin, Step sort_every);
+  void check_finite(double dt, double blowup_speed) const;
+  State& s_;
+  const ContactModel& law_;
+  std::vector<Module*> modules_;
+  std::vector<const Monitor*> monitors_;
+  StepPlan plan_;
+  double skin_ = 0.0;
+};
+
+/// Built-in monitors available in every stage.
+std::vector<std::string> builtin_columns(const State& s);
+std::vector<double> builtin_values(const State& s);
+
+}  // namespace sparkdem

@@ -1,0 +1,95 @@
+#pragma once
+/// Particle store: fixed core SoA arrays plus a FieldRegistry for optional fields.
+#include <string>
+#include <vector>
+
+#include "engine/core/archive.hpp"
+#include "engine/core/types.hpp"
+#include "engine/state/field_registry.hpp"
+
+namespace sparkdem {
+
+struct ParticleStore {
+  std::vector<Id> id;
+  std::vector<Vec3> position;      ///< [m]
+  std::vector<Vec3> velocity;      ///< [m/s]
+  std::vector<Quat> orientation;   ///< unit quaternion
+  std::vector<Vec3> omega;         ///< angular velocity [rad/s]
+  std::vector<Vec3> force;         ///< [N]
+  std::vector<Vec3> torque;        ///< [N m]
+  std::vector<double> radius;      ///< [m]
+  std::vector<double> mass;        ///< [kg] (includes mass scaling when enabled)
+  std::vector<double> inertia;     ///< moment of inertia of the sphere [kg m^2]
+  std::vector<std::int32_t> material;  ///< index into the material table
+  std::vector<std::int32_t> fixed;     ///< 1 = not integrated (frozen particle)
+  FieldRegistry fields;            ///< optional per-particle fields
+
+  std::size_t size() const { return id.size(); }
+  Id next_id = 0;
+
+  /// Append one particle at rest; returns its local index.
+  Index add(const Vec3& x, double r, double m, std::int32_t mat = 0) {
+    id.push_back(next_id++);
+    position.push_back(x);
+    velocity.push_back(Vec3::Zero());
+    orientation.push_back(Quat::Identity());
+    omega.push_back(Vec3::Zero());
+    force.push_back(Vec3::Zero());
+    torque.push_back(Vec3::Zero());
+    radius.push_back(r);
+    mass.push_back(m);
+    inertia.push_back(0.4 * m * r * r);
+    material.push_back(mat);
+    fixed.push_back(0);
+    fields.resize(size());
+    return static_cast<Index>(size() - 1);
+  }
+
+  /// Reorder: new[i] = old[perm[i]] for every core array and every registered field.
+  void permute(const std::vector<Index>& perm) {
+    apply(id, perm); apply(position, perm); apply(velocity, perm); apply(orientation, perm);
+    apply(omega, perm); apply(force, perm); apply(torque, perm); apply(radius, perm);
+    apply(mass, perm); apply(inertia, perm); apply(material, perm); apply(fixed, perm);
+    fields.permute(perm);
+  }
+
+  /// Keep only the particles with keep[i] true (order preserved).
+  void filter(const std::vector<bool>& keep) {
+    std::vector<Index> perm;
+    for (std::size_t i = 0; i < keep.size(); ++i)
+      if (keep[i]) perm.push_back(static_cast<Index>(i));
+    permute(perm);
+  }
+
+  void visit(Archive& ar, const std::string& prefix) {
+    std::vector<std::int64_t> ids(id.begin(), id.end());
+    ar.visit(prefix + "/id", ids);
+    if (ar.reading()) id.assign(ids.begin(), ids.end());
+    ar.visit(prefix + "/position", position);
+    ar.visit(prefix + "/velocity", velocity);
+    ar.visit(prefix + "/orientation", orientation);
+    ar.visit(prefix + "/omega", omega);
+    ar.visit(prefix + "/force", force);
+    ar.visit(prefix + "/torque", torque);
+    ar.visit(prefix + "/radius", radius);
+    ar.visit(prefix + "/mass", mass);
+    ar.visit(prefix + "/inertia", inertia);
+    ar.visit(prefix + "/material", material);
+    ar.visit(prefix + "/fixed", fixed);
+    std::int64_t nid = next_id;
+    ar.visit(prefix + "/next_id", nid);
+    next_id = nid;
+    if (ar.reading()) fields.resize(size());
+    fields.visit(ar, prefix + "/fields");
+  }
+
+ private:
+  template <class T>
+  static void apply(std::vector<T>& v, const std::vector<Index>& perm) {
+    std::vector<T> out(perm.size());
+    for (std::size_t i = 0; i < perm.size(); ++i) out[i] = v[perm[i]];
+    v.swap(out);
+  }
+};
+
+}  // namespace sparkdem

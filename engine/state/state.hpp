@@ -1,0 +1,74 @@
+#pragma once
+/// Everything that flows from one stage to the next and goes into a checkpoint.
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "engine/core/archive.hpp"
+#include "engine/neighbor/neighbor_search.hpp"
+#include "engine/state/contact_table.hpp"
+#include "engine/state/particle_store.hpp"
+#include "engine/walls/wall.hpp"
+
+namespace sparkdem {
+
+struct Material {
+  std::string name;
+  double density = 1000.0;  ///< [kg/m^3]
+};
+
+struct State {
+  ParticleStore particles;
+  ContactTable contacts;
+  std::vector<Wall> walls;
+  std::vector<Material> materials;
+  VerletTracker verlet;
+  Step step = 0;               ///< global step counter (all stages)
+  double time = 0.0;           ///< [s] = stage_t0 + (step - stage_step0) * dt
+  Step stage_step0 = 0;        ///< step at the start of the current stage
+  double stage_t0 = 0.0;       ///< [s] time at the start of the current stage
+  double stage_dt = 0.0;       ///< [s] mechanical step of the current stage
+  double stage_skin = 0.0;     ///< [m] Verlet skin of the current stage
+  std::int64_t stage_index = 0;
+  std::int64_t rebuilds = 0;   ///< neighbour rebuilds so far (drives periodic sorting)
+  std::mt19937_64 rng{12345};
+
+  Wall* find_wall(const std::string& name) {
+    for (auto& w : walls)
+      if (w.name == name) return &w;
+    return nullptr;
+  }
+
+  void visit(Archive& ar) {
+    particles.visit(ar, "state/particles");
+    contacts.visit(ar, "state/contacts");
+    std::vector<std::string> names;
+    for (const auto& w : walls) names.push_back(w.name);
+    std::string joined;
+    for (const auto& n : names) joined += n + "\n";
+    ar.visit("state/wall_names", joined);
+    if (ar.reading()) {
+      walls.clear();
+      std::istringstream is(joined);
+      for (std::string n; std::getline(is, n);) walls.push_back(Wall{n, PlaneShape{}, {}, 0, 0, 0, Vec3::Zero(), 0});
+    }
+    for (auto& w : walls) w.visit(ar, "state/walls/" + w.name);
+    ar.visit("state/verlet/x0", verlet.x0());
+    ar.visit("state/verlet/r0", verlet.r0());
+    ar.visit("state/step", step);
+    ar.visit("state/time", time);
+    ar.visit("state/stage_step0", stage_step0);
+    ar.visit("state/stage_t0", stage_t0);
+    ar.visit("state/stage_dt", stage_dt);
+    ar.visit("state/stage_skin", stage_skin);
+    ar.visit("state/stage_index", stage_index);
+    ar.visit("state/rebuilds", rebuilds);
+    std::string rs;
+    if (!ar.reading()) { std::ostringstream os; os << rng; rs = os.str(); }
+    ar.visit("state/rng", rs);
+    if (ar.reading()) { std::istringstream is(rs); is >> rng; contacts.remap_after_permutation(particles.id); }
+  }
+};
+
+}  // namespace sparkdem

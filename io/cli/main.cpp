@@ -1,0 +1,145 @@
+/// sparkdem command line: run | check | schema | --version.
+/// The only place that prints errors and chooses exit codes:
+///   0 success, 2 invalid scenario or input, 3 physics failure (blow-up, unmet required stop),
+///   4 set-up failure, 130 interrupted (checkpoint written).
+#include <omp.h>
+
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <filesystem>
+#include <iostream>
+
+#include "engine/core/error.hpp"
+#include "engine/core/interrupt.hpp"
+#include "io/scenario/json_binder.hpp"
+#include "io/scenario/pipeline.hpp"
+#include "io/scenario/scenario.hpp"
+#include "physics/register_all.hpp"
+
+namespace {
+
+void on_signal(int) { sparkdem::interrupt_flag().store(true); }
+
+sparkdem::io::json check_report(sparkdem::io::Scenario& sc) {
+  using namespace sparkdem;
+  io::json j = sc.resolved;
+  // Derived values: each stage's step against the stable steps, from a scratch set-up of the
+  // particles (generator stages except relax, whose packing is an optimisation).
+  State s;
+  s.materials = sc.materials;
+  s.walls = sc.walls;
+  s.rng.seed(sc.seed);
+  bool known = true;
+  for (std::size_t k = 0; k < sc.stages.size(); ++k) {
+    auto& st = sc.stages[k];
+    auto& js = j["stages"][k];
+    if (!st.from_snapshot.empty()) {
+      State snap;
+      io::read_checkpoint(st.from_snapshot, snap);
+      snap.materials = s.materials;
+      s = std::move(snap);
+      known = true;
+    }
+    for (const auto& n : st.remove_walls) std::erase_if(s.walls, [&](const Wall& w) { return w.name == n; });
+    for (const auto& w : st.add_walls) s.walls.push_back(w);
+    if (st.generator) {
+      js["estimated_particles"] = st.generator->estimated_particles();
+      if (st.type == "relax") { known = false; continue; }
+      st.generator->generate(s);
+    }
+    if (!known || !st.dynamics) continue;
+    Simulation sim(s, sc.law_of(st));
+    for (auto& m : st.modules) sim.add_module(m.get());
+    sim.prepare(st.cfg);
+    s.contacts.rebuild(find_pairs(s.particles.position, s.particles.radius, 0.0), s.particles.id, s.particles.size());
+    const double stable = sim.mechanical_stable_dt();
+    js["derived"]["particles_at_start"] = s.particles.size();
+    js["derived"]["mechanical_stable_dt_s"] = stable;
+    try {
+      const double dt = sim.resolve_dt(st.cfg);
+      js["derived"]["dt_s"] = dt;
+      js["derived"]["dt_fraction_of_stable"] = dt / stable;
+      if (dt > stable && !st.cfg.allow_unstable_dt)
+        throw ConfigError(st.path + "/dt", "dt = " + std::to_string(dt) + " s exceeds the stable step " + std::to_string(stable) +
+                                               " s (set allow_unstable_dt to override)");
+    } catch (const SetupError& e) {
+      js["derived"]["dt_note"] = e.what();
+    }
+    for (const auto& [name, sdt] : sim.module_stable_dts()) js["derived"]["module_stable_dt_s"][name] = std::isfinite(sdt) ? io::json(sdt) : io::json("unconditionally stable");
+    io::json plan = io::json::array();
+    for (const auto& n : sim.plan().names()) plan.push_back(n);
+    js["derived"]["step_plan"] = plan;
+    known = false;  // later stages start from a state that only the run produces
+  }
+  return j;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace sparkdem;
+  CLI::App app{"sparkdem: coupled thermo-electro-mechanical DEM"};
+  app.set_version_flag("--version", std::string("sparkdem ") + SPARKDEM_VERSION);
+  app.require_subcommand(1);
+  std::string scene, outdir = "out", restart;
+  int threads = 0;
+  bool quiet = false;
+  auto* run = app.add_subcommand("run", "run a scenario");
+  run->add_option("scene", scene, "scenario JSON file")->required();
+  run->add_option("-o,--output", outdir, "output directory");
+  run->add_option("--threads", threads, "OpenMP threads (0 = default)");
+  run->add_option("--restart", restart, "continue from this checkpoint");
+  run->add_flag("--quiet", quiet, "no progress output");
+  auto* check = app.add_subcommand("check", "validate a scenario and print it resolved");
+  check->add_option("scene", scene, "scenario JSON file")->required();
+  auto* schema = app.add_subcommand("schema", "print every stage, law, module and generator with its parameters");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;
+  }
+
+  Registry reg;
+  physics::register_all(reg);
+  try {
+    if (schema->parsed()) {
+      std::cout << io::schema_json(reg).dump(2) << "\n";
+      return 0;
+    }
+    const std::filesystem::path file(scene);
+    const io::json j = io::read_json_file(file);
+    io::Scenario sc = io::load_scenario(j, reg, file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
+    if (check->parsed()) {
+      std::cout << check_report(sc).dump(2) << "\n";
+      return 0;
+    }
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    io::RunOptions opt;
+    opt.outdir = outdir;
+    opt.quiet = quiet;
+    opt.threads = threads;
+    if (!restart.empty()) opt.restart = restart;
+    const io::json summary = io::run_scenario(sc, opt);
+    if (!quiet)
+      std::cerr << "done: " << summary["steps"] << " steps, " << summary["wall_time_s"] << " s wall, "
+                << summary["particle_steps_per_s"] << " particle-steps/s; outputs in " << outdir << "\n";
+    return 0;
+  } catch (const ConfigError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  } catch (const Interrupted& e) {
+    std::cerr << "\n" << e.what() << "\n";
+    return 130;
+  } catch (const PhysicsError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 3;
+  } catch (const SetupError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 4;
+  } catch (const std::exception& e) {
+    std::cerr << "internal error: " << e.what() << "\n";
+    return 5;
+  }
+}

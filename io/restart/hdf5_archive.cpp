@@ -1,0 +1,134 @@
+#include "io/restart/hdf5_archive.hpp"
+
+#include <system_error>
+#include <utility>
+
+#include "engine/core/error.hpp"
+
+namespace sparkdem::io {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path tmp_path(const fs::path& path) {
+  fs::path tmp = path;
+  tmp += ".tmp";
+  return tmp;
+}
+
+std::string shape_text(const std::vector<std::size_t>& dims) {
+  std::string s = "(";
+  for (std::size_t k = 0; k < dims.size(); ++k) s += (k ? ", " : "") + std::to_string(dims[k]);
+  return s + ")";
+}
+
+}  // namespace
+
+Hdf5Archive::Hdf5Archive(H5File file, fs::path path, bool reading)
+    : file_(std::move(file)), path_(std::move(path)), tmp_(reading ? fs::path() : tmp_path(path_)),
+      reading_(reading), pending_(!reading) {}
+
+Hdf5Archive Hdf5Archive::for_writing(const fs::path& path) {
+  return Hdf5Archive(H5File::create(tmp_path(path)), path, false);
+}
+
+Hdf5Archive Hdf5Archive::for_reading(const fs::path& path) {
+  return Hdf5Archive(H5File::open_read(path), path, true);
+}
+
+Hdf5Archive::Hdf5Archive(Hdf5Archive&& other) noexcept
+    : Archive(), file_(std::move(other.file_)), path_(std::move(other.path_)), tmp_(std::move(other.tmp_)),
+      reading_(other.reading_), pending_(std::exchange(other.pending_, false)) {}
+
+Hdf5Archive::~Hdf5Archive() {
+  if (!pending_) return;
+  try {
+    file_.close();
+  } catch (const SetupError&) {
+    // The checkpoint is being discarded anyway.
+  }
+  std::error_code ec;
+  fs::remove(tmp_, ec);
+}
+
+void Hdf5Archive::commit() {
+  if (reading_) throw SetupError("checkpoint '" + path_.string() + "': commit() on an archive opened for reading");
+  if (!pending_) throw SetupError("checkpoint '" + path_.string() + "': already committed");
+  file_.close();
+  std::error_code ec;
+  fs::rename(tmp_, path_, ec);
+  if (ec)
+    throw SetupError("checkpoint '" + path_.string() + "': cannot rename '" + tmp_.string() + "' to it: " +
+                     ec.message());
+  pending_ = false;
+}
+
+bool Hdf5Archive::has(const std::string& name) const { return !name.empty() && file_.is_open() && file_.exists(name); }
+
+void Hdf5Archive::require_item(const std::string& name) const {
+  if (name.empty()) throw SetupError("checkpoint '" + path_.string() + "': empty item name");
+  if (!file_.is_open())
+    throw SetupError("checkpoint '" + path_.string() + "': cannot visit item '" + name + "': already committed");
+  if (reading_ && !file_.exists(name))
+    throw SetupError("checkpoint '" + path_.string() + "' has no item '" + name + "'");
+}
+
+void Hdf5Archive::require_components(const std::string& name, int components) const {
+  const std::vector<std::size_t> dims = file_.shape(name);
+  const bool ok = (components == 1 && dims.size() == 1) ||
+                  (dims.size() == 2 && dims[1] == static_cast<std::size_t>(components));
+  if (!ok)
+    throw SetupError("checkpoint '" + path_.string() + "': item '" + name + "' has shape " + shape_text(dims) +
+                     ", expected (rows, " + std::to_string(components) + ")");
+}
+
+void Hdf5Archive::visit(const std::string& name, std::vector<double>& v, int components) {
+  require_item(name);
+  if (components < 1)
+    throw SetupError("checkpoint '" + path_.string() + "': item '" + name + "': components must be at least 1");
+  if (reading_) {
+    require_components(name, components);
+    v = file_.read_doubles(name);
+  } else {
+    file_.write(name, v, components == 1 ? 0 : components);
+  }
+}
+
+void Hdf5Archive::visit(const std::string& name, std::vector<std::int64_t>& v, int components) {
+  require_item(name);
+  if (components < 1)
+    throw SetupError("checkpoint '" + path_.string() + "': item '" + name + "': components must be at least 1");
+  if (reading_) {
+    require_components(name, components);
+    v = file_.read_int64s(name);
+  } else {
+    file_.write(name, v, components == 1 ? 0 : components);
+  }
+}
+
+void Hdf5Archive::visit(const std::string& name, double& x) {
+  require_item(name);
+  if (reading_)
+    x = file_.read_double(name);
+  else
+    file_.write_scalar(name, x);
+}
+
+void Hdf5Archive::visit(const std::string& name, std::int64_t& x) {
+  require_item(name);
+  if (reading_)
+    x = file_.read_int64(name);
+  else
+    file_.write_scalar(name, x);
+}
+
+void Hdf5Archive::visit(const std::string& name, std::string& s) {
+  require_item(name);
+  if (reading_)
+    s = file_.read_string(name);
+  else
+    file_.write_string(name, s);
+}
+
+}  // namespace sparkdem::io

@@ -1,0 +1,62 @@
+#pragma once
+/// HDF5 implementation of the checkpoint Archive.
+///
+/// Every item is a dataset at the path given by its name (relative to the file root):
+/// arrays are 1-D (components == 1) or rows x components, scalars are scalar datasets and
+/// strings are fixed-length byte-exact string datasets (see io/hdf5/h5file.hpp).
+/// Writing goes to `path + ".tmp"`; commit() renames it to `path` so a crash never leaves
+/// a half-written checkpoint behind, and an uncommitted archive removes its tmp file.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "engine/core/archive.hpp"
+#include "io/hdf5/h5file.hpp"
+
+namespace sparkdem::io {
+
+class Hdf5Archive final : public sparkdem::Archive {
+ public:
+  /// Starts a checkpoint that becomes `path` on commit(); writes into `path + ".tmp"`.
+  static Hdf5Archive for_writing(const std::filesystem::path& path);
+  /// Opens an existing checkpoint for restoring.
+  static Hdf5Archive for_reading(const std::filesystem::path& path);
+
+  Hdf5Archive(Hdf5Archive&& other) noexcept;
+  Hdf5Archive& operator=(Hdf5Archive&&) = delete;
+  Hdf5Archive(const Hdf5Archive&) = delete;
+  Hdf5Archive& operator=(const Hdf5Archive&) = delete;
+  /// Closes the file; an uncommitted checkpoint's tmp file is removed.
+  ~Hdf5Archive() override;
+
+  /// Writing mode: closes the file and atomically renames the tmp file to the final path.
+  /// Nothing can be visited afterwards.
+  void commit();
+  /// The final checkpoint path (not the tmp file).
+  const std::filesystem::path& path() const { return path_; }
+
+  bool reading() const override { return reading_; }
+  bool has(const std::string& name) const override;
+  using Archive::visit;
+  void visit(const std::string& name, std::vector<double>& v, int components = 1) override;
+  void visit(const std::string& name, std::vector<std::int64_t>& v, int components = 1) override;
+  void visit(const std::string& name, double& x) override;
+  void visit(const std::string& name, std::int64_t& x) override;
+  void visit(const std::string& name, std::string& s) override;
+
+ private:
+  Hdf5Archive(H5File file, std::filesystem::path path, bool reading);
+  /// Throws unless `name` can be visited now; in reading mode also unless it exists.
+  void require_item(const std::string& name) const;
+  /// Reading mode: throws unless the stored array has `components` values per row.
+  void require_components(const std::string& name, int components) const;
+
+  H5File file_;
+  std::filesystem::path path_;     ///< final checkpoint path
+  std::filesystem::path tmp_;      ///< file being written (writing mode)
+  bool reading_;
+  bool pending_ = false;           ///< writing and not committed yet: the tmp file is ours to remove
+};
+
+}  // namespace sparkdem::io

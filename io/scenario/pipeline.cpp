@@ -1,0 +1,278 @@
+#include "io/scenario/pipeline.hpp"
+
+#include <omp.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+
+#include "engine/core/error.hpp"
+#include "io/hdf5/results_writer.hpp"
+#include "io/restart/hdf5_archive.hpp"
+
+namespace sparkdem::io {
+
+namespace {
+
+using steady = std::chrono::steady_clock;
+
+json finite_or_null(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
+
+/// The I/O side of a run: frames, time series, checkpoints, progress.
+class OutputObserver final : public Observer {
+ public:
+  OutputObserver(const std::filesystem::path& outdir, bool quiet) : outdir_(outdir), writer_(outdir), quiet_(quiet) {
+    tty_ = isatty(fileno(stderr));
+  }
+  void set_stage(const std::string& name, std::vector<Module*> modules, const StageConfig& cfg) {
+    stage_ = name;
+    modules_ = std::move(modules);
+    cfg_ = cfg;
+    stage_start_ = steady::now();
+    last_print_ = stage_start_;
+  }
+  void frame(const State& s) override {
+    const auto& p = s.particles;
+    std::vector<FrameField> f;
+    auto vec3 = [&](const char* name, const std::vector<Vec3>& v, const char* unit) {
+      FrameField x{name, 3, std::vector<double>(3 * v.size()), unit};
+      for (std::size_t i = 0; i < v.size(); ++i)
+        for (int d = 0; d < 3; ++d) x.data[3 * i + d] = v[i][d];
+      f.push_back(std::move(x));
+    };
+    vec3("position", p.position, "m");
+    vec3("velocity", p.velocity, "m/s");
+    vec3("omega", p.omega, "rad/s");
+    vec3("force", p.force, "N");
+    f.push_back({"radius", 1, p.radius, "m"});
+    f.push_back({"id", 1, std::vector<double>(p.id.begin(), p.id.end()), "1"});
+    f.push_back({"material", 1, std::vector<double>(p.material.begin(), p.material.end()), "1"});
+    for (const auto& name : p.fields.names()) {
+      const auto& info = p.fields.info(name);
+      if (info.output) f.push_back({name, info.components, p.fields.data(name), info.unit});
+    }
+    ContactFrame c;
+    const auto& t = s.contacts;
+    FrameField ov{"overlap", 1, {}, "m"}, fn{"force", 3, {}, "N"};
+    for (std::size_t r = 0; r < t.size(); ++r) {
+      if (t.overlap()[r] <= 0.0) continue;
+      c.pairs.push_back(t.id_i()[r]);
+      c.pairs.push_back(t.id_j()[r]);
+      ov.data.push_back(t.overlap()[r]);
+      for (int d = 0; d < 3; ++d) fn.data.push_back(t.force()[r][d]);
+    }
+    c.fields = {ov, fn};
+    writer_.write_frame(s.step, s.time, stage_, f, c);
+  }
+  void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) override {
+    std::map<std::string, double> row;
+    for (std::size_t k = 0; k < cols.size(); ++k) {
+      row[cols[k]] = vals[k];
+      if (!col_index_.count(cols[k])) { col_index_[cols[k]] = columns_.size(); columns_.push_back(cols[k]); }
+    }
+    rows_.push_back(std::move(row));
+  }
+  void checkpoint(State& s) override { write_checkpoint(outdir_ / "checkpoint.h5", s, true); }
+  void write_checkpoint(const std::filesystem::path& file, State& s, bool in_stage) {
+    Hdf5Archive ar = Hdf5Archive::for_writing(file);
+    s.visit(ar);
+    std::int64_t flag = in_stage ? 1 : 0;
+    ar.visit("pipeline/in_stage", flag);
+    for (Module* m : modules_) m->visit(ar, "modules/" + m->name());
+    ar.commit();
+  }
+  void progress(const State& s, Step k, double t, double dt) override {
+    if (quiet_) return;
+    const auto now = steady::now();
+    const double since = std::chrono::duration<double>(now - last_print_).count();
+    if (since < (tty_ ? 0.25 : 10.0)) return;
+    last_print_ = now;
+    const double el = std::chrono::duration<double>(now - stage_start_).count();
+    const double rate = el > 0 ? static_cast<double>(k - k0_) / el : 0.0;
+    double remaining = std::nan("");
+    if (std::isfinite(cfg_.duration)) remaining = (cfg_.duration - t) / dt;
+    if (cfg_.max_steps < std::numeric_limits<Step>::max()) remaining = std::min(std::isnan(remaining) ? 1e300 : remaining, static_cast<double>(cfg_.max_steps - k));
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "[%s] step %lld  t = %.4g s  %.3g steps/s  ETA %s%s", stage_.c_str(),
+                  static_cast<long long>(s.step), s.time, rate,
+                  std::isnan(remaining) || rate <= 0 ? "? (until-condition)" : (std::to_string(static_cast<long long>(remaining / rate)) + " s").c_str(),
+                  cfg_.until.empty() ? "" : " (or earlier)");
+    if (tty_) std::cerr << "\r" << buf << "\033[K" << std::flush;
+    else std::cerr << buf << "\n";
+  }
+  void end_stage_line() { if (tty_ && !quiet_) std::cerr << "\n"; }
+  void set_k0(Step k0) { k0_ = k0; }
+  void finalize() {
+    std::vector<std::vector<double>> rows;
+    for (const auto& r : rows_) {
+      std::vector<double> v(columns_.size(), std::nan(""));
+      for (const auto& [k, x] : r) v[col_index_[k]] = x;
+      rows.push_back(std::move(v));
+    }
+    writer_.set_timeseries(columns_, rows);
+    writer_.finalize();
+  }
+
+ private:
+  std::filesystem::path outdir_;
+  ResultsWriter writer_;
+  bool quiet_, tty_ = false;
+  std::string stage_;
+  std::vector<Module*> modules_;
+  StageConfig cfg_;
+  std::vector<std::string> columns_;
+  std::map<std::string, std::size_t> col_index_;
+  std::vector<std::map<std::string, double>> rows_;
+  steady::time_point stage_start_, last_print_;
+  Step k0_ = 0;
+};
+
+}  // namespace
+
+void write_json_atomic(const std::filesystem::path& file, const json& j) {
+  const auto tmp = file.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw SetupError("cannot write '" + tmp + "'");
+    out << j.dump(2) << "\n";
+  }
+  std::filesystem::rename(tmp, file);
+}
+
+std::pair<std::int64_t, bool> read_checkpoint(const std::filesystem::path& file, State& s) {
+  Hdf5Archive ar = Hdf5Archive::for_reading(file);
+  s.visit(ar);
+  std::int64_t flag = 0;
+  if (ar.has("pipeline/in_stage")) ar.visit("pipeline/in_stage", flag);
+  return {s.stage_index, flag != 0};
+}
+
+json run_scenario(Scenario& sc, const RunOptions& opt) {
+  if (opt.threads > 0) omp_set_num_threads(opt.threads);
+  const auto t0 = steady::now();
+  std::filesystem::create_directories(opt.outdir);
+  write_json_atomic(opt.outdir / "resolved.json", sc.resolved);
+
+  State s;
+  s.materials = sc.materials;
+  s.walls = sc.walls;
+  s.rng.seed(sc.seed);
+  std::size_t first = 0;
+  bool resume = false;
+  std::unique_ptr<Hdf5Archive> restart_ar;
+  if (opt.restart) {
+    auto [k, in_stage] = read_checkpoint(*opt.restart, s);
+    if (k < 0 || k >= static_cast<std::int64_t>(sc.stages.size()))
+      throw SetupError("checkpoint '" + opt.restart->string() + "' is at stage " + std::to_string(k) + ", but the scenario has " +
+                       std::to_string(sc.stages.size()) + " stages");
+    first = static_cast<std::size_t>(in_stage ? k : k + 1);
+    resume = in_stage;
+    restart_ar = std::make_unique<Hdf5Archive>(Hdf5Archive::for_reading(*opt.restart));
+  }
+
+  OutputObserver obs(opt.outdir, opt.quiet);
+  json summary;
+  summary["scenario"] = sc.name;
+  summary["version"] = SPARKDEM_VERSION;
+  summary["threads"] = omp_get_max_threads();
+  summary["stages"] = json::array();
+  if (opt.restart) summary["restarted_from"] = opt.restart->string();
+  Step total_steps = 0;
+  double particle_steps = 0.0;
+  std::string status = "completed";
+  std::string error;
+  try {
+    for (std::size_t k = first; k < sc.stages.size(); ++k) {
+      StageDef& st = sc.stages[k];
+      const bool resuming = resume && k == first;
+      const auto ts = steady::now();
+      if (!resuming) {
+        if (!st.from_snapshot.empty()) {
+          State snap;
+          read_checkpoint(st.from_snapshot, snap);
+          snap.materials = s.materials;
+          snap.rng = s.rng;
+          snap.step = s.step;
+          snap.time = s.time;
+          s = std::move(snap);
+        }
+        for (const auto& n : st.remove_walls)
+          std::erase_if(s.walls, [&](const Wall& w) { return w.name == n; });
+        for (const auto& w : st.add_walls) s.walls.push_back(w);
+        if (st.generator) st.generator->generate(s);
+        s.stage_index = static_cast<std::int64_t>(k);
+      }
+      const ContactModel& law = sc.law_of(st);
+      Simulation sim(s, law);
+      std::vector<Module*> mods;
+      for (auto& m : st.modules) { sim.add_module(m.get()); mods.push_back(m.get()); }
+      std::vector<std::unique_ptr<Monitor>> mons;
+      if (st.generator) mons = st.generator->monitors();
+      for (auto& m : mons) sim.add_monitor(m.get());
+      if (resuming)
+        for (Module* m : mods) m->visit(*restart_ar, "modules/" + m->name());
+      obs.set_stage(st.cfg.name, mods, st.cfg);
+      obs.set_k0(resuming ? s.step - s.stage_step0 : 0);
+      json js;
+      js["name"] = st.cfg.name;
+      js["type"] = st.type;
+      if (st.dynamics) {
+        const StageResult r = sim.run_stage(st.cfg, obs, resuming);
+        obs.end_stage_line();
+        js["steps"] = r.steps;
+        js["simulated_time_s"] = r.simulated_time;
+        js["wall_time_s"] = r.wall_seconds;
+        js["dt_s"] = r.dt;
+        js["stable_dt_at_start_s"] = finite_or_null(r.stable_dt_at_start);
+        js["dt_fraction_of_stable"] = finite_or_null(r.dt_fraction_used);
+        js["until_reached"] = r.until_reached;
+        js["particles"] = r.particles;
+        js["particle_steps_per_s"] = r.particle_steps_per_second;
+        js["mass_scaling"] = st.cfg.mass_scaling;
+        js["step_plan"] = r.plan;
+        for (const auto& [c, v] : r.final_values) js["final"][c] = finite_or_null(v);
+        total_steps += r.steps;
+        particle_steps += static_cast<double>(r.steps) * static_cast<double>(r.particles);
+      } else {
+        sim.prepare(st.cfg);
+        s.stage_step0 = s.step;
+        s.stage_t0 = s.time;
+        s.contacts.rebuild(find_pairs(s.particles.position, s.particles.radius, 0.0), s.particles.id, s.particles.size());
+        js["particles"] = s.particles.size();
+        js["wall_time_s"] = std::chrono::duration<double>(steady::now() - ts).count();
+        obs.frame(s);
+      }
+      if (st.generator) {
+        for (const auto& [key, v] : st.generator->report(s)) js["packing"][key] = finite_or_null(v);
+        js["packing"]["coordination_histogram"] = st.generator->coordination_histogram(s);
+      }
+      summary["stages"].push_back(js);
+      obs.write_checkpoint(opt.outdir / "final_state.h5", s, false);
+    }
+  } catch (const Interrupted& e) {
+    status = "interrupted";
+    error = e.what();
+  } catch (const PhysicsError& e) {
+    status = "failed";
+    error = e.what();
+  }
+  obs.end_stage_line();
+  const double wall = std::chrono::duration<double>(steady::now() - t0).count();
+  summary["status"] = status;
+  if (!error.empty()) summary["error"] = error;
+  summary["wall_time_s"] = wall;
+  summary["steps"] = total_steps;
+  summary["particles"] = s.particles.size();
+  summary["particle_steps_per_s"] = wall > 0 ? particle_steps / wall : 0.0;
+  obs.finalize();
+  write_json_atomic(opt.outdir / "summary.json", summary);
+  if (status == "interrupted") throw Interrupted(error);
+  if (status == "failed") throw PhysicsError(s.step, {}, "run", error + " (outputs up to the failure were written)");
+  return summary;
+}
+
+}  // namespace sparkdem::io

@@ -1,0 +1,502 @@
+#include "io/scenario/scenario.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "io/scenario/json_binder.hpp"
+
+namespace sparkdem::io {
+
+namespace {
+
+// ------------------------------------------------------------------------ scenario-level specs
+struct TopParams {
+  std::string name = "scenario";
+  std::int64_t seed = 12345;
+};
+ParamSpec<TopParams> top_spec() {
+  ParamSpec<TopParams> s("scenario", "scenario",
+                         "top level: materials, contact, walls, stages (each stage: a generator or dynamics)");
+  s.add("name", &TopParams::name).doc("scenario name");
+  s.add("seed", &TopParams::seed).nonnegative().doc("random seed of every generator");
+  return s;
+}
+struct MaterialParams {
+  std::string name = "material";
+  double density = 0.0;
+};
+ParamSpec<MaterialParams> material_spec() {
+  ParamSpec<MaterialParams> s("material", "material", "a particle material (referenced by its index)");
+  s.add("name", &MaterialParams::name).doc("material name");
+  s.add("density", &MaterialParams::density).unit("kg/m^3").positive().required().doc("mass density");
+  return s;
+}
+struct WallParams {
+  std::string name;
+  std::string type = "plane";
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();
+  Vec3 base = Vec3::Zero();
+  Vec3 axis = Vec3::UnitZ();
+  double radius = 0.0;
+};
+ParamSpec<WallParams> wall_spec() {
+  ParamSpec<WallParams> s("wall", "wall", "a plane (normal into the domain) or a cylinder (particles inside)");
+  s.add("name", &WallParams::name).required().doc("unique wall name");
+  s.add("type", &WallParams::type).choices({"plane", "cylinder"}).doc("shape");
+  s.add_vec3("point", &WallParams::point).unit("m").doc("plane: a point on the plane");
+  s.add_vec3("normal", &WallParams::normal).unit("1").doc("plane: normal pointing into the particle domain");
+  s.add_vec3("base", &WallParams::base).unit("m").doc("cylinder: a point on the axis");
+  s.add_vec3("axis", &WallParams::axis).unit("1").doc("cylinder: axis direction");
+  s.add("radius", &WallParams::radius).unit("m").nonnegative().doc("cylinder: radius");
+  return s;
+}
+struct MotionParams {
+  std::string type = "fixed";
+  double speed = 0.0;
+  double travel = std::numeric_limits<double>::infinity();
+  std::vector<double> times, displacements, pressures;
+  double area = 0.0;
+  double max_speed = 0.0;
+};
+ParamSpec<MotionParams> motion_spec() {
+  ParamSpec<MotionParams> s("motion", "motion",
+                            "wall motion during a stage, as an offset u along the inward normal (plane) or a radius "
+                            "decrease (cylinder)");
+  s.add("type", &MotionParams::type).choices({"fixed", "velocity", "table", "pressure"}).doc("kind of motion");
+  s.add("speed", &MotionParams::speed).unit("m/s").doc("velocity: du/dt (positive moves into the domain)");
+  s.add("travel", &MotionParams::travel).unit("m").positive().doc("velocity: stop after this displacement");
+  s.add("times", &MotionParams::times).unit("s").nonnegative().doc("table/pressure: times from the stage start");
+  s.add("displacements", &MotionParams::displacements).unit("m").doc("table: displacement at each time");
+  s.add("pressures", &MotionParams::pressures).unit("Pa").nonnegative().doc("pressure: target pressure at each time");
+  s.add("area", &MotionParams::area).unit("m^2").nonnegative().doc("pressure: loaded area (0 = die cross-section)");
+  s.add("max_speed", &MotionParams::max_speed).unit("m/s").nonnegative().doc("pressure: servo speed limit");
+  return s;
+}
+struct StageParams {
+  std::string name = "stage";
+  std::string type = "dynamics";
+  double dt = 0.0;
+  double dt_fraction = 0.0;
+  bool allow_unstable_dt = false;
+  double mass_scaling = 1.0;
+  double skin = 0.0;
+  double blowup_speed = 0.0;
+  std::int64_t sort_every_rebuilds = 50;
+  std::int64_t stability_check_every = 1000;
+  std::string from_snapshot;
+  // stop.*
+  struct Stop {
+    double time = std::numeric_limits<double>::infinity();
+    std::int64_t steps = std::numeric_limits<std::int64_t>::max();
+    std::int64_t check_every = 100;
+    bool require_until = false;
+  } stop;
+  struct Output {
+    std::int64_t frame_every = 0;
+    std::int64_t timeseries_every = 100;
+    std::int64_t checkpoint_every = 0;
+  } output;
+};
+ParamSpec<StageParams::Stop> stop_spec() {
+  using P = StageParams::Stop;
+  ParamSpec<P> s("stop", "object", "stop condition");
+  s.add("time", &P::time).unit("s").positive().doc("simulated time of the stage");
+  s.add("steps", &P::steps).min(0).doc("number of steps of the stage");
+  s.add("check_every", &P::check_every).min(1).doc("steps between checks of `until`");
+  s.add("require_until", &P::require_until).doc("a hard stop before `until` holds is an error (exit 3)");
+  return s;
+}
+ParamSpec<StageParams::Output> output_spec() {
+  using P = StageParams::Output;
+  ParamSpec<P> s("output", "object", "what the stage saves");
+  s.add("frame_every", &P::frame_every).min(0).doc("steps between particle frames (0: final frame only)");
+  s.add("timeseries_every", &P::timeseries_every).min(0).doc("steps between time-series rows");
+  s.add("checkpoint_every", &P::checkpoint_every).min(0).doc("global steps between checkpoints (0: none)");
+  return s;
+}
+ParamSpec<StageParams> stage_spec(const Registry& reg) {
+  ParamSpec<StageParams> s("stage", "stage",
+                           "one stage: a generator (type = lattice|deposit|fill|relax, parameters in `generator`) or "
+                           "`dynamics`; plus modules, wall motions, stop condition and output");
+  std::vector<std::string> types = {"dynamics"};
+  for (const auto& [k, v] : reg.generators()) types.push_back(k);
+  s.add("name", &StageParams::name).doc("stage name");
+  s.add("type", &StageParams::type).choices(types).doc("dynamics or a generator name");
+  s.add("dt", &StageParams::dt).unit("s").nonnegative().doc("time step (0: dt_fraction of the stable step)");
+  s.add("dt_fraction", &StageParams::dt_fraction).unit("1").range(0.0, 10.0).doc("time step as a fraction of the stable step at stage start");
+  s.add("allow_unstable_dt", &StageParams::allow_unstable_dt).doc("run above the stable step (explicit override)");
+  s.add("mass_scaling", &StageParams::mass_scaling).unit("1").min(1.0).doc("mass scaling factor (reported; 1 = off)");
+  s.add("skin", &StageParams::skin).unit("m").nonnegative().doc("Verlet skin (0: 0.3 x smallest radius)");
+  s.add("blowup_speed", &StageParams::blowup_speed).unit("m/s").nonnegative().doc("speed that counts as a blow-up (0: radius per step)");
+  s.add("sort_every_rebuilds", &StageParams::sort_every_rebuilds).min(0).doc("spatial sort period in neighbour rebuilds (0: never)");
+  s.add("stability_check_every", &StageParams::stability_check_every).min(0).doc("steps between stable-step checks (0: start only)");
+  s.add("from_snapshot", &StageParams::from_snapshot).doc("start from the state stored in this checkpoint file");
+  s.add_group("stop", &StageParams::stop, stop_spec());
+  s.add_group("output", &StageParams::output, output_spec());
+  return s;
+}
+
+// ------------------------------------------------------------------------------------ helpers
+template <class P>
+P build(const ParamSpec<P>& ps, const json& obj, const std::string& path, std::vector<Diagnostic>& errors,
+        json& resolved, const std::set<std::string>& extra = {}) {
+  const ParamValues v = bind_params(obj, ps.spec(), path, errors, extra);
+  resolved = to_json(v, ps.spec());
+  // Build only from values that bound; missing ones keep the aggregate's defaults.
+  return ps.build(v);
+}
+
+std::vector<std::string> names_of(const auto& map) {
+  std::vector<std::string> n;
+  for (const auto& [k, v] : map) n.push_back(k);
+  return n;
+}
+
+std::string list_names(const std::vector<std::string>& n) {
+  std::string s;
+  for (const auto& x : n) s += (s.empty() ? "" : ", ") + x;
+  return s;
+}
+
+std::unique_ptr<ContactModel> make_law(const json& c, const Registry& reg, const std::string& path,
+                                       std::vector<Diagnostic>& errors, json& resolved) {
+  if (!c.is_object()) { errors.push_back({path, "expected an object {\"law\": ..., \"params\": {...}}, found " + describe(c)}); return nullptr; }
+  for (auto it = c.begin(); it != c.end(); ++it)
+    if (it.key() != "law" && it.key() != "params")
+      errors.push_back({path + "/" + it.key(), "unknown key \"" + it.key() + "\" (expected \"law\" and \"params\")"});
+  if (!c.contains("law") || !c["law"].is_string()) {
+    errors.push_back({path + "/law", "missing or non-string contact law name; registered laws: " + list_names(names_of(reg.laws()))});
+    return nullptr;
+  }
+  const auto name = c["law"].get<std::string>();
+  auto it = reg.laws().find(name);
+  if (it == reg.laws().end()) {
+    const auto dym = did_you_mean(name, names_of(reg.laws()));
+    errors.push_back({path + "/law", "unknown contact law \"" + name + "\"" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") +
+                                         "; registered laws: " + list_names(names_of(reg.laws()))});
+    return nullptr;
+  }
+  const std::size_t before = errors.size();
+  const ParamValues v = bind_params(c.value("params", json::object()), it->second.spec, path + "/params", errors);
+  resolved = {{"law", name}, {"params", to_json(v, it->second.spec)}};
+  if (errors.size() != before) return nullptr;
+  return it->second.make(v);
+}
+
+Wall make_wall(const json& w, const std::string& path, std::vector<Diagnostic>& errors, json& resolved) {
+  const WallParams p = build(wall_spec(), w, path, errors, resolved);
+  Wall out;
+  out.name = p.name;
+  if (p.type == "plane") {
+    if (p.normal.norm() == 0.0) errors.push_back({path + "/normal", "expected a non-zero normal, found [0, 0, 0]"});
+    out.shape = PlaneShape{p.point, p.normal.norm() > 0 ? Vec3(p.normal.normalized()) : Vec3(Vec3::UnitZ())};
+  } else {
+    if (p.axis.norm() == 0.0) errors.push_back({path + "/axis", "expected a non-zero axis, found [0, 0, 0]"});
+    if (!(p.radius > 0.0)) errors.push_back({path + "/radius", "a cylinder needs a radius > 0 [m], found " + std::to_string(p.radius)});
+    out.shape = CylinderShape{p.base, p.axis.norm() > 0 ? Vec3(p.axis.normalized()) : Vec3(Vec3::UnitZ()), p.radius};
+  }
+  return out;
+}
+
+WallMotion make_motion(const json& m, const std::string& path, std::vector<Diagnostic>& errors, json& resolved) {
+  const MotionParams p = build(motion_spec(), m, path, errors, resolved);
+  WallMotion out;
+  if (p.type == "fixed") out.kind = WallMotion::Kind::Fixed;
+  if (p.type == "velocity") { out.kind = WallMotion::Kind::Velocity; out.speed = p.speed; out.travel = p.travel; }
+  auto check_table = [&](const std::vector<double>& values, const char* key) {
+    if (p.times.empty()) errors.push_back({path + "/times", std::string("a ") + p.type + " motion needs `times`, found none"});
+    if (values.size() != p.times.size())
+      errors.push_back({path + "/" + key, "expected " + std::to_string(p.times.size()) + " values (one per time), found " + std::to_string(values.size())});
+    for (std::size_t k = 1; k < p.times.size(); ++k)
+      if (!(p.times[k] > p.times[k - 1])) errors.push_back({path + "/times/" + std::to_string(k), "times must increase strictly"});
+  };
+  if (p.type == "table") {
+    out.kind = WallMotion::Kind::Table;
+    check_table(p.displacements, "displacements");
+    out.table_time = p.times;
+    out.table_disp = p.displacements;
+  }
+  if (p.type == "pressure") {
+    out.kind = WallMotion::Kind::Pressure;
+    check_table(p.pressures, "pressures");
+    if (!(p.max_speed > 0.0)) errors.push_back({path + "/max_speed", "a pressure motion needs max_speed > 0 [m/s]"});
+    out.pressure_time = p.times;
+    out.pressure_value = p.pressures;
+    out.area = p.area;
+    out.max_speed = p.max_speed;
+  }
+  return out;
+}
+
+/// Are the particle centres of a scratch generation inside every wall?
+void check_enclosed(const State& s, const std::string& path, std::vector<Diagnostic>& errors) {
+  for (const auto& w : s.walls) {
+    std::size_t outside = 0;
+    Id first = -1;
+    for (std::size_t i = 0; i < s.particles.size(); ++i) {
+      Vec3 n;
+      double d;
+      w.distance(s.particles.position[i], n, d);
+      if (d < 0.0) { if (!outside) first = s.particles.id[i]; ++outside; }
+    }
+    if (outside)
+      errors.push_back({path, std::to_string(outside) + " of " + std::to_string(s.particles.size()) +
+                                  " particles (first id " + std::to_string(first) + ") lie outside wall '" + w.name +
+                                  "': the walls do not enclose the particles"});
+  }
+}
+
+}  // namespace
+
+json read_json_file(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw ConfigError("", "cannot read the scenario file '" + file.string() + "'");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  try {
+    return json::parse(ss.str());
+  } catch (const json::parse_error& e) {
+    throw ConfigError("", "'" + file.string() + "' is not valid JSON: " + e.what());
+  }
+}
+
+Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem::path& base_dir) {
+  std::vector<Diagnostic> errors;
+  Scenario sc;
+  if (!j.is_object()) throw ConfigError("", "expected a JSON object at the top level, found " + describe(j));
+  json resolved_top;
+  const TopParams top = build(top_spec(), j, "", errors, resolved_top, {"materials", "contact", "walls", "stages"});
+  sc.name = top.name;
+  sc.seed = static_cast<std::uint64_t>(top.seed);
+  sc.resolved = resolved_top;
+
+  // Materials
+  sc.resolved["materials"] = json::array();
+  if (!j.contains("materials") || !j["materials"].is_array() || j["materials"].empty()) {
+    errors.push_back({"/materials", "expected a non-empty array of materials [{\"name\", \"density\"}], found " +
+                                        (j.contains("materials") ? describe(j["materials"]) : std::string("nothing"))});
+  } else {
+    for (std::size_t k = 0; k < j["materials"].size(); ++k) {
+      json r;
+      const auto m = build(material_spec(), j["materials"][k], "/materials/" + std::to_string(k), errors, r);
+      sc.materials.push_back({m.name, m.density});
+      sc.resolved["materials"].push_back(r);
+    }
+  }
+  // Contact law
+  if (!j.contains("contact")) errors.push_back({"/contact", "missing required key \"contact\" ({\"law\": name, \"params\": {...}}); registered laws: " + list_names(names_of(reg.laws()))});
+  else { json r; sc.law = make_law(j["contact"], reg, "/contact", errors, r); sc.resolved["contact"] = r; }
+  // Walls
+  std::set<std::string> wall_names;
+  sc.resolved["walls"] = json::array();
+  if (j.contains("walls")) {
+    if (!j["walls"].is_array()) errors.push_back({"/walls", "expected an array of walls, found " + describe(j["walls"])});
+    else
+      for (std::size_t k = 0; k < j["walls"].size(); ++k) {
+        json r;
+        Wall w = make_wall(j["walls"][k], "/walls/" + std::to_string(k), errors, r);
+        if (!w.name.empty() && !wall_names.insert(w.name).second)
+          errors.push_back({"/walls/" + std::to_string(k) + "/name", "duplicate wall name \"" + w.name + "\""});
+        sc.walls.push_back(w);
+        sc.resolved["walls"].push_back(r);
+      }
+  }
+  // Stages
+  sc.resolved["stages"] = json::array();
+  if (!j.contains("stages") || !j["stages"].is_array() || j["stages"].empty()) {
+    errors.push_back({"/stages", "expected a non-empty array of stages, found " + (j.contains("stages") ? describe(j["stages"]) : std::string("nothing"))});
+  } else {
+    const auto sspec = stage_spec(reg);
+    bool has_particles = false;
+    for (std::size_t k = 0; k < j["stages"].size(); ++k) {
+      const std::string path = "/stages/" + std::to_string(k);
+      const json& js = j["stages"][k];
+      json r;
+      const std::size_t before = errors.size();
+      const StageParams p = build(sspec, js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact"});
+      StageDef st;
+      st.path = path;
+      st.type = p.type;
+      auto& c = st.cfg;
+      c.name = p.name;
+      c.dt = p.dt;
+      c.dt_fraction = p.dt_fraction;
+      c.allow_unstable_dt = p.allow_unstable_dt;
+      c.mass_scaling = p.mass_scaling;
+      c.skin = p.skin;
+      c.blowup_speed = p.blowup_speed;
+      c.sort_every_rebuilds = p.sort_every_rebuilds;
+      c.stability_check_every = p.stability_check_every;
+      c.duration = p.stop.time;
+      c.max_steps = p.stop.steps;
+      c.check_every = p.stop.check_every;
+      c.require_until = p.stop.require_until;
+      c.frame_every = p.output.frame_every;
+      c.timeseries_every = p.output.timeseries_every;
+      c.checkpoint_every = p.output.checkpoint_every;
+      st.from_snapshot = p.from_snapshot.empty() ? "" : (base_dir / p.from_snapshot).string();
+      if (!st.from_snapshot.empty() && !std::filesystem::exists(st.from_snapshot))
+        errors.push_back({path + "/from_snapshot", "cannot read the snapshot file '" + st.from_snapshot + "'"});
+      if (!st.from_snapshot.empty()) has_particles = true;
+      // Generator
+      if (st.type != "dynamics") {
+        auto g = reg.generators().find(st.type);
+        if (g != reg.generators().end()) {
+          const json jg = js.value("generator", json::object());
+          const std::size_t b2 = errors.size();
+          ParamValues v = bind_params(jg, g->second.spec, path + "/generator", errors);
+          // Resolve relative CSV paths of size distributions against the scenario directory.
+          auto csv = v.find("size_distribution.csv");
+          if (csv != v.end() && !std::get<std::string>(csv->second).empty())
+            csv->second = (base_dir / std::get<std::string>(csv->second)).string();
+          r["generator"] = to_json(v, g->second.spec);
+          if (errors.size() == b2) {
+            try {
+              st.generator = g->second.make(v);
+              r["estimated_particles"] = st.generator->estimated_particles();
+            } catch (const ConfigError& e) {
+              for (const auto& d : e.diagnostics()) {
+                std::string sub = d.path;
+                if (sub.rfind("/", 0) == 0 && (st.type == "deposit")) sub = "/size_distribution" + sub;
+                errors.push_back({path + "/generator" + sub, d.message});
+              }
+            }
+          }
+          st.dynamics = st.type == "deposit" || st.type == "fill";
+          has_particles = true;
+        }
+      } else if (js.contains("generator")) {
+        errors.push_back({path + "/generator", "a `dynamics` stage takes no generator; set \"type\" to one of " + list_names(names_of(reg.generators()))});
+      }
+      if (st.type == "dynamics" && !has_particles)
+        errors.push_back({path + "/type", "this dynamics stage has no particles: no earlier stage generates them and it has no from_snapshot"});
+      if (st.dynamics && std::isinf(c.duration) && c.max_steps == std::numeric_limits<std::int64_t>::max())
+        errors.push_back({path + "/stop", "a stage needs a hard stop: stop.time [s] or stop.steps"});
+      if (st.dynamics && c.dt == 0.0 && c.dt_fraction == 0.0)
+        errors.push_back({path + "/dt", "set dt [s] or dt_fraction (fraction of the stable step)"});
+      if (c.dt > 0.0 && c.dt_fraction > 0.0)
+        errors.push_back({path + "/dt_fraction", "give either dt or dt_fraction, not both"});
+      // Modules
+      r["modules"] = json::object();
+      if (js.contains("modules")) {
+        if (!js["modules"].is_object()) errors.push_back({path + "/modules", "expected an object {module name: {params}}, found " + describe(js["modules"])});
+        else
+          for (auto it = js["modules"].begin(); it != js["modules"].end(); ++it) {
+            auto m = reg.modules().find(it.key());
+            if (m == reg.modules().end()) {
+              const auto dym = did_you_mean(it.key(), names_of(reg.modules()));
+              errors.push_back({path + "/modules/" + it.key(), "unknown module \"" + it.key() + "\"" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") + "; registered modules: " + list_names(names_of(reg.modules()))});
+              continue;
+            }
+            const std::size_t b2 = errors.size();
+            const ParamValues v = bind_params(it.value(), m->second.spec, path + "/modules/" + it.key(), errors);
+            r["modules"][it.key()] = to_json(v, m->second.spec);
+            if (errors.size() == b2) st.modules.push_back(m->second.make(v));
+          }
+      }
+      // Contact law override
+      if (js.contains("contact")) { json rc; st.law = make_law(js["contact"], reg, path + "/contact", errors, rc); r["contact"] = rc; }
+      // Walls added / removed / moved
+      std::set<std::string> stage_walls = wall_names;
+      if (js.contains("add_walls")) {
+        if (!js["add_walls"].is_array()) errors.push_back({path + "/add_walls", "expected an array of walls, found " + describe(js["add_walls"])});
+        else {
+          r["add_walls"] = json::array();
+          for (std::size_t q = 0; q < js["add_walls"].size(); ++q) {
+            json rw;
+            st.add_walls.push_back(make_wall(js["add_walls"][q], path + "/add_walls/" + std::to_string(q), errors, rw));
+            if (!wall_names.insert(st.add_walls.back().name).second)
+              errors.push_back({path + "/add_walls/" + std::to_string(q) + "/name", "duplicate wall name \"" + st.add_walls.back().name + "\""});
+            r["add_walls"].push_back(rw);
+          }
+        }
+      }
+      if (st.type == "deposit") { wall_names.insert("die"); wall_names.insert("bottom"); }
+      if (st.type == "fill" || st.type == "relax") for (const char* n : {"die", "bottom", "top", "xlo", "xhi", "ylo", "yhi"}) wall_names.insert(n);
+      if (js.contains("remove_walls")) {
+        if (!js["remove_walls"].is_array()) errors.push_back({path + "/remove_walls", "expected an array of wall names"});
+        else
+          for (std::size_t q = 0; q < js["remove_walls"].size(); ++q) {
+            const auto& x = js["remove_walls"][q];
+            if (!x.is_string() || !wall_names.count(x.get<std::string>()))
+              errors.push_back({path + "/remove_walls/" + std::to_string(q), "expected the name of an existing wall, found " + describe(x)});
+            else { st.remove_walls.push_back(x.get<std::string>()); wall_names.erase(x.get<std::string>()); }
+          }
+        r["remove_walls"] = js["remove_walls"];
+      }
+      if (js.contains("walls")) {
+        if (!js["walls"].is_object()) errors.push_back({path + "/walls", "expected an object {wall name: motion}, found " + describe(js["walls"])});
+        else {
+          r["walls"] = json::object();
+          for (auto it = js["walls"].begin(); it != js["walls"].end(); ++it) {
+            if (!wall_names.count(it.key())) {
+              const auto dym = did_you_mean(it.key(), std::vector<std::string>(wall_names.begin(), wall_names.end()));
+              errors.push_back({path + "/walls/" + it.key(), "no wall named \"" + it.key() + "\" exists in this stage" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});
+              continue;
+            }
+            json rm;
+            c.motions[it.key()] = make_motion(it.value(), path + "/walls/" + it.key(), errors, rm);
+            r["walls"][it.key()] = rm;
+          }
+        }
+      }
+      (void)stage_walls;
+      // Until
+      if (js.contains("until")) {
+        if (!js["until"].is_object()) errors.push_back({path + "/until", "expected an object {quantity: {\"above\"|\"below\": value}}"});
+        else
+          for (auto it = js["until"].begin(); it != js["until"].end(); ++it) {
+            const auto& cond = it.value();
+            const std::string cp = path + "/until/" + it.key();
+            if (!cond.is_object() || cond.size() != 1 || !(cond.contains("above") || cond.contains("below")) ||
+                !cond.begin().value().is_number()) {
+              errors.push_back({cp, "expected {\"above\": number} or {\"below\": number}, found " + describe(cond)});
+              continue;
+            }
+            c.until.push_back({it.key(), cond.contains("above"), cond.begin().value().get<double>()});
+          }
+        r["until"] = js["until"];
+      }
+      // Generator-defined settling: motions and stop conditions.
+      if (st.generator) {
+        st.generator->configure_stage(c);
+        for (auto& m : st.generator->modules()) st.modules.push_back(std::move(m));
+      }
+      // Consistency: a lattice inside the scenario walls (scratch generation, no dynamics).
+      if (st.generator && st.type == "lattice" && errors.size() == before) {
+        State scratch;
+        scratch.materials = sc.materials;
+        scratch.walls = sc.walls;
+        try {
+          st.generator->generate(scratch);
+          check_enclosed(scratch, path + "/generator", errors);
+        } catch (const ConfigError& e) {
+          for (const auto& d : e.diagnostics()) errors.push_back({path + "/generator" + d.path, d.message});
+        }
+      }
+      sc.resolved["stages"].push_back(r);
+      sc.stages.push_back(std::move(st));
+    }
+  }
+  if (!errors.empty()) throw ConfigError(errors);
+  return sc;
+}
+
+json schema_json(const Registry& reg) {
+  json j;
+  j["scenario"] = spec_to_json(top_spec().spec());
+  j["material"] = spec_to_json(material_spec().spec());
+  j["wall"] = spec_to_json(wall_spec().spec());
+  j["motion"] = spec_to_json(motion_spec().spec());
+  j["stage"] = spec_to_json(stage_spec(reg).spec());
+  j["stage"]["until"] = "object {quantity: {\"above\"|\"below\": value}}; quantities are time-series columns";
+  for (const auto& [k, v] : reg.laws()) j["contact_laws"][k] = spec_to_json(v.spec);
+  for (const auto& [k, v] : reg.modules()) j["modules"][k] = spec_to_json(v.spec);
+  for (const auto& [k, v] : reg.generators()) j["generators"][k] = spec_to_json(v.spec);
+  return j;
+}
+
+}  // namespace sparkdem::io

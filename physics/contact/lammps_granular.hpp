@@ -1,0 +1,68 @@
+#pragma once
+/// # lammps_hertz_tsuji — the exact law of ../shared/peers/lammps_pour.in
+///   pair_style granular: hertz/material E e nu  tangential linear_history k_t x_gammat mu  damping tsuji
+///
+/// Normal:   F_ne = k_nfac delta, k_nfac = 4/3 E* sqrt(R* delta), 1/E* = 2 (1 - nu^2)/E
+/// Damping:  F_nd = -alpha_T(e) sqrt(m* k_nfac) v_n, alpha_T = Tsuji et al. 1992 polynomial
+/// Tangent:  linear_history with stiffness k_t [N/m] (a constant, as in LAMMPS),
+///           gamma_t = x_gammat alpha_T sqrt(m* k_nfac), Coulomb mu |F_ne + F_nd|
+/// Source: LAMMPS documentation of pair_style granular (2022); Tsuji, Tanaka, Ishida,
+/// Powder Technol. 71 (1992) 239.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/contact/geometry.hpp"
+#include "engine/model/param_spec.hpp"
+#include "physics/contact/contact_kernels.hpp"
+
+namespace sparkdem::physics {
+
+struct LammpsHertzTsuji {
+  static constexpr std::string_view kName = "lammps_hertz_tsuji";
+  struct Params {
+    double youngs_modulus = 1e7;
+    double restitution = 0.3;
+    double poisson_ratio = 0.3;
+    double tangential_stiffness = 1.0;
+    double x_gammat = 1.0;
+    double friction = 0.3;
+  };
+  static ParamSpec<Params> spec() {
+    ParamSpec<Params> s(std::string(kName), "contact_law",
+                        "LAMMPS granular: hertz/material + linear_history tangential + tsuji damping");
+    s.add("youngs_modulus", &Params::youngs_modulus).unit("Pa").positive().doc("E of hertz/material");
+    s.add("restitution", &Params::restitution).unit("1").range(0.0, 1.0).doc("e fed to the Tsuji polynomial");
+    s.add("poisson_ratio", &Params::poisson_ratio).unit("1").range(0.0, 0.5).doc("nu of hertz/material");
+    s.add("tangential_stiffness", &Params::tangential_stiffness).unit("N/m").nonnegative().doc("k_t of linear_history");
+    s.add("x_gammat", &Params::x_gammat).unit("1").nonnegative().doc("tangential damping / normal damping");
+    s.add("friction", &Params::friction).unit("1").nonnegative().doc("Coulomb coefficient mu");
+    return s;
+  }
+  static std::vector<std::string> state_columns() { return {"shear_x", "shear_y", "shear_z"}; }
+  explicit LammpsHertzTsuji(const Params& p)
+      : p_(p), e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
+        alpha_(kernel::tsuji_alpha_polynomial(p.restitution)) {}
+
+  ContactForces operator()(const ContactGeometry& g, const RelativeMotion& m, double dt, double* xi) const {
+    const double knfac = 4.0 / 3.0 * e_star_ * std::sqrt(g.r_eff * g.overlap);
+    const double damp = alpha_ * std::sqrt(g.m_eff * knfac);
+    const double fn = knfac * g.overlap - damp * m.vn;
+    ContactForces f;
+    f.tangential = kernel::tangential_history(g.n, m.vt, p_.tangential_stiffness, p_.x_gammat * damp, p_.friction,
+                                              std::abs(fn), dt, xi);
+    f.force = fn * g.n + f.tangential;
+    return f;
+  }
+  double normal_stiffness(const ContactGeometry& g) const { return kernel::hertz_stiffness(e_star_, g.r_eff, g.overlap); }
+  double tangential_stiffness(const ContactGeometry&) const { return p_.tangential_stiffness; }
+  double rayleigh_dt(double radius, double density) const {
+    return kernel::rayleigh_step(radius, density, p_.youngs_modulus, p_.poisson_ratio);
+  }
+
+ private:
+  Params p_;
+  double e_star_, alpha_;
+};
+
+}  // namespace sparkdem::physics

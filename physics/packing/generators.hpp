@@ -1,0 +1,162 @@
+#pragma once
+/// The packing generators of the source papers, plus a lattice for the LAMMPS pour scene.
+///   lattice  simple-cubic lattice points k*a inside a box (LAMMPS `lattice sc` + `create_atoms`)
+///   deposit  seed 000: loose random insertion in a wide cylinder, fall under gravity while the
+///            cylinder contracts, until a target packing density (settled, small overlaps)
+///   fill     seed 001 (GranOO "cooker"): radii uniform +-spread about
+///            r = (phi V / (4/3 pi N))^(1/3) (Eq. 1, phi = 0.63), random insertion at reduced
+///            size, frictionless growth to the size giving the target density, then settling
+///   relax    seed 003: minimise U = sum w(q), w(q) = k (q - 1) ln q for q = d/(r_i + r_j) < 1
+///            (and q = d/r_i against walls) with FIRE from an overlapping random start
+/// Container walls created: deposit -> "die" (cylinder) + "bottom" (plane);
+/// fill -> "die" + "bottom" + "top" (cylinder) or "xlo","xhi","ylo","yhi","bottom","top" (box);
+/// relax -> the six box planes as for fill.
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/model/generator.hpp"
+#include "engine/model/param_spec.hpp"
+#include "physics/packing/packing_common.hpp"
+
+namespace sparkdem::physics {
+
+class LatticeGenerator final : public Generator {
+ public:
+  struct Params {
+    Vec3 lo = Vec3::Zero();            ///< [m]
+    Vec3 hi = Vec3::Ones();            ///< [m]
+    double spacing = 1.0;              ///< [m]
+    double diameter = 0.5;             ///< [m]
+    std::int64_t material = 0;
+  };
+  static ParamSpec<Params> spec();
+  explicit LatticeGenerator(const Params& p) : p_(p) {}
+  std::string name() const override { return "lattice"; }
+  void generate(State& s) override;
+  double estimated_particles() const override;
+  std::map<std::string, double> report(const State& s) const override;
+
+ private:
+  Params p_;
+};
+
+class DepositGenerator final : public Generator {
+ public:
+  struct Params {
+    SizeDistributionParams size_distribution;
+    double container_radius = 61.8e-6;     ///< final die radius [m]
+    double container_height = 202e-6;      ///< bed height that sets the amount of powder [m]
+    double target_density = 0.65;          ///< [1] tap density to reach
+    std::int64_t particles = 0;            ///< 0: as many as fill target_density * pi R^2 H
+    double initial_radius_factor = 1.5;    ///< [1] die radius at insertion / final radius
+    double insertion_density = 0.25;       ///< [1] solid fraction of the loose insertion column
+    double contraction_time = 2e-4;        ///< [s] time for the die to reach its final radius
+    double gravity = 9.81e4;               ///< [m/s^2] packing gravity (scaled; reported)
+    double ke_per_mass_below = 1e-8;       ///< [J/kg] settled when kinetic energy / mass is below
+    double max_overlap = 0.01;             ///< [1] largest overlap / smaller radius allowed
+    double damping_rate = 0.0;             ///< [1/s] background drag during settling (0 = off)
+    std::int64_t material = 0;
+  };
+  static ParamSpec<Params> spec();
+  explicit DepositGenerator(const Params& p) : p_(p) {}
+  std::string name() const override { return "deposit"; }
+  void generate(State& s) override;
+  void configure_stage(StageConfig& cfg) const override;
+  std::vector<std::unique_ptr<Module>> modules() const override;
+  std::vector<std::unique_ptr<Monitor>> monitors() const override;
+  double estimated_particles() const override;
+  std::map<std::string, double> report(const State& s) const override;
+  std::vector<int> coordination_histogram(const State& s) const override { return packing_histogram(s); }
+
+ private:
+  Params p_;
+  std::map<std::string, double> sampling_;
+};
+
+class FillGenerator final : public Generator {
+ public:
+  struct Params {
+    std::string shape = "cylinder";        ///< cylinder | box
+    double radius = 1e-3;                  ///< [m] cylinder radius
+    double length = 5e-3;                  ///< [m] cylinder length (along z, from z = 0)
+    Vec3 lo = Vec3::Zero();                ///< [m] box
+    Vec3 hi = Vec3::Ones() * 1e-3;         ///< [m] box
+    std::int64_t particles = 5000;         ///< N_DE
+    double mean_radius = 0.0;              ///< [m] 0 = Eq. (1) from N and target_density
+    double spread = 0.125;                 ///< [1] radii uniform in r(1 +- spread)
+    double target_density = 0.63;          ///< [1]
+    double initial_scale = 0.5;            ///< [1] radii at insertion / final radii
+    double growth_time = 0.0;              ///< [s] 0 = 2000 steps of the stage
+    double damping_rate = 0.0;             ///< [1/s] background drag; 0 = automatic (see .cpp)
+    double ke_per_mass_below = 1e-10;      ///< [J/kg]
+    double max_overlap = 0.01;             ///< [1]
+    std::int64_t material = 0;
+  };
+  static ParamSpec<Params> spec();
+  explicit FillGenerator(const Params& p) : p_(p) {}
+  std::string name() const override { return "fill"; }
+  void generate(State& s) override;
+  void configure_stage(StageConfig& cfg) const override;
+  std::vector<std::unique_ptr<Module>> modules() const override;
+  std::vector<std::unique_ptr<Monitor>> monitors() const override;
+  double estimated_particles() const override { return static_cast<double>(p_.particles); }
+  std::map<std::string, double> report(const State& s) const override;
+  std::vector<int> coordination_histogram(const State& s) const override { return packing_histogram(s); }
+  double formula_mean_radius() const;
+  double container_volume() const;
+
+ private:
+  Params p_;
+  double growth_scale_ = 1.0;
+};
+
+class RelaxGenerator final : public Generator {
+ public:
+  struct Params {
+    Vec3 lo = Vec3::Zero();                ///< [m]
+    Vec3 hi = Vec3::Ones() * 1e-3;         ///< [m]
+    std::int64_t particles = 1000;
+    double target_density = 0.6;           ///< [1] sets the mean radius from N and the box
+    double spread = 0.125;                 ///< [1] radii uniform in r(1 +- spread)
+    double stiffness = 1.0;                ///< [J] k of w(q) (the minimum does not depend on it)
+    std::int64_t max_iterations = 200000;
+    double force_tolerance = 1e-6;         ///< [1] stop when max |F| < tol k / r_mean
+    double max_step = 0.05;                ///< [1] largest displacement per iteration / radius
+    double density = 1000.0;               ///< [kg/m^3] particle density (for later stages)
+    std::int64_t material = 0;
+  };
+  static ParamSpec<Params> spec();
+  explicit RelaxGenerator(const Params& p) : p_(p) {}
+  std::string name() const override { return "relax"; }
+  void generate(State& s) override;
+  double estimated_particles() const override { return static_cast<double>(p_.particles); }
+  std::map<std::string, double> report(const State& s) const override;
+  std::vector<int> coordination_histogram(const State& s) const override { return packing_histogram(s); }
+
+ private:
+  Params p_;
+  std::map<std::string, double> result_;
+};
+
+/// Radius growth used by `fill`: r_i(t) = r_i,final * s(t), s rising linearly from s0 to s1
+/// over the growth time, then constant; masses follow r^3 at constant density.
+class RadiusGrowth final : public Module {
+ public:
+  struct Params {
+    double s0 = 0.5, s1 = 1.0;   ///< [1]
+    double duration = 1.0;       ///< [s]
+  };
+  static ParamSpec<Params> spec();
+  explicit RadiusGrowth(const Params& p) : p_(p) {}
+  std::string name() const override { return "radius_growth"; }
+  void declare(Declarations& d) const override;
+  void bind(State& s) override;
+  void advance(State& s, const StepInfo& step) override;
+
+ private:
+  Params p_;
+};
+
+}  // namespace sparkdem::physics

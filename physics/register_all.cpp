@@ -1,0 +1,29 @@
+/// The single checked-in registry table (LAMMPS gran_sub_mod_register.cpp style).
+/// How to add a law, module or generator:
+///   1. write it with a `Params` aggregate and `static ParamSpec<Params> spec()` (and, for a
+///      contact law, the Law interface documented in engine/contact/contact_model.hpp);
+///   2. add one row below;
+///   3. add its tests (closed form or invariant) under tests/.
+#include "physics/register_all.hpp"
+
+#include "physics/body/gravity.hpp"
+#include "physics/contact/hertz_mindlin.hpp"
+#include "physics/contact/hooke.hpp"
+#include "physics/contact/lammps_granular.hpp"
+#include "physics/packing/generators.hpp"
+
+namespace sparkdem::physics {
+
+void register_all(Registry& r) {
+  r.contact_law<HertzMindlin>();
+  r.contact_law<LinearSpringDashpot>();
+  r.contact_law<LammpsHertzTsuji>();
+  r.module<Gravity>();
+  r.module<ViscousDamping>();
+  r.generator<LatticeGenerator>();
+  r.generator<DepositGenerator>();
+  r.generator<FillGenerator>();
+  r.generator<RelaxGenerator>();
+}
+
+}  // namespace sparkdem::physics
