@@ -343,9 +343,6 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.wall_seconds = std::chrono::duration<double>(clock::now() - t_start).count();
   res.particle_steps_per_second =
       res.wall_seconds > 0 ? static_cast<double>(res.steps) * static_cast<double>(p.size()) / res.wall_seconds : 0.0;
-  if (cfg.require_until && !res.until_reached)
-    throw PhysicsError(s_.step, {}, "stop condition",
-                       "stage '" + cfg.name + "' reached its hard stop before its 'until' conditions held");
   return res;
 }
 

@@ -104,6 +104,12 @@ void ContactTable::visit(Archive& ar, const std::string& prefix) {
     torque_j_.assign(size(), Vec3::Zero());
     overlap_.assign(size(), 0.0);
   }
+  // Overlaps of the last force pass: the built-in monitors (contacts, max_overlap_ratio) read
+  // them, and a resumed stage checks its `until` conditions before its first force pass.
+  if (!ar.reading() || ar.has(prefix + "/overlap")) ar.visit(prefix + "/overlap", overlap_);
+  if (overlap_.size() != size())
+    throw SetupError("checkpoint contact overlaps have " + std::to_string(overlap_.size()) + " rows, expected " +
+                     std::to_string(size()));
 }
 
 }  // namespace sparkdem

@@ -96,9 +96,17 @@ class OutputObserver final : public Observer {
     double remaining = std::nan("");
     if (std::isfinite(cfg_.duration)) remaining = (cfg_.duration - t) / dt;
     if (cfg_.max_steps < std::numeric_limits<Step>::max()) remaining = std::min(std::isnan(remaining) ? 1e300 : remaining, static_cast<double>(cfg_.max_steps - k));
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "[%s] step %lld  t = %.4g s  %.3g steps/s  ETA %s%s", stage_.c_str(),
-                  static_cast<long long>(s.step), s.time, rate,
+    const auto cols = builtin_columns(s);
+    const auto vals = builtin_values(s);
+    auto value = [&](const char* name) {
+      for (std::size_t q = 0; q < cols.size(); ++q)
+        if (cols[q] == name) return vals[q];
+      return std::nan("");
+    };
+    char buf[320];
+    std::snprintf(buf, sizeof buf, "[%s] step %lld  t = %.4g s  KE/m = %.3g J/kg  max overlap %.3g  %.3g steps/s  ETA %s%s",
+                  stage_.c_str(), static_cast<long long>(s.step), s.time, value("kinetic_energy_per_mass"),
+                  value("max_overlap_ratio"), rate,
                   std::isnan(remaining) || rate <= 0 ? "? (until-condition)" : (std::to_string(static_cast<long long>(remaining / rate)) + " s").c_str(),
                   cfg_.until.empty() ? "" : " (or earlier)");
     if (tty_) std::cerr << "\r" << buf << "\033[K" << std::flush;
@@ -252,6 +260,10 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
       }
       summary["stages"].push_back(js);
       obs.write_checkpoint(opt.outdir / "final_state.h5", s, false);
+      if (st.dynamics && st.cfg.require_until && !js["until_reached"].get<bool>())
+        throw PhysicsError(s.step, {}, "stop condition",
+                           "stage '" + st.cfg.name + "' reached its hard stop before its 'until' conditions held "
+                           "(see the stage's \"final\" values in summary.json)");
     }
   } catch (const Interrupted& e) {
     status = "interrupted";

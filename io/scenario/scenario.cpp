@@ -353,6 +353,31 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
           if (csv != v.end() && !std::get<std::string>(csv->second).empty())
             csv->second = (base_dir / std::get<std::string>(csv->second)).string();
           r["generator"] = to_json(v, g->second.spec);
+          // `fill` with a given mean radius: N radii uniform in r(1 +- spread) have
+          // <r^3> = r^3 (1 + spread^2), so their solid fraction N 4/3 pi r^3 (1 + spread^2) / V must
+          // not exceed 0.74 (densest sphere packing). (Without mean_radius, Eq. 1 sizes the radii
+          // to exactly target_density <= 0.7 of the container.)
+          if (st.type == "fill" && errors.size() == b2 && get_real(v, "mean_radius") > 0.0) {
+            constexpr double kPi = 3.14159265358979323846;
+            double volume = 0.0;
+            if (get_text(v, "shape") == "cylinder") {
+              volume = kPi * get_real(v, "radius") * get_real(v, "radius") * get_real(v, "length");
+            } else {
+              const auto lo = get_list(v, "lo"), hi = get_list(v, "hi");
+              volume = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+            }
+            const double n = static_cast<double>(get_int(v, "particles")), rbar = get_real(v, "mean_radius"),
+                         spread = get_real(v, "spread");
+            const double phi = n * 4.0 / 3.0 * kPi * rbar * rbar * rbar * (1.0 + spread * spread) / volume;
+            if (!(volume > 0.0) || !(phi <= 0.74)) {
+              std::ostringstream msg;
+              msg.precision(4);
+              msg << get_int(v, "particles") << " particles of mean radius " << rbar << " m (spread " << spread
+                  << ") do not fit the container of volume " << volume << " m^3: solid fraction " << phi
+                  << " > 0.74; use fewer particles, a smaller mean_radius or a larger container";
+              errors.push_back({path + "/generator/particles", msg.str()});
+            }
+          }
           if (errors.size() == b2) {
             try {
               st.generator = g->second.make(v);

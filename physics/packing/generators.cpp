@@ -104,8 +104,9 @@ ParamSpec<DepositGenerator::Params> DepositGenerator::spec() {
   return s;
 }
 double DepositGenerator::estimated_particles() const {
-  if (p_.particles > 0) return static_cast<double>(p_.particles);
+  // Built first so that the loader validates the distribution even when `particles` is given.
   const SizeDistribution d = make_distribution(p_.size_distribution);
+  if (p_.particles > 0) return static_cast<double>(p_.particles);
   // Expected particle volume from the number distribution, by quadrature of the quantile function.
   double v = 0.0;
   const int n = 2000;
@@ -182,7 +183,7 @@ ParamSpec<FillGenerator::Params> FillGenerator::spec() {
   s.add("target_density", &Params::target_density).unit("1").range(0.05, 0.7).doc("packing density to reach");
   s.add("initial_scale", &Params::initial_scale).unit("1").range(0.05, 1.0).doc("radius scale at insertion");
   s.add("growth_time", &Params::growth_time).unit("s").nonnegative().doc("growth duration; 0 = 2000 stage steps");
-  s.add("damping_rate", &Params::damping_rate).unit("1/s").nonnegative().doc("background drag; 0 = automatic");
+  s.add("damping_rate", &Params::damping_rate).unit("1/s").nonnegative().doc("background drag (0 = off)");
   s.add("ke_per_mass_below", &Params::ke_per_mass_below).unit("J/kg").positive().doc("settled threshold");
   s.add("max_overlap", &Params::max_overlap).unit("1").positive().doc("largest overlap / smaller radius allowed");
   s.add("material", &Params::material).nonnegative().doc("material index");

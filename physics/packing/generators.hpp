@@ -89,7 +89,7 @@ class FillGenerator final : public Generator {
     double target_density = 0.63;          ///< [1]
     double initial_scale = 0.5;            ///< [1] radii at insertion / final radii
     double growth_time = 0.0;              ///< [s] 0 = 2000 steps of the stage
-    double damping_rate = 0.0;             ///< [1/s] background drag; 0 = automatic (see .cpp)
+    double damping_rate = 0.0;             ///< [1/s] background drag (0 = off)
     double ke_per_mass_below = 1e-10;      ///< [J/kg]
     double max_overlap = 0.01;             ///< [1]
     std::int64_t material = 0;
