@@ -123,7 +123,9 @@ double Simulation::resolve_dt(const StageConfig& cfg) const {
 
 void Simulation::update_neighbors(double skin, Step sort_every) {
   auto& p = s_.particles;
-  if (!s_.verlet.needs_rebuild(p.position, p.radius, skin)) return;
+  std::vector<double> wall_u;
+  for (const auto& w : s_.walls) wall_u.push_back(w.u);
+  if (s_.wall_candidates.size() == s_.walls.size() && !s_.verlet.needs_rebuild(p.position, p.radius, skin, wall_u)) return;
   ++s_.rebuilds;
   if (sort_every > 0 && s_.rebuilds % sort_every == 0 && p.size() > 1) {
     // Spatial sort (cells of one mean diameter, z-y-x order) for cache locality.
@@ -143,7 +145,15 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
     s_.contacts.remap_after_permutation(p.id);
   }
   s_.contacts.rebuild(find_pairs(p.position, p.radius, skin), p.id, p.size());
-  s_.verlet.mark_built(p.position, p.radius);
+  s_.wall_candidates.assign(s_.walls.size(), {});
+  for (std::size_t k = 0; k < s_.walls.size(); ++k)
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      Vec3 n;
+      double d;
+      s_.walls[k].distance(p.position[i], n, d);
+      if (d < p.radius[i] + skin) s_.wall_candidates[k].push_back(static_cast<Index>(i));
+    }
+  s_.verlet.mark_built(p.position, p.radius, wall_u);
 }
 
 void Simulation::compute_forces(double dt, double t_stage) {
@@ -152,7 +162,7 @@ void Simulation::compute_forces(double dt, double t_stage) {
   for (auto& t : p.torque) t.setZero();
   law_.pair_pass(p, s_.contacts, dt);
   s_.contacts.gather(p.force, p.torque);
-  const WallLoads loads = law_.wall_pass(p, s_.walls, dt);
+  const WallLoads loads = law_.wall_pass(p, s_.walls, s_.wall_candidates, dt);
   for (std::size_t k = 0; k < s_.walls.size(); ++k) {
     s_.walls[k].force = loads.force[k];
     s_.walls[k].normal_force = loads.normal[k];
@@ -283,7 +293,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
           s_.contacts.gather(p.force, p.torque);
           break;
         case PlanItem::Kind::ContactWalls: {
-          const WallLoads loads = law_.wall_pass(p, s_.walls, dt_used);
+          const WallLoads loads = law_.wall_pass(p, s_.walls, s_.wall_candidates, dt_used);
           for (std::size_t q = 0; q < s_.walls.size(); ++q) {
             s_.walls[q].force = loads.force[q];
             s_.walls[q].normal_force = loads.normal[q];

@@ -37,7 +37,7 @@ while [[ $# -gt 0 ]]; do
     --csv) csv="$2"; shift 2 ;;
     --wait-policy) wait_policy="$2"; shift 2 ;;
     --stop-time) stop_time="$2"; shift 2 ;;
-    -h|--help) sed -n '2,21p' "${BASH_SOURCE[0]}"; exit 0 ;;
+    -h|--help) sed -n '2,18p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "run_nial.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done

@@ -4,6 +4,7 @@
 #
 #   benchmarks/pour/run_pour.sh [--steps N] [--threads "1 2"] [--sparkdem PATH] [--workdir DIR]
 #                               [--csv FILE] [--no-lammps] [--lammps-mpi NP] [--wait-policy active|passive]
+#                               [--lammps-matched-wall]
 #
 #   --steps N        steps of the pour stage for both codes (default 30000, the peer scene);
 #                    e.g. --steps 3000 for a quick smoke test
@@ -17,6 +18,10 @@
 #                    default spin-then-sleep). On a machine shared with other jobs use `passive`:
 #                    spinning OpenMP barriers then lose their time slices and a 2-thread run can be
 #                    many times slower than 1 thread. The policy is recorded in the `variant` column.
+#   --lammps-matched-wall  diagnostic, not part of the benchmark: also run LAMMPS with the wall
+#                    modulus E of the three fix wall/gran replaced by E/(1+nu). LAMMPS 29Sep2021's
+#                    wall uses E* = E/(2(1-nu)) where its pairs (and sparkdem's walls) use
+#                    E/(2(1-nu^2)); this variant ("wall-matched") makes the wall E* equal.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -28,6 +33,7 @@ workdir=""
 csv="$here/results.csv"
 use_lammps=1
 lammps_mpi=0
+matched_wall=0
 wait_policy=""
 dt=1e-5
 
@@ -41,7 +47,8 @@ while [[ $# -gt 0 ]]; do
     --no-lammps) use_lammps=0; shift ;;
     --lammps-mpi) lammps_mpi="$2"; shift 2 ;;
     --wait-policy) wait_policy="$2"; shift 2 ;;
-    -h|--help) sed -n '2,22p' "${BASH_SOURCE[0]}"; exit 0 ;;
+    --lammps-matched-wall) matched_wall=1; shift ;;
+    -h|--help) sed -n '2,24p' "${BASH_SOURCE[0]}"; exit 0 ;;
     *) echo "run_pour.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -49,8 +56,9 @@ done
 [[ "$steps" =~ ^[0-9]+$ && "$steps" -ge 500 && $((steps % 500)) -eq 0 ]] ||
   { echo "run_pour.sh: --steps must be a positive multiple of 500 (got $steps)" >&2; exit 2; }
 [[ -x "$sparkdem" ]] || { echo "run_pour.sh: sparkdem executable not found at $sparkdem (build it, or pass --sparkdem / set SPARKDEM_BIN)" >&2; exit 2; }
-command -v h5dump >/dev/null && command -v h5ls >/dev/null ||
-  { echo "run_pour.sh: needs h5dump and h5ls (Debian: hdf5-tools)" >&2; exit 2; }
+if ! command -v h5dump >/dev/null || ! command -v h5ls >/dev/null; then
+  echo "run_pour.sh: needs h5dump and h5ls (Debian: hdf5-tools)" >&2; exit 2
+fi
 [[ -z "$wait_policy" || "$wait_policy" == active || "$wait_policy" == passive ]] ||
   { echo "run_pour.sh: --wait-policy must be active or passive" >&2; exit 2; }
 if [[ $use_lammps -eq 1 ]] && ! command -v lmp >/dev/null; then
@@ -115,11 +123,11 @@ if [[ $use_lammps -eq 1 ]]; then
       exit 1
     fi
   fi
-  run_lammps() {  # variant threads ranks launcher...
-    local variant=$1 nthr=$2 ranks=$3; shift 3
+  run_lammps() {  # variant threads ranks input launcher...
+    local variant=$1 nthr=$2 ranks=$3 input=$4; shift 4
     local dir="$workdir/lammps_$variant"
     rm -rf "$dir"; mkdir -p "$dir"
-    sed -E "s/^run([[:space:]]+)30000/run\\1$steps/" "$lin" > "$dir/in.pour"
+    sed -E "s/^run([[:space:]]+)30000/run\\1$steps/" "$input" > "$dir/in.pour"
     grep -qE "^run[[:space:]]+$steps\$" "$dir/in.pour" || { echo "run_pour.sh: could not set the LAMMPS step count" >&2; exit 1; }
     echo "-- LAMMPS $variant: (cd $dir && OMP_NUM_THREADS=$nthr $* -in in.pour -log none)"
     local t0 t1
@@ -130,11 +138,11 @@ if [[ $use_lammps -eq 1 ]]; then
     grep -E "^Loop time" "$dir/screen.out"
     printf 'lammps\t%s\t%s\t%s\t%s\t%s\n' "$variant" "$nthr" "$ranks" "$(elapsed "$t0" "$t1")" "$dir" >> "$manifest"
   }
-  run_lammps serial 1 1 lmp
+  run_lammps serial 1 1 "$lin" lmp
   # A threaded LAMMPS needs the OPENMP package (-sf omp -pk omp 2); note that pair granular and
   # fix wall/gran have no /omp variant, so -sf omp would leave them serial anyway.
   if lmp -h | sed -n '/^Installed packages:/,/^List of individual/p' | grep -qw OPENMP; then
-    run_lammps omp2 2 1 lmp -sf omp -pk omp 2 || echo "LAMMPS -sf omp variant failed: skipped"
+    run_lammps omp2 2 1 "$lin" lmp -sf omp -pk omp 2 || echo "LAMMPS -sf omp variant failed: skipped"
   else
     echo "LAMMPS: this build has no OPENMP package: the '-sf omp -pk omp 2' variant is skipped"
   fi
@@ -142,10 +150,27 @@ if [[ $use_lammps -eq 1 ]]; then
     if command -v mpirun >/dev/null; then
       mpi=(mpirun -np "$lammps_mpi")
       [[ $(id -u) -eq 0 ]] && mpi+=(--allow-run-as-root)
-      run_lammps "mpi$lammps_mpi" 1 "$lammps_mpi" "${mpi[@]}" lmp || echo "LAMMPS MPI variant failed: skipped"
+      run_lammps "mpi$lammps_mpi" 1 "$lammps_mpi" "$lin" "${mpi[@]}" lmp || echo "LAMMPS MPI variant failed: skipped"
     else
       echo "LAMMPS: mpirun not found: the MPI variant is skipped"
     fi
+  fi
+
+  if [[ $matched_wall -eq 1 ]]; then
+    matched="$workdir/lammps_pour_wall_matched.in"
+    python3 - "$lin" "$matched" <<'EOF'
+import re, sys
+out = []
+for line in open(sys.argv[1]):
+    m = re.match(r"(fix\s+\S+\s+\S+\s+wall/gran\s+granular\s+hertz/material\s+)(\S+)(\s+)(\S+)(\s+)(\S+)(.*)", line)
+    if m:
+        e, nu = float(m.group(2)), float(m.group(6))
+        line = f"{m.group(1)}{e / (1 + nu):.12g}{m.group(3)}{m.group(4)}{m.group(5)}{m.group(6)}{m.group(7)}\n"
+    out.append(line)
+open(sys.argv[2], "w").writelines(out)
+EOF
+    grep -E "wall/gran" "$matched"
+    run_lammps wall-matched 1 1 "$matched" lmp || echo "LAMMPS wall-matched variant failed: skipped"
   fi
 fi
 

@@ -36,9 +36,11 @@ class ContactModel {
   virtual std::vector<std::string> state_columns() const = 0;
   /// Particle-particle pass: fills table.force/torque/overlap rows (does not gather).
   virtual void pair_pass(const ParticleStore& p, ContactTable& table, double dt) const = 0;
-  /// Particle-wall pass: adds forces and torques to the particles; returns wall loads.
+  /// Particle-wall pass over the candidate particles of each wall (those within r + skin at the
+  /// last neighbour rebuild); adds forces and torques to the particles; returns wall loads.
   /// Wall history lives in the per-particle field "wall_state/<wall name>".
-  virtual WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, double dt) const = 0;
+  virtual WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls,
+                              const std::vector<std::vector<Index>>& candidates, double dt) const = 0;
   /// Stable step estimate from the current state [s]: min of the law's a-priori step (Rayleigh
   /// for Hertz laws) and 2/omega_max, with omega_max^2 bounded by Gershgorin on the mass-weighted
   /// stiffness matrix of the current contacts:
@@ -97,31 +99,32 @@ class ContactModelT final : public ContactModel {
     }
   }
 
-  WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, double dt) const override {
+  WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& cand,
+                      double dt) const override {
     WallLoads loads;
     loads.force.assign(walls.size(), Vec3::Zero());
     loads.normal.assign(walls.size(), 0.0);
-    if (walls.empty()) return loads;
     const int w = static_cast<int>(Law::state_columns().size());
-    std::vector<double*> hist(walls.size(), nullptr);
-    if (w > 0)
-      for (std::size_t k = 0; k < walls.size(); ++k) hist[k] = p.fields.data("wall_state/" + walls[k].name).data();
-    const std::size_t n = p.size();
-    const std::size_t nblocks = (n + detail::kBlock - 1) / detail::kBlock;
-    std::vector<Vec3> partial(nblocks * walls.size(), Vec3::Zero());
-    std::vector<double> partial_n(nblocks * walls.size(), 0.0);
+    for (std::size_t k = 0; k < walls.size(); ++k) {
+      double* hist = w > 0 ? p.fields.data("wall_state/" + walls[k].name).data() : nullptr;
+      const Wall& wall = walls[k];
+      const std::vector<Index>& list = cand[k];
+      const std::size_t n = list.size();
+      const std::size_t nblocks = (n + detail::kBlock - 1) / detail::kBlock;
+      std::vector<Vec3> partial(nblocks, Vec3::Zero());
+      std::vector<double> partial_n(nblocks, 0.0);
 #pragma omp parallel for schedule(static)
-    for (std::int64_t b = 0; b < static_cast<std::int64_t>(nblocks); ++b) {
-      const std::size_t lo = b * detail::kBlock, hi = std::min(n, lo + detail::kBlock);
-      for (std::size_t i = lo; i < hi; ++i) {
-        for (std::size_t k = 0; k < walls.size(); ++k) {
+      for (std::int64_t b = 0; b < static_cast<std::int64_t>(nblocks); ++b) {
+        const std::size_t lo = b * detail::kBlock, hi = std::min(n, lo + detail::kBlock);
+        for (std::size_t q = lo; q < hi; ++q) {
+          const Index i = list[q];
           Vec3 nrm;
           double dist;
-          walls[k].distance(p.position[i], nrm, dist);
+          wall.distance(p.position[i], nrm, dist);
           const double delta = p.radius[i] - dist;
-          double* state = w > 0 ? hist[k] + i * w : nullptr;
+          double* state = w > 0 ? hist + static_cast<std::size_t>(i) * w : nullptr;
           if (delta <= 0.0) {
-            for (int q = 0; q < w; ++q) state[q] = 0.0;
+            for (int c = 0; c < w; ++c) state[c] = 0.0;
             continue;
           }
           ContactGeometry g;
@@ -131,21 +134,21 @@ class ContactModelT final : public ContactModel {
           g.m_eff = p.mass[i];
           g.arm_i = dist;
           g.arm_j = 0.0;
-          const Vec3 vw = walls[k].u_dot * nrm;
+          g.wall = true;
+          const Vec3 vw = wall.u_dot * nrm;
           const RelativeMotion m = relative_motion(g, p.velocity[i], vw, p.omega[i], Vec3::Zero());
           const ContactForces f = law_(g, m, dt, state);
           p.force[i] += f.force;
           p.torque[i] += -g.arm_i * g.n.cross(f.tangential);
-          partial[b * walls.size() + k] -= f.force;
-          partial_n[b * walls.size() + k] += f.force.dot(g.n);
+          partial[b] -= f.force;
+          partial_n[b] += f.force.dot(g.n);
         }
       }
-    }
-    for (std::size_t b = 0; b < nblocks; ++b)
-      for (std::size_t k = 0; k < walls.size(); ++k) {
-        loads.force[k] += partial[b * walls.size() + k];
-        loads.normal[k] += partial_n[b * walls.size() + k];
+      for (std::size_t b = 0; b < nblocks; ++b) {
+        loads.force[k] += partial[b];
+        loads.normal[k] += partial_n[b];
       }
+    }
     return loads;
   }
 
@@ -181,6 +184,7 @@ class ContactModelT final : public ContactModel {
         g.overlap = p.radius[i] - dist;
         g.r_eff = p.radius[i];
         g.m_eff = p.mass[i];
+        g.wall = true;
         row[i] += law_.normal_stiffness(g) / p.mass[i] +
                   law_.tangential_stiffness(g) * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i]);
       }

@@ -13,6 +13,7 @@ struct ContactGeometry {
   double m_eff = 0.0;     ///< m* = m_i m_j / (m_i + m_j); m_i for a wall [kg]
   double arm_i = 0.0;     ///< centre of i to contact point [m]
   double arm_j = 0.0;     ///< centre of j to contact point (0 for a wall) [m]
+  bool wall = false;      ///< true for a particle-wall contact
 };
 
 struct RelativeMotion {
@@ -26,7 +27,7 @@ struct ContactForces {
   Vec3 tangential = Vec3::Zero();  ///< tangential part (for torques) [N]
 };
 
-inline RelativeMotion relative_motion(const ContactGeometry& g, const Vec3& vi, const Vec3& vj, const Vec3& wi,
+[[gnu::always_inline]] inline RelativeMotion relative_motion(const ContactGeometry& g, const Vec3& vi, const Vec3& vj, const Vec3& wi,
                                       const Vec3& wj) {
   RelativeMotion m;
   m.v = vi - vj - (g.arm_i * wi + g.arm_j * wj).cross(g.n);

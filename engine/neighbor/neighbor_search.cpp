@@ -132,14 +132,16 @@ std::vector<std::array<Index, 2>> find_pairs_brute_force(const std::vector<Vec3>
   return out;
 }
 
-bool VerletTracker::needs_rebuild(const std::vector<Vec3>& x, const std::vector<double>& r, double skin) const {
-  if (x.size() != x0_.size()) return true;
-  double dmax2 = 0.0, drmax = 0.0;
+bool VerletTracker::needs_rebuild(const std::vector<Vec3>& x, const std::vector<double>& r, double skin,
+                                  const std::vector<double>& wall_u) const {
+  if (x.size() != x0_.size() || wall_u.size() != u0_.size()) return true;
+  double dmax2 = 0.0, drmax = 0.0, du = 0.0;
+  for (std::size_t k = 0; k < wall_u.size(); ++k) du = std::max(du, std::abs(wall_u[k] - u0_[k]));
   for (std::size_t i = 0; i < x.size(); ++i) {
     dmax2 = std::max(dmax2, (x[i] - x0_[i]).squaredNorm());
     drmax = std::max(drmax, r[i] - r0_[i]);
   }
-  return 2.0 * (std::sqrt(dmax2) + drmax) > skin;
+  return 2.0 * (std::sqrt(dmax2) + drmax + du) > skin;
 }
 
 }  // namespace sparkdem

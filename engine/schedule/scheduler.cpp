@@ -26,6 +26,8 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
     m->declare(d);
     for (const auto& f : d.particle_fields) available.insert(f.name);
     for (const auto& w : d.writes) available.insert(w);
+    if (m->phase() == Phase::Force && c.kind != Clock::Kind::EveryStep)
+      throw SetupError("module '" + m->name() + "' adds forces, so it must run every mechanical step (its clock is not EveryStep)");
     if (m->phase() == Phase::Force) plan.items.push_back({K::Module, m->name(), m, c});
     else coupling.push_back(m);
   }

@@ -24,6 +24,7 @@ struct State {
   std::vector<Wall> walls;
   std::vector<Material> materials;
   VerletTracker verlet;
+  std::vector<std::vector<Index>> wall_candidates;  ///< per wall: particles within r + skin at the last rebuild
   Step step = 0;               ///< global step counter (all stages)
   double time = 0.0;           ///< [s] = stage_t0 + (step - stage_step0) * dt
   Step stage_step0 = 0;        ///< step at the start of the current stage
@@ -56,6 +57,13 @@ struct State {
     for (auto& w : walls) w.visit(ar, "state/walls/" + w.name);
     ar.visit("state/verlet/x0", verlet.x0());
     ar.visit("state/verlet/r0", verlet.r0());
+    ar.visit("state/verlet/u0", verlet.u0());
+    // Candidate lists exist only once a stage has built them; an empty set forces a rebuild.
+    std::int64_t have = wall_candidates.size() == walls.size() ? 1 : 0;
+    ar.visit("state/wall_candidates_valid", have);
+    if (ar.reading()) wall_candidates.assign(have ? walls.size() : 0, {});
+    if (have)
+      for (std::size_t k = 0; k < walls.size(); ++k) ar.visit("state/wall_candidates/" + walls[k].name, wall_candidates[k]);
     ar.visit("state/step", step);
     ar.visit("state/time", time);
     ar.visit("state/stage_step0", stage_step0);

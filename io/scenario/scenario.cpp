@@ -258,7 +258,7 @@ json read_json_file(const std::filesystem::path& file) {
   ss << in.rdbuf();
   try {
     return json::parse(ss.str());
-  } catch (const json::parse_error& e) {
+  } catch (const json::exception& e) {  // parse_error, or out_of_range for a number like 1e400
     throw ConfigError("", "'" + file.string() + "' is not valid JSON: " + e.what());
   }
 }
@@ -491,7 +491,13 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
         for (auto& m : st.generator->modules()) st.modules.push_back(std::move(m));
       }
       // Consistency: a lattice inside the scenario walls (scratch generation, no dynamics).
-      if (st.generator && st.type == "lattice" && errors.size() == before) {
+      // Cheap only up to ~1e6 particles; a larger lattice is not generated just for this check,
+      // and one that could never be allocated (a typo in spacing or hi) is an error.
+      const double lattice_n = st.generator && st.type == "lattice" ? st.generator->estimated_particles() : 0.0;
+      if (!(lattice_n <= 1e9))
+        errors.push_back({path + "/generator", "the lattice would create " + std::to_string(lattice_n) +
+                                                   " particles (more than 1e9); check spacing, lo and hi"});
+      if (st.generator && st.type == "lattice" && errors.size() == before && lattice_n <= 1e6) {
         State scratch;
         scratch.materials = sc.materials;
         scratch.walls = sc.walls;

@@ -2,6 +2,8 @@
 /// Pure contact kernels shared by the contact laws (LAMMPS granular sub-model style).
 /// Every function is stateless; state (tangential history) is passed explicitly.
 #include <cmath>
+#include <map>
+#include <mutex>
 
 #include "engine/contact/geometry.hpp"
 
@@ -68,15 +70,29 @@ inline double hertz_tsuji_restitution(double alpha, double* duration = nullptr) 
 }
 
 /// Inverse of hertz_tsuji_restitution by bisection: alpha such that e(alpha) = e_target.
+/// The bisection integrates ~60 impacts (~50 ms), so results are memoised per e_target (every
+/// scenario load builds its laws; the value is a pure function of e_target).
 inline double hertz_tsuji_alpha_for_restitution(double e_target) {
   if (e_target >= 1.0) return 0.0;
+  static std::mutex mutex;
+  static std::map<double, double> memo;
+  const bool memoise = !std::isnan(e_target);  // NaN keys would break the map's ordering
+  if (memoise) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = memo.find(e_target); it != memo.end()) return it->second;
+  }
   double lo = 0.0, hi = 1.0;
   while (hertz_tsuji_restitution(hi) > e_target) hi *= 2.0;
   for (int k = 0; k < 60; ++k) {
     const double mid = 0.5 * (lo + hi);
     if (hertz_tsuji_restitution(mid) > e_target) lo = mid; else hi = mid;
   }
-  return 0.5 * (lo + hi);
+  const double alpha = 0.5 * (lo + hi);
+  if (memoise) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    memo.emplace(e_target, alpha);
+  }
+  return alpha;
 }
 
 /// Linear spring-dashpot damping coefficient for an exact restitution e [kg/s]:

@@ -6,6 +6,10 @@
 /// Damping:  F_nd = -alpha_T(e) sqrt(m* k_nfac) v_n, alpha_T = Tsuji et al. 1992 polynomial
 /// Tangent:  linear_history with stiffness k_t [N/m] (a constant, as in LAMMPS),
 ///           gamma_t = x_gammat alpha_T sqrt(m* k_nfac), Coulomb mu |F_ne + F_nd|
+/// Walls: `fix wall/gran granular hertz/material` of the Debian LAMMPS (29 Sep 2021) uses
+///   E*_wall = E / (2 (1 - nu)) instead of the pair value E / (2 (1 - nu^2)) (found by probing the
+///   installed lmp; LAMMPS releases from 2023 use the pair formula). `lammps2021_wall_modulus`
+///   (default true, for like-for-like runs against the Debian peer) selects the old one.
 /// Source: LAMMPS documentation of pair_style granular (2022); Tsuji, Tanaka, Ishida,
 /// Powder Technol. 71 (1992) 239.
 #include <string>
@@ -27,6 +31,7 @@ struct LammpsHertzTsuji {
     double tangential_stiffness = 1.0;
     double x_gammat = 1.0;
     double friction = 0.3;
+    bool lammps2021_wall_modulus = true;
   };
   static ParamSpec<Params> spec() {
     ParamSpec<Params> s(std::string(kName), "contact_law",
@@ -37,15 +42,18 @@ struct LammpsHertzTsuji {
     s.add("tangential_stiffness", &Params::tangential_stiffness).unit("N/m").nonnegative().doc("k_t of linear_history");
     s.add("x_gammat", &Params::x_gammat).unit("1").nonnegative().doc("tangential damping / normal damping");
     s.add("friction", &Params::friction).unit("1").nonnegative().doc("Coulomb coefficient mu");
+    s.add("lammps2021_wall_modulus", &Params::lammps2021_wall_modulus)
+        .doc("walls use E/(2(1-nu)) as fix wall/gran of LAMMPS 29Sep2021 does (false: the pair E/(2(1-nu^2)))");
     return s;
   }
   static std::vector<std::string> state_columns() { return {"shear_x", "shear_y", "shear_z"}; }
   explicit LammpsHertzTsuji(const Params& p)
       : p_(p), e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
+        e_star_wall_(p.lammps2021_wall_modulus ? p.youngs_modulus / (2.0 * (1.0 - p.poisson_ratio)) : e_star_),
         alpha_(kernel::tsuji_alpha_polynomial(p.restitution)) {}
 
   ContactForces operator()(const ContactGeometry& g, const RelativeMotion& m, double dt, double* xi) const {
-    const double knfac = 4.0 / 3.0 * e_star_ * std::sqrt(g.r_eff * g.overlap);
+    const double knfac = 4.0 / 3.0 * (g.wall ? e_star_wall_ : e_star_) * std::sqrt(g.r_eff * g.overlap);
     const double damp = alpha_ * std::sqrt(g.m_eff * knfac);
     const double fn = knfac * g.overlap - damp * m.vn;
     ContactForces f;
@@ -54,7 +62,9 @@ struct LammpsHertzTsuji {
     f.force = fn * g.n + f.tangential;
     return f;
   }
-  double normal_stiffness(const ContactGeometry& g) const { return kernel::hertz_stiffness(e_star_, g.r_eff, g.overlap); }
+  double normal_stiffness(const ContactGeometry& g) const {
+    return kernel::hertz_stiffness(g.wall ? e_star_wall_ : e_star_, g.r_eff, g.overlap);
+  }
   double tangential_stiffness(const ContactGeometry&) const { return p_.tangential_stiffness; }
   double rayleigh_dt(double radius, double density) const {
     return kernel::rayleigh_step(radius, density, p_.youngs_modulus, p_.poisson_ratio);
@@ -62,7 +72,7 @@ struct LammpsHertzTsuji {
 
  private:
   Params p_;
-  double e_star_, alpha_;
+  double e_star_, e_star_wall_, alpha_;
 };
 
 }  // namespace sparkdem::physics

@@ -70,6 +70,9 @@ void LatticeGenerator::generate(State& s) {
   const double r = 0.5 * p_.diameter;
   std::array<std::int64_t, 3> a{}, b{};
   for (int d = 0; d < 3; ++d) {
+    // Lattice indices must fit an int64 (a huge lo or hi would overflow the cast below).
+    if (!(std::abs(p_.lo[d] / p_.spacing) < 9e15)) throw ConfigError("/lo", "lo / spacing is out of range (|lo / spacing| >= 9e15)");
+    if (!(std::abs(p_.hi[d] / p_.spacing) < 9e15)) throw ConfigError("/hi", "hi / spacing is out of range (|hi / spacing| >= 9e15)");
     a[d] = static_cast<std::int64_t>(std::ceil(p_.lo[d] / p_.spacing - 1e-9));
     b[d] = static_cast<std::int64_t>(std::floor(p_.hi[d] / p_.spacing + 1e-9));
   }

@@ -1,0 +1,244 @@
+/// Configuration errors: every class is reported with the JSON pointer of the offending value,
+/// in process (io::load_scenario throws ConfigError with that Diagnostic path) and through the
+/// executable (`sparkdem check` and `sparkdem run` exit with code 2, print the path on stderr and
+/// create no output directory).
+#include <catch2/catch.hpp>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "engine/core/error.hpp"
+#include "engine/model/registry.hpp"
+#include "io/scenario/scenario.hpp"
+#include "physics/register_all.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using sparkdem::ConfigError;
+
+struct ScratchDir {
+  fs::path path;
+  ScratchDir() {
+    static std::atomic<int> counter{0};
+    path = fs::temp_directory_path() /
+           ("sparkdem_cfgerr_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" +
+            std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
+    fs::create_directories(path);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+const sparkdem::Registry& registry() {
+  static const sparkdem::Registry reg = [] {
+    sparkdem::Registry r;
+    sparkdem::physics::register_all(r);
+    return r;
+  }();
+  return reg;
+}
+
+/// A valid scene: lattice of 288 spheres in a box of five walls, then 10 steps under gravity.
+json valid_scene() {
+  std::ifstream in(fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data/restart_pour.json");
+  json j = json::parse(in);
+  j["stages"][1]["stop"] = {{"steps", 10}};
+  return j;
+}
+
+/// A scene with one generator stage (deposit or fill) and no scenario walls.
+json generator_scene(const std::string& type, const json& generator) {
+  json j = valid_scene();
+  j["walls"] = json::array();
+  j["stages"] = json::array({{{"name", "gen"}, {"type", type}, {"dt", 1e-9}, {"generator", generator}, {"stop", {{"steps", 10}}}}});
+  return j;
+}
+
+struct CliResult {
+  int code = -1;
+  std::string err;
+};
+
+/// `sparkdem <args>` with stdout discarded and stderr captured.
+CliResult cli(const std::string& args, const fs::path& dir) {
+  const fs::path err = dir / "stderr.txt";
+  const std::string cmd = "OMP_NUM_THREADS=1 '" + std::string(SPARKDEM_BINARY) + "' " + args + " > /dev/null 2> '" + err.string() + "'";
+  const int rc = std::system(cmd.c_str());
+  CliResult r;
+  if (rc != -1 && WIFEXITED(rc)) r.code = WEXITSTATUS(rc);
+  std::ifstream in(err);
+  r.err.assign(std::istreambuf_iterator<char>(in), {});
+  return r;
+}
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+/// The scenario file `scene` must be rejected by check and run with exit code 2 and every
+/// (path, message fragment) pair on stderr; run must not create its output directory.
+void expect_cli_rejects(const fs::path& scene, const std::vector<std::pair<std::string, std::string>>& expected,
+                        const fs::path& dir) {
+  for (const std::string sub : {"check", "run"}) {
+    const fs::path out = dir / ("out_" + sub);
+    const CliResult r = cli(sub + " '" + scene.string() + "'" + (sub == "run" ? " --quiet -o '" + out.string() + "'" : ""), dir);
+    INFO("sparkdem " << sub << " stderr:\n" << r.err);
+    CHECK(r.code == 2);
+    CHECK(contains(r.err, "configuration error"));
+    for (const auto& [path, fragment] : expected) {
+      CHECK(contains(r.err, path + ": "));
+      CHECK(contains(r.err, fragment));
+    }
+    CHECK_FALSE(fs::exists(out));
+  }
+}
+
+/// In process: load_scenario throws ConfigError holding each expected (path, fragment); then
+/// the same through the executable.
+void expect_rejected(const json& scene, const std::vector<std::pair<std::string, std::string>>& expected) {
+  try {
+    (void)sparkdem::io::load_scenario(scene, registry(), SPARKDEM_SOURCE_DIR);
+    FAIL("load_scenario accepted an invalid scenario");
+  } catch (const ConfigError& e) {
+    INFO("diagnostics: " << e.what());
+    CHECK(e.diagnostics().size() == expected.size());
+    for (const auto& [path, fragment] : expected) {
+      bool found = false;
+      for (const auto& d : e.diagnostics()) found = found || (d.path == path && contains(d.message, fragment));
+      CHECK(found);
+    }
+  }
+  ScratchDir dir;
+  const fs::path file = dir.path / "scene.json";
+  std::ofstream(file) << scene.dump(2);
+  expect_cli_rejects(file, expected, dir.path);
+}
+
+}  // namespace
+
+TEST_CASE("the base scene of the error tests is valid", "[config_errors][scenario]") {
+  // Reference point: without the mutation the scene loads (otherwise the tests below prove nothing).
+  const auto sc = sparkdem::io::load_scenario(valid_scene(), registry(), SPARKDEM_SOURCE_DIR);
+  CHECK(sc.stages.size() == 2);
+  ScratchDir dir;
+  const fs::path file = dir.path / "scene.json";
+  std::ofstream(file) << valid_scene().dump(2);
+  CHECK(cli("check '" + file.string() + "'", dir.path).code == 0);
+}
+
+TEST_CASE("each class of configuration error names its JSON path (exit 2, no output directory)", "[config_errors][scenario]") {
+  SECTION("unknown key, with a did-you-mean") {
+    json j = valid_scene();
+    j["stages"][1]["dtt"] = 1e-5;
+    expect_rejected(j, {{"/stages/1/dtt", "did you mean \"dt\""}});
+  }
+  SECTION("missing required key") {
+    json j = valid_scene();
+    j["materials"][0].erase("density");
+    expect_rejected(j, {{"/materials/0/density", "missing required key \"density\""}});
+  }
+  SECTION("wrong type") {
+    json j = valid_scene();
+    j["stages"][1]["stop"]["time"] = "long";
+    expect_rejected(j, {{"/stages/1/stop/time", "expected number, found \"long\""}});
+  }
+  SECTION("out-of-range value") {
+    json j = valid_scene();
+    j["contact"]["params"]["restitution"] = 1.5;
+    expect_rejected(j, {{"/contact/params/restitution", "found 1.5"}});
+  }
+  SECTION("unknown contact law: the message lists every registered law") {
+    json j = valid_scene();
+    j["contact"]["law"] = "hertz_mindlinn";
+    std::vector<std::pair<std::string, std::string>> expected = {{"/contact/law", "unknown contact law \"hertz_mindlinn\""}};
+    for (const auto& [name, entry] : registry().laws()) expected.push_back({"/contact/law", name});
+    REQUIRE(registry().laws().size() >= 3);
+    try {
+      (void)sparkdem::io::load_scenario(j, registry(), SPARKDEM_SOURCE_DIR);
+      FAIL("accepted");
+    } catch (const ConfigError& e) {
+      REQUIRE(e.diagnostics().size() == 1);
+      for (const auto& [path, fragment] : expected) CHECK(contains(e.diagnostics()[0].message, fragment));
+    }
+    ScratchDir dir;
+    std::ofstream(dir.path / "scene.json") << j.dump(2);
+    expect_cli_rejects(dir.path / "scene.json", expected, dir.path);
+  }
+  SECTION("motion of a wall that does not exist") {
+    json j = valid_scene();
+    j["stages"][1]["walls"] = {{"lid", {{"type", "velocity"}, {"speed", 0.1}}}};
+    expect_rejected(j, {{"/stages/1/walls/lid", "no wall named \"lid\""}});
+  }
+  SECTION("table size distribution whose cumulative fractions end at 0.9, not 1") {
+    const json table = {{"type", "table"}, {"diameters", {10e-6, 20e-6, 30e-6}}, {"cumulative_fraction", {0.2, 0.5, 0.9}}};
+    // Particle count from the volume (0) and given explicitly: both must be caught at load.
+    for (int n : {0, 50}) {
+      INFO("particles = " << n);
+      expect_rejected(generator_scene("deposit", {{"particles", n}, {"size_distribution", table}}),
+                      {{"/stages/0/generator/size_distribution/cumulative_fraction", "last cumulative fraction is 0.9"}});
+    }
+  }
+  SECTION("walls that do not enclose the lattice") {
+    json j = valid_scene();
+    j["stages"][0]["generator"]["hi"] = {0.03, 0.015, 0.02};  // 12 columns in x; the xhi wall is at 0.0175 m
+    expect_rejected(j, {{"/stages/0/generator", "outside wall 'xhi'"}});
+  }
+  SECTION("container too small for the requested particles") {
+    // 5000 spheres of mean radius 0.1 mm (spread 0.125) in a 1 mm^3 box: solid fraction
+    // 5000 * 4/3 pi (1e-4)^3 * (1 + 0.125^2) / 1e-9 = 21.3 > 0.74.
+    const json gen = {{"shape", "box"}, {"lo", {0, 0, 0}}, {"hi", {1e-3, 1e-3, 1e-3}}, {"particles", 5000}, {"mean_radius", 1e-4}};
+    expect_rejected(generator_scene("fill", gen), {{"/stages/0/generator/particles", "solid fraction 21.27 > 0.74"}});
+    // The same particles at a tenth of the radius fit (fraction 0.021): no error.
+    json ok = generator_scene("fill", gen);
+    ok["stages"][0]["generator"]["mean_radius"] = 1e-5;
+    CHECK_NOTHROW(sparkdem::io::load_scenario(ok, registry(), SPARKDEM_SOURCE_DIR));
+  }
+  SECTION("several errors in one file are reported together") {
+    json j = valid_scene();
+    j["stages"][1]["dtt"] = 1e-5;
+    j["contact"]["params"]["restitution"] = -0.5;
+    j["materials"][0].erase("density");
+    j["walls"][2]["normal"] = {1, 0};
+    expect_rejected(j, {{"/stages/1/dtt", "did you mean"},
+                        {"/contact/params/restitution", "found -0.5"},
+                        {"/materials/0/density", "missing required key"},
+                        {"/walls/2/normal", "expected an array of 3 numbers"}});
+  }
+}
+
+TEST_CASE("unreadable and malformed scenario files exit with code 2", "[config_errors][scenario]") {
+  ScratchDir dir;
+  SECTION("unreadable file") {
+    const fs::path missing = dir.path / "no_such_scene.json";
+    CHECK_THROWS_AS(sparkdem::io::read_json_file(missing), ConfigError);
+    expect_cli_rejects(missing, {{"/", "cannot read the scenario file"}, {"/", "no_such_scene.json"}}, dir.path);
+  }
+  SECTION("malformed JSON: the message gives line and column") {
+    const fs::path bad = dir.path / "bad.json";
+    std::ofstream(bad) << "{\n  \"name\": \"x\",\n  \"seed\": ,\n}\n";  // value missing at line 3, column 11
+    try {
+      (void)sparkdem::io::read_json_file(bad);
+      FAIL("accepted");
+    } catch (const ConfigError& e) {
+      CHECK(contains(e.what(), "line 3, column 11"));
+    }
+    expect_cli_rejects(bad, {{"/", "is not valid JSON"}, {"/", "line 3, column 11"}}, dir.path);
+  }
+  SECTION("a number beyond the double range is invalid JSON, not an internal error") {
+    const fs::path big = dir.path / "big.json";
+    std::ofstream(big) << "{\"name\": \"x\", \"seed\": 1e400}\n";  // nlohmann throws out_of_range, not parse_error
+    CHECK_THROWS_AS(sparkdem::io::read_json_file(big), ConfigError);
+    expect_cli_rejects(big, {{"/", "is not valid JSON"}, {"/", "1e400"}}, dir.path);
+  }
+}
