@@ -79,6 +79,16 @@ std::vector<double> builtin_values(const State& s) {
 void Simulation::sample(std::vector<std::string>& cols, std::vector<double>& vals) const {
   cols = builtin_columns(s_);
   vals = builtin_values(s_);
+  for (const auto& [name, v] : prescribed_) {
+    (void)v;
+    const auto& f = s_.particles.fields.data("set/" + name);
+    Vec3 F = Vec3::Zero();
+    double n = 0.0;
+    for (std::size_t i = 0; i < f.size(); ++i)
+      if (f[i] > 0.5) { F += s_.particles.force[i]; n += 1.0; }
+    cols.insert(cols.end(), {"set_" + name + "_count", "set_" + name + "_fx", "set_" + name + "_fy", "set_" + name + "_fz"});
+    vals.insert(vals.end(), {n, F[0], F[1], F[2]});
+  }
   for (const Monitor* m : monitors_) {
     auto c = m->columns(s_);
     auto v = m->values(s_);
@@ -198,7 +208,19 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   for (auto& w : s_.walls) {
     auto it = cfg.motions.find(w.name);
     w.motion = it != cfg.motions.end() ? it->second : WallMotion{};
-    if (!resume) w.u_start = w.u;
+    if (!resume) { w.u_start = w.u; w.halted = false; }
+  }
+  // Prescribed-velocity sets: not integrated, moved with their velocity (see verlet_first_half).
+  prescribed_ = cfg.prescribed_sets;
+  for (const auto& [name, v] : cfg.prescribed_sets) {
+    if (!s_.particles.fields.has("set/" + name))
+      throw SetupError("stage '" + cfg.name + "': particle set '" + name + "' is not defined");
+    const auto& f = s_.particles.fields.data("set/" + name);
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (f[i] > 0.5) {
+        p.fixed[i] = 1;
+        if (!resume) { p.velocity[i] = v; p.omega[i].setZero(); }
+      }
   }
   if (!resume) {
     s_.stage_step0 = s_.step;
@@ -268,12 +290,25 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     if (cfg.frame_every > 0) obs.frame(s_);
   }
 
+  auto halt_walls = [&]() {
+    bool sampled = false;
+    for (auto& w : s_.walls) {
+      if (w.halted || w.motion.halt_quantity.empty()) continue;
+      if (!sampled) { sample(cols, vals); sampled = true; }
+      auto it = std::find(cols.begin(), cols.end(), w.motion.halt_quantity);
+      if (it == cols.end()) throw SetupError("wall '" + w.name + "': halt quantity '" + w.motion.halt_quantity + "' is not monitored");
+      if (vals[it - cols.begin()] >= w.motion.halt_value) w.halted = true;
+    }
+  };
   bool reached = false;
   const Step log_every = cfg.log_every > 0 ? cfg.log_every : 100;
   for (;;) {
     const Step k = s_.step - s_.stage_step0;  // steps done in this stage
     if (k >= cfg.max_steps || static_cast<double>(k) * dt_used >= cfg.duration * (1.0 - 1e-12)) break;
-    if (k > 0 && k % cfg.check_every == 0 && until_holds()) { reached = true; break; }
+    if (k > 0 && k % cfg.check_every == 0) {
+      halt_walls();
+      if (until_holds()) { reached = true; break; }
+    }
 
     // ---- one step: execute the plan ----
     const double t_new = static_cast<double>(k + 1) * dt_used;  // stage time at the end of the step
@@ -350,6 +385,8 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   for (std::size_t q = 0; q < cols.size(); ++q) res.final_values[cols[q]] = vals[q];
   if (cfg.mass_scaling != 1.0)
     for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] /= cfg.mass_scaling; p.inertia[i] /= cfg.mass_scaling; }
+  for (auto& f : p.fixed) f = 0;
+  prescribed_.clear();
   res.wall_seconds = std::chrono::duration<double>(clock::now() - t_start).count();
   res.particle_steps_per_second =
       res.wall_seconds > 0 ? static_cast<double>(res.steps) * static_cast<double>(p.size()) / res.wall_seconds : 0.0;

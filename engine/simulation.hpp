@@ -50,6 +50,9 @@ struct StageConfig {
   Step checkpoint_every = 0;
   Step log_every = 0;              ///< progress callback cadence; 0 = auto
   std::map<std::string, WallMotion> motions;  ///< motions of named walls during this stage
+  /// Particle sets (field "set/<name>") held at a prescribed velocity [m/s] during the stage
+  /// (zero = frozen); their total contact force is in the time series (set_<name>_fx/fy/fz).
+  std::map<std::string, Vec3> prescribed_sets;
 };
 
 /// Callbacks to the I/O layer (the engine never writes files itself).
@@ -110,6 +113,7 @@ class Simulation {
   std::vector<const Monitor*> monitors_;
   StepPlan plan_;
   double skin_ = 0.0;
+  std::map<std::string, Vec3> prescribed_;
 };
 
 /// Built-in monitors available in every stage.

@@ -13,7 +13,10 @@ inline void verlet_first_half(ParticleStore& p, double dt) {
   const std::int64_t n = static_cast<std::int64_t>(p.size());
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
-    if (p.fixed[i]) continue;
+    if (p.fixed[i]) {  // prescribed velocity (zero = frozen): moved, not integrated
+      p.position[i] += dt * p.velocity[i];
+      continue;
+    }
     p.velocity[i] += 0.5 * dt / p.mass[i] * p.force[i];
     p.position[i] += dt * p.velocity[i];
     p.omega[i] += 0.5 * dt / p.inertia[i] * p.torque[i];

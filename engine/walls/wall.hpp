@@ -41,6 +41,8 @@ struct WallMotion {
   std::vector<double> pressure_value;  ///< [Pa]
   double area = 0.0;                   ///< [m^2] area the pressure acts on (0 = from the enclosing cylinder)
   double max_speed = 0.0;              ///< [m/s] servo speed limit
+  std::string halt_quantity;           ///< stop the wall for good once this monitor column ...
+  double halt_value = 0.0;             ///< ... reaches at least this value (checked with `until`)
 };
 
 struct Wall {
@@ -52,6 +54,7 @@ struct Wall {
   double u_start = 0.0;    ///< offset at the start of the current motion [m]
   Vec3 force = Vec3::Zero();  ///< total force of the particles on the wall [N]
   double normal_force = 0.0;  ///< component of `force` against the inward normal (push) [N]
+  bool halted = false;        ///< the motion's halt condition was met: the wall stays where it is
 
   bool is_plane() const { return std::holds_alternative<PlaneShape>(shape); }
   /// Inward normal at a particle centre x and signed distance from the wall to x (> 0 inside).
@@ -91,6 +94,7 @@ struct Wall {
     ar.visit(prefix + "/force", f);
     force = f.at(0);
     ar.visit(prefix + "/normal_force", normal_force);
+    ar.visit(prefix + "/halted", halted);
   }
 };
 
@@ -109,6 +113,10 @@ inline double interpolate(const std::vector<double>& t, const std::vector<double
 /// `area_hint` is used when a pressure motion has area 0 (the die cross-section).
 inline void advance_wall(Wall& w, double t_stage, double dt, double area_hint) {
   const WallMotion& m = w.motion;
+  if (w.halted) {
+    w.u_dot = 0.0;
+    return;
+  }
   switch (m.kind) {
     case WallMotion::Kind::Fixed:
       w.u = w.u_start;

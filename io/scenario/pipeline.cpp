@@ -214,6 +214,10 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
         if (st.generator) st.generator->generate(s);
         s.stage_index = static_cast<std::int64_t>(k);
       }
+      json set_counts;
+      if (!resuming) {
+        for (const auto& [name, sel] : st.sets) set_counts[name] = assign_set(s, name, sel);
+      }
       const ContactModel& law = sc.law_of(st);
       Simulation sim(s, law);
       std::vector<Module*> mods;
@@ -228,6 +232,7 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
       json js;
       js["name"] = st.cfg.name;
       js["type"] = st.type;
+      if (!set_counts.is_null()) js["particle_sets"] = set_counts;
       if (st.dynamics) {
         const StageResult r = sim.run_stage(st.cfg, obs, resuming);
         obs.end_stage_line();

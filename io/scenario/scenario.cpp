@@ -75,6 +75,28 @@ ParamSpec<MotionParams> motion_spec() {
   s.add("max_speed", &MotionParams::max_speed).unit("m/s").nonnegative().doc("pressure: servo speed limit");
   return s;
 }
+struct SetParams {
+  std::string type = "top_layer";
+  double thickness = 0.0;
+  std::string wall;
+  double tolerance = 0.0;
+  std::vector<double> ids;
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+};
+ParamSpec<SetParams> set_spec() {
+  ParamSpec<SetParams> s("particle_set", "particle_set",
+                         "a named particle set, evaluated at the start of each stage that lists it in `sets` or "
+                         "`prescribe`; stored as the field set/<name>");
+  s.add("type", &SetParams::type).choices({"top_layer", "bottom_layer", "touching_wall", "ids", "box"}).doc("selector");
+  s.add("thickness", &SetParams::thickness).unit("m").nonnegative().doc("top/bottom_layer: centres within this height of the extreme centre");
+  s.add("wall", &SetParams::wall).doc("touching_wall: wall name");
+  s.add("tolerance", &SetParams::tolerance).unit("m").nonnegative().doc("touching_wall: allowed surface gap");
+  s.add("ids", &SetParams::ids).nonnegative().doc("ids: particle ids");
+  s.add_vec3("lo", &SetParams::lo).unit("m").doc("box: lower corner");
+  s.add_vec3("hi", &SetParams::hi).unit("m").doc("box: upper corner");
+  return s;
+}
+
 struct StageParams {
   std::string name = "stage";
   std::string type = "dynamics";
@@ -268,7 +290,36 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
   Scenario sc;
   if (!j.is_object()) throw ConfigError("", "expected a JSON object at the top level, found " + describe(j));
   json resolved_top;
-  const TopParams top = build(top_spec(), j, "", errors, resolved_top, {"materials", "contact", "walls", "stages"});
+  const TopParams top = build(top_spec(), j, "", errors, resolved_top, {"materials", "contact", "walls", "stages", "particle_sets"});
+  // Particle sets
+  std::map<std::string, SetSelector> sets;
+  if (j.contains("particle_sets")) {
+    if (!j["particle_sets"].is_object()) errors.push_back({"/particle_sets", "expected an object {name: selector}, found " + describe(j["particle_sets"])});
+    else
+      for (auto it = j["particle_sets"].begin(); it != j["particle_sets"].end(); ++it) {
+        json r;
+        const std::string sp = "/particle_sets/" + it.key();
+        const SetParams sp_ = build(set_spec(), it.value(), sp, errors, r);
+        SetSelector sel;
+        if (sp_.type == "top_layer") sel.kind = SetSelector::Kind::TopLayer;
+        if (sp_.type == "bottom_layer") sel.kind = SetSelector::Kind::BottomLayer;
+        if (sp_.type == "touching_wall") sel.kind = SetSelector::Kind::TouchingWall;
+        if (sp_.type == "ids") sel.kind = SetSelector::Kind::Ids;
+        if (sp_.type == "box") sel.kind = SetSelector::Kind::Box;
+        if ((sp_.type == "top_layer" || sp_.type == "bottom_layer") && !(sp_.thickness > 0.0))
+          errors.push_back({sp + "/thickness", "a layer set needs thickness > 0 [m]"});
+        if (sp_.type == "touching_wall" && sp_.wall.empty()) errors.push_back({sp + "/wall", "a touching_wall set needs a wall name"});
+        if (sp_.type == "ids" && sp_.ids.empty()) errors.push_back({sp + "/ids", "an ids set needs at least one id"});
+        sel.thickness = sp_.thickness;
+        sel.wall = sp_.wall;
+        sel.tolerance = sp_.tolerance;
+        for (double x : sp_.ids) sel.ids.push_back(static_cast<Id>(x));
+        sel.lo = sp_.lo;
+        sel.hi = sp_.hi;
+        sets[it.key()] = sel;
+        resolved_top["particle_sets"][it.key()] = r;
+      }
+  }
   sc.name = top.name;
   sc.seed = static_cast<std::uint64_t>(top.seed);
   sc.resolved = resolved_top;
@@ -316,7 +367,7 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
       const json& js = j["stages"][k];
       json r;
       const std::size_t before = errors.size();
-      const StageParams p = build(sspec, js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact"});
+      const StageParams p = build(sspec, js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact", "sets", "prescribe"});
       StageDef st;
       st.path = path;
       st.type = p.type;
@@ -469,6 +520,44 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
         }
       }
       (void)stage_walls;
+      // Particle sets evaluated at the stage start, and sets held at a prescribed velocity.
+      auto use_set = [&](const std::string& name, const std::string& at) {
+        auto it = sets.find(name);
+        if (it == sets.end()) {
+          std::vector<std::string> names;
+          for (const auto& [k, v] : sets) names.push_back(k);
+          const auto dym = did_you_mean(name, names);
+          errors.push_back({at, "no particle set named \"" + name + "\" in /particle_sets" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});
+          return;
+        }
+        for (const auto& [n, s2] : st.sets)
+          if (n == name) return;
+        st.sets.emplace_back(name, it->second);
+      };
+      if (js.contains("sets")) {
+        if (!js["sets"].is_array()) errors.push_back({path + "/sets", "expected an array of particle set names"});
+        else
+          for (std::size_t q = 0; q < js["sets"].size(); ++q) {
+            if (!js["sets"][q].is_string()) errors.push_back({path + "/sets/" + std::to_string(q), "expected a set name, found " + describe(js["sets"][q])});
+            else use_set(js["sets"][q].get<std::string>(), path + "/sets/" + std::to_string(q));
+          }
+        r["sets"] = js["sets"];
+      }
+      if (js.contains("prescribe")) {
+        if (!js["prescribe"].is_object()) errors.push_back({path + "/prescribe", "expected an object {set name: [vx, vy, vz]}"});
+        else
+          for (auto it = js["prescribe"].begin(); it != js["prescribe"].end(); ++it) {
+            const std::string at = path + "/prescribe/" + it.key();
+            const auto& v = it.value();
+            if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number()) {
+              errors.push_back({at, "expected a velocity [vx, vy, vz] in m/s, found " + describe(v)});
+              continue;
+            }
+            use_set(it.key(), at);
+            c.prescribed_sets[it.key()] = Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+          }
+        r["prescribe"] = js["prescribe"];
+      }
       // Until
       if (js.contains("until")) {
         if (!js["until"].is_object()) errors.push_back({path + "/until", "expected an object {quantity: {\"above\"|\"below\": value}}"});
@@ -523,6 +612,9 @@ json schema_json(const Registry& reg) {
   j["wall"] = spec_to_json(wall_spec().spec());
   j["motion"] = spec_to_json(motion_spec().spec());
   j["stage"] = spec_to_json(stage_spec(reg).spec());
+  j["particle_set"] = spec_to_json(set_spec().spec());
+  j["stage"]["sets"] = "array of particle-set names evaluated at the stage start";
+  j["stage"]["prescribe"] = "object {set name: [vx, vy, vz] m/s}: the set moves at this velocity (zero = frozen)";
   j["stage"]["until"] = "object {quantity: {\"above\"|\"below\": value}}; quantities are time-series columns";
   for (const auto& [k, v] : reg.laws()) j["contact_laws"][k] = spec_to_json(v.spec);
   for (const auto& [k, v] : reg.modules()) j["modules"][k] = spec_to_json(v.spec);

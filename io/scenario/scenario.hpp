@@ -9,6 +9,7 @@
 
 #include "engine/model/registry.hpp"
 #include "engine/simulation.hpp"
+#include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
 
 namespace sparkdem::io {
@@ -26,6 +27,7 @@ struct StageDef {
   std::vector<std::string> remove_walls;
   std::string from_snapshot;          ///< load particles, contacts and walls from a checkpoint
   bool dynamics = true;               ///< false: a generator stage with nothing to settle (lattice, relax)
+  std::vector<std::pair<std::string, SetSelector>> sets;  ///< particle sets (re)evaluated at the stage start
 };
 
 struct Scenario {

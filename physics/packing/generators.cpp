@@ -98,7 +98,10 @@ ParamSpec<DepositGenerator::Params> DepositGenerator::spec() {
   s.add("particles", &Params::particles).nonnegative().doc("particle count; 0 = fill target_density*pi R^2 H");
   s.add("initial_radius_factor", &Params::initial_radius_factor).unit("1").min(1.0).doc("die radius at insertion / final");
   s.add("insertion_density", &Params::insertion_density).unit("1").range(0.01, 0.35).doc("solid fraction of the loose insertion");
-  s.add("contraction_time", &Params::contraction_time).unit("s").positive().doc("time for the die to contract");
+  s.add("settle_time", &Params::settle_time).unit("s").nonnegative().doc("fall and settling time before the die contracts");
+  s.add("contraction_time", &Params::contraction_time).unit("s").positive().doc("time for the die to reach container_radius");
+  s.add("min_radius_factor", &Params::min_radius_factor).unit("1").range(0.3, 1.0)
+      .doc("the die may contract further, down to this x container_radius, until the target density is reached");
   s.add("gravity", &Params::gravity).unit("m/s^2").positive().doc("packing gravity (scaled for micron powders; reported)");
   s.add("ke_per_mass_below", &Params::ke_per_mass_below).unit("J/kg").positive().doc("settled threshold");
   s.add("max_overlap", &Params::max_overlap).unit("1").positive().doc("largest overlap / smaller radius allowed");
@@ -147,8 +150,17 @@ void DepositGenerator::generate(State& s) {
 void DepositGenerator::configure_stage(StageConfig& cfg) const {
   WallMotion m;
   m.kind = WallMotion::Kind::Velocity;
-  m.travel = (p_.initial_radius_factor - 1.0) * p_.container_radius;
-  m.speed = m.travel / p_.contraction_time;
+  // The powder first falls and settles for settle_time; then the die contracts at constant speed,
+  // reaching its final radius after contraction_time, and further (to min_radius_factor x the
+  // final radius) if the bed is still looser than the target; it halts for good as soon as the
+  // packing density reaches the target.
+  const double speed = (p_.initial_radius_factor - 1.0) * p_.container_radius / p_.contraction_time;
+  const double travel = (p_.initial_radius_factor - p_.min_radius_factor) * p_.container_radius;
+  m.kind = WallMotion::Kind::Table;
+  m.table_time = {0.0, p_.settle_time, p_.settle_time + travel / speed};
+  m.table_disp = {0.0, 0.0, travel};
+  m.halt_quantity = "packing_density";
+  m.halt_value = p_.target_density;
   cfg.motions["die"] = m;
   add_common_until(cfg, p_.target_density, p_.ke_per_mass_below, p_.max_overlap);
 }
@@ -167,6 +179,10 @@ std::map<std::string, double> DepositGenerator::report(const State& s) const {
   auto r = packing_report(s);
   r.insert(sampling_.begin(), sampling_.end());
   r["packing_gravity"] = p_.gravity;
+  double dmin = 1e300, dmax = 0.0;
+  for (double x : s.particles.radius) { dmin = std::min(dmin, 2 * x); dmax = std::max(dmax, 2 * x); }
+  r["diameter_min"] = dmin;
+  r["diameter_max"] = dmax;
   return r;
 }
 
@@ -230,7 +246,8 @@ void FillGenerator::generate(State& s) {
   }
 }
 void FillGenerator::configure_stage(StageConfig& cfg) const {
-  add_common_until(cfg, 0.0, p_.ke_per_mass_below, p_.max_overlap);
+  // Reached = grown (or jammed), settled, small overlaps, and within 0.01 of the target density.
+  add_common_until(cfg, p_.target_density - 0.01, p_.ke_per_mass_below, p_.max_overlap);
   cfg.until.push_back({"growth_complete", true, 1.0});
 }
 std::vector<std::unique_ptr<Module>> FillGenerator::modules() const {
@@ -239,6 +256,7 @@ std::vector<std::unique_ptr<Module>> FillGenerator::modules() const {
   g.s0 = p_.initial_scale;
   g.s1 = 1.0;
   g.duration = p_.growth_time;
+  g.halt_overlap = 0.5 * p_.max_overlap;
   m.push_back(std::make_unique<RadiusGrowth>(g));
   if (p_.damping_rate > 0.0) m.push_back(std::make_unique<ViscousDamping>(ViscousDamping::Params{p_.damping_rate}));
   return m;
@@ -264,6 +282,8 @@ std::vector<std::unique_ptr<Monitor>> FillGenerator::monitors() const {
 std::map<std::string, double> FillGenerator::report(const State& s) const {
   auto r = packing_report(s);
   r["mean_radius_formula"] = formula_mean_radius();
+  if (s.particles.fields.has("radius_growth/scale") && s.particles.size())
+    r["growth_scale"] = s.particles.fields.data("radius_growth/scale")[0];  // 1 = fully grown
   double rs = 0.0;
   for (double x : s.particles.radius) rs += x;
   r["mean_radius"] = s.particles.size() ? rs / static_cast<double>(s.particles.size()) : 0.0;
@@ -276,6 +296,7 @@ ParamSpec<RadiusGrowth::Params> RadiusGrowth::spec() {
   s.add("s0", &Params::s0).unit("1").positive().doc("initial scale");
   s.add("s1", &Params::s1).unit("1").positive().doc("final scale");
   s.add("duration", &Params::duration).unit("s").nonnegative().doc("growth time");
+  s.add("halt_overlap", &Params::halt_overlap).unit("1").nonnegative().doc("pause growth while the largest overlap ratio exceeds this (0 = never)");
   return s;
 }
 void RadiusGrowth::declare(Declarations& d) const {
@@ -298,18 +319,28 @@ void RadiusGrowth::bind(State& s) {
 }
 void RadiusGrowth::advance(State& s, const StepInfo& step) {
   auto& p = s.particles;
-  const double t = step.time - s.stage_t0;
-  const double T = p_.duration > 0.0 ? p_.duration : 2000.0 * step.dt;
-  const double f = std::min(1.0, t / T);
-  const double scale = p_.s0 + (p_.s1 - p_.s0) * f;
+  if (p.size() == 0) return;
   const auto& rf = p.fields.data("radius_growth/radius_final");
   const auto& mf = p.fields.data("radius_growth/mass_final");
   auto& sc = p.fields.data("radius_growth/scale");
+  if (sc[0] >= p_.s1) return;  // fully grown: radii stay as they are
+  // Grow by ds per step while the largest overlap of the last contact pass stays below
+  // halt_overlap; pause otherwise (a jammed packing pauses for good and never reaches s1).
+  const double T = p_.duration > 0.0 ? p_.duration : 2000.0 * step.dt;
+  const double ds = (p_.s1 - p_.s0) * step.dt / T;
+  double worst = 0.0;
+  if (p_.halt_overlap > 0.0) {
+    const auto& ov = s.contacts.overlap();
+    for (std::size_t r = 0; r < s.contacts.size(); ++r)
+      if (ov[r] > 0.0) worst = std::max(worst, ov[r] / std::min(p.radius[s.contacts.i(r)], p.radius[s.contacts.j(r)]));
+  }
+  if (p_.halt_overlap > 0.0 && worst > p_.halt_overlap) return;
+  const double scale = std::min(p_.s1, sc[0] + ds);
   for (std::size_t i = 0; i < p.size(); ++i) {
     p.radius[i] = rf[i] * scale;
     p.mass[i] = mf[i] * scale * scale * scale;
     p.inertia[i] = 0.4 * p.mass[i] * p.radius[i] * p.radius[i];
-    sc[i] = f >= 1.0 ? 1.0 : scale;
+    sc[i] = scale;
   }
 }
 

@@ -52,7 +52,9 @@ class DepositGenerator final : public Generator {
     std::int64_t particles = 0;            ///< 0: as many as fill target_density * pi R^2 H
     double initial_radius_factor = 1.5;    ///< [1] die radius at insertion / final radius
     double insertion_density = 0.25;       ///< [1] solid fraction of the loose insertion column
-    double contraction_time = 2e-4;        ///< [s] time for the die to reach its final radius
+    double settle_time = 2e-4;             ///< [s] fall and settling before the die contracts
+    double contraction_time = 2e-4;        ///< [s] time for the die to reach container_radius
+    double min_radius_factor = 0.9;        ///< [1] smallest die radius / container_radius
     double gravity = 9.81e4;               ///< [m/s^2] packing gravity (scaled; reported)
     double ke_per_mass_below = 1e-8;       ///< [J/kg] settled when kinetic energy / mass is below
     double max_overlap = 0.01;             ///< [1] largest overlap / smaller radius allowed
@@ -141,12 +143,15 @@ class RelaxGenerator final : public Generator {
 };
 
 /// Radius growth used by `fill`: r_i(t) = r_i,final * s(t), s rising linearly from s0 to s1
-/// over the growth time, then constant; masses follow r^3 at constant density.
+/// over the growth time, then constant; masses follow r^3 at constant density. Growth pauses
+/// while the largest pair overlap / smaller radius of the last contact pass exceeds
+/// `halt_overlap` (0 = never): a jammed packing is not squeezed further.
 class RadiusGrowth final : public Module {
  public:
   struct Params {
     double s0 = 0.5, s1 = 1.0;   ///< [1]
     double duration = 1.0;       ///< [s]
+    double halt_overlap = 0.0;   ///< [1]
   };
   static ParamSpec<Params> spec();
   explicit RadiusGrowth(const Params& p) : p_(p) {}

@@ -212,6 +212,10 @@ std::map<std::string, double> packing_report(const State& s) {
   const Region region = container_region(s);
   r["packing_density"] = packing_density(p.position, p.radius, region);
   r["container_volume"] = region_volume(region);
+  if (const auto* c = std::get_if<CylinderRegion>(&region)) {
+    r["container_radius"] = c->radius;
+    r["container_height"] = c->height;
+  }
   const double margin = max_diameter(s);
   try {
     const Region inner = shrink(region, margin);
