@@ -271,6 +271,20 @@ void check_enclosed(const State& s, const std::string& path, std::vector<Diagnos
   }
 }
 
+/// JSON pointer of a value nested more than `limit` levels deep in `j`, or "". The walk stops at
+/// the limit, so it never recurses deeper itself (copying a JSON value is recursive: a document
+/// nested 1e5 levels deep would overflow the stack in the loader).
+std::string too_deep(const json& j, int limit, const std::string& path) {
+  if (!j.is_structured()) return "";
+  if (limit == 0) return path.empty() ? "/" : path;
+  std::size_t k = 0;
+  for (auto it = j.begin(); it != j.end(); ++it, ++k) {
+    const std::string p = too_deep(it.value(), limit - 1, path + "/" + (j.is_object() ? it.key() : std::to_string(k)));
+    if (!p.empty()) return p;
+  }
+  return "";
+}
+
 }  // namespace
 
 json read_json_file(const std::filesystem::path& file) {
@@ -289,6 +303,8 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
   std::vector<Diagnostic> errors;
   Scenario sc;
   if (!j.is_object()) throw ConfigError("", "expected a JSON object at the top level, found " + describe(j));
+  if (const std::string deep = too_deep(j, 32, ""); !deep.empty())
+    throw ConfigError(deep, "nested more than 32 levels deep (a scenario needs fewer than 10)");
   json resolved_top;
   const TopParams top = build(top_spec(), j, "", errors, resolved_top, {"materials", "contact", "walls", "stages", "particle_sets"});
   // Particle sets

@@ -204,6 +204,27 @@ TEST_CASE("each class of configuration error names its JSON path (exit 2, no out
     ok["stages"][0]["generator"]["mean_radius"] = 1e-5;
     CHECK_NOTHROW(sparkdem::io::load_scenario(ok, registry(), SPARKDEM_SOURCE_DIR));
   }
+  SECTION("absurdly deep nesting is rejected before anything copies it") {
+    // 100000 nested arrays: copying such a value recursively overflowed the stack (segfault).
+    ScratchDir dir;
+    const fs::path file = dir.path / "deep.json";
+    std::string scene = valid_scene().dump();
+    const std::string stop = "\"stop\":{\"steps\":10}";
+    REQUIRE(scene.find(stop) != std::string::npos);
+    scene.replace(scene.find(stop), stop.size(), stop + ",\"until\":" + std::string(100000, '[') + std::string(100000, ']'));
+    std::ofstream(file) << scene;
+    // Reported at the first value 32 levels below the root: /stages/1/until + 29 x "/0".
+    std::string at = "/stages/1/until";
+    for (int k = 0; k < 29; ++k) at += "/0";
+    try {
+      (void)sparkdem::io::load_scenario(sparkdem::io::read_json_file(file), registry(), SPARKDEM_SOURCE_DIR);
+      FAIL("accepted");
+    } catch (const ConfigError& e) {
+      REQUIRE(e.diagnostics().size() == 1);
+      CHECK(e.diagnostics()[0].path == at);
+    }
+    expect_cli_rejects(file, {{at, "nested more than 32 levels deep"}}, dir.path);
+  }
   SECTION("several errors in one file are reported together") {
     json j = valid_scene();
     j["stages"][1]["dtt"] = 1e-5;

@@ -152,14 +152,16 @@ class Mutator {
       case 15: return json::object();
       case 16: return json::array({1, 2, 3});
       case 17: return json::array({std::nan(""), 1e308, -1});
-      case 18: {  // deeply nested object
+      case 18: {  // deeply nested object (within or beyond the loader's depth limit of 32)
         json v = 1;
-        for (int d = 0; d < 200; ++d) v = json{{"a", v}};
+        const int depth = pick(2) ? 20 : 200;
+        for (int d = 0; d < depth; ++d) v = json{{"a", v}};
         return v;
       }
       case 19: {  // deeply nested array
         json v = json::array();
-        for (int d = 0; d < 200; ++d) v = json::array({v});
+        const int depth = pick(2) ? 20 : 200;
+        for (int d = 0; d < depth; ++d) v = json::array({v});
         return v;
       }
       case 20: return std::string(10000, 'z');

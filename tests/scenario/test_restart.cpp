@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -241,4 +242,29 @@ TEST_CASE("multi-stage restart: checkpoints in the first and in the second dynam
       require_identical(A / "final_state.h5", C / "final_state.h5");
     }
   }
+}
+
+TEST_CASE("restart inside a fill stage: radius growth, wall history and until conditions", "[restart][scenario]") {
+  ScratchDir tmp;
+  // 60 spheres grown in a 4 mm box (the growth state lives in per-particle fields restored from
+  // the checkpoint), then 500 steps under gravity. The fill stage stops on its `until`
+  // conditions (growth complete, settled, small overlaps), checked every 50 steps.
+  const json base = load_data("restart_fill.json");
+  const fs::path A = tmp.path / "A", B = tmp.path / "B", C = tmp.path / "C";
+  REQUIRE(run_cli("run " + q(write_scene(tmp.path, "plain.json", base)) + " -o " + q(A) + " --quiet", 1, tmp.path) == 0);
+  const json cook = summary_of(A)["stages"][0];
+  CHECK(cook["until_reached"] == true);  // the stop conditions, not the step budget, end the stage
+  const std::int64_t n = cook["steps"].get<std::int64_t>();
+  // One checkpoint at about 3/4 of the stage, on a check_every boundary: the `until` check right
+  // after the restart sees the restored state.
+  const std::int64_t every = std::max<std::int64_t>(50, 3 * n / 4 / 50 * 50);
+  json scene = base;
+  scene["stages"][0]["output"]["checkpoint_every"] = every;
+  const fs::path f = write_scene(tmp.path, "ckpt.json", scene);
+  REQUIRE(run_cli("run " + q(f) + " -o " + q(B) + " --quiet", 1, tmp.path) == 0);
+  CHECK(stored_int(B / "checkpoint.h5", "/state/step") == every);
+  CHECK(stored_int(B / "checkpoint.h5", "/state/stage_index") == 0);
+  REQUIRE(run_cli("run " + q(f) + " --restart " + q(B / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
+  CHECK(summary_of(C)["stages"][0]["steps"] == n);
+  require_identical(A / "final_state.h5", C / "final_state.h5");
 }
