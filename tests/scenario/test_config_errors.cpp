@@ -3,6 +3,8 @@
 /// executable (`sparkdem check` and `sparkdem run` exit with code 2, print the path on stderr and
 /// create no output directory).
 #include <catch2/catch.hpp>
+
+#include "support/scratch.hpp"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -27,29 +29,11 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using sparkdem::ConfigError;
 
-struct ScratchDir {
-  fs::path path;
-  ScratchDir() {
-    static std::atomic<int> counter{0};
-    path = fs::temp_directory_path() /
-           ("sparkdem_cfgerr_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" +
-            std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
-    fs::create_directories(path);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
+struct ScratchDir : sparkdem::test::ScratchDir {
+  ScratchDir() : sparkdem::test::ScratchDir("sparkdem_cfgerr") {}
 };
 
-const sparkdem::Registry& registry() {
-  static const sparkdem::Registry reg = [] {
-    sparkdem::Registry r;
-    sparkdem::physics::register_all(r);
-    return r;
-  }();
-  return reg;
-}
+using sparkdem::test::registry;
 
 /// A valid scene: lattice of 288 spheres in a box of five walls, then 10 steps under gravity.
 json valid_scene() {

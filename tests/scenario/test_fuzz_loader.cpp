@@ -8,6 +8,8 @@
 /// truncated text, ConfigError, SetupError) within one second; any other exception is a bug.
 #include <catch2/catch.hpp>
 
+#include "support/scratch.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
@@ -31,14 +33,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using Ptr = json::json_pointer;
 
-const sparkdem::Registry& registry() {
-  static const sparkdem::Registry reg = [] {
-    sparkdem::Registry r;
-    sparkdem::physics::register_all(r);
-    return r;
-  }();
-  return reg;
-}
+using sparkdem::test::registry;
 
 std::vector<fs::path> seed_files() {
   std::vector<fs::path> files;

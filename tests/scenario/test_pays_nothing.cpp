@@ -6,6 +6,8 @@
 /// the union of the fields declared by the law (wall history "wall_state/<wall>", one per wall,
 /// when the law keeps per-contact state) and by the active modules' Declarations.
 #include <catch2/catch.hpp>
+
+#include "support/scratch.hpp"
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -96,19 +98,8 @@ void prepare_stages(io::Scenario& sc, F check) {
   }
 }
 
-struct ScratchDir {
-  fs::path path;
-  ScratchDir() {
-    static std::atomic<int> counter{0};
-    path = fs::temp_directory_path() /
-           ("sparkdem_pays_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" +
-            std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
-    fs::create_directories(path);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
+struct ScratchDir : sparkdem::test::ScratchDir {
+  ScratchDir() : sparkdem::test::ScratchDir("sparkdem_pays") {}
 };
 
 }  // namespace

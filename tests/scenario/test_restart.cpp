@@ -8,6 +8,8 @@
 /// orientations, forces, torques, the contact rows with their history (/state/contacts/state),
 /// the wall history fields, walls, Verlet reference, step, time and the RNG.
 #include <catch2/catch.hpp>
+
+#include "support/scratch.hpp"
 #include <hdf5.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -32,20 +34,8 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-/// A fresh directory under the system temp directory, removed at scope exit.
-struct ScratchDir {
-  fs::path path;
-  ScratchDir() {
-    static std::atomic<int> counter{0};
-    path = fs::temp_directory_path() /
-           ("sparkdem_restart_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" +
-            std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
-    fs::create_directories(path);
-  }
-  ~ScratchDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
+struct ScratchDir : sparkdem::test::ScratchDir {
+  ScratchDir() : sparkdem::test::ScratchDir("sparkdem_restart") {}
 };
 
 json load_data(const std::string& name) {
