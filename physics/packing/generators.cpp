@@ -197,7 +197,8 @@ ParamSpec<FillGenerator::Params> FillGenerator::spec() {
   s.add_vec3("lo", &Params::lo).unit("m").doc("box lower corner");
   s.add_vec3("hi", &Params::hi).unit("m").doc("box upper corner");
   s.add("particles", &Params::particles).min(1).doc("number of elements N_DE");
-  s.add("mean_radius", &Params::mean_radius).unit("m").nonnegative().doc("mean radius; 0 = Eq. (1)");
+  s.add("mean_radius", &Params::mean_radius).unit("m").nonnegative()
+      .doc("mean radius kept as given (density = N 4/3 pi r^3 (1+spread^2)/V, target_density unused); 0 = Eq. (1)");
   s.add("spread", &Params::spread).unit("1").range(0.0, 0.9).doc("relative half-width of the radius distribution");
   s.add("target_density", &Params::target_density).unit("1").range(0.05, 0.7).doc("packing density to reach");
   s.add("initial_scale", &Params::initial_scale).unit("1").range(0.05, 1.0).doc("radius scale at insertion");
@@ -212,6 +213,11 @@ double FillGenerator::container_volume() const {
   if (p_.shape == "cylinder") return kPi * p_.radius * p_.radius * p_.length;
   return (p_.hi - p_.lo).prod();
 }
+double FillGenerator::expected_density() const {
+  if (p_.mean_radius <= 0.0) return p_.target_density;
+  const double r = p_.mean_radius;
+  return static_cast<double>(p_.particles) * 4.0 / 3.0 * kPi * r * r * r * (1.0 + p_.spread * p_.spread) / container_volume();
+}
 double FillGenerator::formula_mean_radius() const {
   return std::cbrt(p_.target_density * container_volume() / (4.0 / 3.0 * kPi * static_cast<double>(p_.particles)));
 }
@@ -225,8 +231,10 @@ void FillGenerator::generate(State& s) {
     radii.push_back(r);
     vfinal += 4.0 / 3.0 * kPi * r * r * r;
   }
-  // Scale at which the particles fill exactly target_density of the container.
-  growth_scale_ = std::cbrt(p_.target_density * container_volume() / vfinal);
+  // Without mean_radius: the scale at which the particles fill exactly target_density of the
+  // container (Eq. 1 up to the sampling of the radii). With mean_radius (GranOO's alternative
+  // input) the radii are kept as given and the density is N 4/3 pi r^3 (1 + spread^2) / V.
+  growth_scale_ = p_.mean_radius > 0.0 ? 1.0 : std::cbrt(p_.target_density * container_volume() / vfinal);
   std::vector<double> small(radii.size());
   for (std::size_t k = 0; k < radii.size(); ++k) small[k] = radii[k] * p_.initial_scale * growth_scale_;
   Region region;
@@ -247,7 +255,7 @@ void FillGenerator::generate(State& s) {
 }
 void FillGenerator::configure_stage(StageConfig& cfg) const {
   // Reached = grown (or jammed), settled, small overlaps, and within 0.01 of the target density.
-  add_common_until(cfg, p_.target_density - 0.01, p_.ke_per_mass_below, p_.max_overlap);
+  add_common_until(cfg, expected_density() - 0.01, p_.ke_per_mass_below, p_.max_overlap);
   cfg.until.push_back({"growth_complete", true, 1.0});
 }
 std::vector<std::unique_ptr<Module>> FillGenerator::modules() const {

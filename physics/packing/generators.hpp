@@ -107,6 +107,8 @@ class FillGenerator final : public Generator {
   std::map<std::string, double> report(const State& s) const override;
   std::vector<int> coordination_histogram(const State& s) const override { return packing_histogram(s); }
   double formula_mean_radius() const;
+  /// Density the packing must reach: target_density, or the one implied by a given mean_radius.
+  double expected_density() const;
   double container_volume() const;
 
  private:
