@@ -162,7 +162,9 @@ void DepositGenerator::configure_stage(StageConfig& cfg) const {
   m.halt_quantity = "packing_density";
   m.halt_value = p_.target_density;
   cfg.motions["die"] = m;
-  add_common_until(cfg, p_.target_density, p_.ke_per_mass_below, p_.max_overlap);
+  // Reached = within 0.01 of the target density (the die halts at the target itself; the bed may
+  // relax slightly afterwards), settled, small overlaps.
+  add_common_until(cfg, p_.target_density - 0.01, p_.ke_per_mass_below, p_.max_overlap);
 }
 std::vector<std::unique_ptr<Module>> DepositGenerator::modules() const {
   std::vector<std::unique_ptr<Module>> m;
