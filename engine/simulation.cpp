@@ -184,6 +184,17 @@ void Simulation::compute_forces(double dt, double t_stage) {
 
 void Simulation::check_finite(double dt, double blowup_speed) const {
   const auto& p = s_.particles;
+  // Fast parallel screen; the detailed (serial) pass runs only when something is wrong.
+  const std::int64_t n = static_cast<std::int64_t>(p.size());
+  int suspicious = 0;
+#pragma omp parallel for schedule(static) reduction(max : suspicious)
+  for (std::int64_t i = 0; i < n; ++i) {
+    const double vmax = blowup_speed > 0.0 ? blowup_speed : p.radius[i] / dt;
+    const bool ok = p.position[i].allFinite() && p.velocity[i].allFinite() && p.omega[i].allFinite() &&
+                    p.velocity[i].squaredNorm() <= vmax * vmax;
+    if (!ok) suspicious = 1;
+  }
+  if (!suspicious) return;
   std::vector<Id> bad;
   std::string what;
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -319,10 +330,12 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
           for (auto& w : s_.walls) advance_wall(w, t_new, dt_used, t_area);
           break;
         case PlanItem::Kind::Neighbors: update_neighbors(skin_, cfg.sort_every_rebuilds); break;
-        case PlanItem::Kind::ZeroForces:
-          for (auto& f : p.force) f.setZero();
-          for (auto& t : p.torque) t.setZero();
+        case PlanItem::Kind::ZeroForces: {
+          const std::int64_t n = static_cast<std::int64_t>(p.size());
+#pragma omp parallel for schedule(static)
+          for (std::int64_t i = 0; i < n; ++i) { p.force[i].setZero(); p.torque[i].setZero(); }
           break;
+        }
         case PlanItem::Kind::ContactPairs:
           law_.pair_pass(p, s_.contacts, dt_used);
           s_.contacts.gather(p.force, p.torque);

@@ -137,7 +137,10 @@ bool VerletTracker::needs_rebuild(const std::vector<Vec3>& x, const std::vector<
   if (x.size() != x0_.size() || wall_u.size() != u0_.size()) return true;
   double dmax2 = 0.0, drmax = 0.0, du = 0.0;
   for (std::size_t k = 0; k < wall_u.size(); ++k) du = std::max(du, std::abs(wall_u[k] - u0_[k]));
-  for (std::size_t i = 0; i < x.size(); ++i) {
+  const std::int64_t n = static_cast<std::int64_t>(x.size());
+  // max-reductions are exact, so the decision does not depend on the thread count
+#pragma omp parallel for schedule(static) reduction(max : dmax2, drmax)
+  for (std::int64_t i = 0; i < n; ++i) {
     dmax2 = std::max(dmax2, (x[i] - x0_[i]).squaredNorm());
     drmax = std::max(drmax, r[i] - r0_[i]);
   }

@@ -85,6 +85,7 @@ TEST_CASE("shipped fill and relax configs reach their targets", "[generators][sl
   for (const char* name : {"pack_relax_box.json", "pack_fill_cylinder.json"}) {
     const std::string scene = configs + name;
     const json s = run_scene(scene, name);
+    CHECK(s["status"].get<std::string>() == "completed");
     const bool fill = std::string(name).find("fill") != std::string::npos;
     check_packing(s, generator_params(scene), fill, fill);
   }
