@@ -166,17 +166,30 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
   s_.verlet.mark_built(p.position, p.radius, wall_u);
 }
 
-void Simulation::compute_forces(double dt, double t_stage) {
+void Simulation::zero_forces() {
   auto& p = s_.particles;
-  for (auto& f : p.force) f.setZero();
-  for (auto& t : p.torque) t.setZero();
-  law_.pair_pass(p, s_.contacts, dt);
-  s_.contacts.gather(p.force, p.torque);
-  const WallLoads loads = law_.wall_pass(p, s_.walls, s_.wall_candidates, dt);
+  const std::int64_t n = static_cast<std::int64_t>(p.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) { p.force[i].setZero(); p.torque[i].setZero(); }
+}
+
+void Simulation::pair_forces(double dt) {
+  law_.pair_pass(s_.particles, s_.contacts, dt);
+  s_.contacts.gather(s_.particles.force, s_.particles.torque);
+}
+
+void Simulation::wall_forces(double dt) {
+  const WallLoads loads = law_.wall_pass(s_.particles, s_.walls, s_.wall_candidates, dt);
   for (std::size_t k = 0; k < s_.walls.size(); ++k) {
     s_.walls[k].force = loads.force[k];
     s_.walls[k].normal_force = loads.normal[k];
   }
+}
+
+void Simulation::compute_forces(double dt, double t_stage) {
+  zero_forces();
+  pair_forces(dt);
+  wall_forces(dt);
   for (const PlanItem& it : plan_.items)
     if (it.kind == PlanItem::Kind::Module && it.module->phase() == Phase::Force)
       it.module->advance(s_, StepInfo{s_.step, s_.stage_t0 + t_stage, dt});
@@ -330,24 +343,9 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
           for (auto& w : s_.walls) advance_wall(w, t_new, dt_used, t_area);
           break;
         case PlanItem::Kind::Neighbors: update_neighbors(skin_, cfg.sort_every_rebuilds); break;
-        case PlanItem::Kind::ZeroForces: {
-          const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static)
-          for (std::int64_t i = 0; i < n; ++i) { p.force[i].setZero(); p.torque[i].setZero(); }
-          break;
-        }
-        case PlanItem::Kind::ContactPairs:
-          law_.pair_pass(p, s_.contacts, dt_used);
-          s_.contacts.gather(p.force, p.torque);
-          break;
-        case PlanItem::Kind::ContactWalls: {
-          const WallLoads loads = law_.wall_pass(p, s_.walls, s_.wall_candidates, dt_used);
-          for (std::size_t q = 0; q < s_.walls.size(); ++q) {
-            s_.walls[q].force = loads.force[q];
-            s_.walls[q].normal_force = loads.normal[q];
-          }
-          break;
-        }
+        case PlanItem::Kind::ZeroForces: zero_forces(); break;
+        case PlanItem::Kind::ContactPairs: pair_forces(dt_used); break;
+        case PlanItem::Kind::ContactWalls: wall_forces(dt_used); break;
         case PlanItem::Kind::Module: {
           const Clock& c = it.clock;
           if (c.kind == Clock::Kind::EveryStep) {

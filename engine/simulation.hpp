@@ -105,6 +105,9 @@ class Simulation {
 
  private:
   void compute_forces(double dt, double t_stage);
+  void zero_forces();
+  void pair_forces(double dt);   ///< pair pass + per-particle gather
+  void wall_forces(double dt);   ///< wall pass; stores the wall loads
   void update_neighbors(double skin, Step sort_every);
   void check_finite(double dt, double blowup_speed) const;
   State& s_;

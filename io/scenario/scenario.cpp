@@ -492,7 +492,6 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
       // Contact law override
       if (js.contains("contact")) { json rc; st.law = make_law(js["contact"], reg, path + "/contact", errors, rc); r["contact"] = rc; }
       // Walls added / removed / moved
-      std::set<std::string> stage_walls = wall_names;
       if (js.contains("add_walls")) {
         if (!js["add_walls"].is_array()) errors.push_back({path + "/add_walls", "expected an array of walls, found " + describe(js["add_walls"])});
         else {
@@ -535,7 +534,6 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
           }
         }
       }
-      (void)stage_walls;
       // Particle sets evaluated at the stage start, and sets held at a prescribed velocity.
       auto use_set = [&](const std::string& name, const std::string& at) {
         auto it = sets.find(name);

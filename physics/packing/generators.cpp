@@ -149,7 +149,6 @@ void DepositGenerator::generate(State& s) {
 }
 void DepositGenerator::configure_stage(StageConfig& cfg) const {
   WallMotion m;
-  m.kind = WallMotion::Kind::Velocity;
   // The powder first falls and settles for settle_time; then the die contracts at constant speed,
   // reaching its final radius after contraction_time, and further (to min_radius_factor x the
   // final radius) if the bed is still looser than the target; it halts for good as soon as the
@@ -242,11 +241,9 @@ void FillGenerator::generate(State& s) {
   Region region;
   if (p_.shape == "cylinder") region = CylinderRegion{Vec3::Zero(), Vec3::UnitZ(), p_.radius, p_.length};
   else region = BoxRegion{p_.lo, p_.hi};
-  const std::size_t first = s.particles.size();
   if (!insert_random(s, small, region, rho, static_cast<std::int32_t>(p_.material)))
     throw SetupError("fill: random insertion failed; lower initial_scale");
   // Masses of the full-size particles are restored by the growth module.
-  (void)first;
   if (p_.shape == "cylinder") {
     add_wall(s, cylinder("die", Vec3::Zero(), Vec3::UnitZ(), p_.radius));
     add_wall(s, plane("bottom", Vec3::Zero(), Vec3::UnitZ()));

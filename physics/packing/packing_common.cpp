@@ -216,18 +216,17 @@ std::map<std::string, double> packing_report(const State& s) {
     r["container_radius"] = c->radius;
     r["container_height"] = c->height;
   }
+  const auto pairs = current_pairs(s);
   const double margin = max_diameter(s);
   try {
     const Region inner = shrink(region, margin);
     r["packing_density_interior"] = packing_density(p.position, p.radius, inner);
     r["interior_margin"] = margin;
-    const auto pairs = current_pairs(s);
     const auto ci = coordination_in_region(p.position, p.radius, pairs, 1e-9, inner);
     r["coordination_interior"] = ci.mean;
   } catch (const ConfigError&) {
     r["packing_density_interior"] = std::nan("");
   }
-  const auto pairs = current_pairs(s);
   const auto c = coordination(p.position, p.radius, pairs, 1e-9);
   r["coordination_mean"] = c.mean;
   r["rattlers"] = static_cast<double>(c.rattlers);
