@@ -8,6 +8,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/interrupt.hpp"
 #include "engine/integrate/velocity_verlet.hpp"
+#include "engine/state/pair_transfer.hpp"
 
 namespace sparkdem {
 
@@ -27,8 +28,9 @@ double die_area(const std::vector<Wall>& walls) {
 }  // namespace
 
 std::vector<std::string> builtin_columns(const State& s) {
-  std::vector<std::string> c = {"step", "time", "stage", "particles", "kinetic_energy", "kinetic_energy_per_mass",
-                                "max_speed", "contacts", "coordination", "max_overlap_ratio"};
+  std::vector<std::string> c = {"step", "time", "physical_time", "stage", "particles", "kinetic_energy",
+                                "kinetic_energy_per_mass", "max_speed", "contacts", "coordination", "max_overlap_ratio"};
+  if (s.bonds_active) c.insert(c.end(), {"bonds", "bonds_broken"});
   for (const auto& w : s.walls) {
     c.push_back("wall_" + w.name + "_offset");
     c.push_back("wall_" + w.name + "_normal_force");
@@ -62,10 +64,14 @@ std::vector<double> builtin_values(const State& s) {
       w.distance(p.position[i], n, d);
       if (d < p.radius[i]) ovr = std::max(ovr, (p.radius[i] - d) / p.radius[i]);
     }
-  std::vector<double> v = {static_cast<double>(s.step), s.time, static_cast<double>(s.stage_index),
+  std::vector<double> v = {static_cast<double>(s.step), s.time, s.physical_time, static_cast<double>(s.stage_index),
                            static_cast<double>(p.size()), ke, m > 0.0 ? ke / m : 0.0, std::sqrt(vmax2),
                            static_cast<double>(touching),
                            p.size() ? 2.0 * static_cast<double>(touching) / static_cast<double>(p.size()) : 0.0, ovr};
+  if (s.bonds_active) {
+    v.push_back(static_cast<double>(s.bonds.intact_count()));
+    v.push_back(static_cast<double>(s.bonds.broken_count()));
+  }
   for (const auto& w : s.walls) {
     v.push_back(w.u);
     v.push_back(w.normal_force);
@@ -101,21 +107,48 @@ StepPlan Simulation::prepare(const StageConfig& cfg) {
   (void)cfg;
   // Contact law state columns (history is kept if the law's columns are unchanged).
   if (s_.contacts.state_columns() != law_.state_columns()) s_.contacts.set_state_columns(law_.state_columns());
+  alive_rule_ = law_.alive_rule();
   const int w = static_cast<int>(law_.state_columns().size());
   if (w > 0)
     for (const auto& wall : s_.walls)
       s_.particles.fields.declare({"wall_state/" + wall.name, w, "m", 0.0, false}, s_.particles.size());
+  if (bond_law_ && s_.bonds.state_columns() != bond_law_->state_columns()) {
+    if (s_.bonds.size() > 0 && !s_.bonds.state_columns().empty())
+      throw SetupError("the bonds carry state columns of another bond law than '" + bond_law_->name() + "'");
+    s_.bonds.set_state_columns(bond_law_->state_columns());
+  }
+  s_.bonds_active = bond_law_ != nullptr;
+  if (!bond_law_ && s_.bonds.intact_count() > 0)
+    throw SetupError("the state has " + std::to_string(s_.bonds.intact_count()) +
+                     " intact bonds but the scenario names no bond law (\"bonds\": {\"law\": ...})");
   for (Module* m : modules_) {
     Declarations d;
     m->declare(d);
     for (const auto& f : d.particle_fields) s_.particles.fields.declare(f, s_.particles.size());
   }
   for (Module* m : modules_) m->bind(s_);
-  plan_ = build_step_plan(modules_, kCoreFields);
+  plan_ = build_step_plan(modules_, kCoreFields, bond_law_ != nullptr);
+  // Event clocks keep their references in fields (permuted and checkpointed with the particles).
+  for (const PlanItem& it : plan_.items) {
+    if (it.kind != PlanItem::Kind::Module || it.clock.kind != Clock::Kind::OnEvent) continue;
+    const Trigger& t = it.clock.trigger;
+    const std::string base = "trigger/" + it.name + "/";
+    if (std::isfinite(t.moved_beyond)) s_.particles.fields.declare({base + "x0", 3, "m", 0.0, false}, s_.particles.size());
+    if (!t.field.empty()) {
+      const int comps = s_.particles.fields.info(t.field).components;
+      s_.particles.fields.declare({base + "field0", comps, s_.particles.fields.info(t.field).unit, 0.0, false},
+                                  s_.particles.size());
+    }
+  }
   return plan_;
 }
 
-double Simulation::mechanical_stable_dt() const { return law_.stable_dt(s_.particles, s_.contacts, s_.walls); }
+double Simulation::mechanical_stable_dt() const {
+  if (!bond_law_ || s_.bonds.size() == 0) return law_.stable_dt(s_.particles, s_.contacts, s_.walls);
+  std::vector<double> rows(s_.particles.size(), 0.0);
+  bond_law_->add_stiffness_rows(s_.particles, s_.bonds, rows);
+  return law_.stable_dt(s_.particles, s_.contacts, s_.walls, &rows);
+}
 
 std::map<std::string, double> Simulation::module_stable_dts() const {
   std::map<std::string, double> out;
@@ -135,7 +168,10 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
   auto& p = s_.particles;
   std::vector<double> wall_u;
   for (const auto& w : s_.walls) wall_u.push_back(w.u);
-  if (s_.wall_candidates.size() == s_.walls.size() && !s_.verlet.needs_rebuild(p.position, p.radius, skin, wall_u)) return;
+  const bool stale = s_.marks.count("neighbors_stale") > 0 || s_.contacts.has_pending_hand_over();
+  if (!stale && s_.wall_candidates.size() == s_.walls.size() && !s_.verlet.needs_rebuild(p.position, p.radius, skin, wall_u))
+    return;
+  s_.marks.erase("neighbors_stale");
   ++s_.rebuilds;
   if (sort_every > 0 && s_.rebuilds % sort_every == 0 && p.size() > 1) {
     // Spatial sort (cells of one mean diameter, z-y-x order) for cache locality.
@@ -153,8 +189,13 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
     });
     p.permute(perm);
     s_.contacts.remap_after_permutation(p.id);
+    s_.bonds.remap_after_permutation(p.id);
   }
-  s_.contacts.rebuild(find_pairs(p.position, p.radius, skin), p.id, p.size());
+  ContactRebuildRules rules;
+  rules.alive = alive_rule_;
+  if (s_.bonds.contact_rule == BondTable::ContactRule::Exclude && s_.bonds.intact_count() > 0)
+    rules.excluded = &s_.bonds.intact_keys();
+  s_.contacts.rebuild(find_pairs(p.position, p.radius, skin), p.id, p.size(), rules);
   s_.wall_candidates.assign(s_.walls.size(), {});
   for (std::size_t k = 0; k < s_.walls.size(); ++k)
     for (std::size_t i = 0; i < p.size(); ++i) {
@@ -178,6 +219,14 @@ void Simulation::pair_forces(double dt) {
   s_.contacts.gather(s_.particles.force, s_.particles.torque);
 }
 
+void Simulation::bond_forces(double dt) {
+  if (!bond_law_) return;
+  s_.bonds.prepare(s_.particles.size());
+  const std::vector<std::size_t> broke = bond_law_->pass(s_.particles, s_.bonds, dt);
+  s_.bonds.gather(s_.particles.force, s_.particles.torque);
+  for (const std::size_t r : broke) break_bond(s_, r);
+}
+
 void Simulation::wall_forces(double dt) {
   const WallLoads loads = law_.wall_pass(s_.particles, s_.walls, s_.wall_candidates, dt);
   for (std::size_t k = 0; k < s_.walls.size(); ++k) {
@@ -189,10 +238,103 @@ void Simulation::wall_forces(double dt) {
 void Simulation::compute_forces(double dt, double t_stage) {
   zero_forces();
   pair_forces(dt);
+  bond_forces(dt);
   wall_forces(dt);
   for (const PlanItem& it : plan_.items)
     if (it.kind == PlanItem::Kind::Module && it.module->phase() == Phase::Force)
-      it.module->advance(s_, StepInfo{s_.step, s_.stage_t0 + t_stage, dt});
+      it.module->advance(s_, StepInfo{s_.step, s_.stage_t0 + t_stage, dt, 0});
+}
+
+bool Simulation::event_due(const PlanItem& it, Step step) const {
+  const std::string base = "trigger/" + it.name + "/";
+  const auto last = s_.marks.find(base + "last_step");
+  if (last == s_.marks.end()) return true;  // first step of the stage
+  const Trigger& t = it.clock.trigger;
+  if (t.max_interval > 0 && step - static_cast<Step>(last->second) >= t.max_interval) return true;
+  if (t.bond_broke && static_cast<double>(s_.bonds.broken_count()) > s_.marks.at(base + "broken")) return true;
+  const auto& p = s_.particles;
+  const std::int64_t n = static_cast<std::int64_t>(p.size());
+  if (std::isfinite(t.moved_beyond)) {
+    const auto& x0 = p.fields.data(base + "x0");
+    const double lim2 = t.moved_beyond * t.moved_beyond;
+    int moved = 0;
+#pragma omp parallel for schedule(static) reduction(max : moved)
+    for (std::int64_t i = 0; i < n; ++i) {
+      const Vec3 d = p.position[i] - Vec3(x0[3 * i], x0[3 * i + 1], x0[3 * i + 2]);
+      if (d.squaredNorm() > lim2) moved = 1;
+    }
+    if (moved) return true;
+  }
+  if (!t.field.empty()) {
+    const auto& f = p.fields.data(t.field);
+    const auto& f0 = p.fields.data(base + "field0");
+    for (std::size_t k = 0; k < f.size(); ++k)
+      if (std::abs(f[k] - f0[k]) > t.field_change) return true;
+  }
+  return false;
+}
+
+void Simulation::mark_event_run(const PlanItem& it, Step step) {
+  const std::string base = "trigger/" + it.name + "/";
+  const Trigger& t = it.clock.trigger;
+  auto& p = s_.particles;
+  s_.marks[base + "last_step"] = static_cast<double>(step);
+  s_.marks[base + "broken"] = static_cast<double>(s_.bonds.broken_count());
+  if (std::isfinite(t.moved_beyond)) {
+    auto& x0 = p.fields.data(base + "x0");
+    for (std::size_t i = 0; i < p.size(); ++i)
+      for (int d = 0; d < 3; ++d) x0[3 * i + d] = p.position[i][d];
+  }
+  if (!t.field.empty()) p.fields.data(base + "field0") = p.fields.data(t.field);
+}
+
+void Simulation::run_module(const PlanItem& it, Step step, double t_stage, double dt_m) {
+  const Clock& c = it.clock;
+  const bool physical = it.module->time_domain() == TimeDomain::Physical;
+  const double scale = physical ? time_scale_ : 1.0;
+  const double t0 = physical ? s_.stage_phys_t0 : s_.stage_t0;  // domain time at the stage start
+  const double t_end = t0 + scale * t_stage;                      // domain time at the end of this step
+  const double dt = scale * dt_m;
+  Step calls = 0, substeps = 1;
+  switch (c.kind) {
+    case Clock::Kind::EveryStep:
+      it.module->advance(s_, StepInfo{step, t_end, dt, 0});
+      calls = 1;
+      break;
+    case Clock::Kind::EveryNSteps:
+      if (step % c.n == 0) { it.module->advance(s_, StepInfo{step, t_end, static_cast<double>(c.n) * dt, 0}); calls = 1; }
+      break;
+    case Clock::Kind::SubstepsPerStep:
+    case Clock::Kind::AdaptiveSubsteps: {
+      substeps = c.n;
+      if (c.kind == Clock::Kind::AdaptiveSubsteps) {
+        const double sdt = it.module->stable_dt(s_);
+        if (!(sdt > 0.0)) throw PhysicsError(step, {}, "time step", "module '" + it.name + "' reports a stable step of " + std::to_string(sdt) + " s");
+        if (std::isfinite(sdt)) substeps = std::max<Step>(c.n, static_cast<Step>(std::ceil(dt / sdt * (1.0 - 1e-12))));
+      }
+      const double h = dt / static_cast<double>(substeps);
+      const double start = t_end - dt;
+      for (Step q = 1; q <= substeps; ++q)
+        it.module->advance(s_, StepInfo{step, q == substeps ? t_end : start + static_cast<double>(q) * h, h, q - 1});
+      calls = substeps;
+      break;
+    }
+    case Clock::Kind::OnEvent: {
+      if (!event_due(it, step)) break;
+      const std::string key = "trigger/" + it.name + "/last_step";
+      const auto last = s_.marks.find(key);
+      const Step since = last == s_.marks.end() ? 1 : step - static_cast<Step>(last->second);
+      it.module->advance(s_, StepInfo{step, t_end, static_cast<double>(since) * dt, 0});
+      mark_event_run(it, step);
+      calls = 1;
+      break;
+    }
+  }
+  if (stats_) {
+    stats_->module_calls[it.name] += calls;
+    auto& m = stats_->max_substeps[it.name];
+    m = std::max(m, substeps);
+  }
 }
 
 void Simulation::check_finite(double dt, double blowup_speed) const {
@@ -249,6 +391,12 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   if (!resume) {
     s_.stage_step0 = s_.step;
     s_.stage_t0 = s_.time;
+    s_.stage_phys_t0 = s_.physical_time;
+    s_.stage_time_scale = cfg.time_scale;
+    // Event clocks start afresh: each event module runs at the end of the stage's first step.
+    for (const PlanItem& it : plan_.items)
+      if (it.kind == PlanItem::Kind::Module)
+        std::erase_if(s_.marks, [&](const auto& kv) { return kv.first.rfind("trigger/" + it.name + "/", 0) == 0; });
     if (cfg.mass_scaling != 1.0)
       for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] *= cfg.mass_scaling; p.inertia[i] *= cfg.mass_scaling; }
   }
@@ -267,7 +415,10 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     update_neighbors(skin_, 0);
   }
 
+  time_scale_ = resume ? s_.stage_time_scale : cfg.time_scale;
+  if (!(time_scale_ > 0.0)) throw SetupError("stage '" + cfg.name + "': time_scale must be positive");
   StageResult res;
+  stats_ = &res;
   res.name = cfg.name;
   res.plan = plan_.names();
   res.particles = p.size();
@@ -281,14 +432,23 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     throw SetupError("stage '" + cfg.name + "': dt = " + std::to_string(dt_used) + " s is " +
                      std::to_string(res.dt_fraction_used) + " of the stable step " +
                      std::to_string(res.stable_dt_at_start) + " s of the contact law; lower dt or set allow_unstable_dt");
-  for (const auto& [name, sdt] : module_stable_dts()) {
-    double mdt = dt_used;
-    for (const auto& it : plan_.items)
-      if (it.module && it.module->name() == name) mdt = it.clock.dt(dt_used);
-    if (mdt > sdt && !cfg.allow_unstable_dt)
-      throw SetupError("stage '" + cfg.name + "': module '" + name + "' runs with dt = " + std::to_string(mdt) +
-                       " s above its stable step " + std::to_string(sdt) + " s");
-  }
+  // Fixed-clock modules: their step against their own stable step (in their time domain).
+  // Adaptive clocks choose their substeps from it; event clocks run quasi-static solves.
+  auto check_modules = [&](bool at_start) {
+    for (const auto& it : plan_.items) {
+      if (it.kind != PlanItem::Kind::Module) continue;
+      const Clock::Kind kind = it.clock.kind;
+      if (kind == Clock::Kind::AdaptiveSubsteps || kind == Clock::Kind::OnEvent) continue;
+      const double scale = it.module->time_domain() == TimeDomain::Physical ? time_scale_ : 1.0;
+      const double mdt = it.clock.dt(dt_used) * scale, sdt = it.module->stable_dt(s_);
+      if (!(mdt > sdt) || cfg.allow_unstable_dt) continue;
+      const std::string msg = "module '" + it.name + "' runs with dt = " + std::to_string(mdt) + " s above its stable step " +
+                              std::to_string(sdt) + " s";
+      if (at_start) throw SetupError("stage '" + cfg.name + "': " + msg);
+      throw PhysicsError(s_.step, {}, "time step", msg + " of the current state; use an adaptive clock or a smaller step");
+    }
+  };
+  check_modules(true);
   const double t_area = die_area(s_.walls);
   if (!resume) {
     for (auto& w : s_.walls) advance_wall(w, 0.0, dt_used, t_area);
@@ -345,24 +505,15 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
         case PlanItem::Kind::Neighbors: update_neighbors(skin_, cfg.sort_every_rebuilds); break;
         case PlanItem::Kind::ZeroForces: zero_forces(); break;
         case PlanItem::Kind::ContactPairs: pair_forces(dt_used); break;
+        case PlanItem::Kind::Bonds: bond_forces(dt_used); break;
         case PlanItem::Kind::ContactWalls: wall_forces(dt_used); break;
-        case PlanItem::Kind::Module: {
-          const Clock& c = it.clock;
-          if (c.kind == Clock::Kind::EveryStep) {
-            it.module->advance(s_, StepInfo{s_.step + 1, s_.stage_t0 + t_new, dt_used});
-          } else if (c.kind == Clock::Kind::EveryNSteps) {
-            if ((s_.step + 1) % c.n == 0) it.module->advance(s_, StepInfo{s_.step + 1, s_.stage_t0 + t_new, c.dt(dt_used)});
-          } else {
-            for (std::int64_t q = 1; q <= c.n; ++q)
-              it.module->advance(s_, StepInfo{s_.step + 1, s_.stage_t0 + t_new - dt_used + q * c.dt(dt_used), c.dt(dt_used)});
-          }
-          break;
-        }
+        case PlanItem::Kind::Module: run_module(it, s_.step + 1, t_new, dt_used); break;
         case PlanItem::Kind::IntegrateSecondHalf: verlet_second_half(p, dt_used); break;
       }
     }
     ++s_.step;
     s_.time = s_.stage_t0 + t_new;
+    s_.physical_time = s_.stage_phys_t0 + time_scale_ * t_new;
     // ---- bookkeeping ----
     const Step kk = k + 1;
     if (kk % 10 == 0) check_finite(dt_used, cfg.blowup_speed);
@@ -371,7 +522,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
       if (dt_used > st)
         throw PhysicsError(s_.step, {}, "time step",
                            "dt = " + std::to_string(dt_used) + " s now exceeds the stable step " + std::to_string(st) +
-                               " s of the current state (contacts stiffened); lower dt_fraction or dt");
+                               " s of the current state (contacts stiffened); lower dt_fraction or dt");      check_modules(false);
     }
     if (cfg.timeseries_every > 0 && kk % cfg.timeseries_every == 0) {
       sample(cols, vals);
@@ -391,6 +542,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.until_reached = cfg.until.empty() || reached;
   res.steps = s_.step - s_.stage_step0;
   res.simulated_time = s_.time - s_.stage_t0;
+  res.physical_time = s_.physical_time - s_.stage_phys_t0;
   sample(cols, vals);
   obs.timeseries(cols, vals);
   for (std::size_t q = 0; q < cols.size(); ++q) res.final_values[cols[q]] = vals[q];
@@ -401,6 +553,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.wall_seconds = std::chrono::duration<double>(clock::now() - t_start).count();
   res.particle_steps_per_second =
       res.wall_seconds > 0 ? static_cast<double>(res.steps) * static_cast<double>(p.size()) / res.wall_seconds : 0.0;
+  stats_ = nullptr;
   return res;
 }
 

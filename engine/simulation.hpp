@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/contact/bond_model.hpp"
 #include "engine/contact/contact_model.hpp"
 #include "engine/model/module.hpp"
 #include "engine/schedule/scheduler.hpp"
@@ -42,6 +43,7 @@ struct StageConfig {
   bool require_until = false;      ///< a hard stop before `until` holds is an error
   double skin = 0.0;               ///< [m] Verlet skin; 0 = 0.3 * smallest radius
   double mass_scaling = 1.0;       ///< multiplies masses and inertias during the stage (reported)
+  double time_scale = 1.0;         ///< physical seconds per mechanical second (TimeDomain::Physical modules)
   Step stability_check_every = 1000;
   double blowup_speed = 0.0;       ///< [m/s] a speed above this is a blow-up; 0 = radius/dt rule
   Step sort_every_rebuilds = 50;   ///< spatial sort of the particles for cache locality
@@ -76,13 +78,18 @@ struct StageResult {
   bool until_reached = true;
   std::size_t particles = 0;
   double particle_steps_per_second = 0.0;
+  double physical_time = 0.0;      ///< [s] physical time simulated in the stage (time_scale * mechanical)
   std::vector<std::string> plan;
   std::map<std::string, double> final_values;  ///< last monitor values
+  std::map<std::string, Step> module_calls;    ///< calls per module in this stage (substeps counted)
+  std::map<std::string, Step> max_substeps;    ///< largest per-step substep count (adaptive clocks)
 };
 
 class Simulation {
  public:
-  Simulation(State& state, const ContactModel& law) : s_(state), law_(law) {}
+  /// `bonds` is the bond law of the scenario, or null when it has none (no bond pass is planned).
+  Simulation(State& state, const ContactModel& law, const BondModel* bonds = nullptr)
+      : s_(state), law_(law), bond_law_(bonds) {}
   void add_module(Module* m) { modules_.push_back(m); }
   void add_monitor(const Monitor* m) { monitors_.push_back(m); }
 
@@ -107,15 +114,25 @@ class Simulation {
   void compute_forces(double dt, double t_stage);
   void zero_forces();
   void pair_forces(double dt);   ///< pair pass + per-particle gather
+  void bond_forces(double dt);   ///< bond pass + gather; breaks hand their state to the contact table
   void wall_forces(double dt);   ///< wall pass; stores the wall loads
   void update_neighbors(double skin, Step sort_every);
   void check_finite(double dt, double blowup_speed) const;
+  /// Run one plan item of kind Module at the end of mechanical step `step` (global index of the
+  /// step being completed), `t_stage` = stage time at its end, on the item's clock.
+  void run_module(const PlanItem& it, Step step, double t_stage, double dt_m);
+  bool event_due(const PlanItem& it, Step step) const;
+  void mark_event_run(const PlanItem& it, Step step);
   State& s_;
   const ContactModel& law_;
+  const BondModel* bond_law_ = nullptr;
+  StageResult* stats_ = nullptr;  ///< counters of the running stage
   std::vector<Module*> modules_;
   std::vector<const Monitor*> monitors_;
   StepPlan plan_;
   double skin_ = 0.0;
+  double time_scale_ = 1.0;
+  std::function<bool(const double*)> alive_rule_;  ///< persistent pairs of the contact law
   std::map<std::string, Vec3> prescribed_;
 };
 

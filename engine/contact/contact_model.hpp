@@ -10,7 +10,14 @@
 ///   double normal_stiffness(const ContactGeometry&) const;   // tangent dF/d(delta) [N/m]
 ///   double tangential_stiffness(const ContactGeometry&) const; // [N/m]
 ///   double rayleigh_dt(double radius, double density) const; // +inf if not applicable [s]
+/// and optionally, for pairs whose life the law decides (a sintered neck outlives zero or
+/// negative overlap):
+///   static constexpr bool kPersistent = true;
+///   bool alive(const double* state) const;   // keep the row and call the law at overlap <= 0
+/// A persistent law is called with g.overlap <= 0 (a gap) while alive(state) holds; its row is
+/// kept by the contact table even when the pair leaves the neighbour candidates.
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -34,6 +41,9 @@ class ContactModel {
   virtual ~ContactModel() = default;
   virtual std::string name() const = 0;
   virtual std::vector<std::string> state_columns() const = 0;
+  /// For laws with persistent pairs: the rule that keeps a row alive (see ContactTable::rebuild);
+  /// empty for laws whose pairs live only while the spheres overlap.
+  virtual std::function<bool(const double*)> alive_rule() const { return {}; }
   /// Particle-particle pass: fills table.force/torque/overlap rows (does not gather).
   virtual void pair_pass(const ParticleStore& p, ContactTable& table, double dt) const = 0;
   /// Particle-wall pass over the candidate particles of each wall (those within r + skin at the
@@ -47,8 +57,18 @@ class ContactModel {
   ///   omega^2 <= max_i sum_j [ k_n (1/m_i + 1/sqrt(m_i m_j))
   ///                          + k_t (1/m_i + r_i^2/I_i + 1/sqrt(m_i m_j) + r_i r_j/sqrt(I_i I_j)) ]
   /// (normal springs couple translations; tangential springs couple translations and rotations).
-  virtual double stable_dt(const ParticleStore& p, const ContactTable& table, const std::vector<Wall>& walls) const = 0;
+  /// `extra_rows` (optional, per particle [1/s^2]) are other stiffness contributions to the same
+  /// Gershgorin rows, e.g. from bonds (BondModel::add_stiffness_rows).
+  virtual double stable_dt(const ParticleStore& p, const ContactTable& table, const std::vector<Wall>& walls,
+                           const std::vector<double>* extra_rows = nullptr) const = 0;
 };
+
+/// True if Law declares persistent pairs.
+template <class Law>
+constexpr bool is_persistent() {
+  if constexpr (requires { Law::kPersistent; }) return Law::kPersistent;
+  else return false;
+}
 
 namespace detail {
 inline constexpr double kPi = 3.14159265358979323846;
@@ -62,6 +82,10 @@ class ContactModelT final : public ContactModel {
   const Law& law() const { return law_; }
   std::string name() const override { return std::string(Law::kName); }
   std::vector<std::string> state_columns() const override { return Law::state_columns(); }
+  std::function<bool(const double*)> alive_rule() const override {
+    if constexpr (is_persistent<Law>()) return [this](const double* st) { return law_.alive(st); };
+    else return {};
+  }
 
   void pair_pass(const ParticleStore& p, ContactTable& t, double dt) const override {
     const std::int64_t rows = static_cast<std::int64_t>(t.size());
@@ -78,7 +102,9 @@ class ContactModelT final : public ContactModel {
       const double delta = p.radius[i] + p.radius[j] - dist;
       ov[r] = delta;
       double* state = w > 0 ? t.state(r) : nullptr;
-      if (delta <= 0.0 || dist <= 0.0) {
+      bool active = delta > 0.0;
+      if constexpr (is_persistent<Law>()) active = active || law_.alive(state);
+      if (!active || dist <= 0.0) {
         F[r].setZero(); Ti[r].setZero(); Tj[r].setZero();
         for (int k = 0; k < w; ++k) state[k] = 0.0;
         continue;
@@ -152,10 +178,11 @@ class ContactModelT final : public ContactModel {
     return loads;
   }
 
-  double stable_dt(const ParticleStore& p, const ContactTable& t, const std::vector<Wall>& walls) const override {
+  double stable_dt(const ParticleStore& p, const ContactTable& t, const std::vector<Wall>& walls,
+                   const std::vector<double>* extra_rows = nullptr) const override {
     double dt = std::numeric_limits<double>::infinity();
     const std::size_t n = p.size();
-    std::vector<double> row(n, 0.0);
+    std::vector<double> row = extra_rows ? *extra_rows : std::vector<double>(n, 0.0);
     for (std::size_t i = 0; i < n; ++i) {
       const double vol = 4.0 / 3.0 * detail::kPi * p.radius[i] * p.radius[i] * p.radius[i];
       dt = std::min(dt, law_.rayleigh_dt(p.radius[i], p.mass[i] / vol));
@@ -163,7 +190,9 @@ class ContactModelT final : public ContactModel {
     for (std::size_t r = 0; r < t.size(); ++r) {
       const Index i = t.i(r), j = t.j(r);
       const double delta = p.radius[i] + p.radius[j] - (p.position[i] - p.position[j]).norm();
-      if (delta <= 0.0) continue;
+      bool active = delta > 0.0;
+      if constexpr (is_persistent<Law>()) active = active || law_.alive(t.state(r));
+      if (!active) continue;
       ContactGeometry g;
       g.overlap = delta;
       g.r_eff = p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]);

@@ -4,6 +4,7 @@
 /// scheduler builds the step plan once from these declarations.
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,20 +16,46 @@ namespace sparkdem {
 
 struct State;
 
+/// Conditions of an event clock, checked at the end of every mechanical step; the module runs
+/// when any of them holds. References ("since the module last ran") are kept by the simulation
+/// in particle fields "trigger/<module>/..." and in State::marks, so they are checkpointed.
+struct Trigger {
+  double moved_beyond = std::numeric_limits<double>::infinity();  ///< [m] a particle moved more than this
+  std::string field;                                               ///< particle field watched ...
+  double field_change = std::numeric_limits<double>::infinity();  ///< ... for a change above this [field unit]
+  bool bond_broke = false;                                         ///< a bond broke
+  std::int64_t max_interval = 0;                                   ///< also after this many steps (0 = never)
+};
+
 /// When a module runs, relative to the mechanical step dt_m.
+///   EveryStep         once per step, dt = dt_m
+///   EveryNSteps       at steps N, 2N, ... (global step count), dt = N dt_m (zero-order hold between)
+///   SubstepsPerStep   k = n calls per step, dt = dt_m / k
+///   AdaptiveSubsteps  k = max(n, ceil(dt_m / stable_dt)) calls per step, k recomputed every step
+///                     from the module's current stable step (honours a shrinking stable step)
+///   OnEvent           once at the end of the first step of a stage, then whenever the trigger
+///                     fires; dt = time since the module last ran
 struct Clock {
-  enum class Kind { EveryStep, EveryNSteps, SubstepsPerStep };
+  enum class Kind { EveryStep, EveryNSteps, SubstepsPerStep, AdaptiveSubsteps, OnEvent };
   Kind kind = Kind::EveryStep;
-  std::int64_t n = 1;  ///< N mechanical steps per call, or k substeps per mechanical step
-  /// Effective step of one call [s].
+  std::int64_t n = 1;  ///< N mechanical steps per call, or (minimum) substeps per mechanical step
+  Trigger trigger;     ///< OnEvent only
+  /// Nominal step of one call [s] (AdaptiveSubsteps: the largest; OnEvent: one mechanical step).
   double dt(double dt_m) const {
     switch (kind) {
       case Kind::EveryNSteps: return static_cast<double>(n) * dt_m;
-      case Kind::SubstepsPerStep: return dt_m / static_cast<double>(n);
+      case Kind::SubstepsPerStep:
+      case Kind::AdaptiveSubsteps: return dt_m / static_cast<double>(n);
       default: return dt_m;
     }
   }
 };
+
+/// Which clock a module's dt and time are in. With time scaling (StageConfig::time_scale =
+/// physical seconds per mechanical second, e.g. to compress a sintering cycle), Mechanical
+/// modules see dt_m and the mechanical time; Physical modules see time_scale * dt_m and the
+/// physical time. Mass scaling changes neither clock.
+enum class TimeDomain { Mechanical, Physical };
 
 /// Where in the step a module runs. Force modules add to force/torque between the contact
 /// pass and the second half-kick; Coupling modules run after the mechanical step, in the
@@ -37,8 +64,9 @@ enum class Phase { Force, Coupling };
 
 struct StepInfo {
   Step step;    ///< global step index of the step being completed
-  double time;  ///< simulated time at the end of the call [s] (= stage_t0 + steps * dt_m)
-  double dt;    ///< step of this call [s] (Clock::dt)
+  double time;  ///< time at the end of the call in the module's domain [s] (step * dt, never accumulated)
+  double dt;    ///< step of this call in the module's domain [s]
+  std::int64_t substep = 0;  ///< 0-based substep within the mechanical step
 };
 
 /// What a module needs and provides. Declaring is what makes allocation, output, restart and
@@ -56,12 +84,22 @@ class Module {
   virtual Phase phase() const { return Phase::Force; }
   virtual void declare(Declarations& d) const { (void)d; }
   virtual void bind(State& s) { (void)s; }
+  /// The module's own default clock; a scenario can replace it (set_clock).
   virtual Clock clock() const { return {}; }
-  /// Own stable step from the current state [s]; +inf when unconditionally stable.
+  /// The clock the scheduler uses: the scenario's choice if any, else clock().
+  Clock effective_clock() const { return configured_clock_ ? *configured_clock_ : clock(); }
+  void set_clock(const Clock& c) { configured_clock_ = c; }
+  virtual TimeDomain time_domain() const { return TimeDomain::Mechanical; }
+  /// Own stable step from the current state [s], in the module's time domain; +inf when
+  /// unconditionally stable. Checked at the stage start and every stability_check_every steps
+  /// (it may shrink during a stage); AdaptiveSubsteps clocks re-read it every step.
   virtual double stable_dt(const State& s) const { (void)s; return std::numeric_limits<double>::infinity(); }
   virtual void advance(State& s, const StepInfo& step) = 0;
   /// Every piece of state the module keeps between calls goes through here.
   virtual void visit(Archive& ar, const std::string& prefix) { (void)ar; (void)prefix; }
+
+ private:
+  std::optional<Clock> configured_clock_;
 };
 
 }  // namespace sparkdem

@@ -1,13 +1,15 @@
 #include "engine/schedule/scheduler.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 #include "engine/core/error.hpp"
 
 namespace sparkdem {
 
-StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields) {
+StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields,
+                         bool bonds) {
   using K = PlanItem::Kind;
   StepPlan plan;
   plan.items.push_back({K::IntegrateFirstHalf, "integrate_first_half", nullptr, {}});
@@ -15,13 +17,22 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
   plan.items.push_back({K::Neighbors, "neighbors", nullptr, {}});
   plan.items.push_back({K::ZeroForces, "zero_forces", nullptr, {}});
   plan.items.push_back({K::ContactPairs, "contact_pairs", nullptr, {}});
+  if (bonds) plan.items.push_back({K::Bonds, "bonds", nullptr, {}});
   plan.items.push_back({K::ContactWalls, "contact_walls", nullptr, {}});
 
   std::set<std::string> available(core_fields.begin(), core_fields.end());
   std::vector<Module*> coupling;
   for (Module* m : modules) {
-    const Clock c = m->clock();
+    const Clock c = m->effective_clock();
     if (c.n < 1) throw SetupError("module '" + m->name() + "': clock ratio must be a positive integer, found " + std::to_string(c.n));
+    if (c.kind == Clock::Kind::OnEvent) {
+      const Trigger& t = c.trigger;
+      const bool any = std::isfinite(t.moved_beyond) || (!t.field.empty() && std::isfinite(t.field_change)) ||
+                       t.bond_broke || t.max_interval > 0;
+      if (!any) throw SetupError("module '" + m->name() + "': its event clock has no condition that can fire");
+      if (!(t.moved_beyond > 0.0) || !(t.field_change > 0.0) || t.max_interval < 0)
+        throw SetupError("module '" + m->name() + "': event thresholds must be positive");
+    }
     Declarations d;
     m->declare(d);
     for (const auto& f : d.particle_fields) available.insert(f.name);
@@ -38,6 +49,10 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
     for (const auto& r : d.reads)
       if (!available.count(r))
         throw SetupError("module '" + m->name() + "' reads '" + r + "', which no active module or the core provides");
+    const Clock c = m->effective_clock();
+    if (c.kind == Clock::Kind::OnEvent && !c.trigger.field.empty() && !available.count(c.trigger.field))
+      throw SetupError("module '" + m->name() + "' is triggered by changes of '" + c.trigger.field +
+                       "', which no active module or the core provides");
   }
   plan.items.push_back({K::IntegrateSecondHalf, "integrate_second_half", nullptr, {}});
   // Coupling modules: topological order, writers before readers; ties keep declaration order.
@@ -61,7 +76,7 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
     }
     if (!progress) throw SetupError("coupling modules form a read/write cycle");
   }
-  for (Module* m : ordered) plan.items.push_back({K::Module, m->name(), m, m->clock()});
+  for (Module* m : ordered) plan.items.push_back({K::Module, m->name(), m, m->effective_clock()});
   return plan;
 }
 

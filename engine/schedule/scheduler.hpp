@@ -7,11 +7,14 @@
 ///   3 neighbors              Verlet check; rebuild + history transfer when due
 ///   4 zero_forces
 ///   5 contact_pairs          the law's pair pass + per-particle gather
+///   5b bonds                 the bond law's pass + gather; broken bonds hand their state to the
+///                            contact table (only when the scenario has a bond law)
 ///   6 contact_walls          the law's wall pass
 ///   7 <force modules>        e.g. gravity, background damping (declaration order)
 ///   8 integrate_second_half  half kick
 ///   9 <coupling modules>     after the mechanics, ordered by reads/writes (writer before reader),
-///                            each on its own clock (every N steps or k substeps per step)
+///                            each on its own clock (every N steps, k substeps per step, adaptive
+///                            substeps from its stable step, or on an event)
 #include <string>
 #include <vector>
 
@@ -20,7 +23,7 @@
 namespace sparkdem {
 
 struct PlanItem {
-  enum class Kind { IntegrateFirstHalf, Walls, Neighbors, ZeroForces, ContactPairs, ContactWalls, Module, IntegrateSecondHalf };
+  enum class Kind { IntegrateFirstHalf, Walls, Neighbors, ZeroForces, ContactPairs, Bonds, ContactWalls, Module, IntegrateSecondHalf };
   Kind kind;
   std::string name;
   Module* module = nullptr;  ///< for Kind::Module
@@ -39,6 +42,8 @@ struct StepPlan {
 /// Build the plan; throws SetupError on a dependency cycle, a dangling read or a clock that is
 /// not a positive integer.
 /// `core_fields` are fields always present (position, velocity, ...).
-StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields);
+/// `bonds`: the scenario has a bond law (adds the bond pass).
+StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields,
+                         bool bonds = false);
 
 }  // namespace sparkdem

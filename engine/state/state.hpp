@@ -1,5 +1,6 @@
 #pragma once
 /// Everything that flows from one stage to the next and goes into a checkpoint.
+#include <map>
 #include <random>
 #include <sstream>
 #include <string>
@@ -7,6 +8,7 @@
 
 #include "engine/core/archive.hpp"
 #include "engine/neighbor/neighbor_search.hpp"
+#include "engine/state/bond_table.hpp"
 #include "engine/state/contact_table.hpp"
 #include "engine/state/particle_store.hpp"
 #include "engine/walls/wall.hpp"
@@ -21,6 +23,7 @@ struct Material {
 struct State {
   ParticleStore particles;
   ContactTable contacts;
+  BondTable bonds;
   std::vector<Wall> walls;
   std::vector<Material> materials;
   VerletTracker verlet;
@@ -31,9 +34,16 @@ struct State {
   double stage_t0 = 0.0;       ///< [s] time at the start of the current stage
   double stage_dt = 0.0;       ///< [s] mechanical step of the current stage
   double stage_skin = 0.0;     ///< [m] Verlet skin of the current stage
+  double physical_time = 0.0;  ///< [s] = stage_phys_t0 + time_scale * (step - stage_step0) * dt
+  double stage_phys_t0 = 0.0;  ///< [s] physical time at the start of the current stage
+  double stage_time_scale = 1.0;  ///< physical seconds per mechanical second in the current stage
   std::int64_t stage_index = 0;
-  std::int64_t rebuilds = 0;   ///< neighbour rebuilds so far (drives periodic sorting)
+  std::int64_t rebuilds = 0;
+  bool bonds_active = false;   ///< the running stage has a bond law (set by Simulation::prepare)   ///< neighbour rebuilds so far (drives periodic sorting)
   std::mt19937_64 rng{12345};
+  /// Scheduler bookkeeping that must survive a restart (event-trigger references: last run step,
+  /// bond-table version, ...), keyed "trigger/<module>/<what>".
+  std::map<std::string, double> marks;
 
   Wall* find_wall(const std::string& name) {
     for (auto& w : walls)
@@ -44,6 +54,7 @@ struct State {
   void visit(Archive& ar) {
     particles.visit(ar, "state/particles");
     contacts.visit(ar, "state/contacts");
+    if (!ar.reading() || ar.has("state/bonds/id_i")) bonds.visit(ar, "state/bonds");
     std::vector<std::string> names;
     for (const auto& w : walls) names.push_back(w.name);
     std::string joined;
@@ -71,11 +82,33 @@ struct State {
     ar.visit("state/stage_dt", stage_dt);
     ar.visit("state/stage_skin", stage_skin);
     ar.visit("state/stage_index", stage_index);
+    if (!ar.reading() || ar.has("state/physical_time")) {
+      ar.visit("state/physical_time", physical_time);
+      ar.visit("state/stage_phys_t0", stage_phys_t0);
+      ar.visit("state/stage_time_scale", stage_time_scale);
+    }
+    std::string mk;
+    std::vector<double> mv;
+    if (!ar.reading())
+      for (const auto& [k, v] : marks) { mk += k + "\n"; mv.push_back(v); }
+    if (!ar.reading() || ar.has("state/marks/names")) {
+      ar.visit("state/marks/names", mk);
+      ar.visit("state/marks/values", mv);
+    }
+    if (ar.reading()) {
+      marks.clear();
+      std::istringstream ms(mk);
+      std::size_t q = 0;
+      for (std::string n; std::getline(ms, n) && q < mv.size();) marks[n] = mv[q++];
+    }
     ar.visit("state/rebuilds", rebuilds);
     std::string rs;
     if (!ar.reading()) { std::ostringstream os; os << rng; rs = os.str(); }
     ar.visit("state/rng", rs);
-    if (ar.reading()) { std::istringstream is(rs); is >> rng; contacts.remap_after_permutation(particles.id); }
+    if (ar.reading()) { std::istringstream is(rs); is >> rng;
+      contacts.remap_after_permutation(particles.id);
+      bonds.remap_after_permutation(particles.id);
+    }
   }
 };
 

@@ -1,0 +1,109 @@
+#include "engine/state/bond_table.hpp"
+
+#include <algorithm>
+
+#include "engine/core/error.hpp"
+
+namespace sparkdem {
+
+BondReference make_bond_reference(const Vec3& xi, const Vec3& xj, const Quat& qi, const Quat& qj) {
+  BondReference ref;
+  const Vec3 d = xj - xi;
+  ref.length0 = d.norm();
+  const Vec3 axis = ref.length0 > 0.0 ? Vec3(d / ref.length0) : Vec3(Vec3::UnitX());
+  // A world vector normal to the axis: the coordinate axis least aligned with it, orthogonalised.
+  Vec3 e = Vec3::Zero();
+  int k = 0;
+  axis.cwiseAbs().minCoeff(&k);
+  e[k] = 1.0;
+  const Vec3 perp = (e - e.dot(axis) * axis).normalized();
+  const Quat qi_inv = qi.conjugate(), qj_inv = qj.conjugate();
+  ref.dir_i = qi_inv * axis;
+  ref.dir_j = qj_inv * (-axis);
+  ref.perp_i = qi_inv * perp;
+  ref.perp_j = qj_inv * perp;
+  return ref;
+}
+
+std::size_t BondTable::add(Index a, Index b, const std::vector<Id>& ids, const std::vector<Vec3>& x,
+                           const std::vector<Quat>& q, const HandedState& handed) {
+  if (a == b) throw SetupError("a bond needs two different particles (id " + std::to_string(ids[a]) + ")");
+  if (ids[a] > ids[b]) std::swap(a, b);
+  i_.push_back(a);
+  j_.push_back(b);
+  id_i_.push_back(ids[a]);
+  id_j_.push_back(ids[b]);
+  state_.resize(state_.size() + state_names_.size(), 0.0);
+  ref_.push_back(make_bond_reference(x[a], x[b], q[a], q[b]));
+  broken_.push_back(0);
+  broken_step_.push_back(-1);
+  const std::size_t r = size() - 1;
+  if (!handed.names.empty()) copy_named_state(r, handed.names, handed.values.data());
+  ++version_;
+  dirty_ = true;
+  return r;
+}
+
+void BondTable::mark_broken(std::size_t r, Step step) {
+  if (broken_[r]) return;
+  broken_[r] = 1;
+  broken_step_[r] = step;
+  if (r < force_.size()) { force_[r].setZero(); torque_i_[r].setZero(); torque_j_[r].setZero(); }
+  ++version_;
+}
+
+std::size_t BondTable::intact_count() const {
+  return static_cast<std::size_t>(std::count(broken_.begin(), broken_.end(), std::uint8_t{0}));
+}
+
+const std::unordered_set<std::uint64_t>& BondTable::intact_keys() const {
+  if (keys_version_ != version_) {
+    keys_.clear();
+    for (std::size_t r = 0; r < size(); ++r)
+      if (!broken_[r]) keys_.insert(key(r));
+    keys_version_ = version_;
+  }
+  return keys_;
+}
+
+HandedState BondTable::handed_state(std::size_t r) const {
+  HandedState h;
+  h.names = state_names_;
+  h.values.assign(state(r), state(r) + state_width());
+  return h;
+}
+
+void BondTable::visit(Archive& ar, const std::string& prefix) {
+  visit_rows(ar, prefix, "bond");
+  std::vector<double> ref;
+  if (!ar.reading())
+    for (const auto& b : ref_) {
+      ref.push_back(b.length0);
+      for (const Vec3* v : {&b.dir_i, &b.dir_j, &b.perp_i, &b.perp_j}) ref.insert(ref.end(), v->data(), v->data() + 3);
+    }
+  ar.visit(prefix + "/reference", ref, 13);
+  std::vector<std::int64_t> br(broken_.begin(), broken_.end());
+  ar.visit(prefix + "/broken", br);
+  ar.visit(prefix + "/broken_step", broken_step_);
+  std::int64_t rule = contact_rule == ContactRule::Add ? 1 : 0;
+  ar.visit(prefix + "/contact_rule_add", rule);
+  if (ar.reading()) {
+    if (ref.size() != 13 * size() || br.size() != size() || broken_step_.size() != size())
+      throw SetupError("checkpoint bond table is inconsistent: " + std::to_string(size()) + " rows");
+    ref_.assign(size(), {});
+    for (std::size_t r = 0; r < size(); ++r) {
+      const double* p = ref.data() + 13 * r;
+      ref_[r].length0 = p[0];
+      ref_[r].dir_i = Vec3(p[1], p[2], p[3]);
+      ref_[r].dir_j = Vec3(p[4], p[5], p[6]);
+      ref_[r].perp_i = Vec3(p[7], p[8], p[9]);
+      ref_[r].perp_j = Vec3(p[10], p[11], p[12]);
+    }
+    broken_.assign(br.begin(), br.end());
+    contact_rule = rule ? ContactRule::Add : ContactRule::Exclude;
+    ++version_;
+    dirty_ = true;
+  }
+}
+
+}  // namespace sparkdem

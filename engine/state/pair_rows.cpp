@@ -1,0 +1,102 @@
+#include "engine/state/pair_rows.hpp"
+
+#include <algorithm>
+#include <unordered_map>
+
+#include "engine/core/error.hpp"
+
+namespace sparkdem {
+
+int PairRows::column(const std::string& name) const {
+  for (std::size_t k = 0; k < state_names_.size(); ++k)
+    if (state_names_[k] == name) return static_cast<int>(k);
+  return -1;
+}
+
+void PairRows::remap_after_permutation(const std::vector<Id>& ids) {
+  std::unordered_map<Id, Index> local;
+  local.reserve(ids.size() * 2);
+  for (std::size_t k = 0; k < ids.size(); ++k) local.emplace(ids[k], static_cast<Index>(k));
+  for (std::size_t r = 0; r < size(); ++r) {
+    const auto a = local.find(id_i_[r]), b = local.find(id_j_[r]);
+    if (a == local.end() || b == local.end())
+      throw SetupError("pair (" + std::to_string(id_i_[r]) + ", " + std::to_string(id_j_[r]) +
+                       ") refers to a particle id that does not exist");
+    i_[r] = a->second;
+    j_[r] = b->second;
+  }
+  build_incidence(ids.size());
+}
+
+void PairRows::copy_named_state(std::size_t r, const std::vector<std::string>& from_names, const double* from) {
+  double* to = state(r);
+  for (std::size_t a = 0; a < from_names.size(); ++a) {
+    const int c = column(from_names[a]);
+    if (c >= 0) to[c] = from[a];
+  }
+}
+
+void PairRows::reset_results(std::size_t n_particles) {
+  force_.assign(size(), Vec3::Zero());
+  torque_i_.assign(size(), Vec3::Zero());
+  torque_j_.assign(size(), Vec3::Zero());
+  build_incidence(n_particles);
+}
+
+void PairRows::build_incidence(std::size_t n) {
+  inc_start_.assign(n + 1, 0);
+  for (std::size_t r = 0; r < size(); ++r) { ++inc_start_[i_[r] + 1]; ++inc_start_[j_[r] + 1]; }
+  for (std::size_t p = 0; p < n; ++p) inc_start_[p + 1] += inc_start_[p];
+  inc_row_.assign(inc_start_[n], 0);
+  std::vector<std::int64_t> fill(inc_start_.begin(), inc_start_.end() - 1);
+  for (std::size_t r = 0; r < size(); ++r) {
+    inc_row_[fill[i_[r]]++] = static_cast<std::int64_t>(r);
+    inc_row_[fill[j_[r]]++] = ~static_cast<std::int64_t>(r);
+  }
+}
+
+void PairRows::gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
+  const std::int64_t n = static_cast<std::int64_t>(force.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t p = 0; p < n; ++p) {
+    Vec3 f = Vec3::Zero(), t = Vec3::Zero();
+    for (std::int64_t k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
+      const std::int64_t code = inc_row_[k];
+      if (code >= 0) { f += force_[code]; t += torque_i_[code]; }
+      else { f -= force_[~code]; t += torque_j_[~code]; }
+    }
+    force[p] += f;
+    torque[p] += t;
+  }
+}
+
+void PairRows::visit_rows(Archive& ar, const std::string& prefix, const std::string& what) {
+  std::vector<std::int64_t> a(id_i_.begin(), id_i_.end()), b(id_j_.begin(), id_j_.end());
+  ar.visit(prefix + "/id_i", a);
+  ar.visit(prefix + "/id_j", b);
+  ar.visit(prefix + "/i", i_);
+  ar.visit(prefix + "/j", j_);
+  std::string names;
+  for (const auto& n : state_names_) names += n + "\n";
+  ar.visit(prefix + "/state_columns", names);
+  if (ar.reading()) {
+    state_names_.clear();
+    std::string cur;
+    for (char c : names) {
+      if (c == '\n') { state_names_.push_back(cur); cur.clear(); } else cur += c;
+    }
+  }
+  ar.visit(prefix + "/state", state_, std::max(1, state_width()));
+  if (ar.reading()) {
+    id_i_.assign(a.begin(), a.end());
+    id_j_.assign(b.begin(), b.end());
+    if (state_.size() != size() * state_names_.size())
+      throw SetupError("checkpoint " + what + " state has " + std::to_string(state_.size()) + " values, expected " +
+                       std::to_string(size() * state_names_.size()) + " (different law?)");
+    force_.assign(size(), Vec3::Zero());
+    torque_i_.assign(size(), Vec3::Zero());
+    torque_j_.assign(size(), Vec3::Zero());
+  }
+}
+
+}  // namespace sparkdem

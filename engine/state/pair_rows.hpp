@@ -1,0 +1,90 @@
+#pragma once
+/// PairRows: the part shared by the contact table and the bond table. Rows are particle pairs
+/// keyed by global ids with id_i < id_j, so that per-row state keeps its meaning across neighbour
+/// rebuilds and particle reorderings. Laws declare named per-row state columns.
+///
+/// Forces are computed per row into per-row arrays (force on i, torques on i and j) and then
+/// gathered per particle in a fixed order through a CSR incidence list. No two threads ever
+/// write the same memory, and the summation order does not depend on the thread count, so
+/// results are bit-identical for any number of threads.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/core/archive.hpp"
+#include "engine/core/types.hpp"
+
+namespace sparkdem {
+
+/// 64-bit key of an unordered pair of global ids (id_i < id_j).
+inline std::uint64_t pair_key(Id a, Id b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(a) << 32) ^ static_cast<std::uint64_t>(b);
+}
+
+class PairRows {
+ public:
+  /// Names of the per-row state columns (set once by the active law); clears the state.
+  void set_state_columns(std::vector<std::string> names) {
+    state_names_ = std::move(names);
+    state_.assign(size() * state_names_.size(), 0.0);
+  }
+  const std::vector<std::string>& state_columns() const { return state_names_; }
+  int state_width() const { return static_cast<int>(state_names_.size()); }
+  /// Index of a state column, or -1.
+  int column(const std::string& name) const;
+
+  std::size_t size() const { return i_.size(); }
+  Index i(std::size_t r) const { return i_[r]; }
+  Index j(std::size_t r) const { return j_[r]; }
+  const std::vector<Index>& i_list() const { return i_; }
+  const std::vector<Index>& j_list() const { return j_; }
+  const std::vector<Id>& id_i() const { return id_i_; }
+  const std::vector<Id>& id_j() const { return id_j_; }
+  std::uint64_t key(std::size_t r) const { return pair_key(id_i_[r], id_j_[r]); }
+  double* state(std::size_t r) { return state_.data() + r * state_names_.size(); }
+  const double* state(std::size_t r) const { return state_.data() + r * state_names_.size(); }
+  std::vector<double>& state_data() { return state_; }
+  const std::vector<double>& state_data() const { return state_; }
+
+  // Per-row results of the last force pass.
+  std::vector<Vec3>& force() { return force_; }       ///< force on i (j gets minus) [N]
+  std::vector<Vec3>& torque_i() { return torque_i_; }  ///< [N m]
+  std::vector<Vec3>& torque_j() { return torque_j_; }  ///< [N m]
+  const std::vector<Vec3>& force() const { return force_; }
+
+  /// Recompute local indices after the particles were permuted (`ids` maps local -> global).
+  void remap_after_permutation(const std::vector<Id>& ids);
+
+  /// Per-particle incidence (CSR): rows touching particle p; code >= 0: side i, ~row: side j.
+  const std::vector<std::int64_t>& incidence_start() const { return inc_start_; }
+  const std::vector<std::int64_t>& incidence_row() const { return inc_row_; }
+
+  /// Sum per-row forces/torques into particle arrays (adds to force/torque).
+  void gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
+
+ protected:
+  /// Copy same-named columns of `from` (names `from_names`) into row r; others keep their value.
+  void copy_named_state(std::size_t r, const std::vector<std::string>& from_names, const double* from);
+  /// Resize the per-row result arrays to the row count (zeroed) and rebuild the incidence.
+  void reset_results(std::size_t n_particles);
+  void build_incidence(std::size_t n_particles);
+  /// Rows (ids, local indices) and state with their column names.
+  void visit_rows(Archive& ar, const std::string& prefix, const std::string& what);
+
+  std::vector<Index> i_, j_;
+  std::vector<Id> id_i_, id_j_;
+  std::vector<std::string> state_names_;
+  std::vector<double> state_;
+  std::vector<Vec3> force_, torque_i_, torque_j_;
+  std::vector<std::int64_t> inc_start_, inc_row_;
+};
+
+/// Named per-row values handed from one table to another (contact -> bond on bonding,
+/// bond -> contact on breaking): same-named columns are carried over, others start at zero.
+struct HandedState {
+  std::vector<std::string> names;
+  std::vector<double> values;
+};
+
+}  // namespace sparkdem
