@@ -219,12 +219,12 @@ void Simulation::pair_forces(double dt) {
   s_.contacts.gather(s_.particles.force, s_.particles.torque);
 }
 
-void Simulation::bond_forces(double dt) {
+void Simulation::bond_forces(double dt, Step step) {
   if (!bond_law_) return;
   s_.bonds.prepare(s_.particles.size());
   const std::vector<std::size_t> broke = bond_law_->pass(s_.particles, s_.bonds, dt);
   s_.bonds.gather(s_.particles.force, s_.particles.torque);
-  for (const std::size_t r : broke) break_bond(s_, r);
+  for (const std::size_t r : broke) break_bond(s_, r, step);
 }
 
 void Simulation::wall_forces(double dt) {
@@ -238,7 +238,7 @@ void Simulation::wall_forces(double dt) {
 void Simulation::compute_forces(double dt, double t_stage) {
   zero_forces();
   pair_forces(dt);
-  bond_forces(dt);
+  bond_forces(dt, s_.step);
   wall_forces(dt);
   for (const PlanItem& it : plan_.items)
     if (it.kind == PlanItem::Kind::Module && it.module->phase() == Phase::Force)
@@ -505,7 +505,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
         case PlanItem::Kind::Neighbors: update_neighbors(skin_, cfg.sort_every_rebuilds); break;
         case PlanItem::Kind::ZeroForces: zero_forces(); break;
         case PlanItem::Kind::ContactPairs: pair_forces(dt_used); break;
-        case PlanItem::Kind::Bonds: bond_forces(dt_used); break;
+        case PlanItem::Kind::Bonds: bond_forces(dt_used, s_.step + 1); break;
         case PlanItem::Kind::ContactWalls: wall_forces(dt_used); break;
         case PlanItem::Kind::Module: run_module(it, s_.step + 1, t_new, dt_used); break;
         case PlanItem::Kind::IntegrateSecondHalf: verlet_second_half(p, dt_used); break;

@@ -114,7 +114,9 @@ class Simulation {
   void compute_forces(double dt, double t_stage);
   void zero_forces();
   void pair_forces(double dt);   ///< pair pass + per-particle gather
-  void bond_forces(double dt);   ///< bond pass + gather; breaks hand their state to the contact table
+  /// Bond pass + gather; bonds that break are marked at `step` (the step being computed) and
+  /// hand their state to the contact table.
+  void bond_forces(double dt, Step step);
   void wall_forces(double dt);   ///< wall pass; stores the wall loads
   void update_neighbors(double skin, Step sort_every);
   void check_finite(double dt, double blowup_speed) const;

@@ -7,6 +7,7 @@
 #include "physics/register_all.hpp"
 
 #include "physics/body/gravity.hpp"
+#include "physics/bonds/spring_bond.hpp"
 #include "physics/contact/hertz_mindlin.hpp"
 #include "physics/contact/hooke.hpp"
 #include "physics/contact/lammps_granular.hpp"
@@ -18,6 +19,7 @@ void register_all(Registry& r) {
   r.contact_law<HertzMindlin>();
   r.contact_law<LinearSpringDashpot>();
   r.contact_law<LammpsHertzTsuji>();
+  r.bond_law<SpringBond>();
   r.module<Gravity>();
   r.module<ViscousDamping>();
   r.generator<LatticeGenerator>();

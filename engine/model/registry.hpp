@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "engine/contact/bond_model.hpp"
 #include "engine/contact/contact_model.hpp"
 #include "engine/core/error.hpp"
 #include "engine/model/generator.hpp"
@@ -31,6 +32,14 @@ class Registry {
                                         return std::make_unique<ContactModelT<Law>>(ps->build(v));
                                       }};
   }
+  /// Register a bond law type (see engine/contact/bond_model.hpp for the BondLaw concept).
+  template <class Law>
+  void bond_law() {
+    auto ps = std::make_shared<ParamSpec<typename Law::Params>>(Law::spec());
+    bond_laws_[std::string(Law::kName)] = {ps->spec(), [ps](const ParamValues& v) -> std::unique_ptr<BondModel> {
+                                             return std::make_unique<BondModelT<Law>>(ps->build(v));
+                                           }};
+  }
   /// Register a module or generator M with `static ParamSpec<M::Params> spec()` and
   /// a constructor from M::Params.
   template <class M>
@@ -49,11 +58,13 @@ class Registry {
   }
 
   const std::map<std::string, RegistryEntry<ContactModel>>& laws() const { return laws_; }
+  const std::map<std::string, RegistryEntry<BondModel>>& bond_laws() const { return bond_laws_; }
   const std::map<std::string, RegistryEntry<Module>>& modules() const { return modules_; }
   const std::map<std::string, RegistryEntry<Generator>>& generators() const { return generators_; }
 
  private:
   std::map<std::string, RegistryEntry<ContactModel>> laws_;
+  std::map<std::string, RegistryEntry<BondModel>> bond_laws_;
   std::map<std::string, RegistryEntry<Module>> modules_;
   std::map<std::string, RegistryEntry<Generator>> generators_;
 };

@@ -1,5 +1,7 @@
 #include "engine/state/pair_transfer.hpp"
 
+#include "engine/neighbor/neighbor_search.hpp"
+
 namespace sparkdem {
 
 std::vector<std::size_t> bond_contacts(State& s, const std::vector<std::size_t>& contact_rows) {
@@ -23,9 +25,23 @@ std::size_t bond_particles(State& s, Index a, Index b) {
   return r;
 }
 
-void break_bond(State& s, std::size_t r) {
+std::size_t bond_within_gap(State& s, double gap_tolerance) {
+  const auto& p = s.particles;
+  std::size_t made = 0;
+  for (const auto& pr : find_pairs(p.position, p.radius, gap_tolerance)) {
+    const Index a = pr[0], b = pr[1];
+    if (s.bonds.intact_keys().count(pair_key(p.id[a], p.id[b]))) continue;
+    if ((p.position[a] - p.position[b]).norm() - p.radius[a] - p.radius[b] > gap_tolerance) continue;
+    s.bonds.add(a, b, p.id, p.position, p.orientation);
+    ++made;
+  }
+  if (made) s.marks["neighbors_stale"] = 1.0;
+  return made;
+}
+
+void break_bond(State& s, std::size_t r, Step step) {
   if (s.bonds.broken(r)) return;
-  s.bonds.mark_broken(r, s.step);
+  s.bonds.mark_broken(r, step);
   s.contacts.hand_over(s.bonds.key(r), s.bonds.handed_state(r));
   s.marks["neighbors_stale"] = 1.0;
 }

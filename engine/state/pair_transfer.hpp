@@ -18,7 +18,11 @@ std::vector<std::size_t> bond_contacts(State& s, const std::vector<std::size_t>&
 /// Bond local particles a and b (no contact state to hand over); returns the bond row.
 std::size_t bond_particles(State& s, Index a, Index b);
 
-/// Mark bond row r broken at the current step and hand its state to the contact table.
-void break_bond(State& s, std::size_t r);
+/// Bond every pair whose gap r_i + r_j - d >= -gap_tolerance and that is not bonded yet, in
+/// the deterministic order of the neighbour search. Returns the number of new bonds.
+std::size_t bond_within_gap(State& s, double gap_tolerance);
+
+/// Mark bond row r broken at `step` and hand its state to the contact table.
+void break_bond(State& s, std::size_t r, Step step);
 
 }  // namespace sparkdem

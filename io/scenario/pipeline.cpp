@@ -11,6 +11,7 @@
 #include <map>
 
 #include "engine/core/error.hpp"
+#include "engine/state/pair_transfer.hpp"
 #include "io/hdf5/results_writer.hpp"
 #include "io/restart/hdf5_archive.hpp"
 
@@ -214,12 +215,18 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
         if (st.generator) st.generator->generate(s);
         s.stage_index = static_cast<std::int64_t>(k);
       }
+      std::size_t bonds_made = 0;
+      if (!resuming && st.create_bonds_gap >= 0.0) {
+        if (s.bonds.state_columns() != sc.bond_law->state_columns()) s.bonds.set_state_columns(sc.bond_law->state_columns());
+        bonds_made = bond_within_gap(s, st.create_bonds_gap);
+      }
+      s.bonds.contact_rule = sc.bond_contact_rule;
       json set_counts;
       if (!resuming) {
         for (const auto& [name, sel] : st.sets) set_counts[name] = assign_set(s, name, sel);
       }
       const ContactModel& law = sc.law_of(st);
-      Simulation sim(s, law);
+      Simulation sim(s, law, sc.bond_law.get());
       std::vector<Module*> mods;
       for (auto& m : st.modules) { sim.add_module(m.get()); mods.push_back(m.get()); }
       std::vector<std::unique_ptr<Monitor>> mons;
@@ -233,11 +240,19 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
       js["name"] = st.cfg.name;
       js["type"] = st.type;
       if (!set_counts.is_null()) js["particle_sets"] = set_counts;
+      if (st.create_bonds_gap >= 0.0) js["bonds_created"] = bonds_made;
       if (st.dynamics) {
         const StageResult r = sim.run_stage(st.cfg, obs, resuming);
         obs.end_stage_line();
         js["steps"] = r.steps;
         js["simulated_time_s"] = r.simulated_time;
+        js["mechanical_time_s"] = r.simulated_time;
+        js["physical_time_s"] = r.physical_time;
+        js["time_scale"] = st.cfg.time_scale;
+        for (const auto& [m, n] : r.module_calls) js["module_calls"][m] = n;
+        for (const auto& [m, n] : r.max_substeps)
+          if (n > 1) js["max_substeps"][m] = n;
+        if (sc.bond_law) js["bonds"] = {{"intact", s.bonds.intact_count()}, {"broken", s.bonds.broken_count()}};
         js["wall_time_s"] = r.wall_seconds;
         js["dt_s"] = r.dt;
         js["stable_dt_at_start_s"] = finite_or_null(r.stable_dt_at_start);
@@ -283,6 +298,8 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
   if (!error.empty()) summary["error"] = error;
   summary["wall_time_s"] = wall;
   summary["steps"] = total_steps;
+  summary["mechanical_time_s"] = s.time;
+  summary["physical_time_s"] = s.physical_time;
   summary["particles"] = s.particles.size();
   summary["particle_steps_per_s"] = wall > 0 ? particle_steps / wall : 0.0;
   obs.finalize();

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -104,6 +106,7 @@ struct StageParams {
   double dt_fraction = 0.0;
   bool allow_unstable_dt = false;
   double mass_scaling = 1.0;
+  double time_scale = 1.0;
   double skin = 0.0;
   double blowup_speed = 0.0;
   std::int64_t sort_every_rebuilds = 50;
@@ -151,6 +154,7 @@ ParamSpec<StageParams> stage_spec(const Registry& reg) {
   s.add("dt_fraction", &StageParams::dt_fraction).unit("1").range(0.0, 10.0).doc("time step as a fraction of the stable step at stage start");
   s.add("allow_unstable_dt", &StageParams::allow_unstable_dt).doc("run above the stable step (explicit override)");
   s.add("mass_scaling", &StageParams::mass_scaling).unit("1").min(1.0).doc("mass scaling factor (reported; 1 = off)");
+  s.add("time_scale", &StageParams::time_scale).unit("1").positive().doc("physical seconds per mechanical second: modules in physical time (thermal, sintering kinetics) advance time_scale x dt per step; both clocks are reported");
   s.add("skin", &StageParams::skin).unit("m").nonnegative().doc("Verlet skin (0: 0.3 x smallest radius)");
   s.add("blowup_speed", &StageParams::blowup_speed).unit("m/s").nonnegative().doc("speed that counts as a blow-up (0: radius per step)");
   s.add("sort_every_rebuilds", &StageParams::sort_every_rebuilds).min(0).doc("spatial sort period in neighbour rebuilds (0: never)");
@@ -183,22 +187,26 @@ std::string list_names(const std::vector<std::string>& n) {
   return s;
 }
 
-std::unique_ptr<ContactModel> make_law(const json& c, const Registry& reg, const std::string& path,
-                                       std::vector<Diagnostic>& errors, json& resolved) {
+/// An object {"law": name, "params": {...}} (plus `extra` keys, checked by the caller) naming an
+/// entry of a registry table; `what` is "contact law" or "bond law".
+template <class T>
+std::unique_ptr<T> make_named(const json& c, const std::map<std::string, RegistryEntry<T>>& table, const std::string& what,
+                              const std::string& path, std::vector<Diagnostic>& errors, json& resolved,
+                              const std::set<std::string>& extra = {}) {
   if (!c.is_object()) { errors.push_back({path, "expected an object {\"law\": ..., \"params\": {...}}, found " + describe(c)}); return nullptr; }
   for (auto it = c.begin(); it != c.end(); ++it)
-    if (it.key() != "law" && it.key() != "params")
+    if (it.key() != "law" && it.key() != "params" && !extra.count(it.key()))
       errors.push_back({path + "/" + it.key(), "unknown key \"" + it.key() + "\" (expected \"law\" and \"params\")"});
   if (!c.contains("law") || !c["law"].is_string()) {
-    errors.push_back({path + "/law", "missing or non-string contact law name; registered laws: " + list_names(names_of(reg.laws()))});
+    errors.push_back({path + "/law", "missing or non-string " + what + " name; registered: " + list_names(names_of(table))});
     return nullptr;
   }
   const auto name = c["law"].get<std::string>();
-  auto it = reg.laws().find(name);
-  if (it == reg.laws().end()) {
-    const auto dym = did_you_mean(name, names_of(reg.laws()));
-    errors.push_back({path + "/law", "unknown contact law \"" + name + "\"" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") +
-                                         "; registered laws: " + list_names(names_of(reg.laws()))});
+  auto it = table.find(name);
+  if (it == table.end()) {
+    const auto dym = did_you_mean(name, names_of(table));
+    errors.push_back({path + "/law", "unknown " + what + " \"" + name + "\"" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") +
+                                         "; registered: " + list_names(names_of(table))});
     return nullptr;
   }
   const std::size_t before = errors.size();
@@ -206,6 +214,58 @@ std::unique_ptr<ContactModel> make_law(const json& c, const Registry& reg, const
   resolved = {{"law", name}, {"params", to_json(v, it->second.spec)}};
   if (errors.size() != before) return nullptr;
   return it->second.make(v);
+}
+
+std::unique_ptr<ContactModel> make_law(const json& c, const Registry& reg, const std::string& path,
+                                       std::vector<Diagnostic>& errors, json& resolved) {
+  return make_named(c, reg.laws(), "contact law", path, errors, resolved);
+}
+
+/// A module clock: {"kind": every_step|every_n_steps|substeps|adaptive_substeps|on_event, "n",
+/// and for on_event the trigger conditions}.
+struct ClockParams {
+  std::string kind = "every_step";
+  std::int64_t n = 1;
+  double moved_beyond = std::numeric_limits<double>::infinity();
+  std::string field;
+  double field_change = std::numeric_limits<double>::infinity();
+  bool bond_broke = false;
+  std::int64_t max_interval = 0;
+};
+ParamSpec<ClockParams> clock_spec() {
+  using P = ClockParams;
+  ParamSpec<P> s("clock", "object", "when a module runs relative to the mechanical step");
+  s.add("kind", &P::kind).choices({"every_step", "every_n_steps", "substeps", "adaptive_substeps", "on_event"})
+      .doc("every step; every n steps (dt = n dt_m); n substeps per step (dt = dt_m/n); adaptive substeps (at least n, more when the module's stable step shrinks); on an event");
+  s.add("n", &P::n).min(1).doc("steps per call (every_n_steps) or (minimum) substeps per step");
+  s.add("moved_beyond", &P::moved_beyond).unit("m").positive().doc("on_event: a particle moved more than this since the last call");
+  s.add("field", &P::field).doc("on_event: particle field watched for changes");
+  s.add("field_change", &P::field_change).positive().doc("on_event: change of `field` (its unit) that triggers a call");
+  s.add("bond_broke", &P::bond_broke).doc("on_event: a bond broke since the last call");
+  s.add("max_interval", &P::max_interval).min(0).doc("on_event: also call after this many steps (0: never)");
+  return s;
+}
+Clock make_clock(const json& j, const std::string& path, std::vector<Diagnostic>& errors, json& resolved) {
+  const ClockParams p = build(clock_spec(), j, path, errors, resolved);
+  Clock c;
+  c.n = p.n;
+  if (p.kind == "every_n_steps") c.kind = Clock::Kind::EveryNSteps;
+  else if (p.kind == "substeps") c.kind = Clock::Kind::SubstepsPerStep;
+  else if (p.kind == "adaptive_substeps") c.kind = Clock::Kind::AdaptiveSubsteps;
+  else if (p.kind == "on_event") c.kind = Clock::Kind::OnEvent;
+  c.trigger = {p.moved_beyond, p.field, p.field_change, p.bond_broke, p.max_interval};
+  const bool event_keys = std::isfinite(p.moved_beyond) || !p.field.empty() || std::isfinite(p.field_change) ||
+                          p.bond_broke || p.max_interval > 0;
+  if (c.kind == Clock::Kind::OnEvent) {
+    if (!(std::isfinite(p.moved_beyond) || (!p.field.empty() && std::isfinite(p.field_change)) || p.bond_broke ||
+          p.max_interval > 0))
+      errors.push_back({path, "an on_event clock needs a condition: moved_beyond, field + field_change, bond_broke or max_interval"});
+    if (p.field.empty() != !std::isfinite(p.field_change))
+      errors.push_back({path + "/field_change", "field and field_change go together"});
+  } else if (event_keys) {
+    errors.push_back({path + "/kind", "trigger conditions are given but kind is \"" + p.kind + "\", not \"on_event\""});
+  }
+  return c;
 }
 
 Wall make_wall(const json& w, const std::string& path, std::vector<Diagnostic>& errors, json& resolved) {
@@ -306,7 +366,7 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
   if (const std::string deep = too_deep(j, 32, ""); !deep.empty())
     throw ConfigError(deep, "nested more than 32 levels deep (a scenario needs fewer than 10)");
   json resolved_top;
-  const TopParams top = build(top_spec(), j, "", errors, resolved_top, {"materials", "contact", "walls", "stages", "particle_sets"});
+  const TopParams top = build(top_spec(), j, "", errors, resolved_top, {"materials", "contact", "bonds", "walls", "stages", "particle_sets"});
   // Particle sets
   std::map<std::string, SetSelector> sets;
   if (j.contains("particle_sets")) {
@@ -356,6 +416,19 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
   // Contact law
   if (!j.contains("contact")) errors.push_back({"/contact", "missing required key \"contact\" ({\"law\": name, \"params\": {...}}); registered laws: " + list_names(names_of(reg.laws()))});
   else { json r; sc.law = make_law(j["contact"], reg, "/contact", errors, r); sc.resolved["contact"] = r; }
+  // Bond law (optional): {"law", "params", "contact_rule": "exclude"|"add"}
+  if (j.contains("bonds")) {
+    json r;
+    sc.bond_law = make_named(j["bonds"], reg.bond_laws(), "bond law", "/bonds", errors, r, {"contact_rule"});
+    if (j["bonds"].is_object() && j["bonds"].contains("contact_rule")) {
+      const json& cr = j["bonds"]["contact_rule"];
+      if (cr == "add") sc.bond_contact_rule = BondTable::ContactRule::Add;
+      else if (cr != "exclude")
+        errors.push_back({"/bonds/contact_rule", "expected \"exclude\" (bonded pairs get no contact force, default) or \"add\" (bond and contact forces add up), found " + describe(cr)});
+    }
+    r["contact_rule"] = sc.bond_contact_rule == BondTable::ContactRule::Add ? "add" : "exclude";
+    sc.resolved["bonds"] = r;
+  }
   // Walls
   std::set<std::string> wall_names;
   sc.resolved["walls"] = json::array();
@@ -383,7 +456,7 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
       const json& js = j["stages"][k];
       json r;
       const std::size_t before = errors.size();
-      const StageParams p = build(sspec, js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact", "sets", "prescribe"});
+      const StageParams p = build(sspec, js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact", "sets", "prescribe", "create_bonds"});
       StageDef st;
       st.path = path;
       st.type = p.type;
@@ -393,6 +466,7 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
       c.dt_fraction = p.dt_fraction;
       c.allow_unstable_dt = p.allow_unstable_dt;
       c.mass_scaling = p.mass_scaling;
+      c.time_scale = p.time_scale;
       c.skin = p.skin;
       c.blowup_speed = p.blowup_speed;
       c.sort_every_rebuilds = p.sort_every_rebuilds;
@@ -484,10 +558,30 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
               continue;
             }
             const std::size_t b2 = errors.size();
-            const ParamValues v = bind_params(it.value(), m->second.spec, path + "/modules/" + it.key(), errors);
+            const ParamValues v = bind_params(it.value(), m->second.spec, path + "/modules/" + it.key(), errors, {"clock"});
             r["modules"][it.key()] = to_json(v, m->second.spec);
-            if (errors.size() == b2) st.modules.push_back(m->second.make(v));
+            std::optional<Clock> clk;
+            if (it.value().is_object() && it.value().contains("clock")) {
+              json rc;
+              clk = make_clock(it.value()["clock"], path + "/modules/" + it.key() + "/clock", errors, rc);
+              r["modules"][it.key()]["clock"] = rc;
+            }
+            if (errors.size() == b2) {
+              st.modules.push_back(m->second.make(v));
+              if (clk) st.modules.back()->set_clock(*clk);
+            }
           }
+      }
+      // Bonds created at the stage start
+      if (js.contains("create_bonds")) {
+        const std::string bp = path + "/create_bonds";
+        const json& cb = js["create_bonds"];
+        if (!cb.is_object() || cb.size() != 1 || !cb.contains("gap_tolerance") || !cb["gap_tolerance"].is_number() ||
+            !(cb["gap_tolerance"].get<double>() >= 0.0))
+          errors.push_back({bp, "expected {\"gap_tolerance\": number >= 0} [m] (bond every pair whose gap is at most this; 0 = touching pairs), found " + describe(cb)});
+        else st.create_bonds_gap = cb["gap_tolerance"].get<double>();
+        if (!j.contains("bonds")) errors.push_back({bp, "creating bonds needs a bond law: add \"bonds\": {\"law\": ...} at the top level"});
+        r["create_bonds"] = cb;
       }
       // Contact law override
       if (js.contains("contact")) { json rc; st.law = make_law(js["contact"], reg, path + "/contact", errors, rc); r["contact"] = rc; }
@@ -631,7 +725,11 @@ json schema_json(const Registry& reg) {
   j["stage"]["prescribe"] = "object {set name: [vx, vy, vz] m/s}: the set moves at this velocity (zero = frozen)";
   j["stage"]["until"] = "object {quantity: {\"above\"|\"below\": value}}; quantities are time-series columns";
   for (const auto& [k, v] : reg.laws()) j["contact_laws"][k] = spec_to_json(v.spec);
+  for (const auto& [k, v] : reg.bond_laws()) j["bond_laws"][k] = spec_to_json(v.spec);
   for (const auto& [k, v] : reg.modules()) j["modules"][k] = spec_to_json(v.spec);
+  j["module_clock"] = spec_to_json(clock_spec().spec());
+  j["stage"]["create_bonds"] = "object {\"gap_tolerance\": m}: bond every pair whose gap is at most this at the stage start";
+  j["bonds"] = "object {\"law\": bond law, \"params\": {...}, \"contact_rule\": \"exclude\"|\"add\"}";
   for (const auto& [k, v] : reg.generators()) j["generators"][k] = spec_to_json(v.spec);
   return j;
 }

@@ -26,6 +26,7 @@ struct StageDef {
   std::vector<Wall> add_walls;
   std::vector<std::string> remove_walls;
   std::string from_snapshot;          ///< load particles, contacts and walls from a checkpoint
+  double create_bonds_gap = -1.0;     ///< >= 0: bond every pair with gap <= this at the stage start [m]
   bool dynamics = true;               ///< false: a generator stage with nothing to settle (lattice, relax)
   std::vector<std::pair<std::string, SetSelector>> sets;  ///< particle sets (re)evaluated at the stage start
 };
@@ -36,6 +37,8 @@ struct Scenario {
   std::uint64_t seed = 12345;
   std::vector<Material> materials;
   std::unique_ptr<ContactModel> law;
+  std::unique_ptr<BondModel> bond_law;  ///< null: the scenario has no bonds
+  BondTable::ContactRule bond_contact_rule = BondTable::ContactRule::Exclude;
   std::vector<Wall> walls;
   std::vector<StageDef> stages;
   const ContactModel& law_of(const StageDef& st) const { return st.law ? *st.law : *law; }

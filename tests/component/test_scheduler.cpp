@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -27,13 +28,21 @@ class Mock final : public Module {
   std::string name() const override { return name_; }
   Phase phase() const override { return phase_; }
   Clock clock() const override { return clock_; }
+  TimeDomain time_domain() const override { return domain; }
+  double stable_dt(const State& s) const override { return stable ? stable(s) : Module::stable_dt(s); }
   void declare(Declarations& d) const override {
     d.reads = reads_;
     d.writes = writes_;
     d.particle_fields = fields_;
   }
-  void advance(State&, const StepInfo& info) override { calls.push_back(info); }
+  void advance(State& s, const StepInfo& info) override {
+    calls.push_back(info);
+    if (on_call) on_call(s);
+  }
   std::vector<StepInfo> calls;
+  TimeDomain domain = TimeDomain::Mechanical;
+  std::function<double(const State&)> stable;  ///< own stable step; empty = unconditionally stable
+  std::function<void(State&)> on_call;
 
  private:
   std::string name_;
@@ -166,4 +175,132 @@ TEST_CASE("FieldRegistry: only declared fields exist, and they follow the partic
   test::add_sphere(b.s, Vec3(0, 5e-3, 0), 1e-3, 2500.0);
   CHECK(f.data("temperature").size() == 2 * b.s.particles.size());
   CHECK(f.data("temperature").back() == 293.0);
+}
+
+// ---- event clocks, adaptive substeps, shrinking stable steps, time scaling --------------------
+
+namespace {
+Clock on_event(Trigger t) {
+  Clock c;
+  c.kind = Clock::Kind::OnEvent;
+  c.trigger = std::move(t);
+  return c;
+}
+std::vector<Step> steps_of(const Mock& m) {
+  std::vector<Step> out;
+  for (const auto& c : m.calls) out.push_back(c.step);
+  return out;
+}
+}  // namespace
+
+TEST_CASE("OnEvent: a module runs at the stage's first step, then when a particle moved beyond a distance",
+          "[scheduler][contracts]") {
+  Bench b;
+  b.s.particles.velocity[0] = Vec3(1.0, 0, 0);  // 1 m/s, no forces: 1e-6 m per step of 1e-6 s
+  Trigger t;
+  t.moved_beyond = 3.5e-6;
+  Mock m("solver", Phase::Coupling, on_event(t));
+  Simulation sim(b.s, b.law);
+  sim.add_module(&m);
+  test::NullObserver obs;
+  const double dt = 1e-6;
+  sim.run_stage(test::stage(dt, 14), obs);
+  // Runs at step 1, then 4 steps (4e-6 m > 3.5e-6 m) after each run: 1, 5, 9, 13.
+  CHECK(steps_of(m) == std::vector<Step>{1, 5, 9, 13});
+  CHECK(m.calls[0].dt == Approx(dt).epsilon(1e-15));
+  for (std::size_t k = 1; k < m.calls.size(); ++k) CHECK(m.calls[k].dt == Approx(4 * dt).epsilon(1e-15));  // time since last run
+}
+
+TEST_CASE("OnEvent: a field changed by more than a threshold, and a maximum interval", "[scheduler][contracts]") {
+  Bench b;
+  Mock writer("heater", Phase::Coupling, {}, {}, {"heat"}, {FieldInfo{"heat", 1, "J", 0.0, false}});
+  writer.on_call = [](State& s) { s.particles.fields.data("heat")[0] += 1.0; };
+  Trigger t;
+  t.field = "heat";
+  t.field_change = 2.5;
+  Mock reader("watcher", Phase::Coupling, on_event(t), {"heat"});
+  Trigger ti;
+  ti.max_interval = 5;
+  Mock ticker("ticker", Phase::Coupling, on_event(ti));
+  Simulation sim(b.s, b.law);
+  sim.add_module(&reader);  // declared first: the plan still puts the writer before it
+  sim.add_module(&writer);
+  sim.add_module(&ticker);
+  test::NullObserver obs;
+  sim.run_stage(test::stage(1e-6, 12), obs);
+  // heat = n after step n; runs at 1 (heat 1), then when heat - heat_at_last_run > 2.5: 4, 7, 10.
+  CHECK(steps_of(reader) == std::vector<Step>{1, 4, 7, 10});
+  CHECK(steps_of(ticker) == std::vector<Step>{1, 6, 11});
+}
+
+TEST_CASE("AdaptiveSubsteps follows a shrinking stable step; a fixed clock above it stops the run",
+          "[scheduler][contracts]") {
+  const double dt = 1e-6;
+  SECTION("adaptive") {
+    Bench b;
+    Mock m("stiff", Phase::Coupling, {Clock::Kind::AdaptiveSubsteps, 1});
+    m.stable = [dt](const State& s) { return dt / (1.0 + static_cast<double>(s.step) / 4.0); };
+    Simulation sim(b.s, b.law);
+    sim.add_module(&m);
+    test::NullObserver obs;
+    const StageResult r = sim.run_stage(test::stage(dt, 12), obs);
+    // Step n (1-based) is computed from the state after n - 1 steps: k_n = ceil(1 + (n - 1)/4).
+    std::size_t c = 0;
+    Step total = 0;
+    for (Step n = 1; n <= 12; ++n) {
+      const Step k = static_cast<Step>(std::ceil(1.0 + static_cast<double>(n - 1) / 4.0 - 1e-12));
+      total += k;
+      double sum = 0.0;
+      for (Step q = 0; q < k; ++q, ++c) {
+        REQUIRE(c < m.calls.size());
+        CHECK(m.calls[c].step == n);
+        CHECK(m.calls[c].substep == q);
+        CHECK(m.calls[c].dt <= dt / (1.0 + static_cast<double>(n - 1) / 4.0) * (1 + 1e-12));  // never above the stable step
+        sum += m.calls[c].dt;
+      }
+      CHECK(sum == Approx(dt).epsilon(1e-14));                         // the substeps tile the step
+      CHECK(m.calls[c - 1].time == Approx(static_cast<double>(n) * dt).epsilon(1e-12));
+    }
+    CHECK(m.calls.size() == static_cast<std::size_t>(total));
+    CHECK(r.module_calls.at("stiff") == total);
+    CHECK(r.max_substeps.at("stiff") == 4);
+  }
+  SECTION("fixed clock") {
+    Bench b;
+    Mock m("fixed", Phase::Coupling, {Clock::Kind::SubstepsPerStep, 1});
+    m.stable = [dt](const State& s) { return 2.0 * dt / (1.0 + static_cast<double>(s.step) / 10.0); };
+    Simulation sim(b.s, b.law);
+    sim.add_module(&m);
+    test::NullObserver obs;
+    StageConfig cfg = test::stage(dt, 100);
+    cfg.stability_check_every = 5;
+    // Stable step < dt once step > 10: found at the check after step 15.
+    CHECK_THROWS_AS(sim.run_stage(cfg, obs), PhysicsError);
+    CHECK(b.s.step == 15);
+  }
+}
+
+TEST_CASE("time scaling: physical-time modules see time_scale x dt and the physical clock", "[scheduler][contracts]") {
+  Bench b;
+  Mock phys("sintering_kinetics", Phase::Coupling, {Clock::Kind::EveryNSteps, 2});
+  phys.domain = TimeDomain::Physical;
+  Mock mech("mechanical_observer", Phase::Coupling, {});
+  Simulation sim(b.s, b.law);
+  sim.add_module(&phys);
+  sim.add_module(&mech);
+  test::NullObserver obs;
+  const double dt = 1e-6, scale = 1000.0;
+  StageConfig cfg = test::stage(dt, 10);
+  cfg.time_scale = scale;
+  const StageResult r = sim.run_stage(cfg, obs);
+  REQUIRE(phys.calls.size() == 5);
+  for (std::size_t k = 0; k < phys.calls.size(); ++k) {
+    CHECK(phys.calls[k].dt == Approx(2 * dt * scale).epsilon(1e-15));
+    CHECK(phys.calls[k].time == Approx(scale * dt * 2.0 * static_cast<double>(k + 1)).epsilon(1e-12));
+  }
+  CHECK(mech.calls.back().dt == Approx(dt).epsilon(1e-15));
+  CHECK(mech.calls.back().time == Approx(10 * dt).epsilon(1e-12));
+  CHECK(r.simulated_time == Approx(10 * dt).epsilon(1e-12));
+  CHECK(r.physical_time == Approx(10 * dt * scale).epsilon(1e-12));
+  CHECK(b.s.physical_time == Approx(10 * dt * scale).epsilon(1e-12));
 }
