@@ -3,6 +3,7 @@
 #include <omp.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -54,7 +55,10 @@ class OutputObserver final : public Observer {
     f.push_back({"material", 1, std::vector<double>(p.material.begin(), p.material.end()), "1"});
     for (const auto& name : p.fields.names()) {
       const auto& info = p.fields.info(name);
-      if (info.output) f.push_back({name, info.components, p.fields.data(name), info.unit});
+      // Field names may hold '/' (e.g. "set/top"); a frame dataset name may not.
+      std::string out = name;
+      std::replace(out.begin(), out.end(), '/', '_');
+      if (info.output) f.push_back({out, info.components, p.fields.data(name), info.unit});
     }
     ContactFrame c;
     const auto& t = s.contacts;

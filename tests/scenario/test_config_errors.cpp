@@ -247,3 +247,21 @@ TEST_CASE("unreadable and malformed scenario files exit with code 2", "[config_e
     expect_cli_rejects(big, {{"/", "is not valid JSON"}, {"/", "1e400"}}, dir.path);
   }
 }
+
+TEST_CASE("bond, clock and create_bonds errors are reported together with their paths", "[config_errors][scenario][contracts]") {
+  json j = valid_scene();
+  j["bonds"] = {{"law", "spring_bnd"}, {"contact_rule", "sometimes"}};
+  j["stages"][1]["create_bonds"] = {{"gap_tolerance", -1.0}};
+  j["stages"][1]["modules"]["gravity"]["clock"] = {{"kind", "on_event"}};
+  expect_rejected(j, {{"/bonds/law", "did you mean \"spring_bond\""},
+                      {"/bonds/contact_rule", "found \"sometimes\""},
+                      {"/stages/1/create_bonds", "gap_tolerance"},
+                      {"/stages/1/modules/gravity/clock", "needs a condition"}});
+  json k = valid_scene();
+  k["stages"][1]["create_bonds"] = {{"gap_tolerance", 0.0}};  // no bond law in the scenario
+  k["stages"][1]["modules"]["gravity"]["clock"] = {{"kind", "every_step"}, {"moved_beyond", 1e-3}};
+  k["stages"][1]["time_scale"] = 0.0;
+  expect_rejected(k, {{"/stages/1/create_bonds", "needs a bond law"},
+                      {"/stages/1/modules/gravity/clock/kind", "not \"on_event\""},
+                      {"/stages/1/time_scale", "found 0"}});
+}
