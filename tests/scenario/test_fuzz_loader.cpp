@@ -8,6 +8,7 @@
 /// truncated text, ConfigError, SetupError) within one second; any other exception is a bug.
 #include <catch2/catch.hpp>
 
+#include "support/mock_modules.hpp"
 #include "support/scratch.hpp"
 
 #include <algorithm>
@@ -33,7 +34,12 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using Ptr = json::json_pointer;
 
-using sparkdem::test::registry;
+/// Every registered law, module and generator plus the test mocks (scenes in tests/scenario/data
+/// may use the mock modules of the contract tests).
+const sparkdem::Registry& registry() {
+  static const sparkdem::Registry reg = sparkdem::test::registry_with_mocks();
+  return reg;
+}
 
 std::vector<fs::path> seed_files() {
   std::vector<fs::path> files;
