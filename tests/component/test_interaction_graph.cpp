@@ -72,7 +72,7 @@ Packing make_packing(std::uint64_t seed) {
   for (Index k = 0; k < 3; ++k) bond_particles(s, k, static_cast<Index>(299 - k));
   bond_particles(s, 0, 299);  // duplicate of an intact bond: ignored
   const std::size_t broken = bond_particles(s, 5, 6);
-  break_bond(s, broken);
+  break_bond(s, broken, s.step);
   pk.bond_broken = s.bonds.key(broken);
 
   // Move every particle by up to 0.4 rmin: the table (and its stored overlaps) is now stale.
