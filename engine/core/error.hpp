@@ -53,7 +53,10 @@ class PhysicsError : public std::runtime_error {
     std::string s = "physics error at step " + std::to_string(step) + " in " + q + ": " + w;
     if (!ids.empty()) {
       s += " (particle ids";
-      for (std::size_t k = 0; k < ids.size() && k < 10; ++k) s += " " + std::to_string(ids[k]);
+      for (std::size_t k = 0; k < ids.size() && k < 10; ++k) {
+        s += ' ';  // (not " " + to_string(): GCC 12 reports a false -Wrestrict on it)
+        s += std::to_string(ids[k]);
+      }
       if (ids.size() > 10) s += " ...";
       s += ")";
     }
