@@ -468,9 +468,11 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     }
     return true;
   };
+  const Step watch_every = obs.watch_every();
   if (!resume) {
     sample(cols, vals);
     obs.timeseries(cols, vals);
+    obs.watch(s_, cols, vals);
     if (cfg.frame_every > 0) obs.frame(s_);
   }
 
@@ -524,9 +526,11 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
                            "dt = " + std::to_string(dt_used) + " s now exceeds the stable step " + std::to_string(st) +
                                " s of the current state (contacts stiffened); lower dt_fraction or dt");      check_modules(false);
     }
-    if (cfg.timeseries_every > 0 && kk % cfg.timeseries_every == 0) {
+    const bool row = cfg.timeseries_every > 0 && kk % cfg.timeseries_every == 0;
+    if (row || (watch_every > 0 && kk % watch_every == 0)) {
       sample(cols, vals);
-      obs.timeseries(cols, vals);
+      if (row) obs.timeseries(cols, vals);
+      obs.watch(s_, cols, vals);
     }
     if (cfg.frame_every > 0 && kk % cfg.frame_every == 0) obs.frame(s_);
     if (cfg.checkpoint_every > 0 && s_.step % cfg.checkpoint_every == 0) obs.checkpoint(s_);
@@ -545,6 +549,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.physical_time = s_.physical_time - s_.stage_phys_t0;
   sample(cols, vals);
   obs.timeseries(cols, vals);
+  obs.watch(s_, cols, vals);
   for (std::size_t q = 0; q < cols.size(); ++q) res.final_values[cols[q]] = vals[q];
   if (cfg.mass_scaling != 1.0)
     for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] /= cfg.mass_scaling; p.inertia[i] /= cfg.mass_scaling; }

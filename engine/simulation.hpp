@@ -65,6 +65,14 @@ class Observer {
   virtual void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) { (void)cols; (void)vals; }
   virtual void checkpoint(State&) {}
   virtual void progress(const State&, Step stage_steps, double stage_time, double dt) { (void)stage_steps; (void)stage_time; (void)dt; }
+  /// Stage steps between extra watch() calls (0: none beyond the time-series rows).
+  virtual Step watch_every() const { return 0; }
+  /// The monitor values together with the state they were sampled from: at the stage start
+  /// (not on resume), at every time-series row, every watch_every() stage steps (inside the
+  /// step loop, before that step's frame and checkpoint) and at the stage end. Lets the I/O
+  /// layer act on a column (e.g. save a snapshot when it crosses a value); the state must not be
+  /// modified (non-const only so that it can be written through an Archive).
+  virtual void watch(State&, const std::vector<std::string>& cols, const std::vector<double>& vals) { (void)cols; (void)vals; }
 };
 
 struct StageResult {

@@ -53,10 +53,8 @@ class PhysicsError : public std::runtime_error {
     std::string s = "physics error at step " + std::to_string(step) + " in " + q + ": " + w;
     if (!ids.empty()) {
       s += " (particle ids";
-      // Two appends rather than " " + to_string(...): GCC 12 -O3 emits a false -Wrestrict for
-      // operator+(const char*, string&&) once this is inlined into some callers (GCC PR 105329).
       for (std::size_t k = 0; k < ids.size() && k < 10; ++k) {
-        s += ' ';
+        s += ' ';  // (not " " + to_string(): GCC 12 reports a false -Wrestrict on it)
         s += std::to_string(ids[k]);
       }
       if (ids.size() > 10) s += " ...";

@@ -15,6 +15,7 @@
 #include "engine/state/pair_transfer.hpp"
 #include "io/hdf5/results_writer.hpp"
 #include "io/restart/hdf5_archive.hpp"
+#include "io/scenario/sweep.hpp"
 
 namespace sparkdem::io {
 
@@ -30,6 +31,9 @@ class OutputObserver final : public Observer {
   OutputObserver(const std::filesystem::path& outdir, bool quiet) : outdir_(outdir), writer_(outdir), quiet_(quiet) {
     tty_ = isatty(fileno(stderr));
   }
+  /// Sweeps: checkpoints go to this file, and every state file carries this pipeline record.
+  void set_checkpoint_file(const std::filesystem::path& f) { checkpoint_file_ = f; }
+  void set_record(std::function<json()> record) { record_ = std::move(record); }
   void set_stage(const std::string& name, std::vector<Module*> modules, const StageConfig& cfg) {
     stage_ = name;
     modules_ = std::move(modules);
@@ -81,13 +85,17 @@ class OutputObserver final : public Observer {
     }
     rows_.push_back(std::move(row));
   }
-  void checkpoint(State& s) override { write_checkpoint(outdir_ / "checkpoint.h5", s, true); }
+  void checkpoint(State& s) override { write_checkpoint(checkpoint_file_.empty() ? outdir_ / "checkpoint.h5" : checkpoint_file_, s, true); }
   void write_checkpoint(const std::filesystem::path& file, State& s, bool in_stage) {
     Hdf5Archive ar = Hdf5Archive::for_writing(file);
     s.visit(ar);
     std::int64_t flag = in_stage ? 1 : 0;
     ar.visit("pipeline/in_stage", flag);
     for (Module* m : modules_) m->visit(ar, "modules/" + m->name());
+    if (record_) {
+      std::string r = record_().dump();
+      ar.visit("pipeline/record", r);
+    }
     ar.commit();
   }
   void progress(const State& s, Step k, double t, double dt) override {
@@ -142,6 +150,8 @@ class OutputObserver final : public Observer {
   std::vector<std::map<std::string, double>> rows_;
   steady::time_point stage_start_, last_print_;
   Step k0_ = 0;
+  std::filesystem::path checkpoint_file_;
+  std::function<json()> record_;
 };
 
 }  // namespace
@@ -174,20 +184,30 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
   s.materials = sc.materials;
   s.walls = sc.walls;
   s.rng.seed(sc.seed);
+  if (opt.start) s = *opt.start;
+  RunRecord record;  // snapshots taken and sweep progress (see sweep.hpp)
   std::size_t first = 0;
   bool resume = false;
   std::unique_ptr<Hdf5Archive> restart_ar;
   if (opt.restart) {
-    auto [k, in_stage] = read_checkpoint(*opt.restart, s);
+    auto [kc, in_stage] = read_checkpoint(*opt.restart, s);
+    const std::int64_t k = kc - opt.stage_offset;
     if (k < 0 || k >= static_cast<std::int64_t>(sc.stages.size()))
       throw SetupError("checkpoint '" + opt.restart->string() + "' is at stage " + std::to_string(k) + ", but the scenario has " +
                        std::to_string(sc.stages.size()) + " stages");
     first = static_cast<std::size_t>(in_stage ? k : k + 1);
     resume = in_stage;
     restart_ar = std::make_unique<Hdf5Archive>(Hdf5Archive::for_reading(*opt.restart));
+    if (!opt.record && restart_ar->has("pipeline/record")) {
+      std::string r;
+      restart_ar->visit("pipeline/record", r);
+      record = RunRecord::from_json(json::parse(r, nullptr, false));
+    }
   }
 
   OutputObserver obs(opt.outdir, opt.quiet);
+  if (!opt.checkpoint_file.empty()) obs.set_checkpoint_file(opt.checkpoint_file);
+  obs.set_record(opt.record ? opt.record : std::function<json()>([&record] { return record.to_json(); }));
   json summary;
   summary["scenario"] = sc.name;
   summary["version"] = SPARKDEM_VERSION;
@@ -203,6 +223,15 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
       StageDef& st = sc.stages[k];
       const bool resuming = resume && k == first;
       const auto ts = steady::now();
+      const std::int64_t stage_index = opt.stage_offset + static_cast<std::int64_t>(k);
+      if (st.sweep) {
+        const SweepOutcome r = run_sweep(sc, k, s, record, resuming, opt);
+        summary["stages"].push_back(r.entry);
+        total_steps += r.steps;
+        particle_steps += r.particle_steps;
+        obs.write_checkpoint(opt.outdir / "final_state.h5", s, false);
+        continue;
+      }
       if (!resuming) {
         if (!st.from_snapshot.empty()) {
           State snap;
@@ -217,7 +246,7 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
           std::erase_if(s.walls, [&](const Wall& w) { return w.name == n; });
         for (const auto& w : st.add_walls) s.walls.push_back(w);
         if (st.generator) st.generator->generate(s);
-        s.stage_index = static_cast<std::int64_t>(k);
+        s.stage_index = stage_index;
       }
       std::size_t bonds_made = 0;
       if (!resuming && st.create_bonds_gap >= 0.0) {
@@ -246,7 +275,13 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
       if (!set_counts.is_null()) js["particle_sets"] = set_counts;
       if (st.create_bonds_gap >= 0.0) js["bonds_created"] = bonds_made;
       if (st.dynamics) {
-        const StageResult r = sim.run_stage(st.cfg, obs, resuming);
+        std::optional<SnapshotObserver> snap;
+        if (st.snapshots) {
+          if (!resuming) record.forget_stage(stage_index);
+          snap.emplace(obs, *st.snapshots, stage_index, st.cfg.name, opt.outdir, record,
+                       [&obs](const std::filesystem::path& f, State& x) { obs.write_checkpoint(f, x, true); });
+        }
+        const StageResult r = sim.run_stage(st.cfg, snap ? static_cast<Observer&>(*snap) : obs, resuming);
         obs.end_stage_line();
         js["steps"] = r.steps;
         js["simulated_time_s"] = r.simulated_time;
@@ -267,6 +302,7 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
         js["mass_scaling"] = st.cfg.mass_scaling;
         js["step_plan"] = r.plan;
         for (const auto& [c, v] : r.final_values) js["final"][c] = finite_or_null(v);
+        if (st.snapshots) js["snapshots"] = snapshots_summary(record, stage_index, *st.snapshots, opt.outdir);
         total_steps += r.steps;
         particle_steps += static_cast<double>(r.steps) * static_cast<double>(r.particles);
       } else {

@@ -1,9 +1,11 @@
 #include "io/scenario/scenario.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <optional>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -163,6 +165,43 @@ ParamSpec<StageParams> stage_spec(const Registry& reg) {
   s.add_group("stop", &StageParams::stop, stop_spec());
   s.add_group("output", &StageParams::output, output_spec());
   return s;
+}
+
+struct SnapshotParams {
+  std::string column;
+  std::vector<double> at;
+  std::int64_t every_steps = 0;
+  std::int64_t check_every = 0;
+};
+ParamSpec<SnapshotParams> snapshot_spec() {
+  ParamSpec<SnapshotParams> s("snapshots", "object",
+                              "states saved during a stepping stage as OUTDIR/snapshots/<stage>_<k>.h5 (checkpoint "
+                              "format), listed in summary.json; a later stage can sweep over them (sweep.snapshots_of)");
+  s.add("column", &SnapshotParams::column).doc("time-series column watched by `at` (every_steps: recorded only; default time)");
+  s.add("at", &SnapshotParams::at).doc("values of `column`: snapshot k when the column first reaches at[k] (from its first sample's side)");
+  s.add("every_steps", &SnapshotParams::every_steps).min(0).doc("instead of `at`: a snapshot every this many stage steps");
+  s.add("check_every", &SnapshotParams::check_every).min(0).doc("stage steps between checks of `at` besides the time-series rows (0: rows only)");
+  return s;
+}
+struct SweepParams {
+  std::string snapshots_of;
+  std::string parameter;
+};
+ParamSpec<SweepParams> sweep_spec() {
+  ParamSpec<SweepParams> s("sweep", "object",
+                           "run the stage once per item, each from the same input state into OUTDIR/sweep_<stage>/<item>/, "
+                           "results in OUTDIR/sweep_<stage>.csv and summary.json; the main state after the stage is the "
+                           "state before it. Exactly one of snapshots_of, parameter (+ values), seeds");
+  s.add("snapshots_of", &SweepParams::snapshots_of).doc("one item per snapshot of this earlier stage");
+  s.add("parameter", &SweepParams::parameter).doc("JSON pointer relative to the stage (e.g. /modules/gravity/acceleration/2) substituted by each of `values`");
+  return s;
+}
+json sweep_schema() {
+  json j = spec_to_json(sweep_spec().spec());
+  j["params"].push_back({{"name", "values"}, {"type", "array"}, {"doc", "parameter: one item per value (any JSON value, validated in place)"}});
+  j["params"].push_back({{"name", "seeds"}, {"type", "array of integers"}, {"minimum", 0}, {"doc", "one item per seed of the random generator (an ensemble; the table gets mean, sample std and count per column)"}});
+  j["params"].push_back({{"name", "collect"}, {"type", "array of strings"}, {"doc", "table columns: final time-series columns and `packing.<key>` report values (default: all)"}});
+  return j;
 }
 
 // ------------------------------------------------------------------------------------ helpers
@@ -345,6 +384,562 @@ std::string too_deep(const json& j, int limit, const std::string& path) {
   return "";
 }
 
+/// What checking a stage depends on from the scenario and the stages before it.
+struct StageContext {
+  std::shared_ptr<const Registry> reg;
+  std::filesystem::path base_dir;
+  std::map<std::string, SetSelector> sets;  ///< the scenario's particle sets
+  std::set<std::string> wall_names;         ///< walls at the stage start (the stage updates it)
+  bool has_particles = false;               ///< an earlier stage creates particles (updated)
+  std::vector<Material> materials;          ///< for the lattice enclosure check
+  std::vector<Wall> walls;                  ///< scenario walls, for the lattice enclosure check
+  bool has_bond_law = false;                ///< the scenario names a bond law
+  /// Output: the time-series columns of the stage just built (none when unknown before the run:
+  /// a stage from a snapshot file).
+  std::optional<std::vector<std::string>> columns;
+};
+
+/// Time-series columns of a stage whose walls are named `walls` (a superset of them is fine):
+/// the built-in ones, the prescribed sets' and the generator monitors' (whose columns are fixed
+/// for a stage; they are read from a scratch state with those walls).
+std::vector<std::string> stage_columns(const StageDef& st, const std::set<std::string>& walls) {
+  State scratch;
+  for (const auto& n : walls) {
+    Wall w;
+    w.name = n;
+    scratch.walls.push_back(w);
+  }
+  std::vector<std::string> cols = builtin_columns(scratch);
+  for (const auto& [name, v] : st.cfg.prescribed_sets)
+    for (const char* x : {"_count", "_fx", "_fy", "_fz"}) cols.push_back("set_" + name + x);
+  if (st.generator)
+    for (const auto& m : st.generator->monitors())
+      for (const auto& c : m->columns(scratch)) cols.push_back(c);
+  return cols;
+}
+
+/// "" if `column` is one of `cols`, else the problem (with a did-you-mean).
+std::string unknown_column(const std::string& column, const std::vector<std::string>& cols) {
+  if (std::find(cols.begin(), cols.end(), column) != cols.end()) return "";
+  const auto dym = did_you_mean(column, cols);
+  return "\"" + column + "\" is not a time-series column of this stage" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") +
+         "; columns: " + list_names(cols);
+}
+
+/// Bind and check one stage (its "sweep" key is left to the caller); appends every problem to
+/// `errors` and the resolved stage to `r`.
+StageDef build_stage(StageContext& ctx, const json& js, const std::string& path, std::vector<Diagnostic>& errors, json& r) {
+  const std::size_t before = errors.size();
+  const StageParams p = build(stage_spec(*ctx.reg), js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact", "sets", "prescribe", "snapshots", "sweep", "create_bonds"});
+  StageDef st;
+  st.path = path;
+  st.type = p.type;
+  auto& c = st.cfg;
+  c.name = p.name;
+  c.dt = p.dt;
+  c.dt_fraction = p.dt_fraction;
+  c.allow_unstable_dt = p.allow_unstable_dt;
+  c.mass_scaling = p.mass_scaling;
+  c.time_scale = p.time_scale;
+  c.skin = p.skin;
+  c.blowup_speed = p.blowup_speed;
+  c.sort_every_rebuilds = p.sort_every_rebuilds;
+  c.stability_check_every = p.stability_check_every;
+  c.duration = p.stop.time;
+  c.max_steps = p.stop.steps;
+  c.check_every = p.stop.check_every;
+  c.require_until = p.stop.require_until;
+  c.frame_every = p.output.frame_every;
+  c.timeseries_every = p.output.timeseries_every;
+  c.checkpoint_every = p.output.checkpoint_every;
+  st.from_snapshot = p.from_snapshot.empty() ? "" : (ctx.base_dir / p.from_snapshot).string();
+  if (!st.from_snapshot.empty() && !std::filesystem::exists(st.from_snapshot))
+    errors.push_back({path + "/from_snapshot", "cannot read the snapshot file '" + st.from_snapshot + "'"});
+  if (!st.from_snapshot.empty()) ctx.has_particles = true;
+  // Generator
+  if (st.type != "dynamics") {
+    auto g = ctx.reg->generators().find(st.type);
+    if (g != ctx.reg->generators().end()) {
+      const json jg = js.value("generator", json::object());
+      const std::size_t b2 = errors.size();
+      ParamValues v = bind_params(jg, g->second.spec, path + "/generator", errors);
+      // Resolve relative CSV paths of size distributions against the scenario directory.
+      auto csv = v.find("size_distribution.csv");
+      if (csv != v.end() && !std::get<std::string>(csv->second).empty())
+        csv->second = (ctx.base_dir / std::get<std::string>(csv->second)).string();
+      r["generator"] = to_json(v, g->second.spec);
+      // `fill` with a given mean radius: N radii uniform in r(1 +- spread) have
+      // <r^3> = r^3 (1 + spread^2), so their solid fraction N 4/3 pi r^3 (1 + spread^2) / V must
+      // not exceed 0.74 (densest sphere packing). (Without mean_radius, Eq. 1 sizes the radii
+      // to exactly target_density <= 0.7 of the container.)
+      if (st.type == "fill" && errors.size() == b2 && get_real(v, "mean_radius") > 0.0) {
+        constexpr double kPi = 3.14159265358979323846;
+        double volume = 0.0;
+        if (get_text(v, "shape") == "cylinder") {
+          volume = kPi * get_real(v, "radius") * get_real(v, "radius") * get_real(v, "length");
+        } else {
+          const auto lo = get_list(v, "lo"), hi = get_list(v, "hi");
+          volume = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+        }
+        const double n = static_cast<double>(get_int(v, "particles")), rbar = get_real(v, "mean_radius"),
+                     spread = get_real(v, "spread");
+        const double phi = n * 4.0 / 3.0 * kPi * rbar * rbar * rbar * (1.0 + spread * spread) / volume;
+        if (!(volume > 0.0) || !(phi <= 0.74)) {
+          std::ostringstream msg;
+          msg.precision(4);
+          msg << get_int(v, "particles") << " particles of mean radius " << rbar << " m (spread " << spread
+              << ") do not fit the container of volume " << volume << " m^3: solid fraction " << phi
+              << " > 0.74; use fewer particles, a smaller mean_radius or a larger container";
+          errors.push_back({path + "/generator/particles", msg.str()});
+        }
+      }
+      if (errors.size() == b2) {
+        try {
+          st.generator = g->second.make(v);
+          r["estimated_particles"] = st.generator->estimated_particles();
+        } catch (const ConfigError& e) {
+          for (const auto& d : e.diagnostics()) {
+            std::string sub = d.path;
+            if (sub.rfind("/", 0) == 0 && (st.type == "deposit")) sub = "/size_distribution" + sub;
+            errors.push_back({path + "/generator" + sub, d.message});
+          }
+        }
+      }
+      st.dynamics = st.type == "deposit" || st.type == "fill";
+      ctx.has_particles = true;
+    }
+  } else if (js.contains("generator")) {
+    errors.push_back({path + "/generator", "a `dynamics` stage takes no generator; set \"type\" to one of " + list_names(names_of(ctx.reg->generators()))});
+  }
+  if (st.type == "dynamics" && !ctx.has_particles)
+    errors.push_back({path + "/type", "this dynamics stage has no particles: no earlier stage generates them and it has no from_snapshot"});
+  if (st.dynamics && std::isinf(c.duration) && c.max_steps == std::numeric_limits<std::int64_t>::max())
+    errors.push_back({path + "/stop", "a stage needs a hard stop: stop.time [s] or stop.steps"});
+  if (st.dynamics && c.dt == 0.0 && c.dt_fraction == 0.0)
+    errors.push_back({path + "/dt", "set dt [s] or dt_fraction (fraction of the stable step)"});
+  if (c.dt > 0.0 && c.dt_fraction > 0.0)
+    errors.push_back({path + "/dt_fraction", "give either dt or dt_fraction, not both"});
+  // Modules
+  r["modules"] = json::object();
+  if (js.contains("modules")) {
+    if (!js["modules"].is_object()) errors.push_back({path + "/modules", "expected an object {module name: {params}}, found " + describe(js["modules"])});
+    else
+      for (auto it = js["modules"].begin(); it != js["modules"].end(); ++it) {
+        auto m = ctx.reg->modules().find(it.key());
+        if (m == ctx.reg->modules().end()) {
+          const auto dym = did_you_mean(it.key(), names_of(ctx.reg->modules()));
+          errors.push_back({path + "/modules/" + it.key(), "unknown module \"" + it.key() + "\"" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") + "; registered modules: " + list_names(names_of(ctx.reg->modules()))});
+          continue;
+        }
+        const std::size_t b2 = errors.size();
+        const ParamValues v = bind_params(it.value(), m->second.spec, path + "/modules/" + it.key(), errors, {"clock"});
+        r["modules"][it.key()] = to_json(v, m->second.spec);
+        std::optional<Clock> clk;
+        if (it.value().is_object() && it.value().contains("clock")) {
+          json rc;
+          clk = make_clock(it.value()["clock"], path + "/modules/" + it.key() + "/clock", errors, rc);
+          r["modules"][it.key()]["clock"] = rc;
+        }
+        if (errors.size() == b2) {
+          st.modules.push_back(m->second.make(v));
+          if (clk) st.modules.back()->set_clock(*clk);
+        }
+      }
+  }
+  // Bonds created at the stage start
+  if (js.contains("create_bonds")) {
+    const std::string bp = path + "/create_bonds";
+    const json& cb = js["create_bonds"];
+    if (!cb.is_object() || cb.size() != 1 || !cb.contains("gap_tolerance") || !cb["gap_tolerance"].is_number() ||
+        !(cb["gap_tolerance"].get<double>() >= 0.0))
+      errors.push_back({bp, "expected {\"gap_tolerance\": number >= 0} [m] (bond every pair whose gap is at most this; 0 = touching pairs), found " + describe(cb)});
+    else st.create_bonds_gap = cb["gap_tolerance"].get<double>();
+    if (!ctx.has_bond_law) errors.push_back({bp, "creating bonds needs a bond law: add \"bonds\": {\"law\": ...} at the top level"});
+    r["create_bonds"] = cb;
+  }
+  // Contact law override
+  if (js.contains("contact")) { json rc; st.law = make_law(js["contact"], *ctx.reg, path + "/contact", errors, rc); r["contact"] = rc; }
+  // Walls added / removed / moved
+  if (js.contains("add_walls")) {
+    if (!js["add_walls"].is_array()) errors.push_back({path + "/add_walls", "expected an array of walls, found " + describe(js["add_walls"])});
+    else {
+      r["add_walls"] = json::array();
+      for (std::size_t q = 0; q < js["add_walls"].size(); ++q) {
+        json rw;
+        st.add_walls.push_back(make_wall(js["add_walls"][q], path + "/add_walls/" + std::to_string(q), errors, rw));
+        if (!ctx.wall_names.insert(st.add_walls.back().name).second)
+          errors.push_back({path + "/add_walls/" + std::to_string(q) + "/name", "duplicate wall name \"" + st.add_walls.back().name + "\""});
+        r["add_walls"].push_back(rw);
+      }
+    }
+  }
+  if (st.type == "deposit") { ctx.wall_names.insert("die"); ctx.wall_names.insert("bottom"); }
+  if (st.type == "fill" || st.type == "relax") for (const char* n : {"die", "bottom", "top", "xlo", "xhi", "ylo", "yhi"}) ctx.wall_names.insert(n);
+  if (js.contains("remove_walls")) {
+    if (!js["remove_walls"].is_array()) errors.push_back({path + "/remove_walls", "expected an array of wall names"});
+    else
+      for (std::size_t q = 0; q < js["remove_walls"].size(); ++q) {
+        const auto& x = js["remove_walls"][q];
+        if (!x.is_string() || !ctx.wall_names.count(x.get<std::string>()))
+          errors.push_back({path + "/remove_walls/" + std::to_string(q), "expected the name of an existing wall, found " + describe(x)});
+        else { st.remove_walls.push_back(x.get<std::string>()); ctx.wall_names.erase(x.get<std::string>()); }
+      }
+    r["remove_walls"] = js["remove_walls"];
+  }
+  if (js.contains("walls")) {
+    if (!js["walls"].is_object()) errors.push_back({path + "/walls", "expected an object {wall name: motion}, found " + describe(js["walls"])});
+    else {
+      r["walls"] = json::object();
+      for (auto it = js["walls"].begin(); it != js["walls"].end(); ++it) {
+        if (!ctx.wall_names.count(it.key())) {
+          const auto dym = did_you_mean(it.key(), std::vector<std::string>(ctx.wall_names.begin(), ctx.wall_names.end()));
+          errors.push_back({path + "/walls/" + it.key(), "no wall named \"" + it.key() + "\" exists in this stage" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});
+          continue;
+        }
+        json rm;
+        c.motions[it.key()] = make_motion(it.value(), path + "/walls/" + it.key(), errors, rm);
+        r["walls"][it.key()] = rm;
+      }
+    }
+  }
+  // Particle sets evaluated at the stage start, and sets held at a prescribed velocity.
+  auto use_set = [&](const std::string& name, const std::string& at) {
+    auto it = ctx.sets.find(name);
+    if (it == ctx.sets.end()) {
+      std::vector<std::string> names;
+      for (const auto& [k, v] : ctx.sets) names.push_back(k);
+      const auto dym = did_you_mean(name, names);
+      errors.push_back({at, "no particle set named \"" + name + "\" in /particle_sets" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});
+      return;
+    }
+    for (const auto& [n, s2] : st.sets)
+      if (n == name) return;
+    st.sets.emplace_back(name, it->second);
+  };
+  if (js.contains("sets")) {
+    if (!js["sets"].is_array()) errors.push_back({path + "/sets", "expected an array of particle set names"});
+    else
+      for (std::size_t q = 0; q < js["sets"].size(); ++q) {
+        if (!js["sets"][q].is_string()) errors.push_back({path + "/sets/" + std::to_string(q), "expected a set name, found " + describe(js["sets"][q])});
+        else use_set(js["sets"][q].get<std::string>(), path + "/sets/" + std::to_string(q));
+      }
+    r["sets"] = js["sets"];
+  }
+  if (js.contains("prescribe")) {
+    if (!js["prescribe"].is_object()) errors.push_back({path + "/prescribe", "expected an object {set name: [vx, vy, vz]}"});
+    else
+      for (auto it = js["prescribe"].begin(); it != js["prescribe"].end(); ++it) {
+        const std::string at = path + "/prescribe/" + it.key();
+        const auto& v = it.value();
+        if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number()) {
+          errors.push_back({at, "expected a velocity [vx, vy, vz] in m/s, found " + describe(v)});
+          continue;
+        }
+        use_set(it.key(), at);
+        c.prescribed_sets[it.key()] = Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+      }
+    r["prescribe"] = js["prescribe"];
+  }
+  // Until
+  if (js.contains("until")) {
+    if (!js["until"].is_object()) errors.push_back({path + "/until", "expected an object {quantity: {\"above\"|\"below\": value}}"});
+    else
+      for (auto it = js["until"].begin(); it != js["until"].end(); ++it) {
+        const auto& cond = it.value();
+        const std::string cp = path + "/until/" + it.key();
+        if (!cond.is_object() || cond.size() != 1 || !(cond.contains("above") || cond.contains("below")) ||
+            !cond.begin().value().is_number()) {
+          errors.push_back({cp, "expected {\"above\": number} or {\"below\": number}, found " + describe(cond)});
+          continue;
+        }
+        c.until.push_back({it.key(), cond.contains("above"), cond.begin().value().get<double>()});
+      }
+    r["until"] = js["until"];
+  }
+  // Generator-defined settling: motions and stop conditions.
+  if (st.generator) {
+    st.generator->configure_stage(c);
+    for (auto& m : st.generator->modules()) st.modules.push_back(std::move(m));
+  }
+  // Consistency: a lattice inside the scenario walls (scratch generation, no dynamics).
+  // Cheap only up to ~1e6 particles; a larger lattice is not generated just for this check,
+  // and one that could never be allocated (a typo in spacing or hi) is an error.
+  const double lattice_n = st.generator && st.type == "lattice" ? st.generator->estimated_particles() : 0.0;
+  if (!(lattice_n <= 1e9))
+    errors.push_back({path + "/generator", "the lattice would create " + std::to_string(lattice_n) +
+                                               " particles (more than 1e9); check spacing, lo and hi"});
+  if (st.generator && st.type == "lattice" && errors.size() == before && lattice_n <= 1e6) {
+    State scratch;
+    scratch.materials = ctx.materials;
+    scratch.walls = ctx.walls;
+    try {
+      st.generator->generate(scratch);
+      check_enclosed(scratch, path + "/generator", errors);
+    } catch (const ConfigError& e) {
+      for (const auto& d : e.diagnostics()) errors.push_back({path + "/generator" + d.path, d.message});
+    }
+  }
+  // Snapshots taken during the stage.
+  if (js.contains("snapshots")) {
+    const std::string sp = path + "/snapshots";
+    json rs;
+    const std::size_t b2 = errors.size();
+    const SnapshotParams q = build(snapshot_spec(), js["snapshots"], sp, errors, rs);
+    if (errors.size() == b2) {
+      if (!st.dynamics)
+        errors.push_back({sp, "only a stage that steps (dynamics, deposit, fill) takes snapshots; this one is `" + st.type + "`"});
+      if (q.at.empty() && q.every_steps == 0)
+        errors.push_back({sp, "give `at` (values of `column`) or `every_steps`"});
+      if (!q.at.empty() && q.every_steps > 0)
+        errors.push_back({sp + "/every_steps", "give either `at` or `every_steps`, not both"});
+      if (!q.at.empty() && q.column.empty())
+        errors.push_back({sp + "/column", "`at` needs the time-series column it refers to (e.g. \"time\", \"packing_density\")"});
+      if (q.every_steps > 0 && q.check_every > 0)
+        errors.push_back({sp + "/check_every", "check_every applies to `at`; every_steps snapshots are taken at their steps"});
+    }
+    st.snapshots = SnapshotSpec{q.column.empty() && q.every_steps > 0 ? "time" : q.column, q.at, q.every_steps, q.check_every};
+    r["snapshots"] = rs;
+  }
+  ctx.columns.reset();
+  if (st.from_snapshot.empty()) ctx.columns = stage_columns(st, ctx.wall_names);
+  if (st.snapshots && ctx.columns && js["snapshots"].is_object() && js["snapshots"].contains("column") &&
+      js["snapshots"]["column"].is_string() && !st.snapshots->column.empty()) {
+    const std::string bad = unknown_column(st.snapshots->column, *ctx.columns);
+    if (!bad.empty()) errors.push_back({path + "/snapshots/column", bad});
+  }
+  return st;
+}
+
+/// Is `token` an index of an array of `size` elements (RFC 6901: digits, no leading zero)?
+bool array_index(const std::string& token, std::size_t size) {
+  if (token.empty() || token.size() > 18 || (token.size() > 1 && token[0] == '0')) return false;
+  if (!std::all_of(token.begin(), token.end(), [](char c) { return c >= '0' && c <= '9'; })) return false;
+  return std::stoull(token) < size;
+}
+
+/// Checks the swept parameter's pointer against the stage JSON; returns a problem or "".
+std::string check_parameter(const json& stage, const std::string& text, json::json_pointer& ptr) {
+  const std::string example = " (e.g. \"/modules/gravity/acceleration/2\" or \"/contact/params/friction\")";
+  try {
+    ptr = json::json_pointer(text);
+  } catch (const json::exception&) {
+    return "\"" + text + "\" is not a JSON pointer" + example;
+  }
+  if (ptr.empty()) return "expected a JSON pointer to one value of the stage" + example + ", found \"\"";
+  json::json_pointer top = ptr;
+  while (!top.parent_pointer().empty()) top = top.parent_pointer();
+  if (top.back() == "sweep" || top.back() == "name" || top.back() == "type")
+    return "\"" + text + "\": the stage's " + top.back() + " cannot be swept";
+  const json::json_pointer parent = ptr.parent_pointer();
+  // Walk the parent by hand: contains() on a malformed array token would throw.
+  const json* node = &stage;
+  std::string walked;
+  json::json_pointer rest = parent;
+  std::vector<std::string> tokens;
+  while (!rest.empty()) { tokens.insert(tokens.begin(), rest.back()); rest.pop_back(); }
+  for (const auto& t : tokens) {
+    walked += "/" + t;
+    if (node->is_object() && node->contains(t)) node = &(*node)[t];
+    else if (node->is_array() && array_index(t, node->size())) node = &(*node)[std::stoull(t)];
+    else return "\"" + text + "\": the stage has no " + walked + " (the parameter's parent must be written in the stage)";
+  }
+  if (node->is_array() && !array_index(ptr.back(), node->size()))
+    return "\"" + text + "\": " + (parent.empty() ? std::string("/") : parent.to_string()) + " is an array of " +
+           std::to_string(node->size()) + ", \"" + ptr.back() + "\" is not one of its indices";
+  if (!node->is_object() && !node->is_array())
+    return "\"" + text + "\": " + parent.to_string() + " is " + describe(*node) + ", not an object or array";
+  return "";
+}
+
+/// What a sweep over snapshots needs to know of a stage before it.
+struct EarlierStage {
+  std::string name;
+  bool snapshots = false;             ///< it takes snapshots
+  std::set<std::string> wall_names;   ///< its walls (those of its snapshots)
+};
+
+/// Parses a stage's "sweep" (the stage JSON `js` has one) into `sw`.
+void parse_sweep(const json& js, const std::string& path, const std::vector<EarlierStage>& earlier,
+                 SweepDef& sw, std::vector<Diagnostic>& errors, json& resolved) {
+  const std::string sp = path + "/sweep";
+  const json& j = js["sweep"];
+  json r;
+  const SweepParams p = build(sweep_spec(), j, sp, errors, r, {"values", "seeds", "collect"});
+  if (!j.is_object()) return;
+  std::vector<std::string> kinds;
+  for (const char* k : {"snapshots_of", "parameter", "seeds"})
+    if (j.contains(k)) kinds.push_back(k);
+  if (kinds.size() != 1) {
+    errors.push_back({sp, kinds.empty() ? std::string("give one of snapshots_of, parameter (with values) or seeds")
+                                        : "give exactly one of snapshots_of, parameter, seeds; found " + list_names(kinds)});
+  }
+  if (j.contains("values") && !j.contains("parameter"))
+    errors.push_back({sp + "/values", "values go with `parameter` (the JSON pointer they replace)"});
+  if (kinds.size() == 1 && kinds[0] == "snapshots_of") {
+    sw.kind = SweepDef::Kind::Snapshots;
+    sw.snapshots_of = p.snapshots_of;
+    std::vector<std::string> with;
+    for (std::size_t q = 0; q < earlier.size(); ++q) {
+      if (earlier[q].snapshots) with.push_back(earlier[q].name);
+      if (earlier[q].name == p.snapshots_of && earlier[q].snapshots) sw.snapshots_stage = static_cast<std::int64_t>(q);
+    }
+    if (j["snapshots_of"].is_string() && sw.snapshots_stage < 0) {
+      const bool exists = std::any_of(earlier.begin(), earlier.end(), [&](const auto& e) { return e.name == p.snapshots_of; });
+      const auto dym = did_you_mean(p.snapshots_of, with);
+      errors.push_back({sp + "/snapshots_of",
+                        exists ? "stage \"" + p.snapshots_of + "\" takes no snapshots (give it \"snapshots\")"
+                               : "no earlier stage named \"" + p.snapshots_of + "\" takes snapshots" +
+                                     (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") +
+                                     (with.empty() ? std::string("; no earlier stage takes any") : "; stages with snapshots: " + list_names(with))});
+    }
+  }
+  if (kinds.size() == 1 && kinds[0] == "parameter") {
+    sw.kind = SweepDef::Kind::Parameter;
+    sw.parameter = p.parameter;
+    if (!j.contains("values") || !j["values"].is_array() || j["values"].empty())
+      errors.push_back({sp + "/values", "expected a non-empty array of values for " + p.parameter + ", found " +
+                                            (j.contains("values") ? describe(j["values"]) : std::string("nothing"))});
+    else
+      for (const auto& v : j["values"]) sw.values.push_back(v);
+    r["values"] = j.value("values", json::array());
+  }
+  if (kinds.size() == 1 && kinds[0] == "seeds") {
+    sw.kind = SweepDef::Kind::Seeds;
+    const json& x = j["seeds"];
+    if (!x.is_array() || x.empty()) {
+      errors.push_back({sp + "/seeds", "expected a non-empty array of seeds (non-negative integers), found " + describe(x)});
+    } else {
+      for (std::size_t q = 0; q < x.size(); ++q) {
+        const bool ok = x[q].is_number_unsigned() || (x[q].is_number_integer() && x[q].get<std::int64_t>() >= 0);
+        if (!ok) { errors.push_back({sp + "/seeds/" + std::to_string(q), "expected a non-negative integer seed, found " + describe(x[q])}); continue; }
+        const auto seed = x[q].get<std::uint64_t>();
+        if (std::find(sw.seeds.begin(), sw.seeds.end(), seed) != sw.seeds.end())
+          errors.push_back({sp + "/seeds/" + std::to_string(q), "duplicate seed " + std::to_string(seed)});
+        sw.seeds.push_back(seed);
+      }
+    }
+    r["seeds"] = x;
+  }
+  if (j.contains("collect")) {
+    const json& c = j["collect"];
+    if (!c.is_array() || c.empty()) {
+      errors.push_back({sp + "/collect", "expected a non-empty array of column names, found " + describe(c)});
+    } else {
+      for (std::size_t q = 0; q < c.size(); ++q) {
+        if (!c[q].is_string() || c[q].get<std::string>().empty()) {
+          errors.push_back({sp + "/collect/" + std::to_string(q), "expected a column name, found " + describe(c[q])});
+          continue;
+        }
+        const auto name = c[q].get<std::string>();
+        if (std::find(sw.collect.begin(), sw.collect.end(), name) != sw.collect.end())
+          errors.push_back({sp + "/collect/" + std::to_string(q), "duplicate column \"" + name + "\""});
+        sw.collect.push_back(name);
+      }
+    }
+    r["collect"] = c;
+  }
+  resolved = json::object();
+  if (j.contains("snapshots_of")) resolved["snapshots_of"] = j["snapshots_of"];
+  if (j.contains("parameter")) resolved["parameter"] = j["parameter"];
+  for (const char* k : {"values", "seeds", "collect"})
+    if (r.contains(k)) resolved[k] = r[k];
+}
+
+
+/// A stage with a "sweep": checks the sweep and every item's stage JSON (a parameter value that
+/// does not bind is reported at /stages/k/sweep/values/i), and keeps a builder of fresh item
+/// stages for the run. The context is left as before the stage: a sweep is a branch.
+StageDef build_sweep_stage(StageContext& ctx, const json& js, const std::string& path,
+                           const std::vector<EarlierStage>& earlier, std::vector<Diagnostic>& errors, json& r) {
+  auto sw = std::make_shared<SweepDef>();
+  json rsweep;
+  parse_sweep(js, path, earlier, *sw, errors, rsweep);
+  sw->stage_json = js;
+  sw->stage_json.erase("sweep");
+  StageContext item_ctx = ctx;  // copy: the items' context, and the main sequence's is unchanged
+  if (sw->kind == SweepDef::Kind::Snapshots) {
+    item_ctx.has_particles = true;
+    if (sw->snapshots_stage >= 0) item_ctx.wall_names = earlier[static_cast<std::size_t>(sw->snapshots_stage)].wall_names;
+  }
+  std::optional<std::vector<std::string>> columns;  // of the (first) item
+  StageDef st;
+  json::json_pointer ptr;
+  bool pointer_ok = false;
+  if (sw->kind == SweepDef::Kind::Parameter && js["sweep"]["parameter"].is_string()) {
+    const std::string bad = check_parameter(sw->stage_json, sw->parameter, ptr);
+    if (!bad.empty()) errors.push_back({path + "/sweep/parameter", bad});
+    pointer_ok = bad.empty();
+  }
+  if (pointer_ok && !sw->values.empty()) {
+    // Bind the stage once per value; a problem at (or inside) the substituted value belongs to
+    // that value, the others are reported once.
+    const std::string target = path + ptr.to_string();
+    bool absent = false;
+    try { absent = !sw->stage_json.contains(ptr); } catch (const json::exception&) { absent = true; }
+    // A problem at (or inside) the substituted value, or one that only some values cause (a
+    // consequence, e.g. no hard stop left), belongs to those values; one every value causes is
+    // reported once at its own path.
+    std::vector<std::vector<Diagnostic>> per_item(sw->values.size());
+    std::map<std::pair<std::string, std::string>, std::size_t> count;
+    for (std::size_t i = 0; i < sw->values.size(); ++i) {
+      StageContext c = item_ctx;
+      json ri;
+      StageDef sti = build_stage(c, sw->item_json(i), path, per_item[i], ri);
+      std::set<std::pair<std::string, std::string>> once;
+      for (const auto& d : per_item[i])
+        if (once.insert({d.path, d.message}).second) ++count[{d.path, d.message}];
+      if (i == 0) { st = std::move(sti); r = ri; columns = c.columns; }
+    }
+    std::set<std::pair<std::string, std::string>> reported;
+    for (std::size_t i = 0; i < sw->values.size(); ++i) {
+      const std::string vpath = path + "/sweep/values/" + std::to_string(i);
+      const std::string what = "value " + sw->values[i].dump() + " for " + sw->parameter + ": ";
+      for (const auto& d : per_item[i]) {
+        const bool here = d.path == target || d.path.rfind(target + "/", 0) == 0;
+        if (here && absent && d.path == target && d.message.rfind("unknown key", 0) == 0) {
+          if (reported.insert({path + "/sweep/parameter", d.message}).second)
+            errors.push_back({path + "/sweep/parameter", "\"" + sw->parameter + "\" names no parameter of the stage: " + d.message});
+        } else if (here) {
+          errors.push_back({vpath + d.path.substr(target.size()), what + d.message});
+        } else if (count[{d.path, d.message}] < sw->values.size()) {
+          errors.push_back({vpath, what + d.message + " (at " + d.path + ")"});
+        } else if (reported.insert({d.path, d.message}).second) {
+          errors.push_back(d);
+        }
+      }
+    }
+  } else {
+    StageContext c = item_ctx;
+    st = build_stage(c, sw->stage_json, path, errors, r);
+    columns = c.columns;
+  }
+  // Table columns: time-series columns of the stage, or packing.<key> of its generator report.
+  for (std::size_t q = 0; q < sw->collect.size(); ++q) {
+    const std::string& name = sw->collect[q];
+    const std::string at = path + "/sweep/collect/" + std::to_string(q);
+    if (name.rfind("packing.", 0) == 0) {
+      if (!st.generator) errors.push_back({at, "\"" + name + "\": this stage has no generator, so no packing report"});
+    } else if (columns) {
+      const std::string bad = unknown_column(name, *columns);
+      if (!bad.empty()) errors.push_back({at, bad + " (or packing.<key> of a generator's report)"});
+    }
+  }
+  if (st.snapshots) errors.push_back({path + "/snapshots", "a sweep stage takes no snapshots (take them in the stage it sweeps over)"});
+  if (sw->kind == SweepDef::Kind::Snapshots && !st.from_snapshot.empty())
+    errors.push_back({path + "/from_snapshot", "a sweep over snapshots starts from each snapshot; remove from_snapshot"});
+  item_ctx.reg = std::make_shared<const Registry>(*ctx.reg);  // the builder outlives the caller's registry
+  sw->build = [item_ctx, path](const json& stage_json, json& resolved) {
+    StageContext c = item_ctx;
+    std::vector<Diagnostic> e;
+    StageDef d = build_stage(c, stage_json, path, e, resolved);
+    if (!e.empty()) throw ConfigError(e);
+    return d;
+  };
+  r["sweep"] = rsweep;
+  st.sweep = std::move(sw);
+  return st;
+}
+
 }  // namespace
 
 json read_json_file(const std::filesystem::path& file) {
@@ -449,264 +1044,40 @@ Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem
   if (!j.contains("stages") || !j["stages"].is_array() || j["stages"].empty()) {
     errors.push_back({"/stages", "expected a non-empty array of stages, found " + (j.contains("stages") ? describe(j["stages"]) : std::string("nothing"))});
   } else {
-    const auto sspec = stage_spec(reg);
-    bool has_particles = false;
+    StageContext ctx;
+    ctx.reg = std::shared_ptr<const Registry>(std::shared_ptr<const Registry>(), &reg);  // not owned
+    ctx.base_dir = base_dir;
+    ctx.has_bond_law = j.contains("bonds");
+    ctx.sets = sets;
+    ctx.wall_names = wall_names;
+    ctx.materials = sc.materials;
+    ctx.walls = sc.walls;
+    std::vector<EarlierStage> earlier;
     for (std::size_t k = 0; k < j["stages"].size(); ++k) {
       const std::string path = "/stages/" + std::to_string(k);
       const json& js = j["stages"][k];
       json r;
-      const std::size_t before = errors.size();
-      const StageParams p = build(sspec, js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact", "sets", "prescribe", "create_bonds"});
-      StageDef st;
-      st.path = path;
-      st.type = p.type;
-      auto& c = st.cfg;
-      c.name = p.name;
-      c.dt = p.dt;
-      c.dt_fraction = p.dt_fraction;
-      c.allow_unstable_dt = p.allow_unstable_dt;
-      c.mass_scaling = p.mass_scaling;
-      c.time_scale = p.time_scale;
-      c.skin = p.skin;
-      c.blowup_speed = p.blowup_speed;
-      c.sort_every_rebuilds = p.sort_every_rebuilds;
-      c.stability_check_every = p.stability_check_every;
-      c.duration = p.stop.time;
-      c.max_steps = p.stop.steps;
-      c.check_every = p.stop.check_every;
-      c.require_until = p.stop.require_until;
-      c.frame_every = p.output.frame_every;
-      c.timeseries_every = p.output.timeseries_every;
-      c.checkpoint_every = p.output.checkpoint_every;
-      st.from_snapshot = p.from_snapshot.empty() ? "" : (base_dir / p.from_snapshot).string();
-      if (!st.from_snapshot.empty() && !std::filesystem::exists(st.from_snapshot))
-        errors.push_back({path + "/from_snapshot", "cannot read the snapshot file '" + st.from_snapshot + "'"});
-      if (!st.from_snapshot.empty()) has_particles = true;
-      // Generator
-      if (st.type != "dynamics") {
-        auto g = reg.generators().find(st.type);
-        if (g != reg.generators().end()) {
-          const json jg = js.value("generator", json::object());
-          const std::size_t b2 = errors.size();
-          ParamValues v = bind_params(jg, g->second.spec, path + "/generator", errors);
-          // Resolve relative CSV paths of size distributions against the scenario directory.
-          auto csv = v.find("size_distribution.csv");
-          if (csv != v.end() && !std::get<std::string>(csv->second).empty())
-            csv->second = (base_dir / std::get<std::string>(csv->second)).string();
-          r["generator"] = to_json(v, g->second.spec);
-          // `fill` with a given mean radius: N radii uniform in r(1 +- spread) have
-          // <r^3> = r^3 (1 + spread^2), so their solid fraction N 4/3 pi r^3 (1 + spread^2) / V must
-          // not exceed 0.74 (densest sphere packing). (Without mean_radius, Eq. 1 sizes the radii
-          // to exactly target_density <= 0.7 of the container.)
-          if (st.type == "fill" && errors.size() == b2 && get_real(v, "mean_radius") > 0.0) {
-            constexpr double kPi = 3.14159265358979323846;
-            double volume = 0.0;
-            if (get_text(v, "shape") == "cylinder") {
-              volume = kPi * get_real(v, "radius") * get_real(v, "radius") * get_real(v, "length");
-            } else {
-              const auto lo = get_list(v, "lo"), hi = get_list(v, "hi");
-              volume = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
-            }
-            const double n = static_cast<double>(get_int(v, "particles")), rbar = get_real(v, "mean_radius"),
-                         spread = get_real(v, "spread");
-            const double phi = n * 4.0 / 3.0 * kPi * rbar * rbar * rbar * (1.0 + spread * spread) / volume;
-            if (!(volume > 0.0) || !(phi <= 0.74)) {
-              std::ostringstream msg;
-              msg.precision(4);
-              msg << get_int(v, "particles") << " particles of mean radius " << rbar << " m (spread " << spread
-                  << ") do not fit the container of volume " << volume << " m^3: solid fraction " << phi
-                  << " > 0.74; use fewer particles, a smaller mean_radius or a larger container";
-              errors.push_back({path + "/generator/particles", msg.str()});
-            }
-          }
-          if (errors.size() == b2) {
-            try {
-              st.generator = g->second.make(v);
-              r["estimated_particles"] = st.generator->estimated_particles();
-            } catch (const ConfigError& e) {
-              for (const auto& d : e.diagnostics()) {
-                std::string sub = d.path;
-                if (sub.rfind("/", 0) == 0 && (st.type == "deposit")) sub = "/size_distribution" + sub;
-                errors.push_back({path + "/generator" + sub, d.message});
-              }
-            }
-          }
-          st.dynamics = st.type == "deposit" || st.type == "fill";
-          has_particles = true;
-        }
-      } else if (js.contains("generator")) {
-        errors.push_back({path + "/generator", "a `dynamics` stage takes no generator; set \"type\" to one of " + list_names(names_of(reg.generators()))});
+      if (!js.is_object() || !js.contains("sweep")) {
+        StageDef st = build_stage(ctx, js, path, errors, r);
+        earlier.push_back({st.cfg.name, st.snapshots.has_value(), ctx.wall_names});
+        sc.resolved["stages"].push_back(r);
+        sc.stages.push_back(std::move(st));
+        continue;
       }
-      if (st.type == "dynamics" && !has_particles)
-        errors.push_back({path + "/type", "this dynamics stage has no particles: no earlier stage generates them and it has no from_snapshot"});
-      if (st.dynamics && std::isinf(c.duration) && c.max_steps == std::numeric_limits<std::int64_t>::max())
-        errors.push_back({path + "/stop", "a stage needs a hard stop: stop.time [s] or stop.steps"});
-      if (st.dynamics && c.dt == 0.0 && c.dt_fraction == 0.0)
-        errors.push_back({path + "/dt", "set dt [s] or dt_fraction (fraction of the stable step)"});
-      if (c.dt > 0.0 && c.dt_fraction > 0.0)
-        errors.push_back({path + "/dt_fraction", "give either dt or dt_fraction, not both"});
-      // Modules
-      r["modules"] = json::object();
-      if (js.contains("modules")) {
-        if (!js["modules"].is_object()) errors.push_back({path + "/modules", "expected an object {module name: {params}}, found " + describe(js["modules"])});
-        else
-          for (auto it = js["modules"].begin(); it != js["modules"].end(); ++it) {
-            auto m = reg.modules().find(it.key());
-            if (m == reg.modules().end()) {
-              const auto dym = did_you_mean(it.key(), names_of(reg.modules()));
-              errors.push_back({path + "/modules/" + it.key(), "unknown module \"" + it.key() + "\"" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") + "; registered modules: " + list_names(names_of(reg.modules()))});
-              continue;
-            }
-            const std::size_t b2 = errors.size();
-            const ParamValues v = bind_params(it.value(), m->second.spec, path + "/modules/" + it.key(), errors, {"clock"});
-            r["modules"][it.key()] = to_json(v, m->second.spec);
-            std::optional<Clock> clk;
-            if (it.value().is_object() && it.value().contains("clock")) {
-              json rc;
-              clk = make_clock(it.value()["clock"], path + "/modules/" + it.key() + "/clock", errors, rc);
-              r["modules"][it.key()]["clock"] = rc;
-            }
-            if (errors.size() == b2) {
-              st.modules.push_back(m->second.make(v));
-              if (clk) st.modules.back()->set_clock(*clk);
-            }
-          }
-      }
-      // Bonds created at the stage start
-      if (js.contains("create_bonds")) {
-        const std::string bp = path + "/create_bonds";
-        const json& cb = js["create_bonds"];
-        if (!cb.is_object() || cb.size() != 1 || !cb.contains("gap_tolerance") || !cb["gap_tolerance"].is_number() ||
-            !(cb["gap_tolerance"].get<double>() >= 0.0))
-          errors.push_back({bp, "expected {\"gap_tolerance\": number >= 0} [m] (bond every pair whose gap is at most this; 0 = touching pairs), found " + describe(cb)});
-        else st.create_bonds_gap = cb["gap_tolerance"].get<double>();
-        if (!j.contains("bonds")) errors.push_back({bp, "creating bonds needs a bond law: add \"bonds\": {\"law\": ...} at the top level"});
-        r["create_bonds"] = cb;
-      }
-      // Contact law override
-      if (js.contains("contact")) { json rc; st.law = make_law(js["contact"], reg, path + "/contact", errors, rc); r["contact"] = rc; }
-      // Walls added / removed / moved
-      if (js.contains("add_walls")) {
-        if (!js["add_walls"].is_array()) errors.push_back({path + "/add_walls", "expected an array of walls, found " + describe(js["add_walls"])});
-        else {
-          r["add_walls"] = json::array();
-          for (std::size_t q = 0; q < js["add_walls"].size(); ++q) {
-            json rw;
-            st.add_walls.push_back(make_wall(js["add_walls"][q], path + "/add_walls/" + std::to_string(q), errors, rw));
-            if (!wall_names.insert(st.add_walls.back().name).second)
-              errors.push_back({path + "/add_walls/" + std::to_string(q) + "/name", "duplicate wall name \"" + st.add_walls.back().name + "\""});
-            r["add_walls"].push_back(rw);
-          }
-        }
-      }
-      if (st.type == "deposit") { wall_names.insert("die"); wall_names.insert("bottom"); }
-      if (st.type == "fill" || st.type == "relax") for (const char* n : {"die", "bottom", "top", "xlo", "xhi", "ylo", "yhi"}) wall_names.insert(n);
-      if (js.contains("remove_walls")) {
-        if (!js["remove_walls"].is_array()) errors.push_back({path + "/remove_walls", "expected an array of wall names"});
-        else
-          for (std::size_t q = 0; q < js["remove_walls"].size(); ++q) {
-            const auto& x = js["remove_walls"][q];
-            if (!x.is_string() || !wall_names.count(x.get<std::string>()))
-              errors.push_back({path + "/remove_walls/" + std::to_string(q), "expected the name of an existing wall, found " + describe(x)});
-            else { st.remove_walls.push_back(x.get<std::string>()); wall_names.erase(x.get<std::string>()); }
-          }
-        r["remove_walls"] = js["remove_walls"];
-      }
-      if (js.contains("walls")) {
-        if (!js["walls"].is_object()) errors.push_back({path + "/walls", "expected an object {wall name: motion}, found " + describe(js["walls"])});
-        else {
-          r["walls"] = json::object();
-          for (auto it = js["walls"].begin(); it != js["walls"].end(); ++it) {
-            if (!wall_names.count(it.key())) {
-              const auto dym = did_you_mean(it.key(), std::vector<std::string>(wall_names.begin(), wall_names.end()));
-              errors.push_back({path + "/walls/" + it.key(), "no wall named \"" + it.key() + "\" exists in this stage" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});
-              continue;
-            }
-            json rm;
-            c.motions[it.key()] = make_motion(it.value(), path + "/walls/" + it.key(), errors, rm);
-            r["walls"][it.key()] = rm;
-          }
-        }
-      }
-      // Particle sets evaluated at the stage start, and sets held at a prescribed velocity.
-      auto use_set = [&](const std::string& name, const std::string& at) {
-        auto it = sets.find(name);
-        if (it == sets.end()) {
-          std::vector<std::string> names;
-          for (const auto& [k, v] : sets) names.push_back(k);
-          const auto dym = did_you_mean(name, names);
-          errors.push_back({at, "no particle set named \"" + name + "\" in /particle_sets" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});
-          return;
-        }
-        for (const auto& [n, s2] : st.sets)
-          if (n == name) return;
-        st.sets.emplace_back(name, it->second);
-      };
-      if (js.contains("sets")) {
-        if (!js["sets"].is_array()) errors.push_back({path + "/sets", "expected an array of particle set names"});
-        else
-          for (std::size_t q = 0; q < js["sets"].size(); ++q) {
-            if (!js["sets"][q].is_string()) errors.push_back({path + "/sets/" + std::to_string(q), "expected a set name, found " + describe(js["sets"][q])});
-            else use_set(js["sets"][q].get<std::string>(), path + "/sets/" + std::to_string(q));
-          }
-        r["sets"] = js["sets"];
-      }
-      if (js.contains("prescribe")) {
-        if (!js["prescribe"].is_object()) errors.push_back({path + "/prescribe", "expected an object {set name: [vx, vy, vz]}"});
-        else
-          for (auto it = js["prescribe"].begin(); it != js["prescribe"].end(); ++it) {
-            const std::string at = path + "/prescribe/" + it.key();
-            const auto& v = it.value();
-            if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number()) {
-              errors.push_back({at, "expected a velocity [vx, vy, vz] in m/s, found " + describe(v)});
-              continue;
-            }
-            use_set(it.key(), at);
-            c.prescribed_sets[it.key()] = Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
-          }
-        r["prescribe"] = js["prescribe"];
-      }
-      // Until
-      if (js.contains("until")) {
-        if (!js["until"].is_object()) errors.push_back({path + "/until", "expected an object {quantity: {\"above\"|\"below\": value}}"});
-        else
-          for (auto it = js["until"].begin(); it != js["until"].end(); ++it) {
-            const auto& cond = it.value();
-            const std::string cp = path + "/until/" + it.key();
-            if (!cond.is_object() || cond.size() != 1 || !(cond.contains("above") || cond.contains("below")) ||
-                !cond.begin().value().is_number()) {
-              errors.push_back({cp, "expected {\"above\": number} or {\"below\": number}, found " + describe(cond)});
-              continue;
-            }
-            c.until.push_back({it.key(), cond.contains("above"), cond.begin().value().get<double>()});
-          }
-        r["until"] = js["until"];
-      }
-      // Generator-defined settling: motions and stop conditions.
-      if (st.generator) {
-        st.generator->configure_stage(c);
-        for (auto& m : st.generator->modules()) st.modules.push_back(std::move(m));
-      }
-      // Consistency: a lattice inside the scenario walls (scratch generation, no dynamics).
-      // Cheap only up to ~1e6 particles; a larger lattice is not generated just for this check,
-      // and one that could never be allocated (a typo in spacing or hi) is an error.
-      const double lattice_n = st.generator && st.type == "lattice" ? st.generator->estimated_particles() : 0.0;
-      if (!(lattice_n <= 1e9))
-        errors.push_back({path + "/generator", "the lattice would create " + std::to_string(lattice_n) +
-                                                   " particles (more than 1e9); check spacing, lo and hi"});
-      if (st.generator && st.type == "lattice" && errors.size() == before && lattice_n <= 1e6) {
-        State scratch;
-        scratch.materials = sc.materials;
-        scratch.walls = sc.walls;
-        try {
-          st.generator->generate(scratch);
-          check_enclosed(scratch, path + "/generator", errors);
-        } catch (const ConfigError& e) {
-          for (const auto& d : e.diagnostics()) errors.push_back({path + "/generator" + d.path, d.message});
-        }
-      }
+      sc.stages.push_back(build_sweep_stage(ctx, js, path, earlier, errors, r));
+      earlier.push_back({sc.stages.back().cfg.name, false, ctx.wall_names});
       sc.resolved["stages"].push_back(r);
-      sc.stages.push_back(std::move(st));
+    }
+    // Stages with snapshots or a sweep name their files after themselves.
+    for (std::size_t k = 0; k < sc.stages.size(); ++k) {
+      if (!sc.stages[k].snapshots && !sc.stages[k].sweep) continue;
+      for (std::size_t q = 0; q < sc.stages.size(); ++q)
+        if (q != k && sc.stages[q].cfg.name == sc.stages[k].cfg.name) {
+          errors.push_back({"/stages/" + std::to_string(k) + "/name", "a stage with snapshots or a sweep needs a unique name (it names "
+                                                                      "its files); stage " + std::to_string(q) + " is also \"" +
+                                                                      sc.stages[k].cfg.name + "\""});
+          break;
+        }
     }
   }
   if (!errors.empty()) throw ConfigError(errors);
@@ -724,6 +1095,8 @@ json schema_json(const Registry& reg) {
   j["stage"]["sets"] = "array of particle-set names evaluated at the stage start";
   j["stage"]["prescribe"] = "object {set name: [vx, vy, vz] m/s}: the set moves at this velocity (zero = frozen)";
   j["stage"]["until"] = "object {quantity: {\"above\"|\"below\": value}}; quantities are time-series columns";
+  j["stage"]["snapshots"] = spec_to_json(snapshot_spec().spec());
+  j["stage"]["sweep"] = sweep_schema();
   for (const auto& [k, v] : reg.laws()) j["contact_laws"][k] = spec_to_json(v.spec);
   for (const auto& [k, v] : reg.bond_laws()) j["bond_laws"][k] = spec_to_json(v.spec);
   for (const auto& [k, v] : reg.modules()) j["modules"][k] = spec_to_json(v.spec);
@@ -731,6 +1104,12 @@ json schema_json(const Registry& reg) {
   j["stage"]["create_bonds"] = "object {\"gap_tolerance\": m}: bond every pair whose gap is at most this at the stage start";
   j["bonds"] = "object {\"law\": bond law, \"params\": {...}, \"contact_rule\": \"exclude\"|\"add\"}";
   for (const auto& [k, v] : reg.generators()) j["generators"][k] = spec_to_json(v.spec);
+  return j;
+}
+
+json SweepDef::item_json(std::size_t k) const {
+  json j = stage_json;
+  if (kind == Kind::Parameter && k < values.size()) j[json::json_pointer(parameter)] = values[k];
   return j;
 }
 

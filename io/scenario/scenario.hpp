@@ -1,8 +1,11 @@
 #pragma once
 /// A scenario: materials, the contact law, initial walls and a sequence of stages. Loading
 /// validates everything before step 0 and reports all problems at once (ConfigError).
+#include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -15,6 +18,21 @@
 namespace sparkdem::io {
 
 using nlohmann::json;
+
+/// `"snapshots"` of a dynamics stage: the full state (checkpoint format) is saved under
+/// OUTDIR/snapshots/<stage>_<k>.h5 the first time the time-series column `column` crosses
+/// `at[k]` (direction per value from the column's first sample of the stage: a value above the
+/// first sample is crossed upwards, one below downwards, one equal at once), or every
+/// `every_steps` stage steps (k = 0, 1, ...). Values are checked at the stage start, at every
+/// time-series row, every `check_every` stage steps and at the stage end.
+struct SnapshotSpec {
+  std::string column;           ///< watched time-series column ("time" by default with every_steps)
+  std::vector<double> at;       ///< crossing values, in the order of the snapshot files
+  std::int64_t every_steps = 0; ///< > 0: a snapshot at stage steps N, 2N, ... instead of `at`
+  std::int64_t check_every = 0; ///< extra checks of `at` every this many stage steps (0: none)
+};
+
+struct SweepDef;
 
 struct StageDef {
   std::string type;  ///< dynamics | <generator name> (lattice, deposit, fill, relax)
@@ -29,6 +47,33 @@ struct StageDef {
   double create_bonds_gap = -1.0;     ///< >= 0: bond every pair with gap <= this at the stage start [m]
   bool dynamics = true;               ///< false: a generator stage with nothing to settle (lattice, relax)
   std::vector<std::pair<std::string, SetSelector>> sets;  ///< particle sets (re)evaluated at the stage start
+  std::optional<SnapshotSpec> snapshots;   ///< states saved during the stage (dynamics stages)
+  std::shared_ptr<const SweepDef> sweep;   ///< run once per item (see SweepDef); null: once
+};
+
+/// `"sweep"` of a stage: the stage runs once per item, each item a branch that starts from the
+/// same input state (the state before the stage, or one snapshot) and writes its own outputs.
+/// The main state after a sweep stage is the state before it. Exactly one kind:
+///   snapshots_of  one item per snapshot taken by an earlier stage (its particles, contacts,
+///                 walls, step and time; materials and random generator of the current state)
+///   parameter     one item per value, substituted at a JSON pointer relative to the stage
+///                 before the stage is bound (each value validated at load time)
+///   seeds         one item per seed of the state's random generator (an ensemble)
+struct SweepDef {
+  enum class Kind { Snapshots, Parameter, Seeds };
+  Kind kind = Kind::Seeds;
+  std::string snapshots_of;          ///< Snapshots: name of the earlier stage
+  std::int64_t snapshots_stage = -1; ///< Snapshots: its index
+  std::string parameter;             ///< Parameter: JSON pointer relative to the stage
+  std::vector<json> values;          ///< Parameter: one item per value
+  std::vector<std::uint64_t> seeds;  ///< Seeds: one item per seed
+  std::vector<std::string> collect;  ///< table columns; empty: every final value
+  json stage_json;                   ///< the stage as written, without "sweep"
+  /// A fresh stage (own modules, generator and law) from an item's stage JSON and its resolved
+  /// form; the JSON was validated at load time (throws ConfigError otherwise).
+  std::function<StageDef(const json& stage_json, json& resolved)> build;
+  /// Stage JSON of parameter item k (the value substituted), or the stage JSON.
+  json item_json(std::size_t k) const;
 };
 
 struct Scenario {
@@ -36,8 +81,8 @@ struct Scenario {
   std::string name;
   std::uint64_t seed = 12345;
   std::vector<Material> materials;
-  std::unique_ptr<ContactModel> law;
-  std::unique_ptr<BondModel> bond_law;  ///< null: the scenario has no bonds
+  std::shared_ptr<ContactModel> law;  ///< shared with the nested runs of sweep items
+  std::shared_ptr<BondModel> bond_law;  ///< null: the scenario has no bonds (shared like law)
   BondTable::ContactRule bond_contact_rule = BondTable::ContactRule::Exclude;
   std::vector<Wall> walls;
   std::vector<StageDef> stages;

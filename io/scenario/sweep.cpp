@@ -1,0 +1,440 @@
+#include "io/scenario/sweep.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <numeric>
+#include <set>
+
+#include "engine/core/error.hpp"
+#include "io/restart/hdf5_archive.hpp"
+#include "io/scenario/pipeline.hpp"
+
+namespace sparkdem::io {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+json number_or_null(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
+double number_of(const json& j) { return j.is_number() ? j.get<double>() : std::nan(""); }
+
+/// `file` relative to `dir` when it lies inside it, else as it is.
+std::string shown(const fs::path& file, const fs::path& dir) {
+  const fs::path rel = fs::path(file).lexically_normal().lexically_relative(fs::absolute(dir).lexically_normal());
+  if (!rel.empty() && *rel.begin() != "..") return rel.generic_string();
+  return file.string();
+}
+
+void write_text_atomic(const fs::path& file, const std::string& text) {
+  const auto tmp = file.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    if (!out) throw SetupError("cannot write '" + tmp + "'");
+    out << text;
+    if (!out) throw SetupError("cannot write '" + tmp + "'");
+  }
+  fs::rename(tmp, file);
+}
+
+/// A state file (checkpoint format, no module or pipeline data).
+void write_state(const fs::path& file, State& s) {
+  Hdf5Archive ar = Hdf5Archive::for_writing(file);
+  s.visit(ar);
+  ar.commit();
+}
+
+/// One CSV cell: integers as such, other numbers with 17 significant digits (they read back
+/// exactly), null as nan, anything else as its JSON text, quoted when it holds a comma or quote.
+std::string cell(const json& v) {
+  if (v.is_null()) return "nan";
+  if (v.is_number_integer() || v.is_number_unsigned()) return v.dump();
+  if (v.is_number_float()) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v.get<double>());
+    return buf;
+  }
+  std::string t = v.is_string() ? v.get<std::string>() : v.dump();
+  if (t.find_first_of(",\"\n") == std::string::npos) return t;
+  std::string q = "\"";
+  for (char c : t) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+/// The columns of a row that identify its item, per sweep kind.
+std::vector<std::string> key_columns(SweepDef::Kind kind) {
+  switch (kind) {
+    case SweepDef::Kind::Parameter: return {"value"};
+    case SweepDef::Kind::Seeds: return {"seed"};
+    case SweepDef::Kind::Snapshots: return {"snapshot", "snapshot_step", "snapshot_time", "snapshot_value"};
+  }
+  return {};
+}
+
+const char* kind_name(SweepDef::Kind kind) {
+  switch (kind) {
+    case SweepDef::Kind::Parameter: return "parameter";
+    case SweepDef::Kind::Seeds: return "seeds";
+    case SweepDef::Kind::Snapshots: return "snapshots";
+  }
+  return "?";
+}
+
+/// Table columns: `collect`, or every value name of the rows in first-seen order.
+std::vector<std::string> table_columns(const SweepDef& sw, const json& rows) {
+  if (!sw.collect.empty()) return sw.collect;
+  std::vector<std::string> cols;
+  std::set<std::string> seen;
+  for (const auto& r : rows)
+    if (r.contains("values"))
+      for (auto it = r["values"].begin(); it != r["values"].end(); ++it)
+        if (seen.insert(it.key()).second) cols.push_back(it.key());
+  return cols;
+}
+
+std::string table_csv(const SweepDef& sw, const json& rows, const std::vector<std::string>& cols) {
+  std::string out = "item";
+  auto add = [&out](const std::string& c) {
+    out += ',';
+    out += c;
+  };
+  const auto keys = key_columns(sw.kind);
+  for (const auto& k : keys) add(k);
+  add("status");
+  for (const auto& c : cols) add(cell(json(c)));
+  out += '\n';
+  for (const auto& r : rows) {
+    out += cell(r["item"]);
+    for (const auto& k : keys) add(cell(r.value(k, json(nullptr))));
+    add(cell(r["status"]));
+    const json values = r.value("values", json::object());
+    for (const auto& c : cols) add(cell(values.value(c, json(nullptr))));
+    out += '\n';
+  }
+  return out;
+}
+
+/// Rows as shown in the table and summary: their files relative to `outdir` when inside it (the
+/// rows themselves keep absolute paths: after a restart into another directory, the items run
+/// before it are in the first one).
+json shown_rows(const json& rows, const fs::path& outdir) {
+  json out = rows;
+  for (auto& r : out)
+    for (const char* k : {"snapshot", "directory"})
+      if (r.contains(k) && r[k].is_string()) r[k] = shown(r[k].get<std::string>(), outdir);
+  return out;
+}
+
+/// Every final value of a stage's summary entry: time-series columns by name, generator report
+/// values as packing.<key>.
+json values_of(const json& entry) {
+  json v = json::object();
+  if (entry.contains("final"))
+    for (auto it = entry["final"].begin(); it != entry["final"].end(); ++it) v[it.key()] = it.value();
+  if (entry.contains("packing"))
+    for (auto it = entry["packing"].begin(); it != entry["packing"].end(); ++it)
+      if (it.value().is_number() || it.value().is_null()) v["packing." + it.key()] = it.value();
+  return v;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------- RunRecord
+json RunRecord::to_json() const {
+  json j;
+  j["snapshots"] = json::array();
+  for (const auto& r : snapshots)
+    j["snapshots"].push_back({{"stage_index", r.stage_index}, {"stage", r.stage}, {"index", r.index}, {"column", r.column},
+                              {"target", number_or_null(r.target)}, {"value", number_or_null(r.value)}, {"step", r.step},
+                              {"time", r.time}, {"file", r.file}});
+  j["first_values"] = json::object();
+  for (const auto& [k, v] : first_values) j["first_values"][std::to_string(k)] = number_or_null(v);
+  j["sweep"] = sweep;
+  return j;
+}
+
+RunRecord RunRecord::from_json(const json& j) {
+  RunRecord r;
+  try {
+    for (const auto& x : j.at("snapshots")) {
+      SnapshotRecord s;
+      s.stage_index = x.at("stage_index").get<std::int64_t>();
+      s.stage = x.at("stage").get<std::string>();
+      s.index = x.at("index").get<std::int64_t>();
+      s.column = x.at("column").get<std::string>();
+      s.target = number_of(x.at("target"));
+      s.value = number_of(x.at("value"));
+      s.step = x.at("step").get<Step>();
+      s.time = x.at("time").get<double>();
+      s.file = x.at("file").get<std::string>();
+      r.snapshots.push_back(std::move(s));
+    }
+    for (auto it = j.at("first_values").begin(); it != j.at("first_values").end(); ++it)
+      r.first_values[std::stoll(it.key())] = number_of(it.value());
+    r.sweep = j.at("sweep");
+  } catch (const std::exception& e) {
+    throw SetupError(std::string("the checkpoint's pipeline record is malformed: ") + e.what());
+  }
+  return r;
+}
+
+std::vector<SnapshotRecord> RunRecord::of_stage(std::int64_t stage_index) const {
+  std::vector<SnapshotRecord> out;
+  for (const auto& r : snapshots)
+    if (r.stage_index == stage_index) out.push_back(r);
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.index < b.index; });
+  return out;
+}
+
+void RunRecord::forget_stage(std::int64_t stage_index) {
+  std::erase_if(snapshots, [&](const SnapshotRecord& r) { return r.stage_index == stage_index; });
+  first_values.erase(stage_index);
+}
+
+std::string file_name_of(const std::string& stage) {
+  std::string out = stage.empty() ? "stage" : stage;
+  for (char& c : out)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) c = '_';
+  if (out == "." || out == "..") out = "stage";
+  return out;
+}
+
+// --------------------------------------------------------------------------- SnapshotObserver
+Step SnapshotObserver::watch_every() const {
+  return std::gcd(inner_.watch_every(), spec_.every_steps > 0 ? spec_.every_steps : spec_.check_every);
+}
+
+bool SnapshotObserver::taken(std::int64_t index) const {
+  return std::any_of(record_.snapshots.begin(), record_.snapshots.end(),
+                     [&](const SnapshotRecord& r) { return r.stage_index == stage_index_ && r.index == index; });
+}
+
+void SnapshotObserver::take(State& s, std::int64_t index, double target, double value) {
+  const fs::path file = fs::absolute(outdir_ / "snapshots" / (file_name_of(stage_) + "_" + std::to_string(index) + ".h5")).lexically_normal();
+  fs::create_directories(file.parent_path());
+  record_.snapshots.push_back({stage_index_, stage_, index, spec_.column, target, value, s.step, s.time, file.string()});
+  save_(file, s);
+}
+
+void SnapshotObserver::watch(State& s, const std::vector<std::string>& cols, const std::vector<double>& vals) {
+  inner_.watch(s, cols, vals);
+  const auto it = std::find(cols.begin(), cols.end(), spec_.column);
+  if (it == cols.end()) {
+    std::string list;
+    for (const auto& c : cols) list += (list.empty() ? "" : ", ") + c;
+    throw SetupError("stage '" + stage_ + "': the snapshot column '" + spec_.column + "' is not a time-series column of this stage (" + list + ")");
+  }
+  const double v = vals[static_cast<std::size_t>(it - cols.begin())];
+  if (spec_.every_steps > 0) {
+    const Step k = s.step - s.stage_step0;
+    if (k > 0 && k % spec_.every_steps == 0 && !taken(k / spec_.every_steps - 1)) take(s, k / spec_.every_steps - 1, std::nan(""), v);
+    return;
+  }
+  auto first = record_.first_values.find(stage_index_);
+  if (first == record_.first_values.end()) {
+    if (!std::isfinite(v)) return;
+    first = record_.first_values.emplace(stage_index_, v).first;
+  }
+  const double v0 = first->second;
+  for (std::size_t k = 0; k < spec_.at.size(); ++k) {
+    const auto index = static_cast<std::int64_t>(k);
+    if (taken(index)) continue;
+    const double a = spec_.at[k];
+    if (v0 <= a ? v >= a : v <= a) take(s, index, a, v);
+  }
+}
+
+json snapshots_summary(const RunRecord& record, std::int64_t stage_index, const SnapshotSpec& spec, const fs::path& outdir) {
+  json j;
+  j["column"] = spec.column;
+  if (spec.every_steps > 0) j["every_steps"] = spec.every_steps;
+  j["taken"] = json::array();
+  std::set<std::int64_t> have;
+  for (const auto& r : record.of_stage(stage_index)) {
+    have.insert(r.index);
+    json x = {{"index", r.index}, {"value", number_or_null(r.value)}, {"step", r.step}, {"time", r.time}, {"file", shown(r.file, outdir)}};
+    if (std::isfinite(r.target)) x["target"] = r.target;
+    j["taken"].push_back(x);
+  }
+  if (!spec.at.empty()) {
+    j["not_reached"] = json::array();
+    for (std::size_t k = 0; k < spec.at.size(); ++k)
+      if (!have.count(static_cast<std::int64_t>(k))) j["not_reached"].push_back(spec.at[k]);
+  }
+  return j;
+}
+
+json column_statistics(const json& rows, const std::vector<std::string>& columns) {
+  json out = json::object();
+  for (const auto& c : columns) {
+    std::vector<double> x;
+    for (const auto& r : rows) {
+      if (r.value("status", "") != "completed" || !r.contains("values")) continue;
+      const double v = number_of(r["values"].value(c, json(nullptr)));
+      if (std::isfinite(v)) x.push_back(v);
+    }
+    double sum = 0.0;
+    for (double v : x) sum += v;
+    const double n = static_cast<double>(x.size());
+    const double mean = x.empty() ? std::nan("") : sum / n;
+    double ss = 0.0;
+    for (double v : x) ss += (v - mean) * (v - mean);
+    out[c] = {{"count", x.size()}, {"mean", number_or_null(mean)},
+              {"std", x.size() >= 2 ? number_or_null(std::sqrt(ss / (n - 1.0))) : json(nullptr)}};
+  }
+  return out;
+}
+
+// ------------------------------------------------------------------------------------ sweeps
+SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record, bool resuming, const RunOptions& opt) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const StageDef& st = sc.stages[k];
+  const SweepDef& sw = *st.sweep;
+  const std::int64_t stage_index = opt.stage_offset + static_cast<std::int64_t>(k);
+  const std::string name = file_name_of(st.cfg.name);
+  const fs::path dir = opt.outdir / ("sweep_" + name);
+  const fs::path table = opt.outdir / ("sweep_" + name + ".csv");
+  const fs::path checkpoint = opt.checkpoint_file.empty() ? opt.outdir / "checkpoint.h5" : opt.checkpoint_file;
+  fs::create_directories(dir);
+
+  // The input state: the state before the stage, kept in a file for a restart.
+  State input;
+  json rows = json::array();
+  std::size_t first = 0;
+  std::string input_file = fs::absolute(dir / "input_state.h5").lexically_normal().string();
+  if (resuming) {
+    const json& p = record.sweep;
+    if (!p.is_object() || p.value("stage", std::int64_t{-1}) != stage_index || !p.contains("item") || !p.contains("rows"))
+      throw SetupError("the checkpoint lies inside sweep stage '" + st.cfg.name + "' but records no progress of it");
+    first = p["item"].get<std::size_t>();
+    rows = p["rows"];
+    input_file = p.value("input_state", input_file);
+    read_checkpoint(input_file, input);
+    input.materials = sc.materials;
+  } else {
+    input = s;
+    write_state(input_file, input);
+  }
+
+  std::vector<SnapshotRecord> snaps;
+  std::size_t n = 0;
+  if (sw.kind == SweepDef::Kind::Parameter) n = sw.values.size();
+  if (sw.kind == SweepDef::Kind::Seeds) n = sw.seeds.size();
+  if (sw.kind == SweepDef::Kind::Snapshots) {
+    snaps = record.of_stage(sw.snapshots_stage);
+    n = snaps.size();
+  }
+
+  SweepOutcome out;
+  auto write_table = [&] { write_text_atomic(table, table_csv(sw, shown_rows(rows, opt.outdir), table_columns(sw, rows))); };
+  for (std::size_t j = first; j < n; ++j) {
+    const bool resume_item = resuming && j == first;
+    json resolved_stage;
+    Scenario sub;
+    sub.stages.push_back(sw.build(sw.item_json(j), resolved_stage));
+    sub.name = sc.name;
+    sub.seed = sc.seed;
+    sub.materials = sc.materials;
+    sub.law = sc.law;
+    sub.bond_law = sc.bond_law;
+    sub.bond_contact_rule = sc.bond_contact_rule;
+    sub.walls = sc.walls;
+    sub.resolved = sc.resolved;
+    sub.resolved["stages"] = json::array({resolved_stage});
+
+    json row;
+    row["item"] = j;
+    switch (sw.kind) {
+      case SweepDef::Kind::Parameter: row["value"] = sw.values[j]; break;
+      case SweepDef::Kind::Seeds: row["seed"] = sw.seeds[j]; break;
+      case SweepDef::Kind::Snapshots:
+        row["snapshot"] = snaps[j].file;
+        row["snapshot_index"] = snaps[j].index;
+        row["snapshot_step"] = snaps[j].step;
+        row["snapshot_time"] = snaps[j].time;
+        row["snapshot_value"] = number_or_null(snaps[j].value);
+        break;
+    }
+    const fs::path item_dir = dir / std::to_string(j);
+    row["directory"] = fs::absolute(item_dir).lexically_normal().string();
+    sub.resolved["sweep_item"] = row;
+
+    State start;
+    if (!resume_item) {
+      if (sw.kind == SweepDef::Kind::Snapshots) {
+        read_checkpoint(snaps[j].file, start);
+        start.materials = sc.materials;
+        start.rng = input.rng;
+      } else {
+        start = input;
+        if (sw.kind == SweepDef::Kind::Seeds) start.rng.seed(sw.seeds[j]);
+      }
+    }
+    RunOptions o;
+    o.outdir = item_dir;
+    o.quiet = opt.quiet;
+    o.start = resume_item ? nullptr : &start;
+    if (resume_item) o.restart = opt.restart;
+    o.stage_offset = stage_index;
+    o.checkpoint_file = checkpoint;
+    record.sweep = {{"stage", stage_index}, {"item", j}, {"rows", rows}, {"input_state", input_file}};
+    o.record = [&record] { return record.to_json(); };
+    try {
+      const json summary = run_scenario(sub, o);
+      const json& e = summary["stages"].at(0);
+      row["status"] = "completed";
+      row["steps"] = e.value("steps", std::int64_t{0});
+      if (e.contains("until_reached")) row["until_reached"] = e["until_reached"];
+      const json all = values_of(e);
+      if (sw.collect.empty()) {
+        row["values"] = all;
+      } else {
+        row["values"] = json::object();
+        for (const auto& c : sw.collect) {
+          row["values"][c] = all.value(c, json(nullptr));
+          if (!all.contains(c)) row["missing"].push_back(c);
+        }
+      }
+      const auto steps = summary.value("steps", Step{0});
+      out.steps += steps;
+      out.particle_steps += static_cast<double>(row["steps"].get<std::int64_t>()) * e.value("particles", 0.0);
+    } catch (const PhysicsError& e) {
+      row["status"] = "failed";
+      row["error"] = e.what();
+    } catch (...) {
+      write_table();
+      throw;
+    }
+    rows.push_back(row);
+    write_table();
+  }
+  record.sweep = nullptr;
+
+  const auto cols = table_columns(sw, rows);
+  write_table();
+  json& e = out.entry;
+  e["name"] = st.cfg.name;
+  e["type"] = st.type;
+  json& x = e["sweep"];
+  x["kind"] = kind_name(sw.kind);
+  if (sw.kind == SweepDef::Kind::Parameter) x["parameter"] = sw.parameter;
+  if (sw.kind == SweepDef::Kind::Snapshots) x["snapshots_of"] = sw.snapshots_of;
+  x["table"] = table.filename().string();
+  x["directory"] = dir.filename().string();
+  x["input_state"] = shown(input_file, opt.outdir);
+  x["items"] = rows.size();
+  x["failed"] = std::count_if(rows.begin(), rows.end(), [](const json& r) { return r.value("status", "") != "completed"; });
+  x["columns"] = cols;
+  x["rows"] = shown_rows(rows, opt.outdir);
+  if (sw.kind == SweepDef::Kind::Seeds) x["statistics"] = column_statistics(rows, cols);
+  std::int64_t item_steps = 0;
+  for (const auto& r : rows) item_steps += r.value("steps", std::int64_t{0});
+  e["steps"] = item_steps;  // of every item, also those run before a restart
+  e["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  s = std::move(input);  // a sweep is a branch: the main state goes on from the state before it
+  s.stage_index = stage_index;
+  return out;
+}
+
+}  // namespace sparkdem::io
