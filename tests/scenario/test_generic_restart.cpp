@@ -30,6 +30,7 @@ Registry registry_with_mocks() {
   r.module<MockModule<0>>();
   r.module<MockModule<1>>();
   r.module<MockModule<2>>();
+  r.module<MockNetwork>();
   return r;
 }
 }  // namespace sparkdem::test
@@ -151,6 +152,7 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
         CHECK(sa["stages"][1]["physical_time_s"].get<double>() ==
               Approx(10.0 * sa["stages"][1]["mechanical_time_s"].get<double>()).epsilon(1e-12));
         for (const char* m : {"mock_a", "mock_b", "mock_c"}) CHECK(sa["stages"][1]["module_calls"][m].get<double>() > 2);
+        CHECK(sa["stages"][1]["module_calls"]["mock_network"].get<double>() > 2);
         CHECK(sa["stages"][1]["max_substeps"]["mock_b"].get<double>() > 1);
       }
     }

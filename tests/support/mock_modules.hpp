@@ -10,6 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "engine/graph/interaction_graph.hpp"
+#include "engine/graph/laplacian.hpp"
+#include "engine/core/error.hpp"
 #include "engine/model/module.hpp"
 #include "engine/model/param_spec.hpp"
 #include "engine/model/registry.hpp"
@@ -84,6 +87,65 @@ class MockModule final : public Module {
   std::int64_t calls_ = 0;
   double dt_sum_ = 0.0, last_time_ = 0.0, held_ = 0.0;
   std::map<Id, double> warm_;
+};
+
+/// A fake network module: on its clock it builds the interaction graph (contacts and bonds),
+/// gives every edge a conductance proportional to its contact radius (plus a floor), holds the
+/// particles of set `high_set` at 1 and of `low_set` at 0, solves through the shared
+/// LaplacianSolver (CG with warm start, so the warm start is state a restart must keep) and
+/// writes the potential to a particle field and the electrode current to a held output.
+class MockNetwork final : public Module {
+ public:
+  struct Params {
+    std::string high_set = "top";
+    std::string low_set = "bottom";
+  };
+  static ParamSpec<Params> spec() {
+    ParamSpec<Params> s("mock_network", "module", "test network module on the interaction graph");
+    s.add("high_set", &Params::high_set).doc("particle set held at potential 1");
+    s.add("low_set", &Params::low_set).doc("particle set held at potential 0");
+    return s;
+  }
+  explicit MockNetwork(const Params& p) : p_(p), solver_(LaplacianOptions{LaplacianMethod::CgDiagonal, 1e-8, 0, true}) {}
+  std::string name() const override { return "mock_network"; }
+  Phase phase() const override { return Phase::Coupling; }
+  void declare(Declarations& d) const override {
+    d.particle_fields.push_back({"mock_potential", 1, "V", 0.0, true});
+    d.reads = {"position"};
+    d.writes = {"mock_potential"};
+  }
+  void advance(State& s, const StepInfo& info) override {
+    const InteractionGraph g = build_interaction_graph(s, GraphOptions{});
+    std::vector<double> cond(g.size());
+    for (std::size_t e = 0; e < g.size(); ++e) cond[e] = 1e-3 + g.radius[e];
+    LaplacianProblem prob = LaplacianProblem::on(g, cond);
+    prob.step = info.step;
+    const auto& hi = s.particles.fields.data("set/" + p_.high_set);
+    const auto& lo = s.particles.fields.data("set/" + p_.low_set);
+    DirichletGroup high{{}, 1.0}, low{{}, 0.0};
+    for (std::size_t i = 0; i < s.particles.size(); ++i) {
+      if (hi[i] > 0.5) high.nodes.push_back(static_cast<Index>(i));
+      else if (lo[i] > 0.5) low.nodes.push_back(static_cast<Index>(i));
+    }
+    if (high.nodes.empty() || low.nodes.empty()) throw SetupError("mock_network: an electrode set is empty");
+    prob.dirichlet = {high, low};
+    const LaplacianResult r = solver_.solve(prob);
+    auto& u = s.particles.fields.data("mock_potential");
+    for (std::size_t i = 0; i < u.size(); ++i) u[i] = std::isnan(r.value[i]) ? -1.0 : r.value[i];
+    current = r.dirichlet_flux[0];
+    ++calls_;
+  }
+  void visit(Archive& ar, const std::string& prefix) override {
+    ar.visit(prefix + "/calls", calls_);
+    ar.visit(prefix + "/current", current);
+    solver_.visit(ar, prefix + "/solver");
+  }
+  double current = 0.0;  ///< held output: net current leaving the high electrode [A]
+
+ private:
+  Params p_;
+  LaplacianSolver solver_;
+  std::int64_t calls_ = 0;
 };
 
 /// Every law, module and generator of physics::register_all plus the mocks.
