@@ -9,6 +9,7 @@
 /// the wall history fields, walls, Verlet reference, step, time and the RNG.
 #include <catch2/catch.hpp>
 
+#include "support/h5compare.hpp"
 #include "support/scratch.hpp"
 #include <hdf5.h>
 #include <sys/wait.h>
@@ -67,81 +68,6 @@ int run_cli(const std::string& args, int threads, const fs::path& dir) {
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
-/// Every dataset of an HDF5 file: name -> (datatype description, dims, raw bytes in file type).
-struct RawDataset {
-  std::string type;
-  std::vector<hsize_t> dims;
-  std::vector<unsigned char> bytes;
-};
-
-/// Names of every dataset below `group` (recursive, portable HDF5 1.10/1.12 calls only).
-void collect_datasets(hid_t file, const std::string& group, std::vector<std::string>& out) {
-  const hid_t g = H5Gopen2(file, group.c_str(), H5P_DEFAULT);
-  REQUIRE(g >= 0);
-  H5G_info_t info;
-  REQUIRE(H5Gget_info(g, &info) >= 0);
-  for (hsize_t k = 0; k < info.nlinks; ++k) {
-    char name[512];
-    REQUIRE(H5Lget_name_by_idx(g, ".", H5_INDEX_NAME, H5_ITER_INC, k, name, sizeof name, H5P_DEFAULT) > 0);
-    const std::string child = (group == "/" ? "" : group) + "/" + name;
-    const hid_t o = H5Oopen(file, child.c_str(), H5P_DEFAULT);
-    const H5I_type_t t = H5Iget_type(o);
-    H5Oclose(o);
-    if (t == H5I_GROUP) collect_datasets(file, child, out);
-    else if (t == H5I_DATASET) out.push_back(child.substr(1));
-  }
-  H5Gclose(g);
-}
-
-std::map<std::string, RawDataset> read_all(const fs::path& file) {
-  std::map<std::string, RawDataset> out;
-  const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  REQUIRE(f >= 0);
-  std::vector<std::string> names;
-  collect_datasets(f, "/", names);
-  for (const auto& n : names) {
-    const hid_t d = H5Dopen2(f, n.c_str(), H5P_DEFAULT);
-    const hid_t t = H5Dget_type(d);
-    const hid_t sp = H5Dget_space(d);
-    RawDataset r;
-    const int rank = H5Sget_simple_extent_ndims(sp);
-    r.dims.resize(rank > 0 ? rank : 0);
-    if (rank > 0) H5Sget_simple_extent_dims(sp, r.dims.data(), nullptr);
-    const hssize_t npts = H5Sget_simple_extent_type(sp) == H5S_NULL ? 0 : H5Sget_simple_extent_npoints(sp);
-    const std::size_t tsize = H5Tget_size(t);
-    r.type = std::to_string(H5Tget_class(t)) + ":" + std::to_string(tsize);
-    r.bytes.resize(static_cast<std::size_t>(npts) * tsize);
-    if (npts > 0) REQUIRE(H5Dread(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, r.bytes.data()) >= 0);
-    out[n] = std::move(r);
-    H5Sclose(sp);
-    H5Tclose(t);
-    H5Dclose(d);
-  }
-  H5Fclose(f);
-  return out;
-}
-
-/// Bit-for-bit comparison of two state files; the named core datasets must be present.
-void require_identical(const fs::path& a, const fs::path& b) {
-  const auto da = read_all(a), db = read_all(b);
-  for (const char* must : {"state/particles/position", "state/particles/velocity", "state/particles/omega",
-                           "state/particles/orientation", "state/particles/force", "state/contacts/state",
-                           "state/contacts/id_i", "state/step", "state/rng"})
-    REQUIRE(da.count(must) == 1);
-  std::vector<std::string> na, nb;
-  for (const auto& [k, v] : da) na.push_back(k);
-  for (const auto& [k, v] : db) nb.push_back(k);
-  REQUIRE(na == nb);
-  for (const auto& [name, x] : da) {
-    const RawDataset& y = db.at(name);
-    INFO("dataset " << name << " of " << a << " vs " << b);
-    CHECK(x.type == y.type);
-    CHECK(x.dims == y.dims);
-    REQUIRE(x.bytes.size() == y.bytes.size());
-    CHECK(std::memcmp(x.bytes.data(), y.bytes.data(), x.bytes.size()) == 0);
-  }
-}
-
 /// Largest |shear displacement| in the contact history: proves the friction history is exercised.
 double max_shear(const fs::path& file) {
   const auto f = sparkdem::io::H5File::open_read(file);
@@ -189,8 +115,8 @@ TEST_CASE("restart from a mid-stage checkpoint reproduces the frictional pour bi
   CHECK(stored_int(C / "final_state.h5", "/state/step") == 3000);
   // Friction is active: tangential history of at least 1e-9 m (overlaps are ~1e-5 m here).
   CHECK(max_shear(A / "final_state.h5") > 1e-9);
-  require_identical(A / "final_state.h5", B / "final_state.h5");  // writing a checkpoint changes nothing
-  require_identical(A / "final_state.h5", C / "final_state.h5");
+  sparkdem::test::require_identical_state(A / "final_state.h5", B / "final_state.h5");  // writing a checkpoint changes nothing
+  sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
 }
 
 TEST_CASE("one and two threads give bit-identical frictional pours", "[restart][threads][scenario]") {
@@ -202,7 +128,7 @@ TEST_CASE("one and two threads give bit-identical frictional pours", "[restart][
   CHECK(summary_of(A)["threads"] == 1);
   CHECK(summary_of(B)["threads"] == 2);
   CHECK(max_shear(A / "final_state.h5") > 1e-9);
-  require_identical(A / "final_state.h5", B / "final_state.h5");
+  sparkdem::test::require_identical_state(A / "final_state.h5", B / "final_state.h5");
 }
 
 TEST_CASE("multi-stage restart: checkpoints in the first and in the second dynamics stage", "[restart][scenario]") {
@@ -229,7 +155,7 @@ TEST_CASE("multi-stage restart: checkpoints in the first and in the second dynam
       CHECK(stored_int(B / "checkpoint.h5", "/state/stage_index") == c.stage);
       CHECK(stored_int(B / "checkpoint.h5", "/state/stage_step0") == c.stage_step0);
       REQUIRE(run_cli("run " + q(f) + " --restart " + q(B / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
-      require_identical(A / "final_state.h5", C / "final_state.h5");
+      sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
     }
   }
 }
@@ -256,5 +182,40 @@ TEST_CASE("restart inside a fill stage: radius growth, wall history and until co
   CHECK(stored_int(B / "checkpoint.h5", "/state/stage_index") == 0);
   REQUIRE(run_cli("run " + q(f) + " --restart " + q(B / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
   CHECK(summary_of(C)["stages"][0]["steps"] == n);
-  require_identical(A / "final_state.h5", C / "final_state.h5");
+  sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
+}
+
+TEST_CASE("restart from a checkpoint at a stage's last step writes the uninterrupted closing frame",
+          "[restart][scenario]") {
+  ScratchDir tmp;
+  // The checkpoint falls on the pour's last step, so the resumed stage takes no step and writes its
+  // closing frame from the restored state: its contact forces must be the stored ones (they were
+  // zero before the contact table's per-row forces went into checkpoints).
+  json scene = load_data("crash_pour.json");
+  scene["stages"][1]["stop"] = {{"steps", 2000}};
+  scene["stages"][1]["output"] = {{"frame_every", 0}, {"timeseries_every", 100}, {"checkpoint_every", 2000}};
+  const fs::path f = write_scene(tmp.path, "scene.json", scene);
+  const fs::path A = tmp.path / "A", C = tmp.path / "C";
+  REQUIRE(run_cli("run " + q(f) + " -o " + q(A) + " --quiet", 1, tmp.path) == 0);
+  CHECK(stored_int(A / "checkpoint.h5", "/state/step") == 2000);
+  REQUIRE(run_cli("run " + q(f) + " --restart " + q(A / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
+  // A: the lattice frame and the pour's closing frame; C: only the closing frame.
+  const auto a = sparkdem::io::H5File::open_read(A / "results.h5");
+  const auto c = sparkdem::io::H5File::open_read(C / "results.h5");
+  REQUIRE(a.children("/frames") == std::vector<std::string>{"000000", "000001"});
+  REQUIRE(c.children("/frames") == std::vector<std::string>{"000000"});
+  CHECK(a.attribute_int64("/frames/000001", "step") == 2000);
+  CHECK(c.attribute_int64("/frames/000000", "step") == 2000);
+  const auto forces = c.read_doubles("/frames/000000/contacts/force");
+  REQUIRE(!forces.empty());
+  CHECK(std::any_of(forces.begin(), forces.end(), [](double x) { return x != 0.0; }));
+  const auto same_bits = [](const std::vector<double>& x, const std::vector<double>& y) {
+    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0;
+  };
+  for (const char* d : {"particles/position", "particles/velocity", "particles/force", "contacts/overlap", "contacts/force"}) {
+    INFO("dataset " << d);
+    CHECK(same_bits(a.read_doubles(std::string("/frames/000001/") + d), c.read_doubles(std::string("/frames/000000/") + d)));
+  }
+  CHECK(a.read_int64s("/frames/000001/contacts/pairs") == c.read_int64s("/frames/000000/contacts/pairs"));
+  sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
 }
