@@ -50,7 +50,10 @@ class PhysicsError : public std::runtime_error {
 
  private:
   static std::string format(Step step, const std::vector<Id>& ids, const std::string& q, const std::string& w) {
-    std::string s = "physics error at step " + std::to_string(step) + " in " + q + ": " + w;
+    // Built by appending: GCC 12 gives a false -Wrestrict on `"literal" + std::string&&` once
+    // this is inlined into some callers.
+    std::string s = "physics error at step ";
+    s.append(std::to_string(step)).append(" in ").append(q).append(": ").append(w);
     if (!ids.empty()) {
       s += " (particle ids";
       for (std::size_t k = 0; k < ids.size() && k < 10; ++k) {

@@ -64,6 +64,13 @@ void ContactTable::visit(Archive& ar, const std::string& prefix) {
   if (overlap_.size() != size())
     throw SetupError("checkpoint contact overlaps have " + std::to_string(overlap_.size()) + " rows, expected " +
                      std::to_string(size()));
+  // Forces of the last force pass: the frame a resumed stage writes before its first force pass
+  // (a checkpoint at the stage's last step) reports them. The torques are only read by the force
+  // pass that recomputes them, so they are not stored.
+  if (!ar.reading() || ar.has(prefix + "/force")) ar.visit(prefix + "/force", force_);
+  if (force_.size() != size())
+    throw SetupError("checkpoint contact forces have " + std::to_string(force_.size()) + " rows, expected " +
+                     std::to_string(size()));
   // Pending hand-overs (a bond broke since the last rebuild), in key order.
   std::vector<std::int64_t> keys;
   std::string names;

@@ -1,7 +1,8 @@
 /// sparkdem command line: run | check | schema | --version.
 /// The only place that prints errors and chooses exit codes:
 ///   0 success, 2 invalid scenario or input, 3 physics failure (blow-up, unmet required stop),
-///   4 set-up failure, 130 interrupted (checkpoint written).
+///   4 set-up failure (including a missing, truncated or corrupt checkpoint or snapshot),
+///   130 interrupted (checkpoint written).
 #include <omp.h>
 
 #include <CLI/CLI.hpp>

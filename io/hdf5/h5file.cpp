@@ -148,10 +148,29 @@ T single_value(const std::vector<T>& values, const fs::path& file, const std::st
 
 }  // namespace
 
-H5File H5File::create(const fs::path& path) {
+H5File H5File::create(const fs::path& path, std::size_t userblock) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  const hid_t id = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  Handle fcpl = own(H5Pcreate(H5P_FILE_CREATE), H5Pclose, path, "cannot create a property list");
+  if (userblock > 0)
+    check(H5Pset_userblock(fcpl.get(), userblock), path, "cannot reserve a user block of " + std::to_string(userblock) + " bytes");
+  const hid_t id = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), H5P_DEFAULT);
   if (id < 0) throw_error(path, "cannot create the file");
+  return H5File(path, id);
+}
+
+H5File H5File::open_image(const fs::path& path, std::span<const unsigned char> image) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  if (image.empty()) throw SetupError("HDF5 file '" + path.string() + "': the file image is empty");
+  Handle fapl = own(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, path, "cannot create a property list");
+  // Core (in-memory) driver without a backing store: nothing is ever written to disk.
+  check(H5Pset_fapl_core(fapl.get(), 1 << 16, 0), path, "cannot select the in-memory driver");
+  check(H5Pset_file_image(fapl.get(), const_cast<unsigned char*>(image.data()), image.size()), path,
+        "cannot set the file image");
+  // The core driver refuses to open an image under the name of an existing file, so the image
+  // gets a name below the file itself, which cannot exist (a regular file has no children).
+  const fs::path image_name = path / "in-memory-image";
+  const hid_t id = H5Fopen(image_name.c_str(), H5F_ACC_RDONLY, fapl.get());
+  if (id < 0) throw_error(path, "cannot open the file image for reading");
   return H5File(path, id);
 }
 
@@ -254,6 +273,17 @@ std::vector<std::size_t> H5File::shape(const std::string& dataset) const {
   if (rank > 0 && H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr) < 0)
     fail("cannot get the dimensions of " + dataset_label(dataset));
   return std::vector<std::size_t>(dims.begin(), dims.end());
+}
+
+void H5File::create_external_link(const std::string& path, const std::string& target_file,
+                                  const std::string& target_object) {
+  require_open("create link '" + absolute(path) + "'");
+  if (exists(path)) fail("cannot create link '" + absolute(path) + "': it already exists");
+  Handle lcpl = own(H5Pcreate(H5P_LINK_CREATE), H5Pclose, path_, "cannot create a property list");
+  check(H5Pset_create_intermediate_group(lcpl.get(), 1), path_, "cannot set intermediate group creation");
+  check(H5Lcreate_external(target_file.c_str(), target_object.c_str(), id_, absolute(path).c_str(), lcpl.get(),
+                           H5P_DEFAULT),
+        path_, "cannot create link '" + absolute(path) + "' to '" + target_file + ":" + target_object + "'");
 }
 
 namespace {

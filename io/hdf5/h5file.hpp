@@ -26,10 +26,15 @@ namespace sparkdem::io {
 /// An open HDF5 file. Move-only; the file is closed by the destructor (or by close()).
 class H5File {
  public:
-  /// Creates (truncates) a file for writing.
-  static H5File create(const std::filesystem::path& path);
+  /// Creates (truncates) a file for writing. `userblock` bytes (0, or a power of two >= 512)
+  /// are reserved at the start of the file for the caller (HDF5 neither writes nor reads them).
+  static H5File create(const std::filesystem::path& path, std::size_t userblock = 0);
   /// Opens an existing file read-only.
   static H5File open_read(const std::filesystem::path& path);
+  /// Opens, read-only, a file image held in memory (the complete bytes of an HDF5 file, user
+  /// block included) with HDF5's core driver; the file on disk is never touched. `path` only
+  /// names the file in error messages. The bytes are copied, `image` can be released afterwards.
+  static H5File open_image(const std::filesystem::path& path, std::span<const unsigned char> image);
 
   H5File(H5File&& other) noexcept;
   H5File& operator=(H5File&& other) noexcept;
@@ -51,6 +56,12 @@ class H5File {
   std::vector<std::string> children(const std::string& group) const;
   /// Dimensions of a dataset (empty for scalars and the empty string).
   std::vector<std::size_t> shape(const std::string& dataset) const;
+
+  /// Creates an external link at `path` (missing parent groups are created) to the object
+  /// `target_object` of the file `target_file`. A relative `target_file` is resolved by HDF5
+  /// relative to the directory of this file when the link is followed.
+  void create_external_link(const std::string& path, const std::string& target_file,
+                            const std::string& target_object);
 
   /// Writes an array dataset: 1-D when components == 0, else rows x components with
   /// rows = data.size() / components. Zero rows are allowed. The dataset must not exist.

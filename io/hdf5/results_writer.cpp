@@ -1,12 +1,17 @@
 #include "io/hdf5/results_writer.hpp"
 
+#include <cerrno>
 #include <cstdio>
-#include <fstream>
+#include <cstring>
+#include <regex>
 #include <set>
+#include <sstream>
 #include <system_error>
 #include <utility>
 
 #include "engine/core/error.hpp"
+#include "io/files/durable_file.hpp"
+#include "io/hdf5/h5file.hpp"
 
 namespace sparkdem::io {
 
@@ -17,20 +22,7 @@ namespace {
 constexpr const char* kResults = "results.h5";
 constexpr const char* kXdmf = "results.xdmf";
 constexpr const char* kCsv = "timeseries.csv";
-
-fs::path tmp_of(const fs::path& file) {
-  fs::path tmp = file;
-  tmp += ".tmp";
-  return tmp;
-}
-
-/// Creates the output directory, then the tmp results file inside it.
-H5File create_results(const fs::path& outdir) {
-  std::error_code ec;
-  fs::create_directories(outdir, ec);
-  if (ec) throw SetupError("results directory '" + outdir.string() + "': cannot create it: " + ec.message());
-  return H5File::create(tmp_of(outdir / kResults));
-}
+constexpr const char* kFrames = "frames";
 
 /// Full-precision text of a double (round-trips exactly).
 std::string number(double x) {
@@ -71,44 +63,66 @@ bool valid_name(const std::string& name, bool csv) {
   return !csv || name.find_first_of(",\"\r\n") == std::string::npos;
 }
 
-void rename_or_throw(const fs::path& from, const fs::path& to) {
-  std::error_code ec;
-  fs::rename(from, to, ec);
-  if (ec) throw SetupError("cannot rename '" + from.string() + "' to '" + to.string() + "': " + ec.message());
+/// "000003" for frame 3: the frame's name in results.h5 and in its file name.
+std::string counter(int index) {
+  char buffer[16];
+  std::snprintf(buffer, sizeof buffer, "%06d", index);
+  return buffer;
 }
+
+/// Creates `outdir/frames` and removes an earlier run's results from `outdir`.
+void take_over(const fs::path& outdir) {
+  std::error_code ec;
+  fs::create_directories(outdir / kFrames, ec);
+  if (ec) throw SetupError("results directory '" + outdir.string() + "': cannot create it: " + ec.message());
+  for (const char* name : {kXdmf, kResults, kCsv}) {  // the index first: it refers to the frames
+    remove_if_present(outdir / name);
+    remove_if_present(tmp_name(outdir / name));
+  }
+  static const std::regex frame_name(R"(frame_[0-9]{6,}\.h5(\.tmp)?)");
+  for (const auto& entry : fs::directory_iterator(outdir / kFrames, ec))
+    if (std::regex_match(entry.path().filename().string(), frame_name)) remove_if_present(entry.path());
+  if (ec) throw SetupError("results directory '" + (outdir / kFrames).string() + "': cannot list it: " + ec.message());
+}
+
+/// Removes a tmp file when a write fails half way (unless dismissed after the commit).
+struct TmpGuard {
+  fs::path file;
+  bool armed = true;
+  ~TmpGuard() {
+    if (!armed) return;
+    std::error_code ec;
+    fs::remove(file, ec);
+  }
+};
 
 }  // namespace
 
-ResultsWriter::ResultsWriter(fs::path outdir) : outdir_(std::move(outdir)), file_(create_results(outdir_)) {}
+ResultsWriter::ResultsWriter(fs::path outdir) : outdir_(std::move(outdir)) { take_over(outdir_); }
 
 ResultsWriter::~ResultsWriter() {
-  if (finalized_) return;
-  try {
-    file_.close();
-  } catch (const SetupError&) {
-    // The results are being discarded anyway.
-  }
   std::error_code ec;
-  for (const char* name : {kResults, kXdmf, kCsv}) fs::remove(tmp_of(outdir_ / name), ec);
+  for (const char* name : {kResults, kXdmf, kCsv}) fs::remove(tmp_name(outdir_ / name), ec);
+  fs::remove(tmp_name(outdir_ / frame_file(frames())), ec);
 }
+
+std::string ResultsWriter::frame_file(int index) { return std::string(kFrames) + "/frame_" + counter(index) + ".h5"; }
 
 void ResultsWriter::fail(const std::string& what) const {
-  throw SetupError("results file '" + (outdir_ / kResults).string() + "': " + what);
+  throw SetupError("results in '" + outdir_.string() + "': " + what);
 }
 
-void ResultsWriter::write_frame(std::int64_t step, double time, const std::string& stage,
-                                const std::vector<FrameField>& particle_fields, const ContactFrame& contacts) {
+std::string ResultsWriter::write_frame(std::int64_t step, double time, const std::string& stage,
+                                       const std::vector<FrameField>& particle_fields, const ContactFrame& contacts) {
   if (finalized_) fail("write_frame() called after finalize()");
-  char counter[16];
-  std::snprintf(counter, sizeof counter, "%06d", frames());
-  const std::string group = std::string("/frames/") + counter;
+  const std::string name = "frame " + counter(frames());
 
-  // Validate everything before writing anything, so a bad frame leaves no partial group.
+  // Validate everything before writing anything, so a bad frame leaves no file.
   const auto check_fields = [&](const std::vector<FrameField>& fields, const std::string& kind,
                                 std::size_t expected_rows) {
     std::set<std::string> seen;
     for (const FrameField& f : fields) {
-      const std::string label = kind + " field '" + f.name + "' of frame " + group;
+      const std::string label = kind + " field '" + f.name + "' of " + name;
       if (!valid_name(f.name, false)) fail(label + ": the name is empty or contains '/'");
       if (kind == "contact" && f.name == "pairs") fail(label + ": the name 'pairs' is reserved");
       if (!seen.insert(f.name).second) fail(label + ": duplicate field name");
@@ -125,36 +139,46 @@ void ResultsWriter::write_frame(std::int64_t step, double time, const std::strin
   bool has_position = false;
   for (const FrameField& f : particle_fields) {
     if (f.name == "position") {
-      if (f.components != 3) fail("field 'position' of frame " + group + " must have 3 components");
+      if (f.components != 3) fail("field 'position' of " + name + " must have 3 components");
       has_position = true;
       particles = f.data.size() / 3;
     }
   }
-  if (!has_position) fail("frame " + group + " has no particle field 'position'");
+  if (!has_position) fail(name + " has no particle field 'position'");
   check_fields(particle_fields, "particle", particles);
-  if (contacts.pairs.size() % 2 != 0) fail("contact pairs of frame " + group + " hold an odd number of ids");
+  if (contacts.pairs.size() % 2 != 0) fail("contact pairs of " + name + " hold an odd number of ids");
   check_fields(contacts.fields, "contact", contacts.pairs.size() / 2);
 
-  file_.create_group(group);
-  file_.set_attribute(group, "step", step);
-  file_.set_attribute(group, "time", time);
-  file_.set_attribute(group, "stage", stage);
-  FrameInfo info{group, time, particles, {}};
-  file_.create_group(group + "/particles");
-  for (const FrameField& f : particle_fields) {
-    const std::string path = group + "/particles/" + f.name;
-    file_.write(path, f.data, f.components);
-    file_.set_attribute(path, "unit", f.unit);
-    info.fields.emplace_back(f.name, f.components);
+  const std::string relative = frame_file(frames());
+  const fs::path final_path = outdir_ / relative;
+  TmpGuard tmp{tmp_name(final_path)};
+  FrameInfo info{relative, time, particles, {}};
+  {
+    H5File file = H5File::create(tmp.file);
+    file.set_attribute("/", "step", step);
+    file.set_attribute("/", "time", time);
+    file.set_attribute("/", "stage", stage);
+    file.create_group("/particles");
+    for (const FrameField& f : particle_fields) {
+      const std::string path = "/particles/" + f.name;
+      file.write(path, f.data, f.components);
+      file.set_attribute(path, "unit", f.unit);
+      info.fields.emplace_back(f.name, f.components);
+    }
+    file.create_group("/contacts");
+    file.write("/contacts/pairs", contacts.pairs, 2);
+    for (const FrameField& f : contacts.fields) {
+      const std::string path = "/contacts/" + f.name;
+      file.write(path, f.data, f.components);
+      file.set_attribute(path, "unit", f.unit);
+    }
+    file.close();
   }
-  file_.create_group(group + "/contacts");
-  file_.write(group + "/contacts/pairs", contacts.pairs, 2);
-  for (const FrameField& f : contacts.fields) {
-    const std::string path = group + "/contacts/" + f.name;
-    file_.write(path, f.data, f.components);
-    file_.set_attribute(path, "unit", f.unit);
-  }
+  commit_file(tmp.file, final_path);
+  tmp.armed = false;
   frames_.push_back(std::move(info));
+  index_current_ = false;
+  return relative;
 }
 
 void ResultsWriter::set_timeseries(const std::vector<std::string>& columns,
@@ -171,41 +195,63 @@ void ResultsWriter::set_timeseries(const std::vector<std::string>& columns,
            std::to_string(columns.size()));
   columns_ = columns;
   rows_ = rows;
+  index_current_ = false;
 }
 
-void ResultsWriter::finalize() {
-  if (finalized_) fail("finalize() called twice");
-  file_.create_group("/timeseries");
+void ResultsWriter::write_results_h5(const fs::path& file) const {
+  H5File h5 = H5File::create(file);
+  h5.create_group("/frames");
+  for (std::size_t k = 0; k < frames_.size(); ++k)
+    h5.create_external_link("/frames/" + counter(static_cast<int>(k)), frames_[k].file, "/");
+  h5.create_group("/timeseries");
   for (std::size_t c = 0; c < columns_.size(); ++c) {
     std::vector<double> column(rows_.size());
     for (std::size_t r = 0; r < rows_.size(); ++r) column[r] = rows_[r][c];
-    file_.write("/timeseries/" + columns_[c], column);
+    h5.write("/timeseries/" + columns_[c], column);
   }
-  file_.close();
-  write_xdmf(tmp_of(outdir_ / kXdmf));
-  write_csv(tmp_of(outdir_ / kCsv));
-  // results.xdmf last: it refers to results.h5.
-  rename_or_throw(tmp_of(outdir_ / kCsv), outdir_ / kCsv);
-  rename_or_throw(tmp_of(outdir_ / kResults), outdir_ / kResults);
-  rename_or_throw(tmp_of(outdir_ / kXdmf), outdir_ / kXdmf);
-  finalized_ = true;
+  h5.close();
 }
 
-void ResultsWriter::write_xdmf(const fs::path& file) const {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) throw SetupError("cannot create '" + file.string() + "'");
+void ResultsWriter::write_index() {
+  if (finalized_) fail("write_index() called after finalize()");
+  // All three complete and synced under tmp names, then renamed (results.xdmf, what a user
+  // opens, last) and the directory synced once.
+  TmpGuard csv{tmp_name(outdir_ / kCsv)}, h5{tmp_name(outdir_ / kResults)}, xdmf{tmp_name(outdir_ / kXdmf)};
+  write_file_synced(csv.file, csv_text());
+  write_results_h5(h5.file);
+  sync_file(h5.file);
+  write_file_synced(xdmf.file, xdmf_text());
+  for (const auto& [tmp, name] : {std::pair{&csv, kCsv}, std::pair{&h5, kResults}, std::pair{&xdmf, kXdmf}}) {
+    if (std::rename(tmp->file.c_str(), (outdir_ / name).c_str()) != 0)
+      fail("cannot rename '" + tmp->file.string() + "' to '" + name + "': " + std::strerror(errno));
+    tmp->armed = false;
+  }
+  sync_directory(outdir_);
+  index_current_ = true;
+}
+
+bool ResultsWriter::finalize() {
+  const bool write = !index_current_;
+  if (write) write_index();
+  finalized_ = true;
+  return write;
+}
+
+std::string ResultsWriter::xdmf_text() const {
+  std::ostringstream out;
   const auto data_item = [&](const FrameInfo& frame, const std::string& field, int components) {
     out << "          <DataItem Dimensions=\"" << frame.particles << ' ' << components
-        << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << kResults << ':'
-        << xml_escaped(frame.group + "/particles/" + field) << "</DataItem>\n";
+        << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << xml_escaped(frame.file) << ":/particles/"
+        << xml_escaped(field) << "</DataItem>\n";
   };
   out << "<?xml version=\"1.0\" ?>\n"
       << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
       << "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
       << "  <Domain>\n"
       << "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-  for (const FrameInfo& frame : frames_) {
-    out << "      <Grid Name=\"frame_" << frame.group.substr(frame.group.rfind('/') + 1) << "\" GridType=\"Uniform\">\n"
+  for (std::size_t k = 0; k < frames_.size(); ++k) {
+    const FrameInfo& frame = frames_[k];
+    out << "      <Grid Name=\"frame_" << counter(static_cast<int>(k)) << "\" GridType=\"Uniform\">\n"
         << "        <Time Value=\"" << number(frame.time) << "\"/>\n"
         << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << frame.particles
         << "\" NodesPerElement=\"1\"/>\n"
@@ -224,21 +270,22 @@ void ResultsWriter::write_xdmf(const fs::path& file) const {
   out << "    </Grid>\n"
       << "  </Domain>\n"
       << "</Xdmf>\n";
-  out.close();
-  if (!out) throw SetupError("cannot write '" + file.string() + "'");
+  return out.str();
 }
 
-void ResultsWriter::write_csv(const fs::path& file) const {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  if (!out) throw SetupError("cannot create '" + file.string() + "'");
-  for (std::size_t c = 0; c < columns_.size(); ++c) out << (c ? "," : "") << columns_[c];
-  out << '\n';
+std::string ResultsWriter::csv_text() const {
+  std::string out;
+  if (columns_.empty()) return out;  // no time series yet: an empty file
+  for (std::size_t c = 0; c < columns_.size(); ++c) out += (c ? "," : "") + columns_[c];
+  out += '\n';
   for (const std::vector<double>& row : rows_) {
-    for (std::size_t c = 0; c < row.size(); ++c) out << (c ? "," : "") << number(row[c]);
-    out << '\n';
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      if (c) out += ',';
+      out += number(row[c]);
+    }
+    out += '\n';
   }
-  out.close();
-  if (!out) throw SetupError("cannot write '" + file.string() + "'");
+  return out;
 }
 
 }  // namespace sparkdem::io

@@ -1,25 +1,37 @@
 #pragma once
-/// Writes a run's results into an output directory:
-///  - results.h5    frames of per-particle and per-contact fields, plus the time series;
-///  - results.xdmf  XDMF description of the particle frames, for ParaView;
-///  - timeseries.csv the time series as text.
-/// Everything is written under tmp names and renamed by finalize(); a writer destroyed
-/// without finalize() removes its tmp files, so the directory never holds half-written output.
+/// Writes a run's results into an output directory so that a run killed at any moment (SIGKILL,
+/// power loss) leaves every frame it has reported readable:
+///  - frames/frame_NNNNNN.h5  one complete HDF5 file per frame, written as frame_NNNNNN.h5.tmp,
+///                            fsynced and renamed (then the directory fsynced) before
+///                            write_frame() returns. Callers report a frame (run.log) only after
+///                            that, so a reported frame is always complete on disk.
+///  - results.h5              the index: /frames/NNNNNN are HDF5 external links to the frame
+///                            files (relative paths, resolved from the directory of results.h5,
+///                            so move the output directory as a whole), plus /timeseries;
+///  - results.xdmf            XDMF description of the particle frames for ParaView, pointing
+///                            straight into the frame files;
+///  - timeseries.csv          the time series as text.
+/// The three index files are rewritten together by write_index() (each atomically: tmp, fsync,
+/// rename) and by finalize(); the pipeline calls write_index() after every checkpoint and at
+/// the end of every stage, so after a crash they describe the run up to its last checkpoint (the
+/// state a restart continues from), while frames/ holds every frame written up to the crash.
 ///
-/// results.h5 layout:
-///   /frames/NNNNNN                  group per frame (zero-padded counter), attributes
-///                                   step (int64), time (double), stage (string)
-///   /frames/NNNNNN/particles/<name> double, n x components, attribute unit (string)
-///   /frames/NNNNNN/contacts/pairs   int64, m x 2 (particle ids of each contact)
-///   /frames/NNNNNN/contacts/<name>  double, m x components, attribute unit (string)
-///   /timeseries/<column>            double, 1-D, one value per row
+/// A new writer takes over the directory: it removes the results of an earlier run there (the
+/// frame files frames/frame_*.h5, results.h5, results.xdmf, timeseries.csv and tmp files of
+/// them); checkpoints and other files are not touched. A writer destroyed without finalize()
+/// removes only its tmp files: the frames written so far stay.
+///
+/// Frame file layout (frames/frame_NNNNNN.h5; in results.h5 the same below /frames/NNNNNN):
+///   /                   attributes step (int64), time (double), stage (string)
+///   /particles/<name>   double, n x components, attribute unit (string)
+///   /contacts/pairs     int64, m x 2 (particle ids of each contact)
+///   /contacts/<name>    double, m x components, attribute unit (string)
+/// results.h5 also holds /timeseries/<column>: double, 1-D, one value per row.
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include "io/hdf5/h5file.hpp"
 
 namespace sparkdem::io {
 
@@ -39,43 +51,53 @@ struct ContactFrame {
 
 class ResultsWriter {
  public:
-  /// Creates `outdir` if needed and starts `outdir/results.h5.tmp`.
+  /// Creates `outdir` and `outdir/frames` if needed and removes an earlier run's results there.
   explicit ResultsWriter(std::filesystem::path outdir);
   ResultsWriter(const ResultsWriter&) = delete;
   ResultsWriter& operator=(const ResultsWriter&) = delete;
-  /// Without finalize(): closes and removes the tmp files.
+  /// Removes the tmp files; written frames stay.
   ~ResultsWriter();
 
-  /// Appends one frame. particle_fields must contain "position" with 3 components and all
-  /// particle fields must have the same number of rows; contact fields one row per pair.
-  void write_frame(std::int64_t step, double time, const std::string& stage,
-                   const std::vector<FrameField>& particle_fields, const ContactFrame& contacts);
-  /// Sets the time series (each row has one value per column); written by finalize().
+  /// Writes the next frame file durably (see above) and returns its path relative to the output
+  /// directory. particle_fields must contain "position" with 3 components and all particle
+  /// fields must have the same number of rows; contact fields one row per pair. An invalid frame
+  /// throws before anything is written.
+  std::string write_frame(std::int64_t step, double time, const std::string& stage,
+                          const std::vector<FrameField>& particle_fields, const ContactFrame& contacts);
+  /// Sets the time series (each row has one value per column) for the next write_index().
+  /// (The index counts as out of date after this call, whatever the values.)
   void set_timeseries(const std::vector<std::string>& columns, const std::vector<std::vector<double>>& rows);
-  /// Writes /timeseries, closes results.h5, writes results.xdmf and timeseries.csv, and
-  /// renames every tmp file to its final name.
-  void finalize();
+  /// Rewrites results.h5 (links to every frame so far, /timeseries), results.xdmf and
+  /// timeseries.csv, each atomically.
+  void write_index();
+  /// write_index() for the last time, unless the index is up to date (no write_frame() or
+  /// set_timeseries() since the last write_index()); no frame can be written afterwards.
+  /// Returns whether the index was written.
+  bool finalize();
   /// Number of frames written so far.
   int frames() const { return static_cast<int>(frames_.size()); }
+  /// Frame file of frame `index`, relative to the output directory ("frames/frame_000003.h5").
+  static std::string frame_file(int index);
 
  private:
-  /// What results.xdmf needs to know about one frame.
+  /// What the index files need to know about one frame.
   struct FrameInfo {
-    std::string group;  ///< "/frames/NNNNNN"
+    std::string file;  ///< relative to the output directory
     double time;
     std::size_t particles;
     std::vector<std::pair<std::string, int>> fields;  ///< particle field name, components
   };
-  void write_xdmf(const std::filesystem::path& file) const;
-  void write_csv(const std::filesystem::path& file) const;
-  /// Throws a SetupError about `what` in this writer's results file.
+  void write_results_h5(const std::filesystem::path& file) const;
+  std::string xdmf_text() const;
+  std::string csv_text() const;
+  /// Throws a SetupError about `what` in this writer's output directory.
   [[noreturn]] void fail(const std::string& what) const;
 
   std::filesystem::path outdir_;
-  H5File file_;
   std::vector<FrameInfo> frames_;
   std::vector<std::string> columns_;
   std::vector<std::vector<double>> rows_;
+  bool index_current_ = false;  ///< the index files on disk describe frames_, columns_, rows_
   bool finalized_ = false;
 };
 

@@ -4,18 +4,14 @@
 #include <utility>
 
 #include "engine/core/error.hpp"
+#include "io/files/durable_file.hpp"
+#include "io/restart/checkpoint_file.hpp"
 
 namespace sparkdem::io {
 
 namespace fs = std::filesystem;
 
 namespace {
-
-fs::path tmp_path(const fs::path& path) {
-  fs::path tmp = path;
-  tmp += ".tmp";
-  return tmp;
-}
 
 std::string shape_text(const std::vector<std::size_t>& dims) {
   std::string s = "(";
@@ -26,15 +22,16 @@ std::string shape_text(const std::vector<std::size_t>& dims) {
 }  // namespace
 
 Hdf5Archive::Hdf5Archive(H5File file, fs::path path, bool reading)
-    : file_(std::move(file)), path_(std::move(path)), tmp_(reading ? fs::path() : tmp_path(path_)),
+    : file_(std::move(file)), path_(std::move(path)), tmp_(reading ? fs::path() : tmp_name(path_)),
       reading_(reading), pending_(!reading) {}
 
 Hdf5Archive Hdf5Archive::for_writing(const fs::path& path) {
-  return Hdf5Archive(H5File::create(tmp_path(path)), path, false);
+  return Hdf5Archive(H5File::create(tmp_name(path), kCheckpointHeaderBytes), path, false);
 }
 
 Hdf5Archive Hdf5Archive::for_reading(const fs::path& path) {
-  return Hdf5Archive(H5File::open_read(path), path, true);
+  const std::vector<unsigned char> image = read_verified_checkpoint(path);
+  return Hdf5Archive(H5File::open_image(path, image), path, true);
 }
 
 Hdf5Archive::Hdf5Archive(Hdf5Archive&& other) noexcept
@@ -56,11 +53,8 @@ void Hdf5Archive::commit() {
   if (reading_) throw SetupError("checkpoint '" + path_.string() + "': commit() on an archive opened for reading");
   if (!pending_) throw SetupError("checkpoint '" + path_.string() + "': already committed");
   file_.close();
-  std::error_code ec;
-  fs::rename(tmp_, path_, ec);
-  if (ec)
-    throw SetupError("checkpoint '" + path_.string() + "': cannot rename '" + tmp_.string() + "' to it: " +
-                     ec.message());
+  seal_checkpoint(tmp_);
+  rename_durably(tmp_, path_);
   pending_ = false;
 }
 

@@ -4,8 +4,15 @@
 /// Every item is a dataset at the path given by its name (relative to the file root):
 /// arrays are 1-D (components == 1) or rows x components, scalars are scalar datasets and
 /// strings are fixed-length byte-exact string datasets (see io/hdf5/h5file.hpp).
-/// Writing goes to `path + ".tmp"`; commit() renames it to `path` so a crash never leaves
-/// a half-written checkpoint behind, and an uncommitted archive removes its tmp file.
+/// The file is a sealed checkpoint (io/restart/checkpoint_file.hpp): an HDF5 file with a 512-byte
+/// user block holding a header with the payload length and an FNV-1a 64 checksum.
+/// Writing goes to `path + ".tmp"`; commit() closes it, seals it (header, fsync) and renames it
+/// to `path` (then fsyncs the directory), so a crash at any moment leaves either the previous
+/// checkpoint or the new one under `path`, never a partial one; an uncommitted archive removes
+/// its tmp file. Reading verifies the length and checksum with plain file I/O before any HDF5
+/// call, then lets HDF5 parse the verified bytes from memory (a reading archive holds the whole
+/// file in memory; opening it briefly needs twice that): a truncated, corrupt or foreign file
+/// gives a SetupError saying what is wrong, and never reaches the HDF5 library.
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -20,7 +27,7 @@ class Hdf5Archive final : public sparkdem::Archive {
  public:
   /// Starts a checkpoint that becomes `path` on commit(); writes into `path + ".tmp"`.
   static Hdf5Archive for_writing(const std::filesystem::path& path);
-  /// Opens an existing checkpoint for restoring.
+  /// Opens an existing checkpoint for restoring, after verifying it (see above).
   static Hdf5Archive for_reading(const std::filesystem::path& path);
 
   Hdf5Archive(Hdf5Archive&& other) noexcept;

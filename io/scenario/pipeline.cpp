@@ -7,12 +7,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <map>
 
 #include "engine/core/error.hpp"
 #include "engine/state/pair_transfer.hpp"
+#include "io/files/durable_file.hpp"
 #include "io/hdf5/results_writer.hpp"
 #include "io/restart/hdf5_archive.hpp"
 #include "io/scenario/sweep.hpp"
@@ -25,10 +25,26 @@ using steady = std::chrono::steady_clock;
 
 json finite_or_null(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
 
-/// The I/O side of a run: frames, time series, checkpoints, progress.
+/// Compact text of a number (9 significant digits), for log lines.
+std::string short_number(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.9g", x);
+  return buffer;
+}
+
+/// Appends a line to the run log on an error path: a failing log must not hide the error.
+void note(RunLog& log, const std::string& text) noexcept {
+  try {
+    log.line(text);
+  } catch (...) {
+  }
+}
+
+/// The I/O side of a run: frames, time series, checkpoints, progress, the run log.
 class OutputObserver final : public Observer {
  public:
-  OutputObserver(const std::filesystem::path& outdir, bool quiet) : outdir_(outdir), writer_(outdir), quiet_(quiet) {
+  OutputObserver(const std::filesystem::path& outdir, bool quiet, RunLog& log)
+      : outdir_(outdir), log_(log), writer_(outdir), quiet_(quiet) {
     tty_ = isatty(fileno(stderr));
   }
   /// Sweeps: checkpoints go to this file, and every state file carries this pipeline record.
@@ -75,7 +91,14 @@ class OutputObserver final : public Observer {
       for (int d = 0; d < 3; ++d) fn.data.push_back(t.force()[r][d]);
     }
     c.fields = {ov, fn};
-    writer_.write_frame(s.step, s.time, stage_, f, c);
+    const int index = writer_.frames();
+    const std::string file = writer_.write_frame(s.step, s.time, stage_, f, c);
+    dirty_ = true;
+    // Only now, with the frame file complete on disk, is the frame reported.
+    char counter[16];
+    std::snprintf(counter, sizeof counter, "%06d", index);
+    log_.line(std::string("frame ") + counter + " written: " + file + " (step " + std::to_string(s.step) +
+              ", t = " + short_number(s.time) + " s, stage '" + stage_ + "')");
   }
   void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) override {
     std::map<std::string, double> row;
@@ -84,8 +107,20 @@ class OutputObserver final : public Observer {
       if (!col_index_.count(cols[k])) { col_index_[cols[k]] = columns_.size(); columns_.push_back(cols[k]); }
     }
     rows_.push_back(std::move(row));
+    dirty_ = true;
   }
-  void checkpoint(State& s) override { write_checkpoint(checkpoint_file_.empty() ? outdir_ / "checkpoint.h5" : checkpoint_file_, s, true); }
+  void checkpoint(State& s) override {
+    const std::filesystem::path file = checkpoint_file_.empty() ? outdir_ / "checkpoint.h5" : checkpoint_file_;
+    write_checkpoint(file, s, true);
+    log_.line("checkpoint written: " + (checkpoint_file_.empty() ? std::string("checkpoint.h5") : file.string()) + " (step " + std::to_string(s.step) + ", stage '" + stage_ + "')");
+    publish();
+  }
+  /// The state after a stage: final_state.h5, then the index files.
+  void final_state(State& s) {
+    write_checkpoint(outdir_ / "final_state.h5", s, false);
+    log_.line("final state written: final_state.h5 (step " + std::to_string(s.step) + ", after stage '" + stage_ + "')");
+    publish();
+  }
   void write_checkpoint(const std::filesystem::path& file, State& s, bool in_stage) {
     Hdf5Archive ar = Hdf5Archive::for_writing(file);
     s.visit(ar);
@@ -127,7 +162,21 @@ class OutputObserver final : public Observer {
   }
   void end_stage_line() { if (tty_ && !quiet_) std::cerr << "\n"; }
   void set_k0(Step k0) { k0_ = k0; }
+  /// Rewrites results.h5, results.xdmf and timeseries.csv with everything so far.
+  void publish() {
+    set_timeseries();
+    writer_.write_index();
+    dirty_ = false;
+    log_index();
+  }
+  /// The last publish(), unless nothing changed since the previous one.
   void finalize() {
+    if (dirty_) set_timeseries();
+    if (writer_.finalize()) log_index();
+  }
+
+ private:
+  void set_timeseries() {
     std::vector<std::vector<double>> rows;
     for (const auto& r : rows_) {
       std::vector<double> v(columns_.size(), std::nan(""));
@@ -135,11 +184,14 @@ class OutputObserver final : public Observer {
       rows.push_back(std::move(v));
     }
     writer_.set_timeseries(columns_, rows);
-    writer_.finalize();
+  }
+  void log_index() {
+    log_.line("index written: results.h5, results.xdmf, timeseries.csv (" + std::to_string(writer_.frames()) +
+              " frames, " + std::to_string(rows_.size()) + " time-series rows)");
   }
 
- private:
   std::filesystem::path outdir_;
+  RunLog& log_;
   ResultsWriter writer_;
   bool quiet_, tty_ = false;
   std::string stage_;
@@ -148,6 +200,7 @@ class OutputObserver final : public Observer {
   std::vector<std::string> columns_;
   std::map<std::string, std::size_t> col_index_;
   std::vector<std::map<std::string, double>> rows_;
+  bool dirty_ = true;  ///< frames or time-series rows not yet in the index files
   steady::time_point stage_start_, last_print_;
   Step k0_ = 0;
   std::filesystem::path checkpoint_file_;
@@ -156,28 +209,28 @@ class OutputObserver final : public Observer {
 
 }  // namespace
 
-void write_json_atomic(const std::filesystem::path& file, const json& j) {
-  const auto tmp = file.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw SetupError("cannot write '" + tmp + "'");
-    out << j.dump(2) << "\n";
-  }
-  std::filesystem::rename(tmp, file);
-}
+void write_json_atomic(const std::filesystem::path& file, const json& j) { write_file_atomic(file, j.dump(2) + "\n"); }
 
-std::pair<std::int64_t, bool> read_checkpoint(const std::filesystem::path& file, State& s) {
-  Hdf5Archive ar = Hdf5Archive::for_reading(file);
+namespace {
+
+/// The state of an open checkpoint: its stage index and whether it was taken inside that stage.
+std::pair<std::int64_t, bool> read_state(Hdf5Archive& ar, State& s) {
   s.visit(ar);
   std::int64_t flag = 0;
   if (ar.has("pipeline/in_stage")) ar.visit("pipeline/in_stage", flag);
   return {s.stage_index, flag != 0};
 }
 
-json run_scenario(Scenario& sc, const RunOptions& opt) {
-  if (opt.threads > 0) omp_set_num_threads(opt.threads);
-  const auto t0 = steady::now();
-  std::filesystem::create_directories(opt.outdir);
+}  // namespace
+
+std::pair<std::int64_t, bool> read_checkpoint(const std::filesystem::path& file, State& s) {
+  Hdf5Archive ar = Hdf5Archive::for_reading(file);
+  return read_state(ar, s);
+}
+
+namespace {
+
+json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_point t0) {
   write_json_atomic(opt.outdir / "resolved.json", sc.resolved);
 
   State s;
@@ -190,22 +243,25 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
   bool resume = false;
   std::unique_ptr<Hdf5Archive> restart_ar;
   if (opt.restart) {
-    auto [kc, in_stage] = read_checkpoint(*opt.restart, s);
+    // One verified read: the state and the module states come from the same bytes.
+    restart_ar = std::make_unique<Hdf5Archive>(Hdf5Archive::for_reading(*opt.restart));
+    auto [kc, in_stage] = read_state(*restart_ar, s);
     const std::int64_t k = kc - opt.stage_offset;
     if (k < 0 || k >= static_cast<std::int64_t>(sc.stages.size()))
       throw SetupError("checkpoint '" + opt.restart->string() + "' is at stage " + std::to_string(k) + ", but the scenario has " +
                        std::to_string(sc.stages.size()) + " stages");
     first = static_cast<std::size_t>(in_stage ? k : k + 1);
     resume = in_stage;
-    restart_ar = std::make_unique<Hdf5Archive>(Hdf5Archive::for_reading(*opt.restart));
     if (!opt.record && restart_ar->has("pipeline/record")) {
       std::string r;
       restart_ar->visit("pipeline/record", r);
       record = RunRecord::from_json(json::parse(r, nullptr, false));
     }
+    log.line("restart: checkpoint '" + opt.restart->string() + "' verified, step " + std::to_string(s.step) + ", stage " +
+             std::to_string(kc) + (in_stage ? " (inside it)" : " (after it)"));
   }
 
-  OutputObserver obs(opt.outdir, opt.quiet);
+  OutputObserver obs(opt.outdir, opt.quiet, log);
   if (!opt.checkpoint_file.empty()) obs.set_checkpoint_file(opt.checkpoint_file);
   obs.set_record(opt.record ? opt.record : std::function<json()>([&record] { return record.to_json(); }));
   json summary;
@@ -229,7 +285,7 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
         summary["stages"].push_back(r.entry);
         total_steps += r.steps;
         particle_steps += r.particle_steps;
-        obs.write_checkpoint(opt.outdir / "final_state.h5", s, false);
+        obs.final_state(s);
         continue;
       }
       if (!resuming) {
@@ -265,9 +321,13 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
       std::vector<std::unique_ptr<Monitor>> mons;
       if (st.generator) mons = st.generator->monitors();
       for (auto& m : mons) sim.add_monitor(m.get());
-      if (resuming)
+      if (resuming) {
         for (Module* m : mods) m->visit(*restart_ar, "modules/" + m->name());
+        restart_ar.reset();  // everything is restored: release the in-memory checkpoint image
+      }
       obs.set_stage(st.cfg.name, mods, st.cfg);
+      log.line("stage '" + st.cfg.name + "' (" + std::to_string(k + 1) + " of " + std::to_string(sc.stages.size()) + ") " +
+               (resuming ? "resumed" : "started") + " at step " + std::to_string(s.step));
       obs.set_k0(resuming ? s.step - s.stage_step0 : 0);
       json js;
       js["name"] = st.cfg.name;
@@ -319,7 +379,7 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
         js["packing"]["coordination_histogram"] = st.generator->coordination_histogram(s);
       }
       summary["stages"].push_back(js);
-      obs.write_checkpoint(opt.outdir / "final_state.h5", s, false);
+      obs.final_state(s);
       if (st.dynamics && st.cfg.require_until && !js["until_reached"].get<bool>())
         throw PhysicsError(s.step, {}, "stop condition",
                            "stage '" + st.cfg.name + "' reached its hard stop before its 'until' conditions held "
@@ -346,7 +406,32 @@ json run_scenario(Scenario& sc, const RunOptions& opt) {
   write_json_atomic(opt.outdir / "summary.json", summary);
   if (status == "interrupted") throw Interrupted(error);
   if (status == "failed") throw PhysicsError(s.step, {}, "run", error + " (outputs up to the failure were written)");
+  log.line("run completed: " + std::to_string(total_steps) + " steps, " + short_number(wall) + " s wall");
   return summary;
+}
+
+}  // namespace
+
+json run_scenario(Scenario& sc, const RunOptions& opt) {
+  if (opt.threads > 0) omp_set_num_threads(opt.threads);
+  const auto t0 = steady::now();
+  std::error_code dir_error;
+  std::filesystem::create_directories(opt.outdir, dir_error);
+  if (dir_error)
+    throw SetupError("output directory '" + opt.outdir.string() + "': cannot create it: " + dir_error.message());
+  RunLog log(opt.outdir / "run.log");
+  log.line("run started: scenario '" + sc.name + "', sparkdem " + SPARKDEM_VERSION + ", pid " +
+           std::to_string(::getpid()) + ", " + std::to_string(omp_get_max_threads()) + " thread(s)" +
+           (opt.restart ? ", restarting from '" + opt.restart->string() + "'" : std::string()));
+  try {
+    return run_logged(sc, opt, log, t0);
+  } catch (const Interrupted& e) {
+    note(log, std::string("run interrupted: ") + e.what());
+    throw;
+  } catch (const std::exception& e) {
+    note(log, std::string("run failed: ") + e.what());
+    throw;
+  }
 }
 
 }  // namespace sparkdem::io

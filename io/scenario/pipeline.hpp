@@ -1,8 +1,24 @@
 #pragma once
-/// Runs a scenario's stages in order, writing OUTDIR/{results.h5, results.xdmf, timeseries.csv,
-/// summary.json, resolved.json, checkpoint.h5, final_state.h5}, plus snapshots/ and, per sweep
-/// stage, sweep_<stage>.csv and sweep_<stage>/<item>/ (see sweep.hpp). Every file is written
-/// under a temporary name and renamed when complete.
+/// Runs a scenario's stages in order, writing OUTDIR/{frames/frame_NNNNNN.h5, results.h5,
+/// results.xdmf, timeseries.csv, summary.json, resolved.json, checkpoint.h5, final_state.h5,
+/// run.log}, plus snapshots/ and, per sweep stage, sweep_<stage>.csv and sweep_<stage>/<item>/
+/// (see sweep.hpp). Every file is written under a temporary name, fsynced and renamed when complete,
+/// so a run killed at any moment (even by SIGKILL) leaves only complete files behind.
+///
+/// run.log is appended to, one line per event, each line written as soon as the event is
+/// complete on disk ("[YYYY-MM-DD hh:mm:ss UTC] " prefix):
+///   run started: scenario 'NAME', sparkdem VERSION, pid PID, N thread(s)[, restarting from 'FILE']
+///   restart: checkpoint 'FILE' verified, step S, stage K (inside it|after it)
+///   stage 'NAME' (K of N) started|resumed at step S
+///   frame NNNNNN written: frames/frame_NNNNNN.h5 (step S, t = T s, stage 'NAME')
+///   checkpoint written: checkpoint.h5 (step S, stage 'NAME')
+///   final state written: final_state.h5 (step S, after stage 'NAME')
+///   index written: results.h5, results.xdmf, timeseries.csv (F frames, R time-series rows)
+///   run completed: S steps, W s wall  |  run interrupted: ...  |  run failed: ...
+/// A frame the log reports is readable; the index files (results.h5, results.xdmf,
+/// timeseries.csv) are rewritten after every checkpoint and final state and at the end (see
+/// io/hdf5/results_writer.hpp); checkpoint.h5 and final_state.h5 are sealed checkpoints
+/// (io/restart/checkpoint_file.hpp), verified before they are read.
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -33,7 +49,7 @@ json run_scenario(Scenario& sc, const RunOptions& opt);
 /// inside that stage.
 std::pair<std::int64_t, bool> read_checkpoint(const std::filesystem::path& file, State& s);
 
-/// Write `json` to `file` atomically (tmp + rename).
+/// Write `json` to `file` atomically and durably (tmp, fsync, rename, directory fsync).
 void write_json_atomic(const std::filesystem::path& file, const json& j);
 
 }  // namespace sparkdem::io

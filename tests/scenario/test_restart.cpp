@@ -9,7 +9,7 @@
 /// the wall history fields, walls, Verlet reference, step, time and the RNG.
 #include <catch2/catch.hpp>
 
-#include "support/h5_compare.hpp"
+#include "support/h5compare.hpp"
 #include "support/scratch.hpp"
 #include <hdf5.h>
 #include <sys/wait.h>
@@ -31,7 +31,6 @@
 #include "io/hdf5/h5file.hpp"
 
 namespace {
-using sparkdem::test::require_identical;
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -116,8 +115,8 @@ TEST_CASE("restart from a mid-stage checkpoint reproduces the frictional pour bi
   CHECK(stored_int(C / "final_state.h5", "/state/step") == 3000);
   // Friction is active: tangential history of at least 1e-9 m (overlaps are ~1e-5 m here).
   CHECK(max_shear(A / "final_state.h5") > 1e-9);
-  require_identical(A / "final_state.h5", B / "final_state.h5");  // writing a checkpoint changes nothing
-  require_identical(A / "final_state.h5", C / "final_state.h5");
+  sparkdem::test::require_identical_state(A / "final_state.h5", B / "final_state.h5");  // writing a checkpoint changes nothing
+  sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
 }
 
 TEST_CASE("one and two threads give bit-identical frictional pours", "[restart][threads][scenario]") {
@@ -129,7 +128,7 @@ TEST_CASE("one and two threads give bit-identical frictional pours", "[restart][
   CHECK(summary_of(A)["threads"] == 1);
   CHECK(summary_of(B)["threads"] == 2);
   CHECK(max_shear(A / "final_state.h5") > 1e-9);
-  require_identical(A / "final_state.h5", B / "final_state.h5");
+  sparkdem::test::require_identical_state(A / "final_state.h5", B / "final_state.h5");
 }
 
 TEST_CASE("multi-stage restart: checkpoints in the first and in the second dynamics stage", "[restart][scenario]") {
@@ -156,7 +155,7 @@ TEST_CASE("multi-stage restart: checkpoints in the first and in the second dynam
       CHECK(stored_int(B / "checkpoint.h5", "/state/stage_index") == c.stage);
       CHECK(stored_int(B / "checkpoint.h5", "/state/stage_step0") == c.stage_step0);
       REQUIRE(run_cli("run " + q(f) + " --restart " + q(B / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
-      require_identical(A / "final_state.h5", C / "final_state.h5");
+      sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
     }
   }
 }
@@ -183,5 +182,40 @@ TEST_CASE("restart inside a fill stage: radius growth, wall history and until co
   CHECK(stored_int(B / "checkpoint.h5", "/state/stage_index") == 0);
   REQUIRE(run_cli("run " + q(f) + " --restart " + q(B / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
   CHECK(summary_of(C)["stages"][0]["steps"] == n);
-  require_identical(A / "final_state.h5", C / "final_state.h5");
+  sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
+}
+
+TEST_CASE("restart from a checkpoint at a stage's last step writes the uninterrupted closing frame",
+          "[restart][scenario]") {
+  ScratchDir tmp;
+  // The checkpoint falls on the pour's last step, so the resumed stage takes no step and writes its
+  // closing frame from the restored state: its contact forces must be the stored ones (they were
+  // zero before the contact table's per-row forces went into checkpoints).
+  json scene = load_data("crash_pour.json");
+  scene["stages"][1]["stop"] = {{"steps", 2000}};
+  scene["stages"][1]["output"] = {{"frame_every", 0}, {"timeseries_every", 100}, {"checkpoint_every", 2000}};
+  const fs::path f = write_scene(tmp.path, "scene.json", scene);
+  const fs::path A = tmp.path / "A", C = tmp.path / "C";
+  REQUIRE(run_cli("run " + q(f) + " -o " + q(A) + " --quiet", 1, tmp.path) == 0);
+  CHECK(stored_int(A / "checkpoint.h5", "/state/step") == 2000);
+  REQUIRE(run_cli("run " + q(f) + " --restart " + q(A / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
+  // A: the lattice frame and the pour's closing frame; C: only the closing frame.
+  const auto a = sparkdem::io::H5File::open_read(A / "results.h5");
+  const auto c = sparkdem::io::H5File::open_read(C / "results.h5");
+  REQUIRE(a.children("/frames") == std::vector<std::string>{"000000", "000001"});
+  REQUIRE(c.children("/frames") == std::vector<std::string>{"000000"});
+  CHECK(a.attribute_int64("/frames/000001", "step") == 2000);
+  CHECK(c.attribute_int64("/frames/000000", "step") == 2000);
+  const auto forces = c.read_doubles("/frames/000000/contacts/force");
+  REQUIRE(!forces.empty());
+  CHECK(std::any_of(forces.begin(), forces.end(), [](double x) { return x != 0.0; }));
+  const auto same_bits = [](const std::vector<double>& x, const std::vector<double>& y) {
+    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0;
+  };
+  for (const char* d : {"particles/position", "particles/velocity", "particles/force", "contacts/overlap", "contacts/force"}) {
+    INFO("dataset " << d);
+    CHECK(same_bits(a.read_doubles(std::string("/frames/000001/") + d), c.read_doubles(std::string("/frames/000000/") + d)));
+  }
+  CHECK(a.read_int64s("/frames/000001/contacts/pairs") == c.read_int64s("/frames/000000/contacts/pairs"));
+  sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
 }

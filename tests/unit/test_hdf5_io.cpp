@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 #include <hdf5.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -400,7 +401,7 @@ ContactFrame contact_frame(int frame, int m) {
 
 }  // namespace
 
-TEST_CASE("ResultsWriter writes frames, contacts, time series, XDMF and CSV", "[io][hdf5][results]") {
+TEST_CASE("ResultsWriter writes frame files, results.h5 linking them, time series, XDMF and CSV", "[io][hdf5][results]") {
   TempDir dir;
   const fs::path outdir = dir.path / "out";  // created by the writer
   const std::vector<std::string> columns{"time", "kinetic_energy", "step"};
@@ -409,23 +410,34 @@ TEST_CASE("ResultsWriter writes frames, contacts, time series, XDMF and CSV", "[
   const std::vector<int> contacts{2, 0, 5};
   {
     ResultsWriter w(outdir);
-    CHECK(fs::exists(outdir / "results.h5.tmp"));
     for (int f = 0; f < 3; ++f) {
-      w.write_frame(10 * f, 1e-3 * f, f < 2 ? "settle" : "shear", particle_fields(f, particles[f]),
-                    contact_frame(f, contacts[f]));
+      char file[32];
+      std::snprintf(file, sizeof file, "frames/frame_%06d.h5", f);
+      // write_frame returns only once the frame file is complete under its final name.
+      CHECK(w.write_frame(10 * f, 1e-3 * f, f < 2 ? "settle" : "shear", particle_fields(f, particles[f]),
+                          contact_frame(f, contacts[f])) == file);
       CHECK(w.frames() == f + 1);
+      CHECK(fs::exists(outdir / file));
+      CHECK_FALSE(fs::exists(outdir / (std::string(file) + ".tmp")));
+      CHECK(H5File::open_read(outdir / file).attribute_int64("/", "step") == 10 * f);
     }
     w.set_timeseries(columns, rows);
-    CHECK_FALSE(fs::exists(outdir / "results.h5"));
+    CHECK_FALSE(fs::exists(outdir / "results.h5"));  // the index is written by write_index/finalize
     w.finalize();
     CHECK_THROWS_AS(w.write_frame(0, 0, "x", particle_fields(0, 1), {}), SetupError);
+    CHECK_THROWS_AS(w.write_index(), SetupError);
   }
   CHECK(fs::exists(outdir / "results.h5"));
   CHECK(fs::exists(outdir / "results.xdmf"));
   CHECK(fs::exists(outdir / "timeseries.csv"));
-  for (const auto& entry : fs::directory_iterator(outdir)) CHECK(entry.path().extension() != ".tmp");
+  for (const auto& entry : fs::recursive_directory_iterator(outdir)) CHECK(entry.path().extension() != ".tmp");
 
+  // The layout is read through results.h5 (external links into frames/), from another working
+  // directory: the links resolve relative to results.h5.
+  const fs::path cwd = fs::current_path();
+  fs::current_path(fs::temp_directory_path());
   const H5File h5 = H5File::open_read(outdir / "results.h5");
+  fs::current_path(cwd);
   CHECK(h5.children("/frames") == std::vector<std::string>{"000000", "000001", "000002"});
   for (int f = 0; f < 3; ++f) {
     char name[16];
@@ -471,7 +483,7 @@ TEST_CASE("ResultsWriter writes frames, contacts, time series, XDMF and CSV", "[
   for (int f = 0; f < 3; ++f) {
     char name[16];
     std::snprintf(name, sizeof name, "%06d", f);
-    const std::string g = std::string("results.h5:/frames/") + name + "/particles/";
+    const std::string g = std::string("frames/frame_") + name + ".h5:/particles/";
     CHECK_THAT(xdmf, Catch::Contains("<Geometry GeometryType=\"XYZ\">") && Catch::Contains(g + "position<"));
     for (const char* field : {"radius", "velocity", "stress", "orientation"})
       CHECK_THAT(xdmf, Catch::Contains(g + field + "<"));
@@ -499,19 +511,70 @@ TEST_CASE("ResultsWriter writes frames, contacts, time series, XDMF and CSV", "[
   }
 }
 
-TEST_CASE("ResultsWriter leaves no results when not finalized", "[io][hdf5][results]") {
+TEST_CASE("ResultsWriter not finalized keeps its complete frames and leaves no tmp files", "[io][hdf5][results]") {
   TempDir dir;
   {
     ResultsWriter w(dir.path);
     w.write_frame(0, 0.0, "s", particle_fields(0, 2), contact_frame(0, 1));
+    w.write_frame(5, 1e-4, "s", particle_fields(1, 2), contact_frame(1, 3));
     w.set_timeseries({"time"}, {{0.0}});
-    CHECK(fs::exists(dir.path / "results.h5.tmp"));
   }
   CHECK_FALSE(fs::exists(dir.path / "results.h5"));
-  CHECK_FALSE(fs::exists(dir.path / "results.h5.tmp"));
   CHECK_FALSE(fs::exists(dir.path / "results.xdmf"));
   CHECK_FALSE(fs::exists(dir.path / "timeseries.csv"));
-  CHECK(fs::is_empty(dir.path));
+  std::vector<std::string> names;
+  for (const auto& entry : fs::recursive_directory_iterator(dir.path))
+    names.push_back(fs::relative(entry.path(), dir.path).string());
+  std::sort(names.begin(), names.end());
+  CHECK(names == std::vector<std::string>{"frames", "frames/frame_000000.h5", "frames/frame_000001.h5"});
+  // The frames are complete: every dataset with its data.
+  const H5File f1 = H5File::open_read(dir.path / "frames/frame_000001.h5");
+  CHECK(f1.attribute_int64("/", "step") == 5);
+  CHECK(f1.attribute_double("/", "time") == 1e-4);
+  CHECK(f1.attribute_string("/", "stage") == "s");
+  for (const FrameField& field : particle_fields(1, 2)) CHECK(same_bits(f1.read_doubles("/particles/" + field.name), field.data));
+  CHECK(f1.read_int64s("/contacts/pairs") == contact_frame(1, 3).pairs);
+  CHECK(same_bits(f1.read_doubles("/contacts/force"), contact_frame(1, 3).fields[0].data));
+}
+
+TEST_CASE("ResultsWriter::write_index publishes the frames so far, and a new writer takes the directory over",
+          "[io][hdf5][results]") {
+  TempDir dir;
+  {
+    ResultsWriter w(dir.path);
+    w.write_frame(0, 0.0, "s", particle_fields(0, 2), contact_frame(0, 1));
+    w.write_frame(1, 1e-3, "s", particle_fields(1, 3), contact_frame(1, 2));
+    w.set_timeseries({"time", "step"}, {{0.0, 0.0}, {1e-3, 1.0}});
+    w.write_index();
+    w.write_frame(2, 2e-3, "s", particle_fields(2, 4), {});
+    // The index still describes the state of the last write_index().
+    const H5File h5 = H5File::open_read(dir.path / "results.h5");
+    CHECK(h5.children("/frames") == std::vector<std::string>{"000000", "000001"});
+    CHECK(h5.shape("/frames/000001/particles/position") == std::vector<std::size_t>{3, 3});
+    CHECK(h5.read_doubles("/timeseries/step") == std::vector<double>{0.0, 1.0});
+    CHECK(count(read_text(dir.path / "results.xdmf"), "GridType=\"Uniform\"") == 2);
+    CHECK(read_text(dir.path / "timeseries.csv") == "time,step\n0,0\n0.001,1\n");
+    CHECK(fs::exists(dir.path / "frames/frame_000002.h5"));
+  }
+  // Files of other kinds in the directory are left alone.
+  std::ofstream(dir.path / "checkpoint.h5") << "keep";
+  std::ofstream(dir.path / "frames" / "notes.txt") << "keep";
+  std::ofstream(dir.path / "frames" / "frame_000007.h5.tmp") << "stale";
+  {
+    ResultsWriter w(dir.path);
+    CHECK_FALSE(fs::exists(dir.path / "results.h5"));
+    CHECK_FALSE(fs::exists(dir.path / "results.xdmf"));
+    CHECK_FALSE(fs::exists(dir.path / "timeseries.csv"));
+    std::vector<std::string> left;
+    for (const auto& entry : fs::directory_iterator(dir.path / "frames")) left.push_back(entry.path().filename().string());
+    CHECK(left == std::vector<std::string>{"notes.txt"});
+    CHECK(read_text(dir.path / "checkpoint.h5") == "keep");
+    w.write_frame(9, 0.5, "t", particle_fields(3, 1), {});
+    w.finalize();
+  }
+  const H5File h5 = H5File::open_read(dir.path / "results.h5");
+  CHECK(h5.children("/frames") == std::vector<std::string>{"000000"});
+  CHECK(h5.attribute_int64("/frames/000000", "step") == 9);
 }
 
 TEST_CASE("ResultsWriter rejects inconsistent frames without writing them", "[io][hdf5][results]") {
@@ -538,6 +601,9 @@ TEST_CASE("ResultsWriter rejects inconsistent frames without writing them", "[io
   const H5File h5 = H5File::open_read(dir.path / "results.h5");
   CHECK(h5.children("/frames") == std::vector<std::string>{"000000"});
   CHECK(h5.children("/timeseries").empty());
+  std::vector<std::string> frame_files;
+  for (const auto& entry : fs::directory_iterator(dir.path / "frames")) frame_files.push_back(entry.path().filename().string());
+  CHECK(frame_files == std::vector<std::string>{"frame_000000.h5"});  // the rejected frames left no file
   CHECK(h5.shape("/frames/000000/contacts/pairs") == std::vector<std::size_t>{0, 2});
 }
 

@@ -1,6 +1,6 @@
 #pragma once
-/// Bit-for-bit comparison of HDF5 state files (checkpoints, final_state.h5): every dataset's
-/// type, shape and stored bytes. Used by the restart and determinism tests.
+/// Bit-for-bit comparison of HDF5 files, through the plain HDF5 C API (independent of the
+/// project's own H5File wrapper): every dataset's type class and size, dimensions and raw bytes.
 #include <catch2/catch.hpp>
 #include <hdf5.h>
 
@@ -13,7 +13,7 @@
 
 namespace sparkdem::test {
 
-/// Every dataset of an HDF5 file: name -> (datatype description, dims, raw bytes in file type).
+/// One dataset: datatype description, dims, raw bytes in the file's type.
 struct RawDataset {
   std::string type;
   std::vector<hsize_t> dims;
@@ -39,9 +39,11 @@ inline void collect_datasets(hid_t file, const std::string& group, std::vector<s
   H5Gclose(g);
 }
 
+/// Every dataset of an HDF5 file, by name (without the leading '/').
 inline std::map<std::string, RawDataset> read_all(const std::filesystem::path& file) {
   std::map<std::string, RawDataset> out;
   const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  INFO("opening " << file);
   REQUIRE(f >= 0);
   std::vector<std::string> names;
   collect_datasets(f, "/", names);
@@ -67,16 +69,17 @@ inline std::map<std::string, RawDataset> read_all(const std::filesystem::path& f
   return out;
 }
 
-/// Bit-for-bit comparison of two state files; the named core datasets must be present.
+/// Bit-for-bit comparison of every dataset of two files; the `required` datasets must exist.
 /// Datasets named in `skip` must exist in both but are compared by the caller (e.g. records
 /// holding output paths, which differ between two runs by construction).
-inline void require_identical(const std::filesystem::path& a, const std::filesystem::path& b,
-                              const std::vector<std::string>& skip = {}) {
+inline void require_identical_files(const std::filesystem::path& a, const std::filesystem::path& b,
+                                    const std::vector<std::string>& required,
+                                    const std::vector<std::string>& skip = {}) {
   const auto da = read_all(a), db = read_all(b);
-  for (const char* must : {"state/particles/position", "state/particles/velocity", "state/particles/omega",
-                           "state/particles/orientation", "state/particles/force", "state/contacts/state",
-                           "state/contacts/id_i", "state/step", "state/rng"})
+  for (const std::string& must : required) {
+    INFO("dataset " << must << " of " << a);
     REQUIRE(da.count(must) == 1);
+  }
   std::vector<std::string> na, nb;
   for (const auto& [k, v] : da) na.push_back(k);
   for (const auto& [k, v] : db) nb.push_back(k);
@@ -92,5 +95,15 @@ inline void require_identical(const std::filesystem::path& a, const std::filesys
   }
 }
 
+/// Bit-for-bit comparison of two state files (checkpoint.h5 / final_state.h5); the core state
+/// datasets must be present.
+inline void require_identical_state(const std::filesystem::path& a, const std::filesystem::path& b,
+                                    const std::vector<std::string>& skip = {}) {
+  require_identical_files(a, b,
+                          {"state/particles/position", "state/particles/velocity", "state/particles/omega",
+                           "state/particles/orientation", "state/particles/force", "state/contacts/state",
+                           "state/contacts/id_i", "state/step", "state/rng"},
+                          skip);
+}
 
 }  // namespace sparkdem::test
