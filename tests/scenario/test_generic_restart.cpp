@@ -36,16 +36,12 @@ Registry registry_with_mocks() {
 }  // namespace sparkdem::test
 
 namespace {
+using sparkdem::test::load_data;
+using sparkdem::test::write_scene;
 
 namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace sparkdem;
-
-json load_data(const std::string& name) {
-  std::ifstream in(fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data" / name);
-  REQUIRE(in);
-  return json::parse(in);
-}
 
 json run(const json& scene, const fs::path& out, const std::optional<fs::path>& restart = {}) {
   static const Registry reg = test::registry_with_mocks();

@@ -31,6 +31,8 @@
 #include "io/hdf5/h5file.hpp"
 
 namespace {
+using sparkdem::test::load_data;
+using sparkdem::test::write_scene;
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -38,18 +40,6 @@ using nlohmann::json;
 struct ScratchDir : sparkdem::test::ScratchDir {
   ScratchDir() : sparkdem::test::ScratchDir("sparkdem_restart") {}
 };
-
-json load_data(const std::string& name) {
-  std::ifstream in(fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data" / name);
-  REQUIRE(in);
-  return json::parse(in);
-}
-
-fs::path write_scene(const fs::path& dir, const std::string& name, const json& j) {
-  const fs::path f = dir / name;
-  std::ofstream(f) << j.dump(2);
-  return f;
-}
 
 /// Runs `sparkdem <args>` with OMP_NUM_THREADS=threads; returns the exit code.
 int run_cli(const std::string& args, int threads, const fs::path& dir) {

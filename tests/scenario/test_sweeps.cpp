@@ -39,6 +39,8 @@
 #include "io/scenario/scenario.hpp"
 
 namespace {
+using sparkdem::test::load_data;
+using sparkdem::test::write_scene;
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -47,18 +49,6 @@ using sparkdem::test::registry;
 struct ScratchDir : sparkdem::test::ScratchDir {
   ScratchDir() : sparkdem::test::ScratchDir("sparkdem_sweeps") {}
 };
-
-json load_data(const std::string& name) {
-  std::ifstream in(fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data" / name);
-  REQUIRE(in);
-  return json::parse(in);
-}
-
-fs::path write_scene(const fs::path& dir, const std::string& name, const json& j) {
-  const fs::path f = dir / name;
-  std::ofstream(f) << j.dump(2);
-  return f;
-}
 
 std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 

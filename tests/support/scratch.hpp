@@ -1,4 +1,7 @@
 #pragma once
+#include <nlohmann/json.hpp>
+#include <fstream>
+#include <catch2/catch.hpp>
 /// Shared helpers of the scenario tests: a scratch directory removed at scope exit, and the
 /// registry filled once by physics::register_all.
 #include <atomic>
@@ -38,6 +41,22 @@ inline const Registry& registry() {
     return r;
   }();
   return reg;
+}
+
+
+/// A scene of tests/scenario/data, parsed.
+inline nlohmann::json load_data(const std::string& name) {
+  std::ifstream in(std::filesystem::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data" / name);
+  REQUIRE(in);
+  return nlohmann::json::parse(in);
+}
+
+/// Write a scene to dir/name and return the path.
+inline std::filesystem::path write_scene(const std::filesystem::path& dir, const std::string& name,
+                                         const nlohmann::json& j) {
+  const std::filesystem::path f = dir / name;
+  std::ofstream(f) << j.dump(2);
+  return f;
 }
 
 }  // namespace sparkdem::test
