@@ -453,6 +453,14 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   if (!resume) {
     for (auto& w : s_.walls) advance_wall(w, 0.0, dt_used, t_area);
     compute_forces(dt_used, 0.0);
+    // Event-clock modules run once on the initial state (a stage of zero steps evaluates them).
+    for (const PlanItem& it : plan_.items)
+      if (it.kind == PlanItem::Kind::Module && it.clock.kind == Clock::Kind::OnEvent) {
+        const bool physical = it.module->time_domain() == TimeDomain::Physical;
+        it.module->advance(s_, StepInfo{s_.step, physical ? s_.stage_phys_t0 : s_.stage_t0, 0.0, 0});
+        mark_event_run(it, s_.step);
+        ++res.module_calls[it.name];
+      }
   }
 
   std::vector<std::string> cols;

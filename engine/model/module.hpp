@@ -33,8 +33,9 @@ struct Trigger {
 ///   SubstepsPerStep   k = n calls per step, dt = dt_m / k
 ///   AdaptiveSubsteps  k = max(n, ceil(dt_m / stable_dt)) calls per step, k recomputed every step
 ///                     from the module's current stable step (honours a shrinking stable step)
-///   OnEvent           once at the end of the first step of a stage, then whenever the trigger
-///                     fires; dt = time since the module last ran
+///   OnEvent           once on the initial state of a stage (dt = 0; a stage of zero steps is
+///                     an evaluation), then at the end of every step where the trigger fires;
+///                     dt = time since the module last ran
 struct Clock {
   enum class Kind { EveryStep, EveryNSteps, SubstepsPerStep, AdaptiveSubsteps, OnEvent };
   Kind kind = Kind::EveryStep;

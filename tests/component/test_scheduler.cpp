@@ -193,7 +193,7 @@ std::vector<Step> steps_of(const Mock& m) {
 }
 }  // namespace
 
-TEST_CASE("OnEvent: a module runs at the stage's first step, then when a particle moved beyond a distance",
+TEST_CASE("OnEvent: a module runs on the stage's initial state, then when a particle moved beyond a distance",
           "[scheduler][contracts]") {
   Bench b;
   b.s.particles.velocity[0] = Vec3(1.0, 0, 0);  // 1 m/s, no forces: 1e-6 m per step of 1e-6 s
@@ -205,9 +205,10 @@ TEST_CASE("OnEvent: a module runs at the stage's first step, then when a particl
   test::NullObserver obs;
   const double dt = 1e-6;
   sim.run_stage(test::stage(dt, 14), obs);
-  // Runs at step 1, then 4 steps (4e-6 m > 3.5e-6 m) after each run: 1, 5, 9, 13.
-  CHECK(steps_of(m) == std::vector<Step>{1, 5, 9, 13});
-  CHECK(m.calls[0].dt == Approx(dt).epsilon(1e-15));
+  // Runs on the initial state (step 0, dt = 0), then 4 steps (4e-6 m > 3.5e-6 m) after each
+  // run: 0, 4, 8, 12.
+  CHECK(steps_of(m) == std::vector<Step>{0, 4, 8, 12});
+  CHECK(m.calls[0].dt == 0.0);
   for (std::size_t k = 1; k < m.calls.size(); ++k) CHECK(m.calls[k].dt == Approx(4 * dt).epsilon(1e-15));  // time since last run
 }
 
@@ -228,12 +229,12 @@ TEST_CASE("OnEvent: a field changed by more than a threshold, and a maximum inte
   sim.add_module(&ticker);
   test::NullObserver obs;
   sim.run_stage(test::stage(1e-6, 12), obs);
-  // heat = n after step n; runs at 1 (heat 1), then when heat - heat_at_last_run > 2.5: 4, 7, 10.
-  CHECK(steps_of(reader) == std::vector<Step>{1, 4, 7, 10});
-  CHECK(steps_of(ticker) == std::vector<Step>{1, 6, 11});
+  // heat = n after step n; runs at 0 (heat 0), then when heat - heat_at_last_run > 2.5: 3, 6, 9, 12.
+  CHECK(steps_of(reader) == std::vector<Step>{0, 3, 6, 9, 12});
+  CHECK(steps_of(ticker) == std::vector<Step>{0, 5, 10});
 }
 
-TEST_CASE("AdaptiveSubsteps follows a shrinking stable step; a fixed clock above it stops the run",
+TEST_CASE("AdaptiveSubsteps follows a shrinking stable step, and a fixed clock above it stops the run",
           "[scheduler][contracts]") {
   const double dt = 1e-6;
   SECTION("adaptive") {
