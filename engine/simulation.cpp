@@ -101,6 +101,15 @@ void Simulation::sample(std::vector<std::string>& cols, std::vector<double>& val
     cols.insert(cols.end(), c.begin(), c.end());
     vals.insert(vals.end(), v.begin(), v.end());
   }
+  for (const Module* m : modules_) {
+    auto c = m->columns();
+    auto v = m->column_values(s_);
+    if (c.size() != v.size())
+      throw SetupError("module '" + m->name() + "' reports " + std::to_string(v.size()) + " values for " +
+                       std::to_string(c.size()) + " columns");
+    cols.insert(cols.end(), c.begin(), c.end());
+    vals.insert(vals.end(), v.begin(), v.end());
+  }
 }
 
 StepPlan Simulation::prepare(const StageConfig& cfg) {

@@ -96,6 +96,10 @@ class Module {
   /// (it may shrink during a stage); AdaptiveSubsteps clocks re-read it every step.
   virtual double stable_dt(const State& s) const { (void)s; return std::numeric_limits<double>::infinity(); }
   virtual void advance(State& s, const StepInfo& step) = 0;
+  /// Time-series columns the module reports (names fixed at construction, by convention
+  /// prefixed with the module name) and their current values, in the same order.
+  virtual std::vector<std::string> columns() const { return {}; }
+  virtual std::vector<double> column_values(const State& s) const { (void)s; return {}; }
   /// Every piece of state the module keeps between calls goes through here.
   virtual void visit(Archive& ar, const std::string& prefix) { (void)ar; (void)prefix; }
 

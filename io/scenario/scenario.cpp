@@ -415,6 +415,8 @@ std::vector<std::string> stage_columns(const StageDef& st, const std::set<std::s
   if (st.generator)
     for (const auto& m : st.generator->monitors())
       for (const auto& c : m->columns(scratch)) cols.push_back(c);
+  for (const auto& m : st.modules)
+    for (const auto& c : m->columns()) cols.push_back(c);
   return cols;
 }
 
