@@ -11,6 +11,7 @@
 #include "physics/contact/hertz_mindlin.hpp"
 #include "physics/contact/hooke.hpp"
 #include "physics/contact/lammps_granular.hpp"
+#include "physics/electrical/electrical_network.hpp"
 #include "physics/packing/generators.hpp"
 
 namespace sparkdem::physics {
@@ -22,6 +23,7 @@ void register_all(Registry& r) {
   r.bond_law<SpringBond>();
   r.module<Gravity>();
   r.module<ViscousDamping>();
+  r.module<ElectricalNetwork>();
   r.generator<LatticeGenerator>();
   r.generator<DepositGenerator>();
   r.generator<FillGenerator>();

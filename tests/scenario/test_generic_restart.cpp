@@ -104,7 +104,7 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
        {"modules", {{"gravity", {{"acceleration", {0, 0, -9.81}}}}, {"mock_c", {{"clock", {{"kind", "substeps"}, {"n", 3}}}}}}},
        {"stop", {{"steps", 600}}}});
   const Case cases[] = {
-      {"lattice + bonded pull with event, adaptive and every-N mock modules, time scaling", load_data("restart_contracts.json"), 1, 180},
+      {"lattice + bonded pull with event, adaptive and every-N mock modules, electrical network, time scaling", load_data("restart_contracts.json"), 1, 180},
       {"deposit generator (settling, die contraction)", with_steps(load_data("gen_deposit_small.json"), 0, 3000), 0, 1777},
       {"fill generator (radius growth)", with_steps(load_data("gen_fill_small.json"), 0, 3000), 0, 1777},
       {"relax generator then dynamics with substepping module", relax_then_fall, 1, 413},
@@ -149,6 +149,8 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
               Approx(10.0 * sa["stages"][1]["mechanical_time_s"].get<double>()).epsilon(1e-12));
         for (const char* m : {"mock_a", "mock_b", "mock_c"}) CHECK(sa["stages"][1]["module_calls"][m].get<double>() > 2);
         CHECK(sa["stages"][1]["module_calls"]["mock_network"].get<double>() > 2);
+        CHECK(sa["stages"][1]["module_calls"]["electrical_network"].get<double>() > 2);
+        CHECK(sa["stages"][1]["final"]["electrical_current"].get<double>() > 0.0);
         CHECK(sa["stages"][1]["max_substeps"]["mock_b"].get<double>() > 1);
       }
     }

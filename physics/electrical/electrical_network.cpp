@@ -1,0 +1,275 @@
+#include "physics/electrical/electrical_network.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "engine/core/error.hpp"
+#include "engine/state/state.hpp"
+#include "physics/electrical/conductance_kernels.hpp"
+
+namespace sparkdem::physics {
+
+namespace el = electrical;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+bool is_wall_electrode(const std::string& e) { return e.rfind("wall:", 0) == 0; }
+
+el::HemisphereLaw hemisphere_law(const std::string& name) {
+  if (name == "reading_b") return el::HemisphereLaw::reading_b();
+  if (name == "reading_c") return el::HemisphereLaw::reading_c();
+  if (name == "fe_table") return el::HemisphereLaw::fe_table();
+  return el::HemisphereLaw::reading_a();
+}
+
+/// Nodes of one electrode: the particles of a set, or a wall node.
+std::vector<Index> electrode_nodes(const State& s, const InteractionGraph& g, const std::string& e) {
+  std::vector<Index> out;
+  if (is_wall_electrode(e)) {
+    const std::string w = e.substr(5);
+    for (std::size_t k = 0; k < s.walls.size(); ++k)
+      if (s.walls[k].name == w) out.push_back(g.wall_node(k));
+    if (out.empty()) throw SetupError("electrical_network: electrode '" + e + "': no wall named '" + w + "'");
+    return out;
+  }
+  if (!s.particles.fields.has("set/" + e))
+    throw SetupError("electrical_network: electrode '" + e + "' is neither a particle set of this stage (\"sets\") nor \"wall:<name>\"");
+  const auto& f = s.particles.fields.data("set/" + e);
+  for (std::size_t i = 0; i < f.size(); ++i)
+    if (f[i] > 0.5) out.push_back(static_cast<Index>(i));
+  if (out.empty()) throw SetupError("electrical_network: electrode set '" + e + "' holds no particle");
+  return out;
+}
+
+/// True if some branch path (edges with G > 0) joins a node of `high` to a node of `low`.
+bool spanning(std::size_t nodes, const InteractionGraph& g, const std::vector<double>& G, const std::vector<Index>& high,
+              const std::vector<Index>& low) {
+  std::vector<Index> parent(nodes);
+  for (std::size_t v = 0; v < nodes; ++v) parent[v] = static_cast<Index>(v);
+  auto find = [&](Index v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (std::size_t e = 0; e < g.size(); ++e)
+    if (G[e] > 0.0) parent[find(g.a[e])] = find(g.b[e]);
+  std::vector<char> high_root(nodes, 0);
+  for (Index v : high) high_root[find(v)] = 1;
+  for (Index v : low)
+    if (high_root[find(v)]) return true;
+  return false;
+}
+
+Vec3 centroid(const State& s, const std::vector<Index>& nodes) {
+  Vec3 c = Vec3::Zero();
+  for (Index i : nodes) c += s.particles.position[i];
+  return c / static_cast<double>(nodes.size());
+}
+
+}  // namespace
+
+ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
+  using P = Params;
+  ParamSpec<P> s("electrical_network", "module",
+                 "steady DC resistor network on the interaction graph: potentials, currents, resistance, effective conductivity");
+  s.add("model", &P::model).choices({"holm", "sintered_neck", "transmission_surface", "touching", "tunnelling"})
+      .doc("branch conductance model (physics/electrical/conductance_kernels.hpp)");
+  s.add("conductivity", &P::conductivity).unit("S/m").positive().doc("bulk conductivity kappa at the evaluation temperature");
+  s.add("high", &P::high).doc("electrode held at `voltage`: a particle-set name or \"wall:<name>\"");
+  s.add("low", &P::low).doc("electrode held at 0 V: a particle-set name or \"wall:<name>\"");
+  s.add("voltage", &P::voltage).unit("V").positive().doc("potential difference between the electrodes");
+  s.add("length", &P::length).unit("m").nonnegative().doc("L of kappa_eff = I L / (dV A); 0: distance between the electrodes' particle centroids");
+  s.add("area", &P::area).unit("m^2").nonnegative().doc("A of kappa_eff; 0: cross-section of the first cylinder wall (else kappa_eff is not reported)");
+  s.add("solver", &P::solver).choices({"direct", "cg_ic", "cg_jacobi"}).doc("sparse Cholesky, or CG with incomplete-Cholesky / Jacobi preconditioner (warm-started)");
+  s.add("tolerance", &P::tolerance).unit("1").positive().doc("CG relative residual");
+  s.add("resolve_distance", &P::resolve_distance).unit("m").nonnegative().doc("default clock: re-solve when a particle moved this far (0: 0.05 x smallest radius)");
+  s.add("contact_radius", &P::contact_radius).choices({"hertz", "geometric"}).doc("holm: a = sqrt(R* delta) (Hertz) or the lens radius of the overlap");
+  s.add("neck", &P::neck).choices({"law", "coble", "cv"}).doc("sintered_neck: neck radius from the contact law's neck_radius column (else Coble), or Coble / constant volume from the overlap");
+  s.add("hemisphere", &P::hemisphere).choices({"reading_a", "reading_b", "reading_c", "fe_table"}).doc("sintered_neck: hemisphere law of Eq. 19 (see conductance_kernels.hpp)");
+  s.add("gb_epsilon", &P::gb_epsilon).unit("1").positive().doc("sintered_neck: conductivity ratio of the grain-boundary layer (Eq. 26)");
+  s.add("gb_thickness", &P::gb_thickness).unit("m").nonnegative().doc("sintered_neck: grain-boundary layer thickness delta_gb (0: no layer)");
+  s.add("gbf_correction", &P::gbf_correction).doc("sintered_neck: grain-boundary-fraction correction of the necks (Eq. 22-25)");
+  s.add("resistivity", &P::resistivity).unit("Ohm m").nonnegative().doc("transmission_surface: rho_e (0: 1/conductivity)");
+  s.add("alpha_constant", &P::alpha_constant).unit("1").nonnegative().doc("transmission_surface: hold alpha fixed and f(e) = 1 (0: the alpha(n), f(e) model)");
+  s.add("unit_conductance", &P::unit_conductance).unit("S").positive().doc("touching / tunnelling: conductance of a touching pair");
+  s.add("touch_tolerance", &P::touch_tolerance).unit("m").nonnegative().doc("touching: pairs with gap up to this count as touching");
+  s.add("tunnel_g0", &P::tunnel_g0).unit("S").positive().doc("tunnelling: prefactor g0");
+  s.add("tunnel_length", &P::tunnel_length).unit("m").positive().doc("tunnelling: decay length xi");
+  s.add("tunnel_cutoff", &P::tunnel_cutoff).unit("m").nonnegative().doc("tunnelling: largest gap that conducts");
+  return s;
+}
+
+ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
+  LaplacianOptions o;
+  o.method = p.solver == "cg_ic" ? LaplacianMethod::CgIncompleteCholesky
+             : p.solver == "cg_jacobi" ? LaplacianMethod::CgDiagonal
+                                       : LaplacianMethod::Direct;
+  o.tolerance = p.tolerance;
+  solver_.set_options(o);
+}
+
+void ElectricalNetwork::declare(Declarations& d) const {
+  d.particle_fields.push_back({"electric_potential", 1, "V", 0.0, true});
+  d.particle_fields.push_back({"joule_power", 1, "W", 0.0, true});
+  d.reads = {"position", "radius"};
+  d.writes = {"electric_potential", "joule_power"};
+}
+
+void ElectricalNetwork::bind(State& s) {
+  double rmin = kInf;
+  for (double r : s.particles.radius) rmin = std::min(rmin, r);
+  default_clock_ = Clock{};
+  default_clock_.kind = Clock::Kind::OnEvent;
+  default_clock_.trigger.bond_broke = true;
+  default_clock_.trigger.moved_beyond = p_.resolve_distance > 0.0 ? p_.resolve_distance
+                                        : std::isfinite(rmin)     ? 0.05 * rmin
+                                                                  : 1.0;
+  if (p_.model == "transmission_surface" && (is_wall_electrode(p_.high) || is_wall_electrode(p_.low)))
+    throw SetupError("electrical_network: the transmission_surface model takes particle-set electrodes, not walls");
+}
+
+std::vector<double> ElectricalNetwork::conductances(const State& s, const InteractionGraph& g) const {
+  const auto& p = s.particles;
+  const double kappa = p_.conductivity;
+  auto radius = [&](Index v) { return g.is_wall_node(v) ? kInf : p.radius[v]; };
+  std::vector<double> G(g.size(), 0.0);
+  if (p_.model == "holm") {
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      double a = 0.0;
+      if (g.kind[e] == EdgeKind::Neck || (g.kind[e] == EdgeKind::Bond && g.radius[e] > 0.0)) a = g.radius[e];
+      else if (g.overlap[e] > 0.0)
+        a = p_.contact_radius == "hertz" ? el::hertz_contact_radius(radius(g.a[e]), radius(g.b[e]), g.overlap[e]) : g.radius[e];
+      G[e] = a > 0.0 ? el::holm_conductance(a, kappa, kappa) : 0.0;
+    }
+  } else if (p_.model == "sintered_neck") {
+    std::vector<double> a(g.size(), 0.0);
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      const double ra = radius(g.a[e]), rb = radius(g.b[e]);
+      const bool law_neck = p_.neck == "law" && g.kind[e] == EdgeKind::Neck;
+      if (law_neck) a[e] = g.radius[e];
+      else if (g.overlap[e] > 0.0 && std::isfinite(ra) && std::isfinite(rb))
+        a[e] = p_.neck == "cv" ? el::cv_neck_radius(ra, rb, g.overlap[e]) : el::coble_neck_radius(ra, rb, g.overlap[e]);
+    }
+    if (p_.gbf_correction) {
+      std::vector<double> node_r(g.nodes());
+      for (std::size_t v = 0; v < g.nodes(); ++v) node_r[v] = radius(static_cast<Index>(v));
+      a = el::corrected_neck_radii(g.a, g.b, a, node_r);
+    }
+    const el::HemisphereLaw law = hemisphere_law(p_.hemisphere);
+    const el::GrainBoundaryLayer layer =
+        p_.gb_thickness > 0.0 ? el::GrainBoundaryLayer::layer(p_.gb_epsilon, p_.gb_thickness) : el::GrainBoundaryLayer::none();
+    for (std::size_t e = 0; e < g.size(); ++e)
+      if (a[e] > 0.0)
+        G[e] = el::sintered_neck_conductance(law, layer, kappa, kappa, radius(g.a[e]), radius(g.b[e]), a[e]);
+  } else if (p_.model == "transmission_surface") {
+    const double rho = p_.resistivity > 0.0 ? p_.resistivity : 1.0 / kappa;
+    std::vector<double> S;
+    if (p_.alpha_constant > 0.0) {
+      S.resize(g.nodes());
+      for (std::size_t v = 0; v < g.nodes(); ++v) S[v] = p_.alpha_constant * p.radius[v] * p.radius[v];
+    } else {
+      S = el::transmission_surfaces(el::TransmissionSurfaceModel::platonic(), p.position, p.radius, g.a, g.b);
+    }
+    for (std::size_t e = 0; e < g.size(); ++e)
+      G[e] = el::transmission_conductance(rho, g.distance[e], S[g.a[e]], S[g.b[e]]);
+  } else {  // touching, tunnelling
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      if (g.overlap[e] >= -p_.touch_tolerance) G[e] = el::touching_conductance(g.overlap[e], p_.touch_tolerance, p_.unit_conductance);
+      else if (p_.model == "tunnelling")
+        G[e] = el::tunnelling_conductance(-g.overlap[e], p_.tunnel_g0, p_.tunnel_length, p_.tunnel_cutoff);
+    }
+  }
+  return G;
+}
+
+void ElectricalNetwork::advance(State& s, const StepInfo& info) {
+  const auto t0 = std::chrono::steady_clock::now();
+  GraphOptions go;
+  go.walls = is_wall_electrode(p_.high) || is_wall_electrode(p_.low);
+  if (p_.model == "tunnelling") go.near_gap = p_.tunnel_cutoff;
+  if (p_.model == "touching") go.near_gap = p_.touch_tolerance;
+  const InteractionGraph g = build_interaction_graph(s, go);
+  std::vector<double> G;
+  try {
+    G = conductances(s, g);
+  } catch (const ConfigError& e) {
+    throw PhysicsError(info.step, {}, "electrical conductance", e.what());
+  }
+  const std::vector<Index> high = electrode_nodes(s, g, p_.high), low = electrode_nodes(s, g, p_.low);
+  for (Index v : high)
+    if (std::find(low.begin(), low.end(), v) != low.end())
+      throw SetupError("electrical_network: a particle belongs to both electrodes '" + p_.high + "' and '" + p_.low + "'");
+  LaplacianProblem prob = LaplacianProblem::on(g, G);
+  prob.step = info.step;
+  prob.dirichlet = {DirichletGroup{high, p_.voltage}, DirichletGroup{low, 0.0}};
+  const LaplacianResult res = solver_.solve(prob);
+
+  auto& u = s.particles.fields.data("electric_potential");
+  auto& q = s.particles.fields.data("joule_power");
+  std::fill(q.begin(), q.end(), 0.0);
+  double power = 0.0;
+  for (std::size_t e = 0; e < g.size(); ++e) {
+    if (!(G[e] > 0.0) || res.flux[e] == 0.0) continue;
+    const double pe = res.flux[e] * res.flux[e] / G[e];  // I^2 R
+    power += pe;
+    if (!g.is_wall_node(g.a[e])) q[g.a[e]] += 0.5 * pe;
+    if (!g.is_wall_node(g.b[e])) q[g.b[e]] += 0.5 * pe;
+  }
+  std::size_t floating = 0;
+  for (std::size_t i = 0; i < u.size(); ++i) {
+    u[i] = res.value[i];
+    if (std::isnan(res.value[i])) ++floating;
+  }
+  // No spanning path: exactly zero current (round-off in the equipotential halves is not current).
+  const bool spans = spanning(g.nodes(), g, G, high, low);
+  if (!spans) { std::fill(q.begin(), q.end(), 0.0); power = 0.0; }
+  const double I = spans ? res.dirichlet_flux[0] : 0.0, I_low = spans ? res.dirichlet_flux[1] : 0.0;
+  r_.current = I;
+  r_.current_mismatch = I != 0.0 ? std::abs(I + I_low) / std::abs(I) : std::abs(I_low);
+  r_.resistance = I > 0.0 ? p_.voltage / I : kInf;
+  r_.power = power;
+  r_.power_mismatch = I > 0.0 ? std::abs(power - p_.voltage * I) / (p_.voltage * I) : power;
+  r_.residual = res.relative_residual;
+  r_.floating = static_cast<double>(floating);
+  r_.iterations = res.iterations;
+  // L and A of Eq. 28.
+  double L = p_.length;
+  if (!(L > 0.0) && !go.walls) L = (centroid(s, high) - centroid(s, low)).norm();
+  double A = p_.area;
+  if (!(A > 0.0))
+    for (const auto& w : s.walls)
+      if (!w.is_plane()) { A = el::kPi * w.cylinder_radius() * w.cylinder_radius(); break; }
+  r_.length = L > 0.0 ? L : kNaN;
+  r_.conductivity_eff = (L > 0.0 && A > 0.0) ? I * L / (p_.voltage * A) : kNaN;
+  r_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r_.solves += 1.0;
+}
+
+std::vector<std::string> ElectricalNetwork::columns() const {
+  return {"electrical_current", "electrical_current_mismatch", "electrical_resistance", "electrical_conductivity_eff",
+          "electrical_power", "electrical_power_mismatch", "electrical_residual", "electrical_floating_nodes",
+          "electrical_iterations", "electrical_solve_time", "electrical_length", "electrical_solves"};
+}
+
+std::vector<double> ElectricalNetwork::column_values(const State&) const {
+  return {r_.current, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power, r_.power_mismatch,
+          r_.residual, r_.floating, r_.iterations, r_.seconds, r_.length, r_.solves};
+}
+
+void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
+  // The held outputs (not the wall-clock solve time, which no result depends on) and the warm start.
+  std::vector<double> held = {r_.current, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power,
+                              r_.power_mismatch, r_.residual, r_.floating, r_.iterations, r_.length, r_.solves};
+  ar.visit(prefix + "/held", held);
+  if (ar.reading()) {
+    if (held.size() != 11) throw SetupError("checkpoint electrical_network state has " + std::to_string(held.size()) + " values, expected 11");
+    r_ = Result{held[0], held[1], held[2], held[3], held[4], held[5], held[6], held[7], held[8], 0.0, held[9], held[10]};
+  }
+  solver_.visit(ar, prefix + "/solver");
+}
+
+}  // namespace sparkdem::physics

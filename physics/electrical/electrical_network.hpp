@@ -1,0 +1,121 @@
+#pragma once
+/// # electrical_network — steady DC resistor network on the interaction graph
+///
+/// Particle-centred topology (seeds 000/001): a node at each particle centre (and, when an
+/// electrode is a wall, a node per wall), a branch per edge of the interaction graph (contacts,
+/// sintered necks, intact bonds, near pairs for tunnelling). Kirchhoff's current law with
+/// Ohm's law per branch gives K V = I (seed 000 Eqs. 1-9; K = the conductance-weighted graph
+/// Laplacian); the two electrodes are held at `voltage` and 0 V, everything else is insulated.
+/// Solved by the shared LaplacianSolver (engine/graph/laplacian.hpp). Branch conductances come
+/// from physics/electrical/conductance_kernels.hpp, chosen by `model`:
+///
+///   holm                  G = 2 a kappa, a = Hertz sqrt(R* delta) or the geometric lens radius;
+///                         a neck edge uses its neck radius; a wall contact a = sqrt(r delta)
+///   sintered_neck         Eq. 17-18: hemispheres (Eq. 19-20, `hemisphere` reading) in series with
+///                         the grain-boundary layer (Eq. 26, when gb_thickness > 0); neck radius
+///                         from the contact law's neck column, or Coble (Eq. 21) / constant volume
+///                         from the overlap; grain-boundary-fraction correction (Eq. 22-25)
+///   transmission_surface  R_ij = rho_e l_ij / sqrt(S_i S_j), S_i = alpha(n_i) r_i^2 / f(e_i) (seed
+///                         001 Eq. 2-5); `alpha_constant` > 0 holds alpha fixed and f = 1
+///   touching              G = unit_conductance for every touching pair (seed 002)
+///   tunnelling            touching pairs unit_conductance, gaps g0 exp(-2 gap/xi) up to the cut-off
+///
+/// Outputs: fields electric_potential [V] (NaN on floating particles) and joule_power [W] (each
+/// branch's I^2 R split half-half between its two particles; a wall's half is not counted);
+/// time-series columns electrical_current [A] (leaving the high electrode), its mismatch with the
+/// low electrode, electrical_resistance [Ohm] (+inf without a spanning path), the effective
+/// conductivity kappa_eff = I L / (dV A) (seed 000 Eq. 28), electrical_power [W] (sum I^2 R) and
+/// its mismatch with V I, the Kirchhoff residual, floating nodes, iterations, solve time.
+///
+/// Clock: on an event by default — on the initial state, when any particle moved more than
+/// `resolve_distance` (default 0.05 x the smallest radius) or a bond broke; a scenario can set
+/// any clock (e.g. every N steps). Between solves the outputs are held.
+///
+/// | parameter          | unit  | meaning                                                        |
+/// |--------------------|-------|----------------------------------------------------------------|
+/// | model              | -     | holm, sintered_neck, transmission_surface, touching, tunnelling |
+/// | conductivity       | S/m   | bulk conductivity kappa at the evaluation temperature          |
+/// | high, low          | -     | electrodes: a particle-set name, or "wall:<name>"              |
+/// | voltage            | V     | potential of `high` (low = 0)                                  |
+/// | length, area       | m, m2 | L and A of Eq. 28 (0: distance of the electrodes' centroids; the die cross-section) |
+/// | solver, tolerance  | -, 1  | direct, cg_ic, cg_jacobi; CG relative residual                 |
+#include <string>
+#include <vector>
+
+#include "engine/graph/interaction_graph.hpp"
+#include "engine/graph/laplacian.hpp"
+#include "engine/model/module.hpp"
+#include "engine/model/param_spec.hpp"
+
+namespace sparkdem::physics {
+
+class ElectricalNetwork final : public Module {
+ public:
+  struct Params {
+    std::string model = "holm";
+    double conductivity = 1e6;
+    std::string high = "top";
+    std::string low = "bottom";
+    double voltage = 1.0;
+    double length = 0.0;
+    double area = 0.0;
+    std::string solver = "direct";
+    double tolerance = 1e-10;
+    double resolve_distance = 0.0;
+    // holm
+    std::string contact_radius = "hertz";
+    // sintered_neck
+    std::string neck = "law";
+    std::string hemisphere = "reading_a";
+    double gb_epsilon = 1.0;
+    double gb_thickness = 0.0;
+    bool gbf_correction = true;
+    // transmission_surface
+    double resistivity = 0.0;
+    double alpha_constant = 0.0;
+    // touching, tunnelling
+    double unit_conductance = 1.0;
+    double touch_tolerance = 0.0;
+    double tunnel_g0 = 1.0;
+    double tunnel_length = 1e-9;
+    double tunnel_cutoff = 0.0;
+  };
+  static ParamSpec<Params> spec();
+  explicit ElectricalNetwork(const Params& p);
+
+  std::string name() const override { return "electrical_network"; }
+  Phase phase() const override { return Phase::Coupling; }
+  void declare(Declarations& d) const override;
+  void bind(State& s) override;
+  Clock clock() const override { return default_clock_; }
+  void advance(State& s, const StepInfo& info) override;
+  std::vector<std::string> columns() const override;
+  std::vector<double> column_values(const State& s) const override;
+  void visit(Archive& ar, const std::string& prefix) override;
+
+  /// Results of the last solve (held between solves).
+  struct Result {
+    double current = 0.0;            ///< leaving the high electrode [A]
+    double current_mismatch = 0.0;   ///< |I_high + I_low| / |I_high| [-]
+    double resistance = 0.0;         ///< dV / I [Ohm]; +inf without a spanning path
+    double conductivity_eff = 0.0;   ///< I L / (dV A) [S/m]; NaN when A is unknown
+    double power = 0.0;              ///< sum over branches of I^2 R [W]
+    double power_mismatch = 0.0;     ///< |P - dV I| / (dV I) [-]
+    double residual = 0.0;           ///< relative Kirchhoff residual of the reduced system [-]
+    double floating = 0.0;           ///< particles connected to neither electrode
+    double iterations = 0.0;
+    double seconds = 0.0;
+    double length = 0.0;             ///< L used in Eq. 28 [m]
+    double solves = 0.0;
+  };
+  const Result& result() const { return r_; }
+
+ private:
+  std::vector<double> conductances(const State& s, const InteractionGraph& g) const;
+  Params p_;
+  Clock default_clock_;
+  LaplacianSolver solver_;
+  Result r_;
+};
+
+}  // namespace sparkdem::physics
