@@ -96,7 +96,7 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("resistivity", &P::resistivity).unit("Ohm m").nonnegative().doc("transmission_surface: rho_e (0: 1/conductivity)");
   s.add("alpha_constant", &P::alpha_constant).unit("1").nonnegative().doc("transmission_surface: hold alpha fixed and f(e) = 1 (0: the alpha(n), f(e) model)");
   s.add("unit_conductance", &P::unit_conductance).unit("S").positive().doc("touching / tunnelling: conductance of a touching pair");
-  s.add("touch_tolerance", &P::touch_tolerance).unit("m").nonnegative().doc("touching: pairs with gap up to this count as touching");
+  s.add("touch_tolerance", &P::touch_tolerance).unit("m").nonnegative().doc("touching, transmission_surface: pairs with a gap up to this count as touching branches");
   s.add("tunnel_g0", &P::tunnel_g0).unit("S").positive().doc("tunnelling: prefactor g0");
   s.add("tunnel_length", &P::tunnel_length).unit("m").positive().doc("tunnelling: decay length xi");
   s.add("tunnel_cutoff", &P::tunnel_cutoff).unit("m").nonnegative().doc("tunnelling: largest gap that conducts");
@@ -175,7 +175,8 @@ std::vector<double> ElectricalNetwork::conductances(const State& s, const Intera
       S = el::transmission_surfaces(el::TransmissionSurfaceModel::platonic(), p.position, p.radius, g.a, g.b);
     }
     for (std::size_t e = 0; e < g.size(); ++e)
-      G[e] = el::transmission_conductance(rho, g.distance[e], S[g.a[e]], S[g.b[e]]);
+      if (g.overlap[e] >= -p_.touch_tolerance || g.kind[e] == EdgeKind::Bond)
+        G[e] = el::transmission_conductance(rho, g.distance[e], S[g.a[e]], S[g.b[e]]);
   } else {  // touching, tunnelling
     for (std::size_t e = 0; e < g.size(); ++e) {
       if (g.overlap[e] >= -p_.touch_tolerance) G[e] = el::touching_conductance(g.overlap[e], p_.touch_tolerance, p_.unit_conductance);
@@ -191,7 +192,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   GraphOptions go;
   go.walls = is_wall_electrode(p_.high) || is_wall_electrode(p_.low);
   if (p_.model == "tunnelling") go.near_gap = p_.tunnel_cutoff;
-  if (p_.model == "touching") go.near_gap = p_.touch_tolerance;
+  if (p_.model == "touching" || p_.model == "transmission_surface") go.near_gap = p_.touch_tolerance;
   const InteractionGraph g = build_interaction_graph(s, go);
   std::vector<double> G;
   try {
