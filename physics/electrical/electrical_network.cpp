@@ -46,9 +46,9 @@ std::vector<Index> electrode_nodes(const State& s, const InteractionGraph& g, co
   return out;
 }
 
-/// True if some branch path (edges with G > 0) joins a node of `high` to a node of `low`.
-bool spanning(std::size_t nodes, const InteractionGraph& g, const std::vector<double>& G, const std::vector<Index>& high,
-              const std::vector<Index>& low) {
+/// True if some branch path (edges with g > 0) joins a node of `high` to a node of `low`.
+bool spanning(std::size_t nodes, const std::vector<Index>& ea, const std::vector<Index>& eb, const std::vector<double>& g,
+              const std::vector<Index>& high, const std::vector<Index>& low) {
   std::vector<Index> parent(nodes);
   for (std::size_t v = 0; v < nodes; ++v) parent[v] = static_cast<Index>(v);
   auto find = [&](Index v) {
@@ -56,12 +56,43 @@ bool spanning(std::size_t nodes, const InteractionGraph& g, const std::vector<do
     return v;
   };
   for (std::size_t e = 0; e < g.size(); ++e)
-    if (G[e] > 0.0) parent[find(g.a[e])] = find(g.b[e]);
+    if (g[e] > 0.0) parent[find(ea[e])] = find(eb[e]);
   std::vector<char> high_root(nodes, 0);
   for (Index v : high) high_root[find(v)] = 1;
   for (Index v : low)
     if (high_root[find(v)]) return true;
   return false;
+}
+
+/// The resistor network actually solved: nodes, resistors and which particle each resistor
+/// heats (its dissipation is split equally between heat_a and heat_b; -1 = not a particle).
+struct ResistorNet {
+  std::size_t nodes = 0;
+  std::vector<Index> a, b, heat_a, heat_b;
+  std::vector<double> g;
+  std::vector<Index> high, low;
+  void add(Index x, Index y, double gxy, Index ha, Index hb) {
+    a.push_back(x); b.push_back(y); g.push_back(gxy); heat_a.push_back(ha); heat_b.push_back(hb);
+  }
+};
+
+/// Contact point of graph edge e as seen from particle `i` (one of its ends): on the centre
+/// line at the radical-plane distance for spheres, the foot of the particle on a wall.
+Vec3 contact_point(const State& s, const InteractionGraph& g, std::size_t e, Index i) {
+  const auto& p = s.particles;
+  const Index j = g.a[e] == i ? g.b[e] : g.a[e];
+  if (g.is_wall_node(j)) {
+    Vec3 n;
+    double d;
+    s.walls[static_cast<std::size_t>(j) - g.particle_nodes].distance(p.position[i], n, d);
+    return p.position[i] - d * n;
+  }
+  const Vec3 dx = p.position[j] - p.position[i];
+  const double D = dx.norm();
+  if (!(D > 0.0)) return p.position[i];
+  const double ri = p.radius[i], rj = p.radius[j];
+  const double di = std::clamp((D * D + ri * ri - rj * rj) / (2.0 * D), 0.0, D);
+  return p.position[i] + dx * (di / D);
 }
 
 Vec3 centroid(const State& s, const std::vector<Index>& nodes) {
@@ -76,6 +107,9 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   using P = Params;
   ParamSpec<P> s("electrical_network", "module",
                  "steady DC resistor network on the interaction graph: potentials, currents, resistance, effective conductivity");
+  s.add("topology", &P::topology).choices({"particle_centred", "contact_centred"})
+      .doc("nodes at particle centres, or at contact points with resistors through each particle between its contacts (seed 003)");
+  s.add("chord_scaling", &P::chord_scaling).doc("contact_centred: scale each intra-particle resistor by chord / (path through the centre)");
   s.add("model", &P::model).choices({"holm", "sintered_neck", "transmission_surface", "touching", "tunnelling"})
       .doc("branch conductance model (physics/electrical/conductance_kernels.hpp)");
   s.add("conductivity", &P::conductivity).unit("S/m").positive().doc("bulk conductivity kappa at the evaluation temperature");
@@ -132,11 +166,12 @@ void ElectricalNetwork::bind(State& s) {
     throw SetupError("electrical_network: the transmission_surface model takes particle-set electrodes, not walls");
 }
 
-std::vector<double> ElectricalNetwork::conductances(const State& s, const InteractionGraph& g) const {
+std::vector<double> ElectricalNetwork::conductances(const State& s, const InteractionGraph& g, std::vector<double>& share_a) const {
   const auto& p = s.particles;
   const double kappa = p_.conductivity;
   auto radius = [&](Index v) { return g.is_wall_node(v) ? kInf : p.radius[v]; };
   std::vector<double> G(g.size(), 0.0);
+  share_a.assign(g.size(), 0.5);  // equal halves unless the model says otherwise
   if (p_.model == "holm") {
     for (std::size_t e = 0; e < g.size(); ++e) {
       double a = 0.0;
@@ -162,9 +197,15 @@ std::vector<double> ElectricalNetwork::conductances(const State& s, const Intera
     const el::HemisphereLaw law = hemisphere_law(p_.hemisphere);
     const el::GrainBoundaryLayer layer =
         p_.gb_thickness > 0.0 ? el::GrainBoundaryLayer::layer(p_.gb_epsilon, p_.gb_thickness) : el::GrainBoundaryLayer::none();
-    for (std::size_t e = 0; e < g.size(); ++e)
-      if (a[e] > 0.0)
-        G[e] = el::sintered_neck_conductance(law, layer, kappa, kappa, radius(g.a[e]), radius(g.b[e]), a[e]);
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      if (!(a[e] > 0.0)) continue;
+      const double ra = radius(g.a[e]), rb = radius(g.b[e]);
+      G[e] = el::sintered_neck_conductance(law, layer, kappa, kappa, ra, rb, a[e]);
+      // Side a: its hemisphere and half the grain-boundary layer (Eq. 17).
+      const double Ka = std::isfinite(ra) ? el::hemisphere_conductance(law, kappa, ra, a[e]) : kInf;
+      const double Kc = layer.enabled ? el::grain_boundary_layer_conductance(kappa, a[e], layer.epsilon, layer.thickness_m) : kInf;
+      if (G[e] > 0.0) share_a[e] = (1.0 / Ka + 0.5 / Kc) * G[e];
+    }
   } else if (p_.model == "transmission_surface") {
     const double rho = p_.resistivity > 0.0 ? p_.resistivity : 1.0 / kappa;
     std::vector<double> S;
@@ -177,7 +218,8 @@ std::vector<double> ElectricalNetwork::conductances(const State& s, const Intera
     for (std::size_t e = 0; e < g.size(); ++e)
       if (g.overlap[e] >= -p_.touch_tolerance || g.kind[e] == EdgeKind::Bond)
         G[e] = el::transmission_conductance(rho, g.distance[e], S[g.a[e]], S[g.b[e]]);
-  } else {  // touching, tunnelling
+  } else {  // touching, tunnelling: the whole resistance is at the contact
+    share_a.assign(g.size(), kNaN);
     for (std::size_t e = 0; e < g.size(); ++e) {
       if (g.overlap[e] >= -p_.touch_tolerance) G[e] = el::touching_conductance(g.overlap[e], p_.touch_tolerance, p_.unit_conductance);
       else if (p_.model == "tunnelling")
@@ -194,9 +236,9 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   if (p_.model == "tunnelling") go.near_gap = p_.tunnel_cutoff;
   if (p_.model == "touching" || p_.model == "transmission_surface") go.near_gap = p_.touch_tolerance;
   const InteractionGraph g = build_interaction_graph(s, go);
-  std::vector<double> G;
+  std::vector<double> G, share;
   try {
-    G = conductances(s, g);
+    G = conductances(s, g, share);
   } catch (const ConfigError& e) {
     throw PhysicsError(info.step, {}, "electrical conductance", e.what());
   }
@@ -204,29 +246,102 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   for (Index v : high)
     if (std::find(low.begin(), low.end(), v) != low.end())
       throw SetupError("electrical_network: a particle belongs to both electrodes '" + p_.high + "' and '" + p_.low + "'");
-  LaplacianProblem prob = LaplacianProblem::on(g, G);
+  const std::size_t np = s.particles.size();
+  auto particle = [&](Index v) { return g.is_wall_node(v) ? Index{-1} : v; };
+  ResistorNet net;
+  // For the contact-centred topology: centre node of each particle that keeps one (electrode
+  // particles) and its star; every other particle's star becomes a mesh between its contacts.
+  std::vector<Index> centre(g.nodes(), -1);
+  std::vector<std::vector<std::pair<Index, double>>> star;  // per graph node: (contact node, access conductance)
+  if (p_.topology == "particle_centred") {
+    net.nodes = g.nodes();
+    for (std::size_t e = 0; e < g.size(); ++e) net.add(g.a[e], g.b[e], G[e], particle(g.a[e]), particle(g.b[e]));
+    net.high = high;
+    net.low = low;
+  } else {
+    // Contact-centred: a node at each conducting contact; a particle's resistance between two of
+    // its contacts p, q is the star-mesh transform of its access resistances R_i(p) (the branch
+    // model's share of side i), g_pq = g_p g_q / sum_k g_k, times the path-length factor
+    // (|x_p - x_i| + |x_q - x_i|) / |x_p - x_q| >= 1 (chord_scaling): current turning near the
+    // edge of a particle takes the chord, not the way through the centre. Without the factor it
+    // is exactly the particle-centred network (star-mesh theorem); on a straight chain the
+    // factor is 1, so both topologies agree there.
+    star.assign(g.nodes(), {});
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      if (!(G[e] > 0.0)) continue;
+      if (!std::isfinite(share[e]))
+        throw SetupError("electrical_network: the contact_centred topology needs a model with resistance inside the particles (holm, sintered_neck, transmission_surface), not '" + p_.model + "'");
+      const Index c = static_cast<Index>(net.nodes++);
+      const double Ra = share[e] / G[e], Rb = (1.0 - share[e]) / G[e];
+      star[g.a[e]].push_back({c, Ra > 0.0 ? 1.0 / Ra : kInf});
+      star[g.b[e]].push_back({c, Rb > 0.0 ? 1.0 / Rb : kInf});
+    }
+    std::vector<char> keeps(g.nodes(), 0);
+    for (Index v : high) keeps[v] = 1;
+    for (Index v : low) keeps[v] = 1;
+    for (std::size_t v = 0; v < g.nodes(); ++v) {
+      if (!keeps[v]) continue;
+      centre[v] = static_cast<Index>(net.nodes++);
+      for (const auto& [c, gc] : star[v]) net.add(centre[v], c, gc, particle(static_cast<Index>(v)), particle(static_cast<Index>(v)));
+    }
+    for (Index v : high) net.high.push_back(centre[v]);
+    for (Index v : low) net.low.push_back(centre[v]);
+    // Contact positions per node (for the chord factor).
+    std::vector<Vec3> xc(net.nodes, Vec3::Zero());
+    for (std::size_t e = 0, c = 0; e < g.size(); ++e)
+      if (G[e] > 0.0) xc[c++] = contact_point(s, g, e, g.is_wall_node(g.a[e]) ? g.b[e] : g.a[e]);
+    for (std::size_t v = 0; v < np; ++v) {
+      if (keeps[v]) continue;
+      const auto& st = star[v];
+      double sum = 0.0;
+      for (const auto& [c, gc] : st) sum += gc;
+      const Vec3& xi = s.particles.position[v];
+      for (std::size_t x = 0; x < st.size(); ++x)
+        for (std::size_t y = x + 1; y < st.size(); ++y) {
+          double f = 1.0;
+          if (p_.chord_scaling) {
+            const double arms = (xc[st[x].first] - xi).norm() + (xc[st[y].first] - xi).norm();
+            const double chord = (xc[st[x].first] - xc[st[y].first]).norm();
+            f = arms > 0.0 ? arms / std::max(chord, 1e-6 * arms) : 1.0;  // capped at 1e6
+          }
+          net.add(st[x].first, st[y].first, st[x].second * st[y].second / sum * f, static_cast<Index>(v), static_cast<Index>(v));
+        }
+    }
+  }
+  LaplacianProblem prob;
+  prob.nodes = net.nodes;
+  prob.a = net.a;
+  prob.b = net.b;
+  prob.g = net.g;
   prob.step = info.step;
-  prob.dirichlet = {DirichletGroup{high, p_.voltage}, DirichletGroup{low, 0.0}};
+  prob.dirichlet = {DirichletGroup{net.high, p_.voltage}, DirichletGroup{net.low, 0.0}};
   const LaplacianResult res = solver_.solve(prob);
 
   auto& u = s.particles.fields.data("electric_potential");
   auto& q = s.particles.fields.data("joule_power");
   std::fill(q.begin(), q.end(), 0.0);
   double power = 0.0;
-  for (std::size_t e = 0; e < g.size(); ++e) {
-    if (!(G[e] > 0.0) || res.flux[e] == 0.0) continue;
-    const double pe = res.flux[e] * res.flux[e] / G[e];  // I^2 R
+  for (std::size_t e = 0; e < net.g.size(); ++e) {
+    if (!(net.g[e] > 0.0) || res.flux[e] == 0.0) continue;
+    const double pe = res.flux[e] * res.flux[e] / net.g[e];  // I^2 R
     power += pe;
-    if (!g.is_wall_node(g.a[e])) q[g.a[e]] += 0.5 * pe;
-    if (!g.is_wall_node(g.b[e])) q[g.b[e]] += 0.5 * pe;
+    if (net.heat_a[e] >= 0) q[net.heat_a[e]] += 0.5 * pe;
+    if (net.heat_b[e] >= 0) q[net.heat_b[e]] += 0.5 * pe;
   }
   std::size_t floating = 0;
-  for (std::size_t i = 0; i < u.size(); ++i) {
-    u[i] = res.value[i];
-    if (std::isnan(res.value[i])) ++floating;
+  for (std::size_t i = 0; i < np; ++i) {
+    if (p_.topology == "particle_centred" || centre[i] >= 0) {
+      u[i] = res.value[p_.topology == "particle_centred" ? i : static_cast<std::size_t>(centre[i])];
+    } else {  // the centre potential of the equivalent star
+      double num = 0.0, den = 0.0;
+      for (const auto& [c, gc] : star[i])
+        if (std::isfinite(res.value[c])) { num += gc * res.value[c]; den += gc; }
+      u[i] = den > 0.0 ? num / den : kNaN;
+    }
+    if (std::isnan(u[i])) ++floating;
   }
   // No spanning path: exactly zero current (round-off in the equipotential halves is not current).
-  const bool spans = spanning(g.nodes(), g, G, high, low);
+  const bool spans = spanning(net.nodes, net.a, net.b, net.g, net.high, net.low);
   if (!spans) { std::fill(q.begin(), q.end(), 0.0); power = 0.0; }
   const double I = spans ? res.dirichlet_flux[0] : 0.0, I_low = spans ? res.dirichlet_flux[1] : 0.0;
   r_.current = I;

@@ -53,6 +53,8 @@ class ElectricalNetwork final : public Module {
  public:
   struct Params {
     std::string model = "holm";
+    std::string topology = "particle_centred";
+    bool chord_scaling = true;
     double conductivity = 1e6;
     std::string high = "top";
     std::string low = "bottom";
@@ -111,7 +113,9 @@ class ElectricalNetwork final : public Module {
   const Result& result() const { return r_; }
 
  private:
-  std::vector<double> conductances(const State& s, const InteractionGraph& g) const;
+  /// Branch conductances [S] per graph edge, and the share of each branch resistance on side a
+  /// (NaN when the model puts all of it at the contact).
+  std::vector<double> conductances(const State& s, const InteractionGraph& g, std::vector<double>& share_a) const;
   Params p_;
   Clock default_clock_;
   LaplacianSolver solver_;
