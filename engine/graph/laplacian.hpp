@@ -138,8 +138,8 @@ enum class ChangeIndicator : std::uint8_t {
   /// at exactly 0 V that still changes makes eps infinite).
   PerNode,
   /// The note's fix (sintering-electrical.md §7.6): eps = max_n |V_n^{i+1} - V_n^i| / S with S the
-  /// spread of the Dirichlet values (max - min); if that is 0, S = max_n |V_n^{i+1}| over all
-  /// solved nodes; if that is 0 too, S = 1.
+  /// spread of the Dirichlet values (max - min); if that is 0, S = max_n |V_n^{i+1}| over the
+  /// free nodes; if that is 0 too, S = 1.
   Range,
 };
 
