@@ -1,5 +1,6 @@
 #include "engine/graph/laplacian.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
@@ -11,6 +12,7 @@
 #include <numeric>
 
 #include "engine/core/error.hpp"
+#include "engine/graph/hypre_amg.hpp"
 #include "engine/graph/interaction_graph.hpp"
 
 namespace sparkdem {
@@ -47,6 +49,50 @@ std::int64_t slot_of(const Eigen::SparseMatrix<double>& A, int row, int col) {
 /// Throw a PhysicsError (out of line: keeps the message formatting out of solve()).
 [[noreturn, gnu::noinline]] void physics_fail(Step step, const char* quantity, const std::string& what) {
   throw PhysicsError(step, {}, quantity, what);
+}
+
+using SpMat = Eigen::SparseMatrix<double>;
+
+/// Work is split into fixed blocks of rows; partial sums and maxima are formed per block and
+/// combined in block order, so the results do not depend on the thread count.
+constexpr std::int64_t kBlock = 2048;
+
+std::int64_t blocks(std::int64_t n) { return (n + kBlock - 1) / kBlock; }
+
+/// Deterministic sum of f(i), i = 0..n-1.
+template <class F>
+double block_sum(std::int64_t n, F&& f) {
+  const std::int64_t nb = blocks(n);
+  std::vector<double> part(static_cast<std::size_t>(nb), 0.0);
+#pragma omp parallel for schedule(static) if (nb > 1)
+  for (std::int64_t k = 0; k < nb; ++k) {
+    double s = 0.0;
+    for (std::int64_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i) s += f(i);
+    part[k] = s;
+  }
+  double s = 0.0;
+  for (double x : part) s += x;
+  return s;
+}
+
+/// (A x)_i for a symmetric compressed column-major A: column i is row i.
+inline double row_dot(const SpMat& A, const double* x, std::int64_t i) {
+  const int* inner = A.innerIndexPtr();
+  const double* val = A.valuePtr();
+  double s = 0.0;
+  for (int k = A.outerIndexPtr()[i]; k < A.outerIndexPtr()[i + 1]; ++k) s += val[k] * x[inner[k]];
+  return s;
+}
+
+/// Fixed pseudo-random start vector in [0.5, 1.5) (splitmix64 of the index): deterministic and
+/// with a component along every eigenvector in practice (unlike a constant vector on a symmetric
+/// lattice).
+double start_entry(std::uint64_t i) {
+  std::uint64_t z = (i + 1) * 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return 0.5 + static_cast<double>(z >> 11) * 0x1.0p-53;
 }
 
 Index find_root(std::vector<Index>& parent, Index v) {
@@ -144,6 +190,90 @@ Eigen::SparseMatrix<double> assemble_laplacian(std::size_t nodes, std::span<cons
   return L;
 }
 
+const char* laplacian_method_name(LaplacianMethod m) {
+  switch (m) {
+    case LaplacianMethod::Direct: return "direct";
+    case LaplacianMethod::CgIncompleteCholesky: return "cg_ic";
+    case LaplacianMethod::CgDiagonal: return "cg_jacobi";
+    case LaplacianMethod::PseudoTransient: return "pseudo_transient";
+    case LaplacianMethod::Amg: return "amg";
+  }
+  return "?";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stability limit of the pseudo-transient iteration
+
+EigenEstimate max_generalized_eigenvalue(const SpMat& A, std::span<const double> C, double rel_tol, int max_iterations) {
+  const std::int64_t m = A.rows();
+  if (A.cols() != m || !A.isCompressed())
+    throw SetupError("max_generalized_eigenvalue: the matrix must be square and compressed");
+  if (C.size() != static_cast<std::size_t>(m))
+    throw SetupError("max_generalized_eigenvalue: " + std::to_string(C.size()) + " capacitances for " +
+                     std::to_string(m) + " rows");
+  if (!(rel_tol > 0.0) || max_iterations < 1)
+    throw SetupError("max_generalized_eigenvalue: needs rel_tol > 0 and max_iterations >= 1");
+  for (std::int64_t i = 0; i < m; ++i)
+    if (!(C[i] > 0.0) || !std::isfinite(C[i]))
+      throw SetupError("max_generalized_eigenvalue: capacitance " + std::to_string(i) + " is not finite and > 0");
+  EigenEstimate est;
+  if (m == 0) { est.converged = true; return est; }
+  // Lanczos on B = S A S, S = C^-1/2, without reorthogonalisation: the largest Ritz value is not
+  // affected by the loss of orthogonality (it only brings spurious copies of converged values).
+  Eigen::VectorXd s(m), q(m), q_prev = Eigen::VectorXd::Zero(m), w(m), sq(m);
+  for (std::int64_t i = 0; i < m; ++i) { s[i] = 1.0 / std::sqrt(C[i]); q[i] = start_entry(static_cast<std::uint64_t>(i)); }
+  q /= std::sqrt(block_sum(m, [&](std::int64_t i) { return q[i] * q[i]; }));
+  std::vector<double> alpha, beta;
+  double b_prev = 0.0;
+  for (int k = 1; k <= max_iterations; ++k) {
+#pragma omp parallel for schedule(static) if (m > kBlock)
+    for (std::int64_t i = 0; i < m; ++i) sq[i] = s[i] * q[i];
+#pragma omp parallel for schedule(static) if (m > kBlock)
+    for (std::int64_t i = 0; i < m; ++i) w[i] = s[i] * row_dot(A, sq.data(), i) - b_prev * q_prev[i];
+    const double a = block_sum(m, [&](std::int64_t i) { return q[i] * w[i]; });
+#pragma omp parallel for schedule(static) if (m > kBlock)
+    for (std::int64_t i = 0; i < m; ++i) w[i] -= a * q[i];
+    const double b = std::sqrt(block_sum(m, [&](std::int64_t i) { return w[i] * w[i]; }));
+    alpha.push_back(a);
+    // Ritz values of the k x k tridiagonal matrix: every step while k is small, then every 10th
+    // (the dense tridiagonal eigen-solve costs O(k^2) per step).
+    const bool last = k == max_iterations || b == 0.0;
+    if (k <= 60 || k % 10 == 0 || last) {
+      double theta = a, sk = 1.0;
+      if (k > 1) {
+        Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+        const Eigen::VectorXd d = Eigen::Map<const Eigen::VectorXd>(alpha.data(), k);
+        const Eigen::VectorXd e = Eigen::Map<const Eigen::VectorXd>(beta.data(), k - 1);
+        es.computeFromTridiagonal(d, e, Eigen::ComputeEigenvectors);
+        theta = es.eigenvalues()[k - 1];
+        sk = es.eigenvectors()(k - 1, k - 1);
+      }
+      est.value = theta;
+      est.residual_bound = b * std::abs(sk);
+      est.iterations = k;
+      if (est.residual_bound <= rel_tol * std::abs(theta)) { est.converged = true; break; }
+    }
+    if (b == 0.0) break;  // invariant subspace; theta exact (caught above unless theta == 0)
+    beta.push_back(b);
+    q_prev.swap(q);
+#pragma omp parallel for schedule(static) if (m > kBlock)
+    for (std::int64_t i = 0; i < m; ++i) q[i] = w[i] / b;
+    b_prev = b;
+  }
+  return est;
+}
+
+double gershgorin_step(const SpMat& A, std::span<const double> C) {
+  const std::int64_t m = A.rows();
+  if (A.cols() != m || C.size() != static_cast<std::size_t>(m))
+    throw SetupError("gershgorin_step: needs a square matrix and one capacitance per row");
+  double dt = std::numeric_limits<double>::infinity();
+  for (std::int64_t j = 0; j < m; ++j)
+    for (SpMat::InnerIterator it(A, static_cast<Eigen::Index>(j)); it; ++it)
+      if (it.row() == j && it.value() > 0.0) dt = std::min(dt, C[j] / it.value());
+  return dt;
+}
+
 LaplacianProblem LaplacianProblem::on(const InteractionGraph& graph, std::span<const double> g) {
   LaplacianProblem p;
   p.nodes = graph.nodes();
@@ -176,7 +306,77 @@ struct LaplacianSolver::Impl {
   Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
   Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper, IC> cg_ic;
   Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>> cg_diag;
+  std::unique_ptr<HypreAmgPcg> amg;
+  // Pseudo-transient: capacitance per free unknown of the cached spectral estimate, and that estimate.
+  std::vector<double> pt_capacitance;
+  EigenEstimate pt_lambda;
+  double pt_gershgorin = 0.0;
 };
+
+namespace {
+
+/// The pseudo-transient iteration x <- x + dt C^-1 (b - A x) until the change indicator < beta.
+/// Returns {iterations, indicator}; throws PhysicsError on divergence or no convergence.
+std::pair<int, double> pseudo_transient(const SpMat& A, const Eigen::VectorXd& b, const std::vector<double>& cap,
+                                        double dt, const PseudoTransientOptions& o, double spread, int max_it,
+                                        Eigen::VectorXd& x, Step step, double dt_limit) {
+  const std::int64_t m = A.rows(), nb = blocks(m);
+  Eigen::VectorXd xn(m);
+  std::vector<double> p_ind(nb), p_dmax(nb), p_xmax(nb), p_cn(nb), p_xn(nb);
+  const bool per_node = o.indicator == ChangeIndicator::PerNode;
+  double min_cn = std::numeric_limits<double>::infinity();
+  int min_at = 0;
+  for (int it = 1; it <= max_it; ++it) {
+#pragma omp parallel for schedule(static) if (nb > 1)
+    for (std::int64_t k = 0; k < nb; ++k) {
+      double ind = 0.0, dmax = 0.0, xmax = 0.0, cn = 0.0, xc = 0.0;
+      for (std::int64_t i = k * kBlock; i < std::min(m, (k + 1) * kBlock); ++i) {
+        const double d = dt / cap[i] * (b[i] - row_dot(A, x.data(), i));
+        const double v = x[i] + d;
+        xn[i] = v;
+        const double ad = std::abs(d), av = std::abs(v);
+        if (per_node && ad > 0.0) ind = std::max(ind, av > 0.0 ? ad / av : std::numeric_limits<double>::infinity());
+        dmax = std::max(dmax, ad);
+        xmax = std::max(xmax, av);
+        cn += cap[i] * d * d;
+        xc += cap[i] * v * v;
+        if (!std::isfinite(v)) cn = std::numeric_limits<double>::quiet_NaN();
+      }
+      p_ind[k] = ind; p_dmax[k] = dmax; p_xmax[k] = xmax; p_cn[k] = cn; p_xn[k] = xc;
+    }
+    x.swap(xn);
+    double ind = 0.0, dmax = 0.0, xmax = 0.0, cn2 = 0.0, xc2 = 0.0;
+    for (std::int64_t k = 0; k < nb; ++k) {
+      ind = std::max(ind, p_ind[k]); dmax = std::max(dmax, p_dmax[k]); xmax = std::max(xmax, p_xmax[k]);
+      cn2 += p_cn[k]; xc2 += p_xn[k];
+    }
+    if (!per_node) {
+      const double scale = spread > 0.0 ? spread : xmax > 0.0 ? xmax : 1.0;
+      ind = dmax / scale;
+    }
+    const double cn = std::sqrt(cn2);
+    // Stable dt: ||x^{i+1} - x^i||_C is non-increasing (I - dt C^-1 A is C-self-adjoint with
+    // spectral radius < 1). Growth by divergence_factor over its minimum (above rounding noise)
+    // or a non-finite value means an unstable step.
+    const bool blown = !std::isfinite(cn) || !std::isfinite(xc2) ||
+                       (cn > o.divergence_factor * min_cn && cn > 1e-12 * std::sqrt(xc2));
+    if (blown)
+      physics_fail(step, "pseudo-transient iteration",
+                   "diverges at iteration " + std::to_string(it) + ": the C-norm of the update grew from " +
+                       std::to_string(min_cn) + " (iteration " + std::to_string(min_at) + ") to " + std::to_string(cn) +
+                       " with dt = " + std::to_string(dt) + " s, dt / true limit = " + std::to_string(dt / dt_limit) +
+                       " (limit 2/lambda_max = " + std::to_string(dt_limit) + " s)");
+    if (cn < min_cn) { min_cn = cn; min_at = it; }
+    if (ind < o.beta) return {it, ind};
+    if (it == max_it)
+      physics_fail(step, "pseudo-transient iteration",
+                   "change indicator " + std::to_string(ind) + " still above beta = " + std::to_string(o.beta) +
+                       " after " + std::to_string(max_it) + " iterations (" + std::to_string(m) + " unknowns)");
+  }
+  return {0, 0.0};  // max_it <= 0: not reached (checked by the caller)
+}
+
+}  // namespace
 
 LaplacianSolver::LaplacianSolver(LaplacianOptions opt) : opt_(opt), impl_(std::make_unique<Impl>()) {}
 LaplacianSolver::~LaplacianSolver() = default;
@@ -184,7 +384,10 @@ LaplacianSolver::LaplacianSolver(LaplacianSolver&&) noexcept = default;
 LaplacianSolver& LaplacianSolver::operator=(LaplacianSolver&&) noexcept = default;
 
 void LaplacianSolver::set_options(const LaplacianOptions& opt) {
-  if (opt.method != opt_.method) invalidate();
+  if (opt.method != opt_.method || opt.amg_strong_threshold != opt_.amg_strong_threshold ||
+      opt.amg_aggressive_levels != opt_.amg_aggressive_levels || opt.pseudo.eigen_tolerance != opt_.pseudo.eigen_tolerance ||
+      opt.pseudo.eigen_max_iterations != opt_.pseudo.eigen_max_iterations)
+    invalidate();
   opt_ = opt;
 }
 
@@ -221,6 +424,25 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
   for (std::size_t v = 0; v < p.source.size(); ++v)
     if (!std::isfinite(p.source[v]))
       physics_fail(p.step, "source", "node " + std::to_string(v) + " has a non-finite source");
+  const bool pseudo = opt_.method == LaplacianMethod::PseudoTransient;
+  if (pseudo) {
+    if (p.capacitance.size() != n)
+      throw SetupError("Laplacian: the pseudo-transient method needs one capacitance per node (" +
+                       std::to_string(p.capacitance.size()) + " given for " + std::to_string(n) + " nodes)");
+    for (std::size_t v = 0; v < n; ++v)
+      if (!(p.capacitance[v] > 0.0) || !std::isfinite(p.capacitance[v]))
+        physics_fail(p.step, "capacitance", "node " + std::to_string(v) + " has capacitance " +
+                                                std::to_string(p.capacitance[v]) + "; it must be finite and > 0");
+    const auto& po = opt_.pseudo;
+    if (!(po.dt >= 0.0) || !std::isfinite(po.dt) || (po.dt == 0.0 && !(po.dt_fraction > 0.0 && std::isfinite(po.dt_fraction))))
+      throw SetupError("Laplacian: pseudo-transient step dt = " + std::to_string(po.dt) + ", dt_fraction = " +
+                       std::to_string(po.dt_fraction) + ": give dt > 0, or dt = 0 and dt_fraction > 0");
+    if (!(po.beta > 0.0) || !(po.divergence_factor > 1.0))
+      throw SetupError("Laplacian: pseudo-transient needs beta > 0 and divergence_factor > 1");
+  } else if (!p.capacitance.empty() && p.capacitance.size() != n) {
+    throw SetupError("Laplacian: capacitance has " + std::to_string(p.capacitance.size()) + " entries for " +
+                     std::to_string(n) + " nodes");
+  }
   bool any_shunt = false;
   for (std::size_t v = 0; v < p.shunt.size(); ++v) {
     if (!(p.shunt[v] >= 0.0) || !std::isfinite(p.shunt[v]))
@@ -315,6 +537,8 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
         case LaplacianMethod::Direct: im.ldlt.analyzePattern(im.A); break;
         case LaplacianMethod::CgIncompleteCholesky: im.cg_ic.analyzePattern(im.A); break;
         case LaplacianMethod::CgDiagonal: im.cg_diag.analyzePattern(im.A); break;
+        case LaplacianMethod::PseudoTransient: break;  // nothing symbolic
+        case LaplacianMethod::Amg: break;              // hypre copies the matrix at setup
       }
     }
     ++analyses_;
@@ -341,7 +565,13 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
   }
   if (!p.shunt.empty())
     for (std::size_t f = 0; f < m; ++f) val[im.slot_diag[f]] += p.shunt[free_node[f]];
-  const bool same_values = im.factor_valid && im.factored_values.size() == nnz && std::equal(val, val + nnz, im.factored_values.begin());
+  bool same_values = im.factor_valid && im.factored_values.size() == nnz && std::equal(val, val + nnz, im.factored_values.begin());
+  std::vector<double> cap_free;
+  if (pseudo) {
+    cap_free.resize(m);
+    for (std::size_t f = 0; f < m; ++f) cap_free[f] = p.capacitance[free_node[f]];
+    same_values = same_values && cap_free == im.pt_capacitance;
+  }
   if (!same_values && m > 0) {
     im.factor_valid = false;
     bool ok = true;
@@ -352,6 +582,24 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
         ok = im.cg_ic.preconditioner().info() == Eigen::Success;
         break;
       case LaplacianMethod::CgDiagonal: im.cg_diag.factorize(im.A); break;
+      case LaplacianMethod::PseudoTransient: {
+        const auto& po = opt_.pseudo;
+        im.pt_lambda = max_generalized_eigenvalue(im.A, cap_free, po.eigen_tolerance, po.eigen_max_iterations);
+        if (!im.pt_lambda.converged || !(im.pt_lambda.value > 0.0))
+          physics_fail(p.step, "pseudo-transient stability limit",
+                       "lambda_max(C^-1 A) not found to the relative accuracy " + std::to_string(po.eigen_tolerance) +
+                           " in " + std::to_string(im.pt_lambda.iterations) + " Lanczos steps (estimate " +
+                           std::to_string(im.pt_lambda.value) + ", residual bound " +
+                           std::to_string(im.pt_lambda.residual_bound) + ")");
+        im.pt_gershgorin = gershgorin_step(im.A, cap_free);
+        im.pt_capacitance = cap_free;
+        break;
+      }
+      case LaplacianMethod::Amg:
+        if (!im.amg)
+          im.amg = std::make_unique<HypreAmgPcg>(HypreAmgPcg::Settings{opt_.amg_strong_threshold, opt_.amg_aggressive_levels});
+        im.amg->setup(im.A);
+        break;
     }
     if (!ok)
       physics_fail(p.step, "Laplacian", "the factorisation of the reduced " + std::to_string(m) + " x " +
@@ -386,25 +634,58 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
         const double w = use_warm ? warm_[free_node[f]] : kNaN;
         guess[f] = std::isfinite(w) ? w : fallback;
       }
-      const int max_it = opt_.max_iterations > 0 ? opt_.max_iterations : static_cast<int>(2 * m);
+      const int max_it = opt_.max_iterations > 0 ? opt_.max_iterations
+                         : pseudo                ? 1000000
+                                                 : static_cast<int>(2 * m);
       bool ok = false;
+      const char* what = "conjugate gradients";
       if (opt_.method == LaplacianMethod::CgIncompleteCholesky) {
         im.cg_ic.setTolerance(opt_.tolerance);
         im.cg_ic.setMaxIterations(max_it);
         x = im.cg_ic.solveWithGuess(rhs, guess);
         res.iterations = static_cast<int>(im.cg_ic.iterations());
         ok = im.cg_ic.info() == Eigen::Success;
-      } else {
+      } else if (opt_.method == LaplacianMethod::CgDiagonal) {
         im.cg_diag.setTolerance(opt_.tolerance);
         im.cg_diag.setMaxIterations(max_it);
         x = im.cg_diag.solveWithGuess(rhs, guess);
         res.iterations = static_cast<int>(im.cg_diag.iterations());
         ok = im.cg_diag.info() == Eigen::Success;
+      } else if (opt_.method == LaplacianMethod::Amg) {
+        what = "AMG-preconditioned conjugate gradients";
+        x = guess;
+        const auto out = im.amg->solve(rhs, x, opt_.tolerance, max_it);
+        res.iterations = out.iterations;
+        ok = out.converged;
+      } else {
+        const auto& po = opt_.pseudo;
+        auto& rep = res.pseudo;
+        rep.lambda_max = im.pt_lambda.value;
+        rep.lambda_residual_bound = im.pt_lambda.residual_bound;
+        rep.eigen_iterations = im.pt_lambda.iterations;
+        rep.dt_limit = 2.0 / im.pt_lambda.value;
+        rep.dt_gershgorin = im.pt_gershgorin;
+        rep.dt = po.dt > 0.0 ? po.dt : po.dt_fraction * rep.dt_limit;
+        if (rep.dt >= rep.dt_limit && !po.allow_unstable)
+          physics_fail(p.step, "pseudo-transient step",
+                       "dt = " + std::to_string(rep.dt) + " s is not below the true stability limit 2/lambda_max(C^-1 K) = " +
+                           std::to_string(rep.dt_limit) + " s (the Gershgorin safe step is " +
+                           std::to_string(rep.dt_gershgorin) + " s); the iteration would diverge. Lower dt, or set "
+                           "allow_unstable to run it anyway");
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (const auto& gr : p.dirichlet)
+          if (!gr.nodes.empty()) { lo = std::min(lo, gr.value); hi = std::max(hi, gr.value); }
+        x = guess;
+        const auto [iters, indicator] = pseudo_transient(im.A, rhs, im.pt_capacitance, rep.dt, po, hi > lo ? hi - lo : 0.0,
+                                                         max_it, x, p.step, rep.dt_limit);
+        res.iterations = iters;
+        rep.change_indicator = indicator;
+        ok = true;
       }
       if (!ok)
         physics_fail(p.step, "Laplacian",
-                           "conjugate gradients did not reach the relative tolerance " + std::to_string(opt_.tolerance) +
-                               " in " + std::to_string(res.iterations) + " iterations (" + std::to_string(m) + " unknowns)");
+                     std::string(what) + " did not reach the relative tolerance " + std::to_string(opt_.tolerance) +
+                         " in " + std::to_string(res.iterations) + " iterations (" + std::to_string(m) + " unknowns)");
     }
     const double rn = rhs.norm();
     res.residual_norm = (im.A * x - rhs).norm();

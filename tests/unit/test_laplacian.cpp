@@ -85,8 +85,9 @@ Net random_graph(std::size_t n, std::size_t extra, std::uint64_t seed) {
   return net;
 }
 
+// The pseudo-transient method needs a capacitance per node: tests/unit/test_laplacian_solvers.cpp.
 const LaplacianMethod kMethods[] = {LaplacianMethod::Direct, LaplacianMethod::CgIncompleteCholesky,
-                                    LaplacianMethod::CgDiagonal};
+                                    LaplacianMethod::CgDiagonal, LaplacianMethod::Amg};
 
 LaplacianOptions with(LaplacianMethod m, double tol = 1e-13) {
   LaplacianOptions o;
@@ -348,7 +349,7 @@ TEST_CASE("Laplacian: CG agrees with the direct solve within its rigorous error 
     for (std::size_t c = 0; c < freev.size(); ++c) A(r, c) = Lfull(freev[r], freev[c]);
   const double lmin = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(A, Eigen::EigenvaluesOnly).eigenvalues()[0];
   REQUIRE(lmin > 0.0);
-  for (LaplacianMethod m : {LaplacianMethod::CgIncompleteCholesky, LaplacianMethod::CgDiagonal}) {
+  for (LaplacianMethod m : {LaplacianMethod::CgIncompleteCholesky, LaplacianMethod::CgDiagonal, LaplacianMethod::Amg}) {
     for (double tol : {1e-6, 1e-10}) {
       INFO("method " << static_cast<int>(m) << " tol " << tol);
       LaplacianSolver cg(with(m, tol));
