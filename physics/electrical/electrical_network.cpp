@@ -118,8 +118,15 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("voltage", &P::voltage).unit("V").positive().doc("potential difference between the electrodes");
   s.add("length", &P::length).unit("m").nonnegative().doc("L of kappa_eff = I L / (dV A); 0: distance between the electrodes' particle centroids");
   s.add("area", &P::area).unit("m^2").nonnegative().doc("A of kappa_eff; 0: cross-section of the first cylinder wall (else kappa_eff is not reported)");
-  s.add("solver", &P::solver).choices({"direct", "cg_ic", "cg_jacobi"}).doc("sparse Cholesky, or CG with incomplete-Cholesky / Jacobi preconditioner (warm-started)");
-  s.add("tolerance", &P::tolerance).unit("1").positive().doc("CG relative residual");
+  s.add("solver", &P::solver).choices({"direct", "cg_ic", "cg_jacobi", "amg", "pseudo_transient"})
+      .doc("sparse Cholesky; CG with incomplete-Cholesky / Jacobi preconditioner; hypre BoomerAMG-PCG (all iterative ones warm-started); seed 000's pseudo-transient iteration");
+  s.add("tolerance", &P::tolerance).unit("1").positive().doc("CG / AMG relative residual");
+  s.add("specific_capacity", &P::specific_capacity).unit("F/kg").positive().doc("pseudo_transient: c in C_i = m_i c (numerical only)");
+  s.add("pseudo_dt", &P::pseudo_dt).unit("s").nonnegative().doc("pseudo_transient: pseudo time step (0: pseudo_dt_fraction x the true limit 2/lambda_max)");
+  s.add("pseudo_dt_fraction", &P::pseudo_dt_fraction).unit("1").positive().doc("pseudo_transient: fraction of the true stability limit");
+  s.add("beta", &P::beta).unit("1").positive().doc("pseudo_transient: stop when the change indicator (Eq. 14) falls below beta");
+  s.add("indicator", &P::indicator).choices({"range", "per_node"}).doc("pseudo_transient: Eq. 14 per node as printed, or normalised by the voltage (note §7.6)");
+  s.add("allow_unstable", &P::allow_unstable).doc("pseudo_transient: run a step above the true limit (divergence is then detected and stops the run)");
   s.add("resolve_distance", &P::resolve_distance).unit("m").nonnegative().doc("default clock: re-solve when a particle moved this far (0: 0.05 x smallest radius)");
   s.add("contact_radius", &P::contact_radius).choices({"hertz", "geometric"}).doc("holm: a = sqrt(R* delta) (Hertz) or the lens radius of the overlap");
   s.add("neck", &P::neck).choices({"law", "coble", "cv"}).doc("sintered_neck: neck radius from the contact law's neck_radius column (else Coble), or Coble / constant volume from the overlap");
@@ -139,10 +146,17 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
 
 ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
   LaplacianOptions o;
-  o.method = p.solver == "cg_ic" ? LaplacianMethod::CgIncompleteCholesky
-             : p.solver == "cg_jacobi" ? LaplacianMethod::CgDiagonal
-                                       : LaplacianMethod::Direct;
+  o.method = p.solver == "cg_ic"              ? LaplacianMethod::CgIncompleteCholesky
+             : p.solver == "cg_jacobi"        ? LaplacianMethod::CgDiagonal
+             : p.solver == "amg"              ? LaplacianMethod::Amg
+             : p.solver == "pseudo_transient" ? LaplacianMethod::PseudoTransient
+                                              : LaplacianMethod::Direct;
   o.tolerance = p.tolerance;
+  o.pseudo.dt = p.pseudo_dt;
+  o.pseudo.dt_fraction = p.pseudo_dt_fraction;
+  o.pseudo.beta = p.beta;
+  o.pseudo.indicator = p.indicator == "per_node" ? ChangeIndicator::PerNode : ChangeIndicator::Range;
+  o.pseudo.allow_unstable = p.allow_unstable;
   solver_.set_options(o);
 }
 
@@ -315,6 +329,14 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   prob.g = net.g;
   prob.step = info.step;
   prob.dirichlet = {DirichletGroup{net.high, p_.voltage}, DirichletGroup{net.low, 0.0}};
+  std::vector<double> cap;
+  if (p_.solver == "pseudo_transient") {
+    if (p_.topology != "particle_centred")
+      throw SetupError("electrical_network: the pseudo_transient solver needs the particle_centred topology (C_i = m_i c per particle)");
+    cap.assign(net.nodes, p_.specific_capacity);  // wall nodes: 1 x c (they are electrodes, never free)
+    for (std::size_t i = 0; i < np; ++i) cap[i] = s.particles.mass[i] * p_.specific_capacity;
+    prob.capacitance = cap;
+  }
   const LaplacianResult res = solver_.solve(prob);
 
   auto& u = s.particles.fields.data("electric_potential");

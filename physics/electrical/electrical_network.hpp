@@ -38,7 +38,7 @@
 /// | high, low          | -     | electrodes: a particle-set name, or "wall:<name>"              |
 /// | voltage            | V     | potential of `high` (low = 0)                                  |
 /// | length, area       | m, m2 | L and A of Eq. 28 (0: distance of the electrodes' centroids; the die cross-section) |
-/// | solver, tolerance  | -, 1  | direct, cg_ic, cg_jacobi; CG relative residual                 |
+/// | solver, tolerance  | -, 1  | direct, cg_ic, cg_jacobi, amg, pseudo_transient; iterative relative residual |
 #include <string>
 #include <vector>
 
@@ -63,6 +63,13 @@ class ElectricalNetwork final : public Module {
     double area = 0.0;
     std::string solver = "direct";
     double tolerance = 1e-10;
+    // pseudo_transient (seed 000's iteration, kept to reproduce the paper)
+    double specific_capacity = 1.0;
+    double pseudo_dt = 0.0;
+    double pseudo_dt_fraction = 0.9;
+    double beta = 2e-4;
+    std::string indicator = "range";
+    bool allow_unstable = false;
     double resolve_distance = 0.0;
     // holm
     std::string contact_radius = "hertz";
