@@ -249,6 +249,13 @@ TEST_CASE("unreadable and malformed scenario files exit with code 2", "[config_e
 }
 
 TEST_CASE("bond, clock and create_bonds errors are reported together with their paths", "[config_errors][scenario][contracts]") {
+  // The same keys, valid, are accepted (so each error below comes from the one value changed).
+  json ok = valid_scene();
+  ok["bonds"] = {{"law", "spring_bond"}, {"contact_rule", "add"}};
+  ok["stages"][1]["create_bonds"] = {{"gap_tolerance", 0.0}};
+  ok["stages"][1]["time_scale"] = 10.0;
+  ok["stages"][1]["modules"]["gravity"]["clock"] = {{"kind", "every_step"}};
+  CHECK_NOTHROW(sparkdem::io::load_scenario(ok, registry(), SPARKDEM_SOURCE_DIR));
   json j = valid_scene();
   j["bonds"] = {{"law", "spring_bnd"}, {"contact_rule", "sometimes"}};
   j["stages"][1]["create_bonds"] = {{"gap_tolerance", -1.0}};
