@@ -543,8 +543,12 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
           r["modules"][it.key()]["clock"] = rc;
         }
         if (errors.size() == b2) {
-          st.modules.push_back(m->second.make(v));
-          if (clk) st.modules.back()->set_clock(*clk);
+          try {
+            st.modules.push_back(m->second.make(v));
+            if (clk) st.modules.back()->set_clock(*clk);
+          } catch (const ConfigError& e) {  // a module's own consistency checks (paths relative to it)
+            for (const auto& d : e.diagnostics()) errors.push_back({path + "/modules/" + it.key() + d.path, d.message});
+          }
         }
       }
   }

@@ -112,7 +112,10 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("chord_scaling", &P::chord_scaling).doc("contact_centred: scale each intra-particle resistor by chord / (path through the centre)");
   s.add("model", &P::model).choices({"holm", "sintered_neck", "transmission_surface", "touching", "tunnelling"})
       .doc("branch conductance model (physics/electrical/conductance_kernels.hpp)");
-  s.add("conductivity", &P::conductivity).unit("S/m").positive().doc("bulk conductivity kappa at the evaluation temperature");
+  s.add("conductivity", &P::conductivity).unit("S/m").positive().doc("bulk conductivity kappa at reference_temperature");
+  s.add("temperature", &P::temperature).unit("K").positive().doc("temperature at which the conductivity is evaluated (measurements of sintered samples are made cold)");
+  s.add("reference_temperature", &P::reference_temperature).unit("K").positive().doc("T_ref of `conductivity`");
+  s.add("resistivity_coefficient", &P::resistivity_coefficient).unit("1/K").doc("beta of the linear resistivity law kappa(T) = kappa / (1 + beta (T - T_ref)); 0: constant");
   s.add("high", &P::high).doc("electrode held at `voltage`: a particle-set name or \"wall:<name>\"");
   s.add("low", &P::low).doc("electrode held at 0 V: a particle-set name or \"wall:<name>\"");
   s.add("voltage", &P::voltage).unit("V").positive().doc("potential difference between the electrodes");
@@ -145,6 +148,13 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
 }
 
 ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
+  try {
+    kappa_ = el::conductivity(el::LinearResistivityLaw{p.conductivity, p.resistivity_coefficient, p.reference_temperature},
+                              p.temperature);
+  } catch (const ConfigError& e) {
+    const std::string why = e.diagnostics().empty() ? e.what() : e.diagnostics().front().message;
+    throw ConfigError("/resistivity_coefficient", "kappa(T) at the evaluation temperature: " + why);
+  }
   LaplacianOptions o;
   o.method = p.solver == "cg_ic"              ? LaplacianMethod::CgIncompleteCholesky
              : p.solver == "cg_jacobi"        ? LaplacianMethod::CgDiagonal
@@ -182,7 +192,7 @@ void ElectricalNetwork::bind(State& s) {
 
 std::vector<double> ElectricalNetwork::conductances(const State& s, const InteractionGraph& g, std::vector<double>& share_a) const {
   const auto& p = s.particles;
-  const double kappa = p_.conductivity;
+  const double kappa = kappa_;
   auto radius = [&](Index v) { return g.is_wall_node(v) ? kInf : p.radius[v]; };
   std::vector<double> G(g.size(), 0.0);
   share_a.assign(g.size(), 0.5);  // equal halves unless the model says otherwise
@@ -221,7 +231,7 @@ std::vector<double> ElectricalNetwork::conductances(const State& s, const Intera
       if (G[e] > 0.0) share_a[e] = (1.0 / Ka + 0.5 / Kc) * G[e];
     }
   } else if (p_.model == "transmission_surface") {
-    const double rho = p_.resistivity > 0.0 ? p_.resistivity : 1.0 / kappa;
+    const double rho = p_.resistivity > 0.0 ? p_.resistivity * p_.conductivity / kappa : 1.0 / kappa;
     std::vector<double> S;
     if (p_.alpha_constant > 0.0) {
       S.resize(g.nodes());

@@ -34,7 +34,9 @@
 /// | parameter          | unit  | meaning                                                        |
 /// |--------------------|-------|----------------------------------------------------------------|
 /// | model              | -     | holm, sintered_neck, transmission_surface, touching, tunnelling |
-/// | conductivity       | S/m   | bulk conductivity kappa at the evaluation temperature          |
+/// | conductivity       | S/m   | bulk conductivity kappa at reference_temperature              |
+/// | temperature        | K     | evaluation temperature (default 293.15 K: samples are measured cold) |
+/// | resistivity_coefficient | 1/K | beta of kappa(T) = kappa / (1 + beta (T - T_ref)) (0: constant) |
 /// | high, low          | -     | electrodes: a particle-set name, or "wall:<name>"              |
 /// | voltage            | V     | potential of `high` (low = 0)                                  |
 /// | length, area       | m, m2 | L and A of Eq. 28 (0: distance of the electrodes' centroids; the die cross-section) |
@@ -56,6 +58,9 @@ class ElectricalNetwork final : public Module {
     std::string topology = "particle_centred";
     bool chord_scaling = true;
     double conductivity = 1e6;
+    double temperature = 293.15;
+    double reference_temperature = 293.15;
+    double resistivity_coefficient = 0.0;
     std::string high = "top";
     std::string low = "bottom";
     double voltage = 1.0;
@@ -124,6 +129,7 @@ class ElectricalNetwork final : public Module {
   /// (NaN when the model puts all of it at the contact).
   std::vector<double> conductances(const State& s, const InteractionGraph& g, std::vector<double>& share_a) const;
   Params p_;
+  double kappa_ = 0.0;  ///< bulk conductivity at the evaluation temperature [S/m]
   Clock default_clock_;
   LaplacianSolver solver_;
   Result r_;

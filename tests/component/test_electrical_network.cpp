@@ -83,6 +83,16 @@ TEST_CASE("electrical_network: a chain and two parallel chains of Holm contacts"
     const auto& u = s.particles.fields.data("electric_potential");
     for (int k = 0; k < n; ++k) CHECK(u[k] == Approx(2.0 * k / (n - 1)).margin(1e-12));
   }
+  SECTION("one chain evaluated at 393.15 K with a linear resistivity law") {
+    State s;
+    chain(s, n, delta);
+    box_set(s, "bottom", Vec3(-1, -1, -0.5 * kR), Vec3(1, 1, 0.5 * kR));
+    box_set(s, "top", Vec3(-1, -1, (n - 1) * (2 * kR - delta) - 0.5 * kR), Vec3(1, 1, 1));
+    ElectricalNetwork::Params p = holm_params();
+    p.temperature = 393.15;
+    p.resistivity_coefficient = 0.004;  // rho(T) = rho_ref (1 + 0.004 x 100 K) = 1.4 rho_ref
+    CHECK(test::relative_error(solve(s, p).resistance, 1.4 * R_chain) < 1e-12);
+  }
   SECTION("two chains in parallel, and a particle touching nothing") {
     State s;
     chain(s, n, delta);
