@@ -399,11 +399,13 @@ struct StageContext {
   std::optional<std::vector<std::string>> columns;
 };
 
-/// Time-series columns of a stage whose walls are named `walls` (a superset of them is fine):
+/// Time-series columns of a stage whose walls are named `walls` (a superset of them is fine) in a
+/// scenario with (`bonds`) or without a bond law:
 /// the built-in ones, the prescribed sets' and the generator monitors' (whose columns are fixed
 /// for a stage; they are read from a scratch state with those walls).
-std::vector<std::string> stage_columns(const StageDef& st, const std::set<std::string>& walls) {
+std::vector<std::string> stage_columns(const StageDef& st, const std::set<std::string>& walls, bool bonds) {
   State scratch;
+  scratch.bonds_active = bonds;  // the bond columns exist when the scenario has a bond law
   for (const auto& n : walls) {
     Wall w;
     w.name = n;
@@ -707,7 +709,7 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
     r["snapshots"] = rs;
   }
   ctx.columns.reset();
-  if (st.from_snapshot.empty()) ctx.columns = stage_columns(st, ctx.wall_names);
+  if (st.from_snapshot.empty()) ctx.columns = stage_columns(st, ctx.wall_names, ctx.has_bond_law);
   if (st.snapshots && ctx.columns && js["snapshots"].is_object() && js["snapshots"].contains("column") &&
       js["snapshots"]["column"].is_string() && !st.snapshots->column.empty()) {
     const std::string bad = unknown_column(st.snapshots->column, *ctx.columns);

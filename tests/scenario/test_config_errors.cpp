@@ -255,6 +255,7 @@ TEST_CASE("bond, clock and create_bonds errors are reported together with their 
   ok["stages"][1]["create_bonds"] = {{"gap_tolerance", 0.0}};
   ok["stages"][1]["time_scale"] = 10.0;
   ok["stages"][1]["modules"]["gravity"]["clock"] = {{"kind", "every_step"}};
+  ok["stages"][1]["snapshots"] = {{"column", "bonds_broken"}, {"at", {1.0}}};  // a bond column, known at load
   CHECK_NOTHROW(sparkdem::io::load_scenario(ok, registry(), SPARKDEM_SOURCE_DIR));
   json j = valid_scene();
   j["bonds"] = {{"law", "spring_bnd"}, {"contact_rule", "sometimes"}};
