@@ -119,6 +119,7 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("high", &P::high).doc("electrode held at `voltage`: a particle-set name or \"wall:<name>\"");
   s.add("low", &P::low).doc("electrode held at 0 V: a particle-set name or \"wall:<name>\"");
   s.add("voltage", &P::voltage).unit("V").positive().doc("potential difference between the electrodes");
+  s.add("current", &P::current).unit("A").nonnegative().doc("> 0: inject this current at `high` (one equipotential electrode) instead of holding the voltage; `low` stays at 0 V");
   s.add("length", &P::length).unit("m").nonnegative().doc("L of kappa_eff = I L / (dV A); 0: distance between the electrodes' particle centroids");
   s.add("area", &P::area).unit("m^2").nonnegative().doc("A of kappa_eff; 0: cross-section of the first cylinder wall (else kappa_eff is not reported)");
   s.add("solver", &P::solver).choices({"direct", "cg_ic", "cg_jacobi", "amg", "pseudo_transient"})
@@ -338,7 +339,31 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   prob.b = net.b;
   prob.g = net.g;
   prob.step = info.step;
-  prob.dirichlet = {DirichletGroup{net.high, p_.voltage}, DirichletGroup{net.low, 0.0}};
+  // Current-driven: the high electrode is one equipotential node fed with `current`; the low
+  // one is grounded. Otherwise both electrodes are held at their potentials.
+  const bool driven = p_.current > 0.0;
+  const Index super = net.high.front();
+  std::vector<Index> ma, mb;
+  std::vector<double> mg, source;
+  if (driven) {
+    std::vector<char> in_high(net.nodes, 0);
+    for (Index v : net.high) in_high[v] = 1;
+    ma = net.a; mb = net.b; mg = net.g;
+    for (std::size_t e = 0; e < mg.size(); ++e) {
+      if (in_high[ma[e]]) ma[e] = super;
+      if (in_high[mb[e]]) mb[e] = super;
+      if (ma[e] == mb[e]) mg[e] = 0.0;  // inside the electrode: carries nothing
+    }
+    prob.a = ma;
+    prob.b = mb;
+    prob.g = mg;
+    source.assign(net.nodes, 0.0);
+    source[super] = p_.current;
+    prob.source = source;
+    prob.dirichlet = {DirichletGroup{net.low, 0.0}};
+  } else {
+    prob.dirichlet = {DirichletGroup{net.high, p_.voltage}, DirichletGroup{net.low, 0.0}};
+  }
   std::vector<double> cap;
   if (p_.solver == "pseudo_transient") {
     if (p_.topology != "particle_centred")
@@ -347,15 +372,18 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
     for (std::size_t i = 0; i < np; ++i) cap[i] = s.particles.mass[i] * p_.specific_capacity;
     prob.capacitance = cap;
   }
-  const LaplacianResult res = solver_.solve(prob);
+  LaplacianResult res = solver_.solve(prob);
+  if (driven)
+    for (Index v : net.high) res.value[v] = res.value[super];  // the merged electrode nodes
+  const std::vector<double>& edge_g = driven ? mg : net.g;
 
   auto& u = s.particles.fields.data("electric_potential");
   auto& q = s.particles.fields.data("joule_power");
   std::fill(q.begin(), q.end(), 0.0);
   double power = 0.0;
-  for (std::size_t e = 0; e < net.g.size(); ++e) {
-    if (!(net.g[e] > 0.0) || res.flux[e] == 0.0) continue;
-    const double pe = res.flux[e] * res.flux[e] / net.g[e];  // I^2 R
+  for (std::size_t e = 0; e < edge_g.size(); ++e) {
+    if (!(edge_g[e] > 0.0) || res.flux[e] == 0.0) continue;
+    const double pe = res.flux[e] * res.flux[e] / edge_g[e];  // I^2 R
     power += pe;
     if (net.heat_a[e] >= 0) q[net.heat_a[e]] += 0.5 * pe;
     if (net.heat_b[e] >= 0) q[net.heat_b[e]] += 0.5 * pe;
@@ -375,12 +403,19 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   // No spanning path: exactly zero current (round-off in the equipotential halves is not current).
   const bool spans = spanning(net.nodes, net.a, net.b, net.g, net.high, net.low);
   if (!spans) { std::fill(q.begin(), q.end(), 0.0); power = 0.0; }
-  const double I = spans ? res.dirichlet_flux[0] : 0.0, I_low = spans ? res.dirichlet_flux[1] : 0.0;
+  if (driven && !spans)
+    throw PhysicsError(info.step, {}, "electrical current",
+                       "electrical_network: " + std::to_string(p_.current) + " A injected at '" + p_.high +
+                           "' has no path to '" + p_.low + "' (the network is open)");
+  const double I = !spans ? 0.0 : driven ? p_.current : res.dirichlet_flux[0];
+  const double I_low = !spans ? 0.0 : driven ? res.dirichlet_flux[0] : res.dirichlet_flux[1];
+  const double V = driven ? res.value[super] : p_.voltage;
   r_.current = I;
+  r_.voltage = V;
   r_.current_mismatch = I != 0.0 ? std::abs(I + I_low) / std::abs(I) : std::abs(I_low);
-  r_.resistance = I > 0.0 ? p_.voltage / I : kInf;
+  r_.resistance = I > 0.0 ? V / I : kInf;
   r_.power = power;
-  r_.power_mismatch = I > 0.0 ? std::abs(power - p_.voltage * I) / (p_.voltage * I) : power;
+  r_.power_mismatch = I > 0.0 ? std::abs(power - V * I) / (V * I) : power;
   r_.residual = res.relative_residual;
   r_.floating = static_cast<double>(floating);
   r_.iterations = res.iterations;
@@ -392,30 +427,30 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
     for (const auto& w : s.walls)
       if (!w.is_plane()) { A = el::kPi * w.cylinder_radius() * w.cylinder_radius(); break; }
   r_.length = L > 0.0 ? L : kNaN;
-  r_.conductivity_eff = (L > 0.0 && A > 0.0) ? I * L / (p_.voltage * A) : kNaN;
+  r_.conductivity_eff = (L > 0.0 && A > 0.0) ? I * L / (V * A) : kNaN;
   r_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r_.solves += 1.0;
 }
 
 std::vector<std::string> ElectricalNetwork::columns() const {
-  return {"electrical_current", "electrical_current_mismatch", "electrical_resistance", "electrical_conductivity_eff",
+  return {"electrical_current", "electrical_voltage", "electrical_current_mismatch", "electrical_resistance", "electrical_conductivity_eff",
           "electrical_power", "electrical_power_mismatch", "electrical_residual", "electrical_floating_nodes",
           "electrical_iterations", "electrical_solve_time", "electrical_length", "electrical_solves"};
 }
 
 std::vector<double> ElectricalNetwork::column_values(const State&) const {
-  return {r_.current, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power, r_.power_mismatch,
+  return {r_.current, r_.voltage, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power, r_.power_mismatch,
           r_.residual, r_.floating, r_.iterations, r_.seconds, r_.length, r_.solves};
 }
 
 void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
   // The held outputs (not the wall-clock solve time, which no result depends on) and the warm start.
   std::vector<double> held = {r_.current, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power,
-                              r_.power_mismatch, r_.residual, r_.floating, r_.iterations, r_.length, r_.solves};
+                              r_.power_mismatch, r_.residual, r_.floating, r_.iterations, r_.length, r_.solves, r_.voltage};
   ar.visit(prefix + "/held", held);
   if (ar.reading()) {
-    if (held.size() != 11) throw SetupError("checkpoint electrical_network state has " + std::to_string(held.size()) + " values, expected 11");
-    r_ = Result{held[0], held[1], held[2], held[3], held[4], held[5], held[6], held[7], held[8], 0.0, held[9], held[10]};
+    if (held.size() != 12) throw SetupError("checkpoint electrical_network state has " + std::to_string(held.size()) + " values, expected 12");
+    r_ = Result{held[0], held[1], held[2], held[3], held[4], held[5], held[6], held[7], held[8], 0.0, held[9], held[10], held[11]};
   }
   solver_.visit(ar, prefix + "/solver");
 }

@@ -39,6 +39,7 @@
 /// | resistivity_coefficient | 1/K | beta of kappa(T) = kappa / (1 + beta (T - T_ref)) (0: constant) |
 /// | high, low          | -     | electrodes: a particle-set name, or "wall:<name>"              |
 /// | voltage            | V     | potential of `high` (low = 0)                                  |
+/// | current            | A     | > 0: inject this current at `high` instead (electrode equipotential) |
 /// | length, area       | m, m2 | L and A of Eq. 28 (0: distance of the electrodes' centroids; the die cross-section) |
 /// | solver, tolerance  | -, 1  | direct, cg_ic, cg_jacobi, amg, pseudo_transient; iterative relative residual |
 #include <string>
@@ -64,6 +65,7 @@ class ElectricalNetwork final : public Module {
     std::string high = "top";
     std::string low = "bottom";
     double voltage = 1.0;
+    double current = 0.0;
     double length = 0.0;
     double area = 0.0;
     std::string solver = "direct";
@@ -121,6 +123,7 @@ class ElectricalNetwork final : public Module {
     double seconds = 0.0;
     double length = 0.0;             ///< L used in Eq. 28 [m]
     double solves = 0.0;
+    double voltage = 0.0;            ///< potential of the high electrode [V] (given, or from the injected current)
   };
   const Result& result() const { return r_; }
 

@@ -93,6 +93,19 @@ TEST_CASE("electrical_network: a chain and two parallel chains of Holm contacts"
     p.resistivity_coefficient = 0.004;  // rho(T) = rho_ref (1 + 0.004 x 100 K) = 1.4 rho_ref
     CHECK(test::relative_error(solve(s, p).resistance, 1.4 * R_chain) < 1e-12);
   }
+  SECTION("one chain driven by an injected current: V = I R, the same R") {
+    State s;
+    chain(s, n, delta);
+    box_set(s, "bottom", Vec3(-1, -1, -0.5 * kR), Vec3(1, 1, 0.5 * kR));
+    box_set(s, "top", Vec3(-1, -1, (n - 1) * (2 * kR - delta) - 0.5 * kR), Vec3(1, 1, 1));
+    ElectricalNetwork::Params p = holm_params();
+    p.current = 3.0;
+    const auto r = solve(s, p);
+    CHECK(test::relative_error(r.resistance, R_chain) < 1e-12);
+    CHECK(test::relative_error(r.voltage, 3.0 * R_chain) < 1e-12);
+    CHECK(r.current_mismatch < 1e-12);
+    CHECK(r.power_mismatch < 1e-12);
+  }
   SECTION("two chains in parallel, and a particle touching nothing") {
     State s;
     chain(s, n, delta);
