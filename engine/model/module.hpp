@@ -70,6 +70,19 @@ struct StepInfo {
   std::int64_t substep = 0;  ///< 0-based substep within the mechanical step
 };
 
+/// Per-edge results a module publishes for the frames (e.g. branch currents): pairs of global
+/// ids (a wall node is -1 - wall index) and fields with one value per pair.
+struct EdgeField {
+  std::string name;
+  std::string unit;
+  std::vector<double> values;
+};
+struct EdgeOutput {
+  std::string name;              ///< group name in the frame (/networks/<name>)
+  std::vector<std::int64_t> pairs;  ///< 2 ids per edge
+  std::vector<EdgeField> fields;
+};
+
 /// What a module needs and provides. Declaring is what makes allocation, output, restart and
 /// ordering automatic.
 struct Declarations {
@@ -100,6 +113,8 @@ class Module {
   /// prefixed with the module name) and their current values, in the same order.
   virtual std::vector<std::string> columns() const { return {}; }
   virtual std::vector<double> column_values(const State& s) const { (void)s; return {}; }
+  /// Per-edge outputs for the frames (held between calls like the columns; checkpointed by visit()).
+  virtual std::vector<EdgeOutput> edge_outputs() const { return {}; }
   /// Every piece of state the module keeps between calls goes through here.
   virtual void visit(Archive& ar, const std::string& prefix) { (void)ar; (void)prefix; }
 

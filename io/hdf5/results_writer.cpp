@@ -113,7 +113,8 @@ void ResultsWriter::fail(const std::string& what) const {
 }
 
 std::string ResultsWriter::write_frame(std::int64_t step, double time, const std::string& stage,
-                                       const std::vector<FrameField>& particle_fields, const ContactFrame& contacts) {
+                                       const std::vector<FrameField>& particle_fields, const ContactFrame& contacts,
+                                       const std::vector<std::pair<std::string, ContactFrame>>& networks) {
   if (finalized_) fail("write_frame() called after finalize()");
   const std::string name = "frame " + counter(frames());
 
@@ -148,6 +149,13 @@ std::string ResultsWriter::write_frame(std::int64_t step, double time, const std
   check_fields(particle_fields, "particle", particles);
   if (contacts.pairs.size() % 2 != 0) fail("contact pairs of " + name + " hold an odd number of ids");
   check_fields(contacts.fields, "contact", contacts.pairs.size() / 2);
+  std::set<std::string> network_names;
+  for (const auto& [nname, net] : networks) {
+    if (!valid_name(nname, false) || !network_names.insert(nname).second)
+      fail("network '" + nname + "' of " + name + ": the name is empty, contains '/' or is repeated");
+    if (net.pairs.size() % 2 != 0) fail("network '" + nname + "' of " + name + ": pairs hold an odd number of ids");
+    check_fields(net.fields, "contact", net.pairs.size() / 2);
+  }
 
   const std::string relative = frame_file(frames());
   const fs::path final_path = outdir_ / relative;
@@ -171,6 +179,16 @@ std::string ResultsWriter::write_frame(std::int64_t step, double time, const std
       const std::string path = "/contacts/" + f.name;
       file.write(path, f.data, f.components);
       file.set_attribute(path, "unit", f.unit);
+    }
+    if (!networks.empty()) file.create_group("/networks");
+    for (const auto& [nname, net] : networks) {
+      const std::string base = "/networks/" + nname;
+      file.create_group(base);
+      file.write(base + "/pairs", net.pairs, 2);
+      for (const FrameField& f : net.fields) {
+        file.write(base + "/" + f.name, f.data, f.components);
+        file.set_attribute(base + "/" + f.name, "unit", f.unit);
+      }
     }
     file.close();
   }

@@ -92,7 +92,15 @@ class OutputObserver final : public Observer {
     }
     c.fields = {ov, fn};
     const int index = writer_.frames();
-    const std::string file = writer_.write_frame(s.step, s.time, stage_, f, c);
+    std::vector<std::pair<std::string, ContactFrame>> networks;
+    for (const Module* m : modules_)
+      for (const EdgeOutput& eo : m->edge_outputs()) {
+        ContactFrame n;
+        n.pairs = eo.pairs;
+        for (const EdgeField& ef : eo.fields) n.fields.push_back({ef.name, 1, ef.values, ef.unit});
+        networks.emplace_back(eo.name, std::move(n));
+      }
+    const std::string file = writer_.write_frame(s.step, s.time, stage_, f, c, networks);
     dirty_ = true;
     // Only now, with the frame file complete on disk, is the frame reported.
     char counter[16];

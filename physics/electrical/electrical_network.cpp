@@ -403,6 +403,24 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   // No spanning path: exactly zero current (round-off in the equipotential halves is not current).
   const bool spans = spanning(net.nodes, net.a, net.b, net.g, net.high, net.low);
   if (!spans) { std::fill(q.begin(), q.end(), 0.0); power = 0.0; }
+  // Per-branch results of the particle-centred network: ids of the two ends (a wall is
+  // -1 - wall index), current from the first to the second [A], conductance [S], power [W].
+  edges_ = EdgeOutput{"electrical", {}, {{"current", "A", {}}, {"conductance", "S", {}}, {"power", "W", {}}}};
+  if (p_.topology == "particle_centred") {
+    auto id_of = [&](Index v) {
+      return g.is_wall_node(v) ? -1 - static_cast<std::int64_t>(static_cast<std::size_t>(v) - g.particle_nodes)
+                               : static_cast<std::int64_t>(s.particles.id[v]);
+    };
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      if (!(edge_g[e] > 0.0)) continue;
+      const double I_e = spans ? res.flux[e] : 0.0;
+      edges_.pairs.push_back(id_of(g.a[e]));
+      edges_.pairs.push_back(id_of(g.b[e]));
+      edges_.fields[0].values.push_back(I_e);
+      edges_.fields[1].values.push_back(edge_g[e]);
+      edges_.fields[2].values.push_back(I_e * I_e / edge_g[e]);
+    }
+  }
   if (driven && !spans)
     throw PhysicsError(info.step, {}, "electrical current",
                        "electrical_network: " + std::to_string(p_.current) + " A injected at '" + p_.high +
@@ -453,6 +471,25 @@ void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
     r_ = Result{held[0], held[1], held[2], held[3], held[4], held[5], held[6], held[7], held[8], 0.0, held[9], held[10], held[11]};
   }
   solver_.visit(ar, prefix + "/solver");
+  // The held per-branch results (written with every frame until the next solve).
+  std::vector<std::int64_t> pairs = edges_.pairs;
+  std::vector<double> branch;
+  if (!ar.reading())
+    for (std::size_t k = 0; k < pairs.size() / 2; ++k)
+      for (const auto& f : edges_.fields) branch.push_back(f.values[k]);
+  if (!ar.reading() || ar.has(prefix + "/branch_pairs")) {
+    ar.visit(prefix + "/branch_pairs", pairs, 2);
+    ar.visit(prefix + "/branch_values", branch, 3);
+  }
+  if (ar.reading()) {
+    edges_ = EdgeOutput{};
+    if (!pairs.empty()) {
+      if (branch.size() != 3 * (pairs.size() / 2)) throw SetupError("checkpoint electrical_network branch data is inconsistent");
+      edges_ = EdgeOutput{"electrical", pairs, {{"current", "A", {}}, {"conductance", "S", {}}, {"power", "W", {}}}};
+      for (std::size_t k = 0; k < pairs.size() / 2; ++k)
+        for (int c = 0; c < 3; ++c) edges_.fields[c].values.push_back(branch[3 * k + c]);
+    }
+  }
 }
 
 }  // namespace sparkdem::physics

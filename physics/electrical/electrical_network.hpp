@@ -108,6 +108,12 @@ class ElectricalNetwork final : public Module {
   std::vector<std::string> columns() const override;
   std::vector<double> column_values(const State& s) const override;
   void visit(Archive& ar, const std::string& prefix) override;
+  /// Per conducting branch of the particle-centred network (frames: /networks/electrical): the
+  /// ids of its ends (a wall is -1 - wall index), the current from the first to the second [A],
+  /// its conductance [S] and dissipated power [W]. Empty before the first solve.
+  std::vector<EdgeOutput> edge_outputs() const override {
+    return edges_.name.empty() ? std::vector<EdgeOutput>{} : std::vector<EdgeOutput>{edges_};
+  }
 
   /// Results of the last solve (held between solves).
   struct Result {
@@ -136,6 +142,7 @@ class ElectricalNetwork final : public Module {
   Clock default_clock_;
   LaplacianSolver solver_;
   Result r_;
+  EdgeOutput edges_;  ///< held per-branch results of the last solve (particle-centred only)
 };
 
 }  // namespace sparkdem::physics
