@@ -8,18 +8,6 @@
 
 namespace sparkdem {
 
-namespace {
-
-Index root_of(std::vector<Index>& parent, Index v) {
-  while (parent[v] != v) {
-    parent[v] = parent[parent[v]];
-    v = parent[v];
-  }
-  return v;
-}
-
-}  // namespace
-
 EffectiveResistance effective_resistance(LaplacianSolver& solver, const LaplacianProblem& net,
                                          std::span<const Index> high, std::span<const Index> low, double voltage) {
   const std::size_t n = net.nodes, ne = net.a.size();
@@ -47,8 +35,6 @@ EffectiveResistance effective_resistance(LaplacianSolver& solver, const Laplacia
     }
 
   // Components over the conducting edges.
-  std::vector<Index> parent(n);
-  std::iota(parent.begin(), parent.end(), Index{0});
   for (std::size_t e = 0; e < ne; ++e) {
     const Index a = net.a[e], b = net.b[e];
     if (a < 0 || b < 0 || static_cast<std::size_t>(a) >= n || static_cast<std::size_t>(b) >= n)
@@ -58,13 +44,11 @@ EffectiveResistance effective_resistance(LaplacianSolver& solver, const Laplacia
       throw PhysicsError(net.step, {}, "conductance",
                          "edge " + std::to_string(e) + " (nodes " + std::to_string(a) + ", " + std::to_string(b) +
                              ") has g = " + std::to_string(net.g[e]) + "; conductances must be finite and >= 0");
-    if (a == b || net.g[e] == 0.0) continue;
-    const Index ra = root_of(parent, a), rb = root_of(parent, b);
-    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
   }
+  const std::vector<Index> root = component_roots(n, net.a, net.b, net.g);
   std::vector<std::uint8_t> touches(n, 0);  // per root: bit 1 high, bit 2 low
   for (std::size_t v = 0; v < n; ++v)
-    if (electrode[v]) touches[root_of(parent, static_cast<Index>(v))] |= electrode[v];
+    if (electrode[v]) touches[root[v]] |= electrode[v];
 
   EffectiveResistance out;
   out.voltage = voltage;
@@ -72,7 +56,7 @@ EffectiveResistance effective_resistance(LaplacianSolver& solver, const Laplacia
   out.flux.assign(ne, 0.0);
   std::vector<Index> sub(n, -1), sub_nodes;
   for (std::size_t v = 0; v < n; ++v) {
-    const Index r = root_of(parent, static_cast<Index>(v));
+    const Index r = root[v];
     const bool is_root = r == static_cast<Index>(v);
     switch (touches[r]) {
       case 3:

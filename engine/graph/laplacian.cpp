@@ -105,6 +105,23 @@ Index find_root(std::vector<Index>& parent, Index v) {
 
 }  // namespace
 
+std::vector<Index> component_roots(std::size_t nodes, std::span<const Index> a, std::span<const Index> b,
+                                   std::span<const double> g) {
+  std::vector<Index> parent(nodes);
+  std::iota(parent.begin(), parent.end(), Index{0});
+  for (std::size_t e = 0; e < g.size(); ++e) {
+    if (a[e] == b[e] || !(g[e] > 0.0)) continue;
+    const Index ra = find_root(parent, a[e]), rb = find_root(parent, b[e]);
+    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+  }
+  for (std::size_t v = 0; v < nodes; ++v) parent[v] = find_root(parent, static_cast<Index>(v));
+  return parent;
+}
+
+namespace {
+
+}  // namespace
+
 // ---------------------------------------------------------------------------------------------
 // Matrix-free operator, diagonal, assembly
 
@@ -476,22 +493,16 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
 
   // Connected components over the edges that conduct (union-find), grounded ones solved.
   std::vector<char> active(ne, 0);
-  std::vector<Index> parent(n);
-  std::iota(parent.begin(), parent.end(), Index{0});
-  for (std::size_t e = 0; e < ne; ++e) {
-    if (p.a[e] == p.b[e] || p.g[e] == 0.0) continue;
-    active[e] = 1;
-    const Index ra = find_root(parent, p.a[e]), rb = find_root(parent, p.b[e]);
-    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
-  }
+  for (std::size_t e = 0; e < ne; ++e) active[e] = p.a[e] != p.b[e] && p.g[e] != 0.0;
+  const std::vector<Index> root_of = component_roots(n, p.a, p.b, p.g);
   std::vector<char> grounded(n, 0);
   for (std::size_t v = 0; v < n; ++v)
-    if (group_of[v] >= 0 || (!p.shunt.empty() && p.shunt[v] > 0.0)) grounded[find_root(parent, static_cast<Index>(v))] = 1;
+    if (group_of[v] >= 0 || (!p.shunt.empty() && p.shunt[v] > 0.0)) grounded[root_of[v]] = 1;
   std::vector<std::int32_t> role(n);
   std::vector<Index> free_node;
   LaplacianResult res;
   for (std::size_t v = 0; v < n; ++v) {
-    const Index root = find_root(parent, static_cast<Index>(v));
+    const Index root = root_of[v];
     if (group_of[v] >= 0) role[v] = -1;
     else if (grounded[root]) {
       role[v] = static_cast<std::int32_t>(free_node.size());

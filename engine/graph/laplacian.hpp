@@ -100,6 +100,13 @@ double gershgorin_step(const Eigen::SparseMatrix<double>& A, std::span<const dou
 Eigen::SparseMatrix<double> assemble_laplacian(std::size_t nodes, std::span<const Index> a, std::span<const Index> b,
                                                std::span<const double> g);
 
+/// Connected components over the conducting edges (g > 0, a != b), by union-find: the root of
+/// every node, which is the smallest node index of its component (deterministic). Node
+/// indices must be valid. The one component search shared by the Laplacian solver, the
+/// effective resistance and the network modules.
+std::vector<Index> component_roots(std::size_t nodes, std::span<const Index> a, std::span<const Index> b,
+                                   std::span<const double> g);
+
 /// Nodes held at one value (an electrode, an isothermal wall, ...). Its net flux is reported.
 struct DirichletGroup {
   std::vector<Index> nodes;

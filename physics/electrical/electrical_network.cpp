@@ -49,18 +49,11 @@ std::vector<Index> electrode_nodes(const State& s, const InteractionGraph& g, co
 /// True if some branch path (edges with g > 0) joins a node of `high` to a node of `low`.
 bool spanning(std::size_t nodes, const std::vector<Index>& ea, const std::vector<Index>& eb, const std::vector<double>& g,
               const std::vector<Index>& high, const std::vector<Index>& low) {
-  std::vector<Index> parent(nodes);
-  for (std::size_t v = 0; v < nodes; ++v) parent[v] = static_cast<Index>(v);
-  auto find = [&](Index v) {
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
-  };
-  for (std::size_t e = 0; e < g.size(); ++e)
-    if (g[e] > 0.0) parent[find(ea[e])] = find(eb[e]);
+  const std::vector<Index> root = component_roots(nodes, ea, eb, g);
   std::vector<char> high_root(nodes, 0);
-  for (Index v : high) high_root[find(v)] = 1;
+  for (Index v : high) high_root[root[v]] = 1;
   for (Index v : low)
-    if (high_root[find(v)]) return true;
+    if (high_root[root[v]]) return true;
   return false;
 }
 

@@ -52,6 +52,25 @@ void chain(State& s, int n, double delta, const Vec3& x0 = Vec3::Zero()) {
   for (int k = 0; k < n; ++k) test::add_sphere(s, x0 + Vec3(0, 0, k * (2 * kR - delta)), kR, 2500.0);
 }
 
+/// n random spheres (radius kR (r0 + dr U)) in a cube of edge L, placed one by one and kept only if
+/// no overlap exceeds 5 % of the smaller radius, then all radii grown by 1.35 so that many pairs
+/// overlap; electrode sets "bottom" / "top" are the slabs within 1.5 kR of the two z faces.
+void random_packing(State& s, std::size_t n, std::uint64_t seed, double r0, double dr, double L) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  while (s.particles.size() < n) {
+    const double r = kR * (r0 + dr * U(rng));
+    const Vec3 x(L * U(rng), L * U(rng), L * U(rng));
+    bool ok = true;
+    for (std::size_t i = 0; i < s.particles.size() && ok; ++i)
+      ok = s.particles.radius[i] + r - (s.particles.position[i] - x).norm() < 0.05 * std::min(r, s.particles.radius[i]);
+    if (ok) test::add_sphere(s, x, r, 2500.0);
+  }
+  for (auto& r : s.particles.radius) r *= 1.35;
+  box_set(s, "bottom", Vec3(-1, -1, -1), Vec3(1, 1, 1.5 * kR));
+  box_set(s, "top", Vec3(-1, -1, L - 1.5 * kR), Vec3(1, 1, 1));
+}
+
 ElectricalNetwork::Params holm_params() {
   ElectricalNetwork::Params p;
   p.model = "holm";
@@ -164,24 +183,7 @@ TEST_CASE("electrical_network: simple cubic lattice with the transmission surfac
 TEST_CASE("electrical_network: Kirchhoff and power balance on a random polydisperse packing; solvers agree",
           "[electrical]") {
   State s;
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> U(0.0, 1.0);
-  const double L = 12 * kR;
-  // Random spheres in a box, kept only if no overlap exceeds 5 % of the smaller radius.
-  while (s.particles.size() < 400) {
-    const double r = kR * (0.5 + U(rng));
-    const Vec3 x(L * U(rng), L * U(rng), L * U(rng));
-    bool ok = true;
-    for (std::size_t i = 0; i < s.particles.size() && ok; ++i) {
-      const double ov = s.particles.radius[i] + r - (s.particles.position[i] - x).norm();
-      ok = ov < 0.05 * std::min(r, s.particles.radius[i]);
-    }
-    if (ok) test::add_sphere(s, x, r, 2500.0);
-    // Grow the radii a little until the packing conducts: accept overlapping neighbours.
-  }
-  for (auto& r : s.particles.radius) r *= 1.35;  // now many pairs overlap
-  box_set(s, "bottom", Vec3(-1, -1, -1), Vec3(1, 1, 1.5 * kR));
-  box_set(s, "top", Vec3(-1, -1, L - 1.5 * kR), Vec3(1, 1, 1));
+  random_packing(s, 400, 7, 0.5, 1.0, 12 * kR);
   ElectricalNetwork::Params p = holm_params();
   State s1 = s;
   const auto direct = solve(s1, p);
@@ -244,20 +246,7 @@ TEST_CASE("electrical_network: the contact-centred topology against the particle
   }
   SECTION("random packing: without the chord factor the star-mesh network is the particle-centred one") {
     State s;
-    std::mt19937_64 rng(11);
-    std::uniform_real_distribution<double> U(0.0, 1.0);
-    const double L = 10 * kR;
-    while (s.particles.size() < 250) {
-      const double r = kR * (0.6 + 0.8 * U(rng));
-      const Vec3 x(L * U(rng), L * U(rng), L * U(rng));
-      bool ok = true;
-      for (std::size_t i = 0; i < s.particles.size() && ok; ++i)
-        ok = s.particles.radius[i] + r - (s.particles.position[i] - x).norm() < 0.05 * std::min(r, s.particles.radius[i]);
-      if (ok) test::add_sphere(s, x, r, 2500.0);
-    }
-    for (auto& r : s.particles.radius) r *= 1.35;
-    box_set(s, "bottom", Vec3(-1, -1, -1), Vec3(1, 1, 1.5 * kR));
-    box_set(s, "top", Vec3(-1, -1, L - 1.5 * kR), Vec3(1, 1, 1));
+    random_packing(s, 250, 11, 0.6, 0.8, 10 * kR);
     State s2 = s, s3 = s;
     ElectricalNetwork::Params p = holm_params();
     const auto pc = solve(s, p);
