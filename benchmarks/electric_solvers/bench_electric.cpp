@@ -210,6 +210,9 @@ int main(int argc, char** argv) {
   std::string csv = "results.csv";
   double pt_budget = 30.0;
   std::uint64_t seed = 12345;
+  std::vector<std::string> solvers = {"cg_ic", "cg_jacobi", "amg", "pseudo_transient"};
+  std::vector<double> tols = {1e-4, 1e-6, 1e-8, 1e-10};
+  LaplacianOptions amg_defaults;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -221,7 +224,16 @@ int main(int argc, char** argv) {
     else if (a == "--csv") csv = next();
     else if (a == "--pt-budget") pt_budget = std::stod(next());
     else if (a == "--seed") seed = std::stoull(next());
-    else { std::cerr << "usage: bench_electric [--sizes N,..] [--families packing,bonded,sintered] [--csv FILE] [--pt-budget S] [--seed N]\n"; return 2; }
+    else if (a == "--solvers") solvers = split(next());
+    else if (a == "--tolerances") { tols.clear(); for (auto& s : split(next())) tols.push_back(std::stod(s)); }
+    else if (a == "--amg-threshold") amg_defaults.amg_strong_threshold = std::stod(next());
+    else if (a == "--amg-aggressive") amg_defaults.amg_aggressive_levels = std::stoi(next());
+    else {
+      std::cerr << "usage: bench_electric [--sizes N,..] [--families packing,bonded,sintered] [--csv FILE] [--pt-budget S]"
+                   " [--seed N] [--solvers cg_ic,cg_jacobi,amg,pseudo_transient] [--tolerances 1e-4,..]"
+                   " [--amg-threshold X] [--amg-aggressive L]\n";
+      return 2;
+    }
   }
   std::ofstream out(csv);
   if (!out) { std::cerr << "cannot write " << csv << "\n"; return 1; }
@@ -234,7 +246,6 @@ int main(int argc, char** argv) {
     o.method = LaplacianMethod::Amg;
     (void)run(bonded(1000, 1), o, "warm-up");
   }
-  const double tols[] = {1e-4, 1e-6, 1e-8, 1e-10};
   const double betas[] = {1e-2, 1e-3, 2e-4, 1e-5};
   for (const auto& fam : families) {
     for (std::size_t n : sizes) {
@@ -256,9 +267,13 @@ int main(int argc, char** argv) {
       const double G_ref = ref.G;
       std::cerr << "  reference " << ref.method << " " << ref.wall << " s, G = " << G_ref << std::endl;
       if (direct_ref) { ref.status = "ok(reference)"; rows.push_back(ref); }
+      const auto wanted = [&](LaplacianMethod m) {
+        return std::find(solvers.begin(), solvers.end(), laplacian_method_name(m)) != solvers.end();
+      };
       for (auto m : {LaplacianMethod::CgIncompleteCholesky, LaplacianMethod::CgDiagonal, LaplacianMethod::Amg})
         for (double t : tols) {
-          LaplacianOptions o;
+          if (!wanted(m)) continue;
+          LaplacianOptions o = amg_defaults;
           o.method = m;
           o.tolerance = t;
           rows.push_back(run(net, o, num(t)));
@@ -266,7 +281,7 @@ int main(int argc, char** argv) {
         }
       // Pseudo-transient: iteration cap from a 50-iteration calibration run, so that one run
       // takes about pt_budget seconds at most. A beta below a capped one is capped too: skipped.
-      {
+      if (wanted(LaplacianMethod::PseudoTransient)) {
         LaplacianOptions o;
         o.method = LaplacianMethod::PseudoTransient;
         o.pseudo.indicator = ChangeIndicator::Range;

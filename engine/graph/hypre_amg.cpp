@@ -162,6 +162,7 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
   HYPRE_BoomerAMGSetCycleRelaxType(im.amg, 14, 2);
   HYPRE_BoomerAMGSetCycleRelaxType(im.amg, 9, 3);
   if (settings_.aggressive_levels > 0) HYPRE_BoomerAMGSetAggNumLevels(im.amg, settings_.aggressive_levels);
+  HYPRE_BoomerAMGSetKeepTranspose(im.amg, 1);  // store P^T: faster restriction, more memory
 
   check(HYPRE_ParCSRPCGCreate(MPI_COMM_SELF, &im.pcg), "ParCSRPCGCreate");
   HYPRE_PCGSetTwoNorm(im.pcg, 1);

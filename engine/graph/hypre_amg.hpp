@@ -22,7 +22,7 @@ class HypreAmgPcg {
  public:
   struct Settings {
     double strong_threshold = 0.5;  ///< BoomerAMG strength threshold (0.5 is hypre's advice for 3-D)
-    int aggressive_levels = 0;      ///< levels of aggressive coarsening (cheaper setup, more PCG iterations)
+    int aggressive_levels = 1;      ///< levels of aggressive coarsening (cheaper setup, more PCG iterations)
   };
   struct Outcome {
     int iterations = 0;

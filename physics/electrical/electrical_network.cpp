@@ -109,6 +109,10 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("temperature", &P::temperature).unit("K").positive().doc("temperature at which the conductivity is evaluated (measurements of sintered samples are made cold)");
   s.add("reference_temperature", &P::reference_temperature).unit("K").positive().doc("T_ref of `conductivity`");
   s.add("resistivity_coefficient", &P::resistivity_coefficient).unit("1/K").doc("beta of the linear resistivity law kappa(T) = kappa / (1 + beta (T - T_ref)); 0: constant");
+  s.add("conductivity_table_temperature", &P::conductivity_table_temperature).unit("K")
+      .doc("tabulated kappa(T): temperatures, strictly increasing (>= 2 points; empty: the linear law). Replaces conductivity / resistivity_coefficient");
+  s.add("conductivity_table_values", &P::conductivity_table_values).unit("S/m")
+      .doc("tabulated kappa(T): conductivities at conductivity_table_temperature (piecewise linear, constant beyond the ends)");
   s.add("high", &P::high).doc("electrode held at `voltage`: a particle-set name or \"wall:<name>\"");
   s.add("low", &P::low).doc("electrode held at 0 V: a particle-set name or \"wall:<name>\"");
   s.add("voltage", &P::voltage).unit("V").positive().doc("potential difference between the electrodes");
@@ -142,12 +146,23 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
 }
 
 ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
+  const bool tabulated = !p.conductivity_table_temperature.empty() || !p.conductivity_table_values.empty();
   try {
-    kappa_ = el::conductivity(el::LinearResistivityLaw{p.conductivity, p.resistivity_coefficient, p.reference_temperature},
-                              p.temperature);
+    if (tabulated) {
+      if (p.conductivity_table_temperature.size() != p.conductivity_table_values.size())
+        throw ConfigError("", "expected as many conductivities as temperatures, found " +
+                                  std::to_string(p.conductivity_table_values.size()) + " and " +
+                                  std::to_string(p.conductivity_table_temperature.size()));
+      kappa_ = el::conductivity(el::ConductivityTable(p.conductivity_table_temperature, p.conductivity_table_values),
+                                p.temperature);
+    } else {
+      kappa_ = el::conductivity(el::LinearResistivityLaw{p.conductivity, p.resistivity_coefficient, p.reference_temperature},
+                                p.temperature);
+    }
   } catch (const ConfigError& e) {
     const std::string why = e.diagnostics().empty() ? e.what() : e.diagnostics().front().message;
-    throw ConfigError("/resistivity_coefficient", "kappa(T) at the evaluation temperature: " + why);
+    throw ConfigError(tabulated ? "/conductivity_table_values" : "/resistivity_coefficient",
+                      "kappa(T) at the evaluation temperature: " + why);
   }
   LaplacianOptions o;
   o.method = p.solver == "cg_ic"              ? LaplacianMethod::CgIncompleteCholesky

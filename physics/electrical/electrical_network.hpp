@@ -37,6 +37,7 @@
 /// | conductivity       | S/m   | bulk conductivity kappa at reference_temperature              |
 /// | temperature        | K     | evaluation temperature (default 293.15 K: samples are measured cold) |
 /// | resistivity_coefficient | 1/K | beta of kappa(T) = kappa / (1 + beta (T - T_ref)) (0: constant) |
+/// | conductivity_table_temperature, _values | K, S/m | tabulated kappa(T) instead (piecewise linear) |
 /// | high, low          | -     | electrodes: a particle-set name, or "wall:<name>"              |
 /// | voltage            | V     | potential of `high` (low = 0)                                  |
 /// | current            | A     | > 0: inject this current at `high` instead (electrode equipotential) |
@@ -62,6 +63,8 @@ class ElectricalNetwork final : public Module {
     double temperature = 293.15;
     double reference_temperature = 293.15;
     double resistivity_coefficient = 0.0;
+    std::vector<double> conductivity_table_temperature;  // K; empty: the linear law
+    std::vector<double> conductivity_table_values;       // S/m
     std::string high = "top";
     std::string low = "bottom";
     double voltage = 1.0;

@@ -112,6 +112,22 @@ TEST_CASE("electrical_network: a chain and two parallel chains of Holm contacts"
     p.resistivity_coefficient = 0.004;  // rho(T) = rho_ref (1 + 0.004 x 100 K) = 1.4 rho_ref
     CHECK(test::relative_error(solve(s, p).resistance, 1.4 * R_chain) < 1e-12);
   }
+  SECTION("one chain evaluated at 393.15 K with a tabulated conductivity") {
+    State s;
+    chain(s, n, delta);
+    box_set(s, "bottom", Vec3(-1, -1, -0.5 * kR), Vec3(1, 1, 0.5 * kR));
+    box_set(s, "top", Vec3(-1, -1, (n - 1) * (2 * kR - delta) - 0.5 * kR), Vec3(1, 1, 1));
+    ElectricalNetwork::Params p = holm_params();
+    p.temperature = 393.15;
+    // kappa falls linearly from kKappa at 293.15 K to kKappa / 2 at 493.15 K: at 393.15 K it is
+    // 0.75 kKappa, so R = R_chain / 0.75. The `conductivity` parameter is ignored.
+    p.conductivity = 123.0;
+    p.conductivity_table_temperature = {293.15, 493.15};
+    p.conductivity_table_values = {kKappa, 0.5 * kKappa};
+    CHECK(test::relative_error(solve(s, p).resistance, R_chain / 0.75) < 1e-12);
+    p.conductivity_table_values = {kKappa};
+    CHECK_THROWS_AS(solve(s, p), ConfigError);
+  }
   SECTION("one chain driven by an injected current: V = I R, the same R") {
     State s;
     chain(s, n, delta);
