@@ -224,7 +224,7 @@ void Simulation::zero_forces() {
 }
 
 void Simulation::pair_forces(double dt) {
-  law_.pair_pass(s_.particles, s_.contacts, dt);
+  law_.pair_pass(s_.particles, s_.contacts, dt, time_scale_);
   s_.contacts.gather(s_.particles.force, s_.particles.torque);
 }
 
@@ -237,7 +237,7 @@ void Simulation::bond_forces(double dt, Step step) {
 }
 
 void Simulation::wall_forces(double dt) {
-  const WallLoads loads = law_.wall_pass(s_.particles, s_.walls, s_.wall_candidates, dt);
+  const WallLoads loads = law_.wall_pass(s_.particles, s_.walls, s_.wall_candidates, dt, time_scale_);
   for (std::size_t k = 0; k < s_.walls.size(); ++k) {
     s_.walls[k].force = loads.force[k];
     s_.walls[k].normal_force = loads.normal[k];

@@ -9,6 +9,7 @@
 #include "physics/body/gravity.hpp"
 #include "physics/bonds/spring_bond.hpp"
 #include "physics/contact/hertz_mindlin.hpp"
+#include "physics/contact/sintering.hpp"
 #include "physics/contact/hooke.hpp"
 #include "physics/contact/lammps_granular.hpp"
 #include "physics/electrical/electrical_network.hpp"
@@ -18,6 +19,7 @@ namespace sparkdem::physics {
 
 void register_all(Registry& r) {
   r.contact_law<HertzMindlin>();
+  r.contact_law<Sintering>();
   r.contact_law<LinearSpringDashpot>();
   r.contact_law<LammpsHertzTsuji>();
   r.bond_law<SpringBond>();

@@ -10,10 +10,16 @@
 ///   double normal_stiffness(const ContactGeometry&) const;   // tangent dF/d(delta) [N/m]
 ///   double tangential_stiffness(const ContactGeometry&) const; // [N/m]
 ///   double rayleigh_dt(double radius, double density) const; // +inf if not applicable [s]
+/// and optionally normal_stiffness(g, state) / tangential_stiffness(g, state) when the stiffness
+/// of a pair depends on its state (used for the stable step of the contact table's pairs).
 /// and optionally, for pairs whose life the law decides (a sintered neck outlives zero or
 /// negative overlap):
 ///   static constexpr bool kPersistent = true;
 ///   bool alive(const double* state) const;   // keep the row and call the law at overlap <= 0
+/// A law whose forces depend on temperature or on physical time (a sintering law) declares
+///   static constexpr bool kThermal = true;
+/// and then receives g.temperature (pair mean of the particle field "temperature", NaN when no
+/// module provides it) and g.time_scale (physical seconds per mechanical second of the stage).
 /// A persistent law is called with g.overlap <= 0 (a gap) while alive(state) holds; its row is
 /// kept by the contact table even when the pair leaves the neighbour candidates.
 #include <cmath>
@@ -45,12 +51,14 @@ class ContactModel {
   /// empty for laws whose pairs live only while the spheres overlap.
   virtual std::function<bool(const double*)> alive_rule() const { return {}; }
   /// Particle-particle pass: fills table.force/torque/overlap rows (does not gather).
-  virtual void pair_pass(const ParticleStore& p, ContactTable& table, double dt) const = 0;
+  /// `time_scale` = physical seconds per mechanical second (used by kThermal laws only).
+  virtual void pair_pass(const ParticleStore& p, ContactTable& table, double dt, double time_scale = 1.0) const = 0;
   /// Particle-wall pass over the candidate particles of each wall (those within r + skin at the
   /// last neighbour rebuild); adds forces and torques to the particles; returns wall loads.
   /// Wall history lives in the per-particle field "wall_state/<wall name>".
   virtual WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls,
-                              const std::vector<std::vector<Index>>& candidates, double dt) const = 0;
+                              const std::vector<std::vector<Index>>& candidates, double dt,
+                              double time_scale = 1.0) const = 0;
   /// Stable step estimate from the current state [s]: min of the law's a-priori step (Rayleigh
   /// for Hertz laws) and 2/omega_max, with omega_max^2 bounded by Gershgorin on the mass-weighted
   /// stiffness matrix of the current contacts:
@@ -62,6 +70,13 @@ class ContactModel {
   virtual double stable_dt(const ParticleStore& p, const ContactTable& table, const std::vector<Wall>& walls,
                            const std::vector<double>* extra_rows = nullptr) const = 0;
 };
+
+/// True if Law declares kThermal (reads temperature and the time scale).
+template <class Law>
+constexpr bool is_thermal() {
+  if constexpr (requires { Law::kThermal; }) return Law::kThermal;
+  else return false;
+}
 
 /// True if Law declares persistent pairs.
 template <class Law>
@@ -87,8 +102,11 @@ class ContactModelT final : public ContactModel {
     else return {};
   }
 
-  void pair_pass(const ParticleStore& p, ContactTable& t, double dt) const override {
+  void pair_pass(const ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0) const override {
     const std::int64_t rows = static_cast<std::int64_t>(t.size());
+    const double* temp = nullptr;
+    if constexpr (is_thermal<Law>())
+      if (p.fields.has("temperature")) temp = p.fields.data("temperature").data();
     const int w = t.state_width();
     auto& F = t.force();
     auto& Ti = t.torque_i();
@@ -116,6 +134,12 @@ class ContactModelT final : public ContactModel {
       g.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
       g.arm_i = p.radius[i] - 0.5 * delta;
       g.arm_j = p.radius[j] - 0.5 * delta;
+      g.r_i = p.radius[i];
+      g.r_j = p.radius[j];
+      if constexpr (is_thermal<Law>()) {
+        g.temperature = temp ? 0.5 * (temp[i] + temp[j]) : std::numeric_limits<double>::quiet_NaN();
+        g.time_scale = time_scale;
+      }
       const RelativeMotion m = relative_motion(g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
       const ContactForces f = law_(g, m, dt, state);
       F[r] = f.force;
@@ -126,7 +150,10 @@ class ContactModelT final : public ContactModel {
   }
 
   WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& cand,
-                      double dt) const override {
+                      double dt, double time_scale = 1.0) const override {
+    const double* temp = nullptr;
+    if constexpr (is_thermal<Law>())
+      if (p.fields.has("temperature")) temp = p.fields.data("temperature").data();
     WallLoads loads;
     loads.force.assign(walls.size(), Vec3::Zero());
     loads.normal.assign(walls.size(), 0.0);
@@ -161,6 +188,12 @@ class ContactModelT final : public ContactModel {
           g.arm_i = dist;
           g.arm_j = 0.0;
           g.wall = true;
+          g.r_i = p.radius[i];
+          g.r_j = std::numeric_limits<double>::infinity();
+          if constexpr (is_thermal<Law>()) {
+            g.temperature = temp ? temp[i] : std::numeric_limits<double>::quiet_NaN();
+            g.time_scale = time_scale;
+          }
           const Vec3 vw = wall.u_dot * nrm;
           const RelativeMotion m = relative_motion(g, p.velocity[i], vw, p.omega[i], Vec3::Zero());
           const ContactForces f = law_(g, m, dt, state);
@@ -197,7 +230,16 @@ class ContactModelT final : public ContactModel {
       g.overlap = delta;
       g.r_eff = p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]);
       g.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
-      const double kn = law_.normal_stiffness(g), kt = law_.tangential_stiffness(g);
+      g.r_i = p.radius[i];
+      g.r_j = p.radius[j];
+      double kn, kt;
+      if constexpr (requires { law_.normal_stiffness(g, t.state(r)); }) {
+        kn = law_.normal_stiffness(g, t.state(r));  // laws whose stiffness depends on pair state
+        kt = law_.tangential_stiffness(g, t.state(r));
+      } else {
+        kn = law_.normal_stiffness(g);
+        kt = law_.tangential_stiffness(g);
+      }
       const double mij = 1.0 / std::sqrt(p.mass[i] * p.mass[j]);
       const double iij = p.radius[i] * p.radius[j] / std::sqrt(p.inertia[i] * p.inertia[j]);
       row[i] += kn * (1.0 / p.mass[i] + mij) + kt * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i] + mij + iij);
@@ -214,6 +256,8 @@ class ContactModelT final : public ContactModel {
         g.r_eff = p.radius[i];
         g.m_eff = p.mass[i];
         g.wall = true;
+        g.r_i = p.radius[i];
+        g.r_j = std::numeric_limits<double>::infinity();
         row[i] += law_.normal_stiffness(g) / p.mass[i] +
                   law_.tangential_stiffness(g) * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i]);
       }

@@ -14,6 +14,14 @@ struct ContactGeometry {
   double arm_i = 0.0;     ///< centre of i to contact point [m]
   double arm_j = 0.0;     ///< centre of j to contact point (0 for a wall) [m]
   bool wall = false;      ///< true for a particle-wall contact
+  double r_i = 0.0;       ///< radius of i [m]
+  double r_j = 0.0;       ///< radius of j [m] (+inf for a wall)
+  /// Filled only for laws that declare kThermal (ContactModelT): mean temperature of the pair
+  /// (the particle's for a wall) from the particle field "temperature" [K], NaN without it; and
+  /// the stage's time scale (physical seconds per mechanical second) for laws whose viscous
+  /// processes run in physical time.
+  double temperature = 0.0;
+  double time_scale = 1.0;
 };
 
 struct RelativeMotion {

@@ -1,0 +1,327 @@
+#pragma once
+/// # sintering — thermo-viscoelastic sintering contact (Nosewicz-Rojek; seed 000's hot press)
+///
+/// Sources: Nosewicz, Rojek, Pietrzak, Chmielewski, Powder Technol. 246 (2013) 157 and Adv.
+/// Powder Technol. 28 (2017) 1745 (the model behind seed 000's samples); the authors' public
+/// Kratos implementation (DEM_sintering_continuum_CL.cpp); Parhami & McMeeking, Mech. Mater. 27
+/// (1998) 111 (driving force); equations rebuilt in ../shared/physics/sintering-electrical.md §3.
+///
+/// Normal: a Maxwell branch (Hertz spring k_n in series with the grain-boundary-diffusion
+/// dashpot eta_n), in parallel with the sintering driving force and a numerical damper:
+///   F_n   = F_e + F_d - F_s                         (repulsive positive, along n = j -> i)
+///   dF_e/dt = k_n (v - F_e / eta_n),  v = -v_n the approach rate;  du_s/dt = F_e / eta_n
+///   k_n   = 2 E* sqrt(R*) sqrt(|h - u_s|)           (Hertz tangent on the elastic approach)
+///   eta_n = pi a^4 / (8 D_eff),  D_eff = D_gb delta_b Omega / (k_B T),
+///   D_gb  = D_0 exp(-Q / (R_gas T)),  T = mean temperature of the pair
+///   F_s   = pi gamma_s [4 R (1 - cos(psi/2)) + a sin(psi/2)]   while a < a_eq = r_min sin(psi/2)
+///   F_d   = c_n (v - du_s/dt),  c_n = 2 gamma sqrt(m* k_n)
+/// Maxwell update (kernel::maxwell_step): exact exponential for k_n, eta_n and v held over the
+/// step, x = k_n dt / eta_n,  phi(x) = (1 - e^-x)/x:
+///   F_e' = F_e e^-x + k_n v dt phi(x),   du_s = dt [v (1 - phi(x)) + phi(x) F_e / eta_n]
+/// Unconditionally stable and monotone for any dt / (eta/k): it relaxes without overshoot
+/// when eta -> 0 at a fresh contact (the trapezoidal rule of the Kratos code rings there).
+/// The viscous processes run in physical time: with a stage time scale s (physical seconds per
+/// mechanical second) the dashpots are eta / s in mechanical time.
+///
+/// Neck radius a (state column `neck_radius`, read by the electrical module's
+/// `"neck": "law"`): from the overlap h by `neck` (kratos: a = 1.43 sqrt(r_min^2 - x^2),
+/// x = r_min - h/2; coble: sqrt(2 r* h); cv: constant volume — the kernels shared with the
+/// electrical module), never decreasing while the pair lives, at least min_neck_fraction r_min
+/// once sintering (eta_n > 0 at a fresh contact), at most r_min. A pair with a > 0 is
+/// persistent: it outlives zero or negative overlap (the neck holds the particles together).
+/// After a >= a_eq the driving force stops and u_s is frozen (Kratos).
+///
+/// Tangential: a Maxwell element too, k_t = 8 G* sqrt(R* |h - u_s|) in series with
+/// eta_t = tangential_factor x eta_n, state = the elastic tangential force (rotated into the
+/// current tangent plane), plus damping 2 gamma sqrt(m* k_t). A pair without a neck (cold
+/// contact) is capped by Coulomb friction mu |F_n|; a sintered neck is not.
+/// Below sintering_start_temperature: no driving force, eta = +inf (elastic); a sintered neck
+/// stays bonded (carries tension, `cold_necks: bonded`) or becomes a plain frictional contact
+/// (`cold_necks: contact`: compression only, the neck radius is kept for the conductance).
+/// Walls (punches, die): Hertz + damping + Coulomb friction (wall_friction), no sintering.
+///
+/// Choices the sources leave open (parameters): R in F_s for unequal spheres (`sintering_radius`:
+/// r_min as in Kratos, R* or 2R*), the tangential factor (1 = eta_t = eta_n), cooling below the
+/// start temperature (`cold_necks`), the neck geometry (`neck`), a neck strength (default: none).
+///
+/// | parameter                    | unit    | meaning                                          |
+/// |------------------------------|---------|--------------------------------------------------|
+/// | youngs_modulus, poisson_ratio| Pa, 1   | E, nu of the particles (Hertz)                    |
+/// | surface_energy               | J/m^2   | gamma_s                                           |
+/// | dihedral_angle               | rad     | psi                                               |
+/// | gb_diffusivity_prefactor     | m^2/s   | D_0 of D_gb                                       |
+/// | gb_activation_energy         | J/mol   | Q of D_gb                                         |
+/// | gb_width                     | m       | delta_b (atomic GB width of the diffusion law)    |
+/// | atomic_volume                | m^3     | Omega                                             |
+/// | sintering_start_temperature  | K       | below it: no sintering                            |
+/// | temperature                  | K       | used when no module provides the field            |
+/// | damping_ratio                | 1       | gamma of the numerical damping                    |
+/// | tangential_factor            | 1       | eta_t / eta_n                                     |
+/// | friction, wall_friction      | 1       | Coulomb mu (contacts without a neck; walls)        |
+/// | min_neck_fraction            | 1       | smallest neck of a sintering pair / r_min         |
+/// | neck_strength                | Pa      | a neck breaks when the tension exceeds it x pi a^2 (0: never) |
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/contact/geometry.hpp"
+#include "engine/model/param_spec.hpp"
+#include "physics/contact/contact_kernels.hpp"
+#include "physics/electrical/conductance_kernels.hpp"
+
+namespace sparkdem::physics {
+
+namespace kernel {
+
+inline constexpr double kBoltzmann = 1.380649e-23;  ///< k_B [J/K]
+inline constexpr double kGasConstant = 8.314462618;  ///< R [J/(mol K)]
+
+/// Effective grain-boundary diffusion coefficient [m^5/(N s)] (Coble; Nosewicz 2013):
+///   D_eff = D_0 exp(-Q / (R T)) delta_b Omega / (k_B T).
+inline double gb_effective_diffusivity(double d0_m2_per_s, double q_J_per_mol, double delta_b_m, double omega_m3,
+                                       double t_K) {
+  return d0_m2_per_s * std::exp(-q_J_per_mol / (kGasConstant * t_K)) * delta_b_m * omega_m3 / (kBoltzmann * t_K);
+}
+
+/// Normal viscosity of a neck of radius a [N s/m]: eta_n = pi a^4 / (8 D_eff) (Nosewicz 2013).
+inline double neck_viscosity(double a_m, double d_eff) { return kPi * a_m * a_m * a_m * a_m / (8.0 * d_eff); }
+
+/// Parhami-McMeeking sintering driving force [N] (attractive magnitude):
+///   F_s = pi gamma_s [4 R (1 - cos(psi/2)) + a sin(psi/2)].
+inline double sintering_force(double gamma_s, double psi_rad, double R_m, double a_m) {
+  return kPi * gamma_s * (4.0 * R_m * (1.0 - std::cos(0.5 * psi_rad)) + a_m * std::sin(0.5 * psi_rad));
+}
+
+/// Kratos' neck radius [m]: a = 1.43 sqrt(r_min^2 - x^2), x = r_min - h/2 (0 for h <= 0).
+inline double kratos_neck_radius(double r_min_m, double h_m) {
+  if (!(h_m > 0.0)) return 0.0;
+  const double x = r_min_m - 0.5 * std::min(h_m, 2.0 * r_min_m);
+  return 1.43 * std::sqrt(std::max(0.0, r_min_m * r_min_m - x * x));
+}
+
+/// One step of a Maxwell element (spring k in series with dashpot eta) driven by the rate v,
+/// exact for k, eta and v constant over dt: dF/dt = k (v - F/eta), du/dt = F/eta.
+///   x = k dt / eta, phi = (1 - e^-x)/x:  F' = F e^-x + k v dt phi,  du = dt [v (1 - phi) + phi F/eta]
+/// eta = +inf: elastic (F' = F + k v dt, du = 0). k = 0: F' = F, du = F dt / eta.
+/// Monotone and bounded for every dt: F' lies between F and eta v.
+struct MaxwellStep {
+  double force;       ///< F at the end of the step
+  double flow;        ///< du: dashpot displacement over the step
+};
+inline MaxwellStep maxwell_step(double force, double k, double eta, double v, double dt) {
+  if (!(eta < std::numeric_limits<double>::infinity())) return {force + k * v * dt, 0.0};
+  const double x = k * dt / eta;
+  const double ex = std::exp(-x);
+  const double phi = x > 1e-8 ? -std::expm1(-x) / x : 1.0 - 0.5 * x;
+  return {force * ex + k * v * dt * phi, dt * (v * (1.0 - phi) + phi * force / eta)};
+}
+
+}  // namespace kernel
+
+struct Sintering {
+  static constexpr std::string_view kName = "sintering";
+  static constexpr bool kPersistent = true;
+  static constexpr bool kThermal = true;
+  struct Params {
+    double youngs_modulus = 1e9;
+    double poisson_ratio = 0.3;
+    double surface_energy = 2.0;
+    double dihedral_angle = 2.0;
+    double gb_diffusivity_prefactor = 1e-4;
+    double gb_activation_energy = 2e5;
+    double gb_width = 5e-10;
+    double atomic_volume = 1.2e-29;
+    double sintering_start_temperature = 1000.0;
+    double temperature = 293.15;
+    double damping_ratio = 0.3;
+    double tangential_factor = 1.0;
+    double friction = 0.3;
+    double wall_friction = 0.3;
+    double min_neck_fraction = 0.05;
+    double neck_strength = 0.0;
+    std::string neck = "kratos";
+    std::string sintering_radius = "r_min";
+    std::string cold_necks = "bonded";
+  };
+  static ParamSpec<Params> spec() {
+    using P = Params;
+    ParamSpec<P> s(std::string(kName), "contact_law",
+                   "thermo-viscoelastic sintering (Nosewicz-Rojek): Hertz spring in series with the grain-boundary "
+                   "dashpot pi a^4/(8 D_eff), Parhami-McMeeking driving force, persistent necks");
+    s.add("youngs_modulus", &P::youngs_modulus).unit("Pa").positive().doc("E (Hertz)");
+    s.add("poisson_ratio", &P::poisson_ratio).unit("1").range(0.0, 0.5).doc("nu");
+    s.add("surface_energy", &P::surface_energy).unit("J/m^2").nonnegative().doc("gamma_s");
+    s.add("dihedral_angle", &P::dihedral_angle).unit("rad").range(0.0, 3.14159265358979).doc("psi; equilibrium neck r_min sin(psi/2)");
+    s.add("gb_diffusivity_prefactor", &P::gb_diffusivity_prefactor).unit("m^2/s").positive().doc("D_0 of D_gb = D_0 exp(-Q/RT)");
+    s.add("gb_activation_energy", &P::gb_activation_energy).unit("J/mol").nonnegative().doc("Q of D_gb");
+    s.add("gb_width", &P::gb_width).unit("m").positive().doc("delta_b, atomic grain-boundary width of the diffusion law");
+    s.add("atomic_volume", &P::atomic_volume).unit("m^3").positive().doc("Omega");
+    s.add("sintering_start_temperature", &P::sintering_start_temperature).unit("K").positive().doc("no sintering below it");
+    s.add("temperature", &P::temperature).unit("K").positive().doc("temperature when no module provides the field \"temperature\"");
+    s.add("damping_ratio", &P::damping_ratio).unit("1").nonnegative().doc("gamma of the numerical damping 2 gamma sqrt(m* k)");
+    s.add("tangential_factor", &P::tangential_factor).unit("1").positive().doc("eta_t / eta_n");
+    s.add("friction", &P::friction).unit("1").nonnegative().doc("Coulomb mu of contacts without a neck");
+    s.add("wall_friction", &P::wall_friction).unit("1").nonnegative().doc("Coulomb mu against walls (punches, die)");
+    s.add("min_neck_fraction", &P::min_neck_fraction).unit("1").range(1e-6, 1.0).doc("smallest neck of a sintering pair, / r_min");
+    s.add("neck_strength", &P::neck_strength).unit("Pa").nonnegative().doc("a neck breaks when its tension exceeds this x pi a^2 (0: never)");
+    s.add("neck", &P::neck).choices({"kratos", "coble", "cv"}).doc("neck radius from the overlap: Kratos 1.43 sqrt(r_min^2 - x^2), Coble, constant volume");
+    s.add("sintering_radius", &P::sintering_radius).choices({"r_min", "r_eff", "two_r_eff"}).doc("R of the driving force for unequal spheres");
+    s.add("cold_necks", &P::cold_necks).choices({"bonded", "contact"}).doc("a neck below the start temperature: elastic bond (tension too) or frictional contact");
+    return s;
+  }
+  /// State: neck radius [m], Maxwell force F_e [N], viscous approach u_s [m], tangential elastic
+  /// force [N] (3 values).
+  static std::vector<std::string> state_columns() {
+    return {"neck_radius", "elastic_force", "viscous_approach", "tangential_fx", "tangential_fy", "tangential_fz"};
+  }
+  enum Column { kNeck = 0, kElastic = 1, kViscous = 2, kTangential = 3 };
+
+  explicit Sintering(const Params& p)
+      : p_(p), e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
+        g_star_(kernel::effective_shear_modulus(p.youngs_modulus, p.poisson_ratio)),
+        sin_half_(std::sin(0.5 * p.dihedral_angle)),
+        neck_kind_(p.neck == "coble" ? NeckKind::Coble : p.neck == "cv" ? NeckKind::ConstantVolume : NeckKind::Kratos),
+        radius_kind_(p.sintering_radius == "r_eff" ? RadiusKind::Reff
+                     : p.sintering_radius == "two_r_eff" ? RadiusKind::TwoReff : RadiusKind::Rmin),
+        cold_contact_(p.cold_necks == "contact") {}
+
+  bool alive(const double* st) const { return st[kNeck] > 0.0; }
+
+  /// Neck radius of the geometry [m] (0 for h <= 0), before the pair's history is applied.
+  double geometric_neck(double r_i, double r_j, double h) const {
+    if (!(h > 0.0)) return 0.0;
+    if (neck_kind_ == NeckKind::Coble) return electrical::coble_neck_radius(r_i, r_j, h);
+    if (neck_kind_ == NeckKind::ConstantVolume) return electrical::cv_neck_radius(r_i, r_j, h);
+    return kernel::kratos_neck_radius(std::min(r_i, r_j), h);
+  }
+  /// Normal viscosity in physical time [N s/m] at temperature T (+inf below the start).
+  double viscosity(double a, double t_K) const {
+    if (!(t_K >= p_.sintering_start_temperature)) return std::numeric_limits<double>::infinity();
+    return kernel::neck_viscosity(a, kernel::gb_effective_diffusivity(p_.gb_diffusivity_prefactor, p_.gb_activation_energy,
+                                                                      p_.gb_width, p_.atomic_volume, t_K));
+  }
+  double driving_radius(const ContactGeometry& g) const {
+    if (radius_kind_ == RadiusKind::Reff) return g.r_eff;
+    if (radius_kind_ == RadiusKind::TwoReff) return 2.0 * g.r_eff;
+    return std::min(g.r_i, g.r_j);
+  }
+
+  ContactForces operator()(const ContactGeometry& g, const RelativeMotion& m, double dt, double* st) const {
+    if (g.wall) return wall_contact(g, m, dt, st);
+    const double T = std::isnan(g.temperature) ? p_.temperature : g.temperature;
+    const bool hot = T >= p_.sintering_start_temperature;
+    const double h = g.overlap;
+    const double r_min = std::min(g.r_i, g.r_j);
+    double a = st[kNeck];
+    if (hot && h > 0.0) a = std::max({a, geometric_neck(g.r_i, g.r_j, h), p_.min_neck_fraction * r_min});
+    a = std::min(a, r_min);
+    const bool neck = a > 0.0;
+    const double a_eq = r_min * sin_half_;
+    const bool sintering = hot && neck && a < a_eq;
+    // Mechanical-time viscosity: eta / s.
+    const double eta_n = sintering ? viscosity(a, T) / g.time_scale : std::numeric_limits<double>::infinity();
+    const double he = h - st[kViscous];
+    const double kn = 2.0 * e_star_ * std::sqrt(g.r_eff * std::abs(he));
+    const double v = -m.vn;
+    double fe = st[kElastic];
+    double us = st[kViscous];
+    double fs = 0.0, us_rate = 0.0;
+    if (neck) {
+      const kernel::MaxwellStep ms = kernel::maxwell_step(fe, kn, eta_n, v, dt);
+      fe = ms.force;
+      us += ms.flow;
+      us_rate = dt > 0.0 ? ms.flow / dt : 0.0;
+      if (sintering) fs = kernel::sintering_force(p_.surface_energy, p_.dihedral_angle, driving_radius(g), a);
+      if (!hot && cold_contact_) fe = std::max(fe, 0.0);
+    } else {
+      // Cold contact without a neck: Hertz on the (elastic) overlap.
+      fe = kernel::hertz_force(e_star_, g.r_eff, std::max(he, 0.0));
+    }
+    const double cn = 2.0 * p_.damping_ratio * std::sqrt(g.m_eff * kn);
+    double fn = fe + cn * (v - us_rate) - fs;
+    // Tangential Maxwell element.
+    const double kt = 8.0 * g_star_ * std::sqrt(g.r_eff * std::abs(he));
+    const double eta_t = p_.tangential_factor * eta_n;
+    Vec3 ft(st[kTangential], st[kTangential + 1], st[kTangential + 2]);
+    const double mag = ft.norm();
+    ft -= ft.dot(g.n) * g.n;
+    const double proj = ft.norm();
+    if (proj > 0.0) ft *= mag / proj;
+    const double vt = m.vt.norm();
+    if (vt > 0.0 || mag > 0.0) {
+      // Same exponential step on each component (the element is linear and isotropic in-plane).
+      const double x = std::isfinite(eta_t) ? kt * dt / eta_t : 0.0;
+      const double ex = std::exp(-x);
+      const double phi = x > 1e-8 ? -std::expm1(-x) / x : 1.0 - 0.5 * x;
+      ft = ft * ex - kt * dt * phi * m.vt;
+    }
+    const double ct = 2.0 * p_.damping_ratio * std::sqrt(g.m_eff * kt);
+    Vec3 ftot = ft - ct * m.vt;
+    if (!neck) {
+      const double cap = p_.friction * std::abs(fn);
+      const double fm = ftot.norm();
+      if (fm > cap) {
+        ftot *= fm > 0.0 ? cap / fm : 0.0;
+        ft = ftot + ct * m.vt;
+      }
+    }
+    // A neck that breaks in tension stops carrying load at the next step.
+    if (neck && p_.neck_strength > 0.0 && -fn > p_.neck_strength * kernel::kPi * a * a) {
+      a = 0.0;
+      fe = 0.0;
+      us = 0.0;
+      ft.setZero();
+    }
+    st[kNeck] = neck ? a : 0.0;
+    st[kElastic] = neck ? fe : 0.0;
+    st[kViscous] = neck ? us : 0.0;
+    st[kTangential] = ft[0];
+    st[kTangential + 1] = ft[1];
+    st[kTangential + 2] = ft[2];
+    ContactForces f;
+    f.tangential = ftot;
+    f.force = fn * g.n + ftot;
+    return f;
+  }
+
+  /// Particle-wall: Hertz + damping + Coulomb friction (elastic tangential spring with history).
+  ContactForces wall_contact(const ContactGeometry& g, const RelativeMotion& m, double dt, double* st) const {
+    const double kn = kernel::hertz_stiffness(e_star_, g.r_eff, g.overlap);
+    const double fn = kernel::hertz_force(e_star_, g.r_eff, g.overlap) - 2.0 * p_.damping_ratio * std::sqrt(g.m_eff * kn) * m.vn;
+    const double kt = 8.0 * g_star_ * std::sqrt(g.r_eff * g.overlap);
+    const double gt = 2.0 * p_.damping_ratio * std::sqrt(g.m_eff * kt);
+    // History column kTangential.. holds the tangential displacement for walls.
+    ContactForces f;
+    f.tangential = kernel::tangential_history(g.n, m.vt, kt, gt, p_.wall_friction, std::abs(fn), dt, st + kTangential);
+    f.force = fn * g.n + f.tangential;
+    return f;
+  }
+
+  /// Stiffness on the elastic approach |h - u_s| of a live pair (the Gershgorin rows).
+  double normal_stiffness(const ContactGeometry& g, const double* st) const {
+    return 2.0 * e_star_ * std::sqrt(g.r_eff * std::abs(g.overlap - st[kViscous]));
+  }
+  double tangential_stiffness(const ContactGeometry& g, const double* st) const {
+    return 8.0 * g_star_ * std::sqrt(g.r_eff * std::abs(g.overlap - st[kViscous]));
+  }
+  double normal_stiffness(const ContactGeometry& g) const { return kernel::hertz_stiffness(e_star_, g.r_eff, std::abs(g.overlap)); }
+  double tangential_stiffness(const ContactGeometry& g) const { return 8.0 * g_star_ * std::sqrt(g.r_eff * std::abs(g.overlap)); }
+  double rayleigh_dt(double radius, double density) const {
+    return kernel::rayleigh_step(radius, density, p_.youngs_modulus, p_.poisson_ratio);
+  }
+  const Params& params() const { return p_; }
+
+ private:
+  enum class NeckKind { Kratos, Coble, ConstantVolume };
+  enum class RadiusKind { Rmin, Reff, TwoReff };
+  Params p_;
+  double e_star_, g_star_, sin_half_;
+  NeckKind neck_kind_;
+  RadiusKind radius_kind_;
+  bool cold_contact_;
+};
+
+}  // namespace sparkdem::physics
