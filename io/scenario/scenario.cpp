@@ -962,12 +962,57 @@ json read_json_file(const std::filesystem::path& file) {
   }
 }
 
-Scenario load_scenario(const json& j, const Registry& reg, const std::filesystem::path& base_dir) {
+/// Replace every object holding "$include": "file.json" by the object in that file (resolved
+/// relative to the including file's directory), with the keys written beside "$include"
+/// overriding the included ones (shallow). Included files may include others (8 levels).
+void expand_includes(json& j, const std::filesystem::path& dir, const std::string& path, int depth,
+                     std::vector<Diagnostic>& errors) {
+  if (j.is_array()) {
+    for (std::size_t k = 0; k < j.size(); ++k) expand_includes(j[k], dir, path + "/" + std::to_string(k), depth, errors);
+    return;
+  }
+  if (!j.is_object()) return;
+  std::filesystem::path here = dir;
+  if (j.contains("$include")) {
+    const json& inc = j["$include"];
+    if (!inc.is_string()) {
+      errors.push_back({path + "/$include", "expected a file name (string), found " + describe(inc)});
+      return;
+    }
+    if (depth >= 8) {
+      errors.push_back({path + "/$include", "includes nested more than 8 deep (a cycle?)"});
+      return;
+    }
+    const std::filesystem::path file = dir / inc.get<std::string>();
+    json base;
+    try {
+      base = read_json_file(file);
+    } catch (const ConfigError& e) {
+      errors.push_back({path + "/$include", e.what()});
+      return;
+    }
+    if (!base.is_object()) {
+      errors.push_back({path + "/$include", "expected '" + file.string() + "' to hold a JSON object, found " + describe(base)});
+      return;
+    }
+    expand_includes(base, file.parent_path(), path + "/$include(" + inc.get<std::string>() + ")", depth + 1, errors);
+    for (auto it = j.begin(); it != j.end(); ++it)
+      if (it.key() != "$include") base[it.key()] = it.value();
+    j = std::move(base);
+    here = dir;  // keys written beside $include belong to the including file
+  }
+  for (auto it = j.begin(); it != j.end(); ++it) expand_includes(it.value(), here, path + "/" + it.key(), depth, errors);
+}
+
+Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesystem::path& base_dir) {
   std::vector<Diagnostic> errors;
   Scenario sc;
-  if (!j.is_object()) throw ConfigError("", "expected a JSON object at the top level, found " + describe(j));
-  if (const std::string deep = too_deep(j, 32, ""); !deep.empty())
+  if (!j_in.is_object()) throw ConfigError("", "expected a JSON object at the top level, found " + describe(j_in));
+  if (const std::string deep = too_deep(j_in, 32, ""); !deep.empty())
     throw ConfigError(deep, "nested more than 32 levels deep (a scenario needs fewer than 10)");
+  json j = j_in;
+  expand_includes(j, base_dir, "", 0, errors);
+  if (!errors.empty()) throw ConfigError(std::move(errors));
   json resolved_top;
   const TopParams top = build(top_spec(), j, "", errors, resolved_top, {"materials", "contact", "bonds", "walls", "stages", "particle_sets"});
   // Particle sets

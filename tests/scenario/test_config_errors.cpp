@@ -273,3 +273,43 @@ TEST_CASE("bond, clock and create_bonds errors are reported together with their 
                       {"/stages/1/modules/gravity/clock/kind", "not \"on_event\""},
                       {"/stages/1/time_scale", "found 0"}});
 }
+
+TEST_CASE("$include merges a JSON file into an object, keys beside it override, a bad include names its path", "[config_errors][scenario]") {
+  ScratchDir dir;
+  json scene = valid_scene();
+  // The contact law's parameters come from a material file in a subdirectory, which itself
+  // includes a second file; the scenario overrides one value.
+  fs::create_directories(dir.path / "materials");
+  json params = scene["contact"]["params"];
+  json base = params;
+  base.erase("friction");
+  sparkdem::test::write_scene(dir.path / "materials", "base.json", base);
+  sparkdem::test::write_scene(dir.path / "materials", "law.json", {{"$include", "base.json"}, {"friction", 0.25}});
+  scene["contact"]["params"] = {{"$include", "materials/law.json"}, {"friction", 0.125}};
+  const auto sc = sparkdem::io::load_scenario(scene, registry(), dir.path);
+  json expected = params;
+  expected["friction"] = 0.125;
+  for (auto it = expected.begin(); it != expected.end(); ++it)
+    CHECK(sc.resolved["contact"]["params"][it.key()] == it.value());
+  // A missing file and a non-object file: both reported, with their JSON paths.
+  sparkdem::test::write_scene(dir.path, "list.json", json::array({1, 2}));
+  scene["contact"]["params"] = {{"$include", "nowhere.json"}};
+  scene["stages"][0]["$include"] = "list.json";
+  try {
+    (void)sparkdem::io::load_scenario(scene, registry(), dir.path);
+    FAIL("a missing include was accepted");
+  } catch (const ConfigError& e) {
+    INFO(e.what());
+    REQUIRE(e.diagnostics().size() == 2);
+    CHECK(e.diagnostics()[0].path + e.diagnostics()[1].path != "");
+    bool missing = false, not_object = false;
+    for (const auto& d : e.diagnostics()) {
+      missing = missing || (d.path == "/contact/params/$include" && contains(d.message, "cannot read"));
+      not_object = not_object || (d.path == "/stages/0/$include" && contains(d.message, "JSON object"));
+    }
+    CHECK(missing);
+    CHECK(not_object);
+  }
+  const fs::path file = sparkdem::test::write_scene(dir.path, "scene.json", scene);
+  expect_cli_rejects(file, {{"/contact/params/$include", "cannot read"}, {"/stages/0/$include", "JSON object"}}, dir.path);
+}
