@@ -965,6 +965,7 @@ json read_json_file(const std::filesystem::path& file) {
 /// Replace every object holding "$include": "file.json" by the object in that file (resolved
 /// relative to the including file's directory), with the keys written beside "$include"
 /// overriding the included ones (shallow). Included files may include others (8 levels).
+/// Any other key starting with '$' ("$sources", "$comment") is an annotation and is dropped.
 void expand_includes(json& j, const std::filesystem::path& dir, const std::string& path, int depth,
                      std::vector<Diagnostic>& errors) {
   if (j.is_array()) {
@@ -1002,6 +1003,8 @@ void expand_includes(json& j, const std::filesystem::path& dir, const std::strin
     here = dir;  // keys written beside $include belong to the including file
   }
   for (auto it = j.begin(); it != j.end(); ++it) expand_includes(it.value(), here, path + "/" + it.key(), depth, errors);
+  // Other keys starting with '$' are annotations (e.g. "$sources" of a material file): dropped.
+  for (auto it = j.begin(); it != j.end();) it = it.key().starts_with('$') ? j.erase(it) : std::next(it);
 }
 
 Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesystem::path& base_dir) {

@@ -283,6 +283,7 @@ TEST_CASE("$include merges a JSON file into an object, keys beside it override, 
   json params = scene["contact"]["params"];
   json base = params;
   base.erase("friction");
+  base["$sources"] = {{"youngs_modulus", "an annotation, dropped by the loader"}};
   sparkdem::test::write_scene(dir.path / "materials", "base.json", base);
   sparkdem::test::write_scene(dir.path / "materials", "law.json", {{"$include", "base.json"}, {"friction", 0.25}});
   scene["contact"]["params"] = {{"$include", "materials/law.json"}, {"friction", 0.125}};
