@@ -117,10 +117,14 @@ StepPlan Simulation::prepare(const StageConfig& cfg) {
   // Contact law state columns (history is kept if the law's columns are unchanged).
   if (s_.contacts.state_columns() != law_.state_columns()) s_.contacts.set_state_columns(law_.state_columns());
   alive_rule_ = law_.alive_rule();
+  // Wall history: one row of the law's state per particle and wall; a stage with another law
+  // (other columns) starts with fresh wall history, like the contact table.
   const int w = static_cast<int>(law_.state_columns().size());
-  if (w > 0)
-    for (const auto& wall : s_.walls)
-      s_.particles.fields.declare({"wall_state/" + wall.name, w, "m", 0.0, false}, s_.particles.size());
+  for (const auto& wall : s_.walls) {
+    const std::string f = "wall_state/" + wall.name;
+    if (s_.particles.fields.has(f) && s_.particles.fields.info(f).components != w) s_.particles.fields.remove(f);
+    if (w > 0) s_.particles.fields.declare({f, w, "m", 0.0, false}, s_.particles.size());
+  }
   if (bond_law_ && s_.bonds.state_columns() != bond_law_->state_columns()) {
     if (s_.bonds.size() > 0 && !s_.bonds.state_columns().empty())
       throw SetupError("the bonds carry state columns of another bond law than '" + bond_law_->name() + "'");

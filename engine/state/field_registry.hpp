@@ -33,6 +33,8 @@ class FieldRegistry {
     fields_.emplace(info.name, std::move(e));
   }
   bool has(const std::string& name) const { return fields_.count(name) != 0; }
+  /// Drop a field (no-op if absent).
+  void remove(const std::string& name) { fields_.erase(name); }
   std::vector<double>& data(const std::string& name) { return get(name).data; }
   const std::vector<double>& data(const std::string& name) const { return const_cast<FieldRegistry*>(this)->get(name).data; }
   const FieldInfo& info(const std::string& name) const { return const_cast<FieldRegistry*>(this)->get(name).info; }
