@@ -13,6 +13,7 @@
 #include "physics/contact/lammps_granular.hpp"
 #include "physics/electrical/electrical_network.hpp"
 #include "physics/packing/generators.hpp"
+#include "physics/thermal/temperature_history.hpp"
 
 namespace sparkdem::physics {
 
@@ -24,6 +25,7 @@ void register_all(Registry& r) {
   r.module<Gravity>();
   r.module<ViscousDamping>();
   r.module<ElectricalNetwork>();
+  r.module<TemperatureHistory>();
   r.generator<LatticeGenerator>();
   r.generator<DepositGenerator>();
   r.generator<FillGenerator>();
