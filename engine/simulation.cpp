@@ -464,7 +464,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   check_modules(true);
   const double t_area = die_area(s_.walls);
   if (!resume) {
-    for (auto& w : s_.walls) advance_wall(w, 0.0, dt_used, t_area);
+    for (auto& w : s_.walls) advance_wall(w, 0.0, dt_used, t_area, time_scale_);
     compute_forces(dt_used, 0.0);
     // Event-clock modules run once on the initial state (a stage of zero steps evaluates them).
     for (const PlanItem& it : plan_.items)
@@ -523,7 +523,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
       switch (it.kind) {
         case PlanItem::Kind::IntegrateFirstHalf: verlet_first_half(p, dt_used); break;
         case PlanItem::Kind::Walls:
-          for (auto& w : s_.walls) advance_wall(w, t_new, dt_used, t_area);
+          for (auto& w : s_.walls) advance_wall(w, t_new, dt_used, t_area, time_scale_);
           break;
         case PlanItem::Kind::Neighbors: update_neighbors(skin_, cfg.sort_every_rebuilds); break;
         case PlanItem::Kind::ZeroForces: zero_forces(); break;

@@ -6,7 +6,10 @@
 /// Motions: fixed; constant speed (optionally limited travel); displacement table; or pressure
 /// control (servo on the normal force: a punch driven to a target pressure, as in a hot press).
 /// Prescribed motions are evaluated from the stage time (step * dt), never accumulated; only the
-/// servo integrates u, and its state is in the checkpoint.
+/// servo integrates u, and its state is in the checkpoint. Tables (displacement and pressure)
+/// marked `physical_time` (every table a scenario gives) are in physical seconds from the stage
+/// start and are read at t_phys = time_scale * t_stage (StageConfig::time_scale); speeds, the
+/// servo speed limit and u_dot stay in mechanical time.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -35,12 +38,13 @@ struct WallMotion {
   Kind kind = Kind::Fixed;
   double speed = 0.0;                  ///< [m/s] along the inward normal (Velocity)
   double travel = std::numeric_limits<double>::infinity();  ///< [m] max |u - u_start| (Velocity)
-  std::vector<double> table_time;      ///< [s] from stage start (Table)
+  std::vector<double> table_time;      ///< [s] from stage start (Table), physical if physical_time
   std::vector<double> table_disp;      ///< [m] displacement from u_start (Table)
-  std::vector<double> pressure_time;   ///< [s] (Pressure) piecewise-linear target
+  std::vector<double> pressure_time;   ///< [s] (Pressure) piecewise-linear target, physical if physical_time
   std::vector<double> pressure_value;  ///< [Pa]
   double area = 0.0;                   ///< [m^2] area the pressure acts on (0 = from the enclosing cylinder)
   double max_speed = 0.0;              ///< [m/s] servo speed limit
+  bool physical_time = false;          ///< table times are physical seconds (read at time_scale * t_stage)
   std::string halt_quantity;           ///< stop the wall for good once this monitor column ...
   double halt_value = 0.0;             ///< ... reaches at least this value (checked with `until`)
 };
@@ -110,9 +114,14 @@ inline double interpolate(const std::vector<double>& t, const std::vector<double
 }
 
 /// Update u and u_dot at stage time t_stage (prescribed) or by one servo step dt (pressure).
-/// `area_hint` is used when a pressure motion has area 0 (the die cross-section).
-inline void advance_wall(Wall& w, double t_stage, double dt, double area_hint) {
+/// `area_hint` is used when a pressure motion has area 0 (the die cross-section). `time_scale`
+/// (physical seconds per mechanical second) converts t_stage for tables in physical time:
+///   table:    u = u_start + D(s t),  u_dot = (D(s (t + dt)) - D(s t)) / dt   (mechanical rate)
+///   pressure: F_target = p(s t) A
+/// with s = time_scale when motion.physical_time, else 1.
+inline void advance_wall(Wall& w, double t_stage, double dt, double area_hint, double time_scale = 1.0) {
   const WallMotion& m = w.motion;
+  const double s = m.physical_time ? time_scale : 1.0;
   if (w.halted) {
     w.u_dot = 0.0;
     return;
@@ -134,14 +143,14 @@ inline void advance_wall(Wall& w, double t_stage, double dt, double area_hint) {
       break;
     }
     case WallMotion::Kind::Table: {
-      w.u = w.u_start + interpolate(m.table_time, m.table_disp, t_stage);
+      w.u = w.u_start + interpolate(m.table_time, m.table_disp, s * t_stage);
       const double h = dt;
-      w.u_dot = (interpolate(m.table_time, m.table_disp, t_stage + h) - interpolate(m.table_time, m.table_disp, t_stage)) / h;
+      w.u_dot = (interpolate(m.table_time, m.table_disp, s * (t_stage + h)) - interpolate(m.table_time, m.table_disp, s * t_stage)) / h;
       break;
     }
     case WallMotion::Kind::Pressure: {
       const double area = m.area > 0.0 ? m.area : area_hint;
-      const double target = interpolate(m.pressure_time, m.pressure_value, t_stage) * area;
+      const double target = interpolate(m.pressure_time, m.pressure_value, s * t_stage) * area;
       double ratio = target > 0.0 ? (target - w.normal_force) / target : -1.0;
       ratio = std::clamp(ratio, -1.0, 1.0);
       w.u_dot = m.max_speed * ratio;

@@ -329,6 +329,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
       std::vector<std::unique_ptr<Monitor>> mons;
       if (st.generator) mons = st.generator->monitors();
       for (auto& m : mons) sim.add_monitor(m.get());
+      for (const auto& m : st.monitors) sim.add_monitor(m.get());
       if (resuming) {
         for (Module* m : mods) m->visit(*restart_ar, "modules/" + m->name());
         restart_ar.reset();  // everything is restored: release the in-memory checkpoint image

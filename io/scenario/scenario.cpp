@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "io/scenario/json_binder.hpp"
+#include "physics/packing/compact.hpp"
 
 namespace sparkdem::io {
 
@@ -72,7 +73,7 @@ ParamSpec<MotionParams> motion_spec() {
   s.add("type", &MotionParams::type).choices({"fixed", "velocity", "table", "pressure"}).doc("kind of motion");
   s.add("speed", &MotionParams::speed).unit("m/s").doc("velocity: du/dt (positive moves into the domain)");
   s.add("travel", &MotionParams::travel).unit("m").positive().doc("velocity: stop after this displacement");
-  s.add("times", &MotionParams::times).unit("s").nonnegative().doc("table/pressure: times from the stage start");
+  s.add("times", &MotionParams::times).unit("s").nonnegative().doc("table/pressure: physical times from the stage start (stage time x time_scale; = stage time when time_scale is 1)");
   s.add("displacements", &MotionParams::displacements).unit("m").doc("table: displacement at each time");
   s.add("pressures", &MotionParams::pressures).unit("Pa").nonnegative().doc("pressure: target pressure at each time");
   s.add("area", &MotionParams::area).unit("m^2").nonnegative().doc("pressure: loaded area (0 = die cross-section)");
@@ -325,6 +326,7 @@ Wall make_wall(const json& w, const std::string& path, std::vector<Diagnostic>& 
 WallMotion make_motion(const json& m, const std::string& path, std::vector<Diagnostic>& errors, json& resolved) {
   const MotionParams p = build(motion_spec(), m, path, errors, resolved);
   WallMotion out;
+  out.physical_time = true;  // tables in physical seconds, like the physical-time modules
   if (p.type == "fixed") out.kind = WallMotion::Kind::Fixed;
   if (p.type == "velocity") { out.kind = WallMotion::Kind::Velocity; out.speed = p.speed; out.travel = p.travel; }
   auto check_table = [&](const std::vector<double>& values, const char* key) {
@@ -417,6 +419,8 @@ std::vector<std::string> stage_columns(const StageDef& st, const std::set<std::s
   if (st.generator)
     for (const auto& m : st.generator->monitors())
       for (const auto& c : m->columns(scratch)) cols.push_back(c);
+  for (const auto& m : st.monitors)
+    for (const auto& c : m->columns(scratch)) cols.push_back(c);
   for (const auto& m : st.modules)
     for (const auto& c : m->columns()) cols.push_back(c);
   return cols;
@@ -434,7 +438,7 @@ std::string unknown_column(const std::string& column, const std::vector<std::str
 /// `errors` and the resolved stage to `r`.
 StageDef build_stage(StageContext& ctx, const json& js, const std::string& path, std::vector<Diagnostic>& errors, json& r) {
   const std::size_t before = errors.size();
-  const StageParams p = build(stage_spec(*ctx.reg), js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact", "sets", "prescribe", "snapshots", "sweep", "create_bonds"});
+  const StageParams p = build(stage_spec(*ctx.reg), js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact", "sets", "prescribe", "snapshots", "sweep", "create_bonds", "compact"});
   StageDef st;
   st.path = path;
   st.type = p.type;
@@ -663,6 +667,36 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
         c.until.push_back({it.key(), cond.contains("above"), cond.begin().value().get<double>()});
       }
     r["until"] = js["until"];
+  }
+  // Porosity of a compact in a die (monitor columns porosity, porosity_interior, ...).
+  if (js.contains("compact")) {
+    const std::string cp = path + "/compact";
+    json rc;
+    const std::size_t b2 = errors.size();
+    const physics::CompactParams q = build(physics::compact_spec(), js["compact"], cp, errors, rc);
+    if (errors.size() == b2) {
+      // Shapes are checked here when the wall is known at load time (scenario or added walls; a
+      // generator's walls are checked when the monitor first samples).
+      std::map<std::string, bool> plane;  // name -> is a plane
+      for (const auto& w : ctx.walls) plane[w.name] = w.is_plane();
+      for (const auto& w : st.add_walls) plane[w.name] = w.is_plane();
+      auto check = [&](const std::string& key, const std::string& name, bool want_plane) {
+        if (!ctx.wall_names.count(name)) {
+          const auto dym = did_you_mean(name, std::vector<std::string>(ctx.wall_names.begin(), ctx.wall_names.end()));
+          errors.push_back({cp + "/" + key, "expected the name of a wall of this stage, found \"" + name + "\"" +
+                                                (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});
+        } else if (plane.count(name) && plane[name] != want_plane) {
+          errors.push_back({cp + "/" + key, std::string("expected a ") + (want_plane ? "plane" : "cylinder") + " wall, found the " +
+                                                (want_plane ? "cylinder" : "plane") + " \"" + name + "\""});
+        }
+      };
+      check("die", q.die, false);
+      check("bottom", q.bottom, true);
+      check("top", q.top, true);
+      if (q.bottom == q.top) errors.push_back({cp + "/top", "expected a wall other than the bottom punch, found \"" + q.top + "\""});
+    }
+    st.monitors.push_back(std::make_shared<physics::CompactMonitor>(q));
+    r["compact"] = rc;
   }
   // Generator-defined settling: motions and stop conditions.
   if (st.generator) {
@@ -1152,6 +1186,7 @@ json schema_json(const Registry& reg) {
   j["stage"]["prescribe"] = "object {set name: [vx, vy, vz] m/s}: the set moves at this velocity (zero = frozen)";
   j["stage"]["until"] = "object {quantity: {\"above\"|\"below\": value}}; quantities are time-series columns";
   j["stage"]["snapshots"] = spec_to_json(snapshot_spec().spec());
+  j["stage"]["compact"] = spec_to_json(physics::compact_spec().spec());
   j["stage"]["sweep"] = sweep_schema();
   for (const auto& [k, v] : reg.laws()) j["contact_laws"][k] = spec_to_json(v.spec);
   for (const auto& [k, v] : reg.bond_laws()) j["bond_laws"][k] = spec_to_json(v.spec);

@@ -49,6 +49,7 @@ struct StageDef {
   std::vector<std::pair<std::string, SetSelector>> sets;  ///< particle sets (re)evaluated at the stage start
   std::optional<SnapshotSpec> snapshots;   ///< states saved during the stage (dynamics stages)
   std::shared_ptr<const SweepDef> sweep;   ///< run once per item (see SweepDef); null: once
+  std::vector<std::shared_ptr<const Monitor>> monitors;  ///< stage-key monitors (e.g. "compact"), after the generator's
 };
 
 /// `"sweep"` of a stage: the stage runs once per item, each item a branch that starts from the

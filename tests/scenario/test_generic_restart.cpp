@@ -110,6 +110,8 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
       {"relax generator then dynamics with substepping module", relax_then_fall, 1, 413},
       // (a checkpoint inside a sweep item: test_sweeps.cpp, "a restart neither retakes nor loses ...")
       {"dynamics taking snapshots, then a sweep over them and a stage after it", load_data("sweep_fall.json"), 1, 170},
+      {"hot press: temperature_history with thermal expansion, pressure table in physical time, compact monitor",
+       load_data("hot_press_small.json"), 1, 2333},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.label) {

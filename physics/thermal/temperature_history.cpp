@@ -1,0 +1,129 @@
+#include "physics/thermal/temperature_history.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "engine/core/error.hpp"
+
+namespace sparkdem::physics {
+
+namespace thermal {
+double table_temperature(const std::vector<double>& t, const std::vector<double>& T, double time) {
+  if (time <= t.front()) return T.front();
+  if (time >= t.back()) return T.back();
+  // first k with t[k] > time (k >= 1 since time > t.front())
+  const std::size_t k = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), time) - t.begin());
+  const double s = (time - t[k - 1]) / (t[k] - t[k - 1]);
+  return T[k - 1] + s * (T[k] - T[k - 1]);
+}
+}  // namespace thermal
+
+namespace {
+std::string num(double x) {
+  std::ostringstream os;
+  os.precision(10);
+  os << x;
+  return os.str();
+}
+}  // namespace
+
+ParamSpec<TemperatureHistory::Params> TemperatureHistory::spec() {
+  ParamSpec<Params> s("temperature_history", "module",
+                      "prescribed uniform temperature T(t) (piecewise linear in physical time from the stage start, held "
+                      "beyond the ends) written to the particle field `temperature`, and thermal expansion of the radii "
+                      "r = r_ref (1 + alpha_T (T - T_0)) with constant mass; column `temperature`");
+  s.add("time", &Params::time).unit("s").required().doc("table times, physical seconds from the stage start, strictly increasing");
+  s.add("temperature", &Params::temperature).unit("K").required().doc("temperature at each time (> 0)");
+  s.add("expansion_coefficient", &Params::expansion_coefficient).unit("1/K")
+      .doc("alpha_T, linear thermal expansion coefficient (0: radii unchanged)");
+  s.add("reference_temperature", &Params::reference_temperature).unit("K").positive()
+      .doc("T_0: the radii when the reference radii are first captured are the radii at this temperature (keep it the same in every stage)");
+  return s;
+}
+
+TemperatureHistory::TemperatureHistory(const Params& p) : p_(p) {
+  std::vector<Diagnostic> d;
+  if (p.time.empty()) d.push_back({"/time", "expected at least one time [s], found none"});
+  if (p.temperature.size() != p.time.size())
+    d.push_back({"/temperature", "expected " + std::to_string(p.time.size()) + " temperatures [K] (one per time), found " +
+                                     std::to_string(p.temperature.size())});
+  for (std::size_t k = 1; k < p.time.size(); ++k)
+    if (!(p.time[k] > p.time[k - 1]))
+      d.push_back({"/time/" + std::to_string(k), "expected times increasing strictly, found " + num(p.time[k]) + " s after " +
+                                                     num(p.time[k - 1]) + " s"});
+  for (std::size_t k = 0; k < p.temperature.size(); ++k) {
+    if (!(p.temperature[k] > 0.0) || !std::isfinite(p.temperature[k]))
+      d.push_back({"/temperature/" + std::to_string(k), "expected a finite temperature > 0 K, found " + num(p.temperature[k])});
+    else if (!(thermal::expanded_radius(1.0, p.expansion_coefficient, p.temperature[k], p.reference_temperature) > 0.0))
+      d.push_back({"/expansion_coefficient", "expected 1 + alpha_T (T - T_0) > 0 for every tabulated T, found " +
+                                                 num(1.0 + p.expansion_coefficient * (p.temperature[k] - p.reference_temperature)) +
+                                                 " at T = " + num(p.temperature[k]) + " K"});
+  }
+  if (!d.empty()) throw ConfigError(d);
+  current_ = p_.temperature.front();
+}
+
+void TemperatureHistory::declare(Declarations& d) const {
+  d.particle_fields.push_back({"temperature", 1, "K", 0.0, true});
+  d.writes = {"temperature"};
+  if (p_.expansion_coefficient != 0.0) {
+    d.particle_fields.push_back({"radius_ref", 1, "m", 0.0, true});
+    d.particle_fields.push_back({"radius_ref_temperature", 1, "K", 0.0, false});
+    d.reads = {"mass"};
+    d.writes.insert(d.writes.end(), {"radius", "inertia"});
+  }
+}
+
+void TemperatureHistory::bind(State& s) {
+  if (restored_) {  // resumed mid-stage: temperature, radii and references come from the checkpoint
+    restored_ = false;
+    return;
+  }
+  auto& p = s.particles;
+  if (p_.expansion_coefficient != 0.0) {
+    auto& rr = p.fields.data("radius_ref");
+    auto& tr = p.fields.data("radius_ref_temperature");
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (rr[i] > 0.0) {
+        if (tr[i] != p_.reference_temperature)
+          throw SetupError("temperature_history: the reference radii were captured at T_0 = " + num(tr[i]) +
+                           " K (particle id " + std::to_string(p.id[i]) + "), but this stage gives reference_temperature = " +
+                           num(p_.reference_temperature) + " K; keep it the same in every stage");
+        continue;
+      }
+      rr[i] = p.radius[i];  // captured once: the current radius is the radius at T_0
+      tr[i] = p_.reference_temperature;
+    }
+  }
+  apply(s, temperature_at(0.0));  // the stage's first force pass sees T(0)
+}
+
+void TemperatureHistory::apply(State& s, double T) {
+  auto& p = s.particles;
+  current_ = T;
+  auto& f = p.fields.data("temperature");
+  std::fill(f.begin(), f.end(), T);
+  if (p_.expansion_coefficient == 0.0) return;
+  const auto& rr = p.fields.data("radius_ref");
+  const double a = p_.expansion_coefficient, T0 = p_.reference_temperature;
+  const std::int64_t n = static_cast<std::int64_t>(p.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < n; ++i) {
+    p.radius[i] = thermal::expanded_radius(rr[i], a, T, T0);
+    p.inertia[i] = 0.4 * p.mass[i] * p.radius[i] * p.radius[i];
+  }
+}
+
+void TemperatureHistory::advance(State& s, const StepInfo& step) {
+  // step.time = stage_phys_t0 + time_scale * (mechanical stage time): the table time is the
+  // physical time since the stage start.
+  apply(s, temperature_at(step.time - s.stage_phys_t0));
+}
+
+void TemperatureHistory::visit(Archive& ar, const std::string& prefix) {
+  ar.visit(prefix + "/temperature", current_);
+  if (ar.reading()) restored_ = true;
+}
+
+}  // namespace sparkdem::physics
