@@ -1,4 +1,5 @@
 #include "io/scenario/scenario.hpp"
+#include "io/scenario/pipeline.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -464,6 +465,18 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
   if (!st.from_snapshot.empty() && !std::filesystem::exists(st.from_snapshot))
     errors.push_back({path + "/from_snapshot", "cannot read the snapshot file '" + st.from_snapshot + "'"});
   if (!st.from_snapshot.empty()) ctx.has_particles = true;
+  if (!st.from_snapshot.empty() && std::filesystem::exists(st.from_snapshot)) {
+    // The stage starts with the snapshot's walls: their names (and shapes) are checked against it.
+    try {
+      State snap;
+      (void)read_checkpoint(st.from_snapshot, snap);
+      ctx.wall_names.clear();
+      ctx.walls = snap.walls;
+      for (const auto& w : snap.walls) ctx.wall_names.insert(w.name);
+    } catch (const std::exception& e) {
+      errors.push_back({path + "/from_snapshot", std::string("cannot load the snapshot: ") + e.what()});
+    }
+  }
   // Generator
   if (st.type != "dynamics") {
     auto g = ctx.reg->generators().find(st.type);

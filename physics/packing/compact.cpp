@@ -47,7 +47,7 @@ ParamSpec<CompactParams> compact_spec() {
   using P = CompactParams;
   ParamSpec<P> s("compact", "object",
                  "porosity of a powder compact in a die (stage key): columns porosity = 1 - V_solid / (pi R^2 H) (spheres "
-                 "clipped to the die and the punches, sphere-sphere lens volumes subtracted), porosity_interior, "
+                 "clipped to the die and the punches, sphere-sphere lens volumes subtracted), porosity_interior, porosity_mass (lenses not subtracted: mass-conserving, for sintered compacts), "
                  "relative_density, compact_height");
   s.add("die", &P::die).doc("the die: a cylinder wall (its current radius R)");
   s.add("bottom", &P::bottom).doc("lower punch: a plane wall normal to the die axis");
@@ -87,13 +87,13 @@ CylinderRegion compact_region(const State& s, const CompactParams& p) {
 }
 
 std::vector<std::string> CompactMonitor::columns(const State&) const {
-  return {"porosity", "porosity_interior", "relative_density", "compact_height"};
+  return {"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass"};
 }
 
 std::vector<double> CompactMonitor::values(const State& s) const {
   const CylinderRegion region = compact_region(s, p_);
   const auto& p = s.particles;
-  if (p.size() == 0) return {1.0, 1.0, 0.0, region.height};
+  if (p.size() == 0) return {1.0, 1.0, 0.0, region.height, 1.0};
   const auto pairs = find_pairs(p.position, p.radius, 0.0);
   const double porosity = 1.0 - compact_solid_volume(p.position, p.radius, pairs, region) / region_volume(region);
   double margin = p_.interior_margin;
@@ -104,7 +104,10 @@ std::vector<double> CompactMonitor::values(const State& s) const {
     const Region inner = shrink(region, margin);
     interior = 1.0 - compact_solid_volume(p.position, p.radius, pairs, inner) / region_volume(inner);
   }
-  return {porosity, interior, 1.0 - porosity, region.height};
+  // Mass-conserving porosity: the spheres' volume without subtracting the lenses (in sintering
+  // DEM the overlap stands for shrinkage; the lens material sits in the neck).
+  const double porosity_mass = 1.0 - compact_solid_volume(p.position, p.radius, {}, region) / region_volume(region);
+  return {porosity, interior, 1.0 - porosity, region.height, porosity_mass};
 }
 
 }  // namespace sparkdem::physics

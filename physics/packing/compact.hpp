@@ -61,7 +61,10 @@ CylinderRegion compact_region(const State& s, const CompactParams& p);
 
 /// Time-series columns: porosity = 1 - V_s / (pi R^2 H); porosity_interior (the same in the
 /// region shrunk by interior_margin from every wall); relative_density = 1 - porosity;
-/// compact_height = H [m]. Overlapping pairs are found afresh from the current positions
+/// compact_height = H [m]; porosity_mass = 1 - sum_i V(sphere_i ∩ region) / (pi R^2 H), the
+/// lenses NOT subtracted: in a sintering compact the overlap stands for shrinkage and the lens
+/// material sits in the neck, so this is the porosity by mass (Archimedes) — the one to compare
+/// with measured samples; `porosity` (lenses subtracted) falls behind it as necks grow. Overlapping pairs are found afresh from the current positions
 /// (cell-grid search, O(N); deterministic order), so bonded pairs and pairs of any law count.
 class CompactMonitor final : public Monitor {
  public:

@@ -137,7 +137,7 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   const CompactMonitor mon(cp);
   const auto cols = mon.columns(s);
   const auto vals = mon.values(s);
-  REQUIRE(cols == std::vector<std::string>{"porosity", "porosity_interior", "relative_density", "compact_height"});
+  REQUIRE(cols == std::vector<std::string>{"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass"});
   const double V = sphere_volume(r), VL = lens_volume(r, r, 1.6e-3);
   const double H = 8.8e-3, R = 4.5e-3;
   const double porosity = 1.0 - (4.0 * V - VL - cap_volume(r, 0.3e-3)) / (kPi * R * R * H);
@@ -146,6 +146,8 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   CHECK(std::abs(vals[1] - interior) <= 1e-12);
   CHECK(std::abs(vals[2] - (1.0 - porosity)) <= 1e-15);
   CHECK(std::abs(vals[3] - H) <= 1e-18);
+  // By mass: the lens is not subtracted.
+  CHECK(std::abs(vals[4] - (1.0 - (4.0 * V - cap_volume(r, 0.3e-3)) / (kPi * R * R * H))) <= 1e-12);
   // The die axis may point either way; the punches must face each other across it.
   std::get<CylinderShape>(s.walls[0].shape).axis = -Vec3::UnitZ();
   CHECK(std::abs(mon.values(s)[0] - porosity) <= 1e-12);
