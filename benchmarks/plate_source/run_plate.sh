@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Thick-plate validation of seed 001 (§3.2): runs configs/plate_source.json for each N and seed
-# (one thread, OMP_WAIT_POLICY=PASSIVE), times each run, then calls bench_plate, which computes the
+# (one thread, OMP_WAIT_POLICY=PASSIVE), times each run (wall and CPU time, GNU /usr/bin/time),
+# then calls bench_plate, which computes the
 # finite-difference reference (grid convergence + Richardson) and the DEM potentials at the control
 # points, and writes results.csv and fd_convergence.csv. See benchmarks/README.md.
 #
@@ -45,11 +46,12 @@ j["name"] = "plate_source_N%s_seed%s" % (sys.argv[3], sys.argv[4])
 j["stages"][0]["generator"]["particles"] = int(sys.argv[3])
 json.dump(j, open(sys.argv[2], "w"), indent=2)
 PY
-    t0=$(date +%s.%N)
-    OMP_NUM_THREADS=1 OMP_WAIT_POLICY=PASSIVE "$sparkdem" run "$d/scene.json" -o "$d/out" --threads 1 --quiet
-    t1=$(date +%s.%N)
-    python3 -c "print(f'{$t1 - $t0:.3f}')" > "$d/wall_time_s"
-    echo "N=$n seed=$s: $(cat "$d/wall_time_s") s; load average $(cut -d' ' -f1-3 /proc/loadavg)"
+    OMP_NUM_THREADS=1 OMP_WAIT_POLICY=PASSIVE /usr/bin/time -f "%e %U %S" -o "$d/time.txt" \
+      "$sparkdem" run "$d/scene.json" -o "$d/out" --threads 1 --quiet
+    read -r wall user sys < "$d/time.txt"
+    echo "$wall" > "$d/wall_time_s"
+    python3 -c "print(f'{$user + $sys:.2f}')" > "$d/cpu_time_s"
+    echo "N=$n seed=$s: wall $wall s, cpu $(cat "$d/cpu_time_s") s; load average $(cut -d' ' -f1-3 /proc/loadavg)"
   done
 done
 "$bench" --csv "$csv" --fd-csv "$fdcsv" --fd-grids "$fdgrids" "${dirs[@]}"
