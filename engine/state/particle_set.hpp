@@ -11,17 +11,25 @@
 namespace sparkdem {
 
 struct SetSelector {
-  enum class Kind { TopLayer, BottomLayer, TouchingWall, Ids, Box };
+  enum class Kind { TopLayer, BottomLayer, TouchingWall, Ids, Box, Cylinder };
   Kind kind = Kind::TopLayer;
   double thickness = 0.0;     ///< [m] TopLayer/BottomLayer: centres within this height of the top/bottom centre
   std::string wall;           ///< TouchingWall: wall name
   double tolerance = 0.0;     ///< [m] TouchingWall: gap allowed between particle surface and wall
   std::vector<Id> ids;        ///< Ids
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  ///< Box: centres inside [lo, hi] [m]
+  /// Cylinder (infinite along its axis): the axis passes through `axis_point` [m] along `axis`
+  /// (any non-zero length; normalised here). With `overlap` false a particle is a member when
+  /// its centre lies within `radius` [m] of the axis (d <= radius); with `overlap` true when the
+  /// sphere reaches into the cylinder (d < radius + r_i).
+  Vec3 axis_point = Vec3::Zero();
+  Vec3 axis = Vec3::UnitZ();
+  double radius = 0.0;
+  bool overlap = false;
 };
 
 /// Members (local indices) of the selector in the current state. Throws SetupError for an
-/// unknown wall.
+/// unknown wall, and for a cylinder with a zero axis or a radius that is not positive.
 inline std::vector<Index> select_particles(const State& s, const SetSelector& sel) {
   const auto& p = s.particles;
   std::vector<Index> out;
@@ -33,6 +41,12 @@ inline std::vector<Index> select_particles(const State& s, const SetSelector& se
     for (const auto& w : s.walls)
       if (w.name == sel.wall) wall = &w;
     if (!wall) throw SetupError("particle set: no wall named '" + sel.wall + "' exists at this stage");
+  }
+  Vec3 axis = sel.axis;
+  if (sel.kind == SetSelector::Kind::Cylinder) {
+    if (!(axis.norm() > 0.0) || !axis.allFinite()) throw SetupError("particle set: a cylinder needs a non-zero axis direction");
+    if (!(sel.radius > 0.0)) throw SetupError("particle set: a cylinder needs radius > 0 [m]");
+    axis.normalize();
   }
   for (std::size_t i = 0; i < p.size(); ++i) {
     bool in = false;
@@ -50,6 +64,12 @@ inline std::vector<Index> select_particles(const State& s, const SetSelector& se
       case SetSelector::Kind::Box:
         in = (p.position[i].array() >= sel.lo.array()).all() && (p.position[i].array() <= sel.hi.array()).all();
         break;
+      case SetSelector::Kind::Cylinder: {
+        const Vec3 rel = p.position[i] - sel.axis_point;
+        const double d = (rel - rel.dot(axis) * axis).norm();  // distance of the centre from the axis
+        in = sel.overlap ? d < sel.radius + p.radius[i] : d <= sel.radius;
+        break;
+      }
     }
     if (in) out.push_back(static_cast<Index>(i));
   }

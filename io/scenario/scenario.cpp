@@ -21,12 +21,14 @@ namespace {
 struct TopParams {
   std::string name = "scenario";
   std::int64_t seed = 12345;
+  std::string description;
 };
 ParamSpec<TopParams> top_spec() {
   ParamSpec<TopParams> s("scenario", "scenario",
                          "top level: materials, contact, walls, stages (each stage: a generator or dynamics)");
   s.add("name", &TopParams::name).doc("scenario name");
   s.add("seed", &TopParams::seed).nonnegative().doc("random seed of every generator");
+  s.add("description", &TopParams::description).doc("free text: what the scenario is and the choices behind it (not used by the run)");
   return s;
 }
 struct MaterialParams {
@@ -88,18 +90,27 @@ struct SetParams {
   double tolerance = 0.0;
   std::vector<double> ids;
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();
+  Vec3 axis_point = Vec3::Zero();
+  Vec3 axis = Vec3::UnitZ();
+  double radius = 0.0;
+  std::string criterion = "centre";
 };
 ParamSpec<SetParams> set_spec() {
   ParamSpec<SetParams> s("particle_set", "particle_set",
                          "a named particle set, evaluated at the start of each stage that lists it in `sets` or "
                          "`prescribe`; stored as the field set/<name>");
-  s.add("type", &SetParams::type).choices({"top_layer", "bottom_layer", "touching_wall", "ids", "box"}).doc("selector");
+  s.add("type", &SetParams::type).choices({"top_layer", "bottom_layer", "touching_wall", "ids", "box", "cylinder"}).doc("selector");
   s.add("thickness", &SetParams::thickness).unit("m").nonnegative().doc("top/bottom_layer: centres within this height of the extreme centre");
   s.add("wall", &SetParams::wall).doc("touching_wall: wall name");
   s.add("tolerance", &SetParams::tolerance).unit("m").nonnegative().doc("touching_wall: allowed surface gap");
   s.add("ids", &SetParams::ids).nonnegative().doc("ids: particle ids");
   s.add_vec3("lo", &SetParams::lo).unit("m").doc("box: lower corner");
   s.add_vec3("hi", &SetParams::hi).unit("m").doc("box: upper corner");
+  s.add_vec3("axis_point", &SetParams::axis_point).unit("m").doc("cylinder: a point of the axis (the cylinder is unbounded along it)");
+  s.add_vec3("axis", &SetParams::axis).unit("1").doc("cylinder: axis direction (any non-zero length)");
+  s.add("radius", &SetParams::radius).unit("m").nonnegative().doc("cylinder: radius (required, > 0)");
+  s.add("criterion", &SetParams::criterion).choices({"centre", "overlap"})
+      .doc("cylinder: members are the particles whose centre lies within the radius of the axis (centre), or that reach into the cylinder (overlap: distance < radius + particle radius)");
   return s;
 }
 
@@ -1080,16 +1091,29 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
         if (sp_.type == "touching_wall") sel.kind = SetSelector::Kind::TouchingWall;
         if (sp_.type == "ids") sel.kind = SetSelector::Kind::Ids;
         if (sp_.type == "box") sel.kind = SetSelector::Kind::Box;
+        if (sp_.type == "cylinder") sel.kind = SetSelector::Kind::Cylinder;
         if ((sp_.type == "top_layer" || sp_.type == "bottom_layer") && !(sp_.thickness > 0.0))
           errors.push_back({sp + "/thickness", "a layer set needs thickness > 0 [m]"});
         if (sp_.type == "touching_wall" && sp_.wall.empty()) errors.push_back({sp + "/wall", "a touching_wall set needs a wall name"});
         if (sp_.type == "ids" && sp_.ids.empty()) errors.push_back({sp + "/ids", "an ids set needs at least one id"});
+        const auto reported = [&errors](const std::string& path) {
+          return std::any_of(errors.begin(), errors.end(), [&path](const Diagnostic& d) { return d.path == path; });
+        };
+        if (sp_.type == "cylinder" && !(sp_.radius > 0.0) && !reported(sp + "/radius"))
+          errors.push_back({sp + "/radius", "a cylinder set needs radius > 0 [m], found " +
+                                                (it.value().is_object() && it.value().contains("radius") ? it.value()["radius"].dump() : std::string("nothing"))});
+        if (sp_.type == "cylinder" && !(sp_.axis.norm() > 0.0) && !reported(sp + "/axis"))
+          errors.push_back({sp + "/axis", "a cylinder set needs a non-zero axis direction [1], found [0, 0, 0]"});
         sel.thickness = sp_.thickness;
         sel.wall = sp_.wall;
         sel.tolerance = sp_.tolerance;
         for (double x : sp_.ids) sel.ids.push_back(static_cast<Id>(x));
         sel.lo = sp_.lo;
         sel.hi = sp_.hi;
+        sel.axis_point = sp_.axis_point;
+        sel.axis = sp_.axis;
+        sel.radius = sp_.radius;
+        sel.overlap = sp_.criterion == "overlap";
         sets[it.key()] = sel;
         resolved_top["particle_sets"][it.key()] = r;
       }

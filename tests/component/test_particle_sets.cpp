@@ -75,3 +75,36 @@ TEST_CASE("a prescribed set moves at its velocity and the rest integrates", "[se
   REQUIRE(s.particles.fields.has("set/top"));
   CHECK(s.particles.fields.info("set/top").output);
 }
+
+TEST_CASE("cylinder set: centre-inside and overlap criteria, any axis", "[sets]") {
+  // Spheres of radius 1 mm in the plane z = 0 at x = 0, 2, 4, 6 mm (y = 0); a cylinder of radius
+  // 3 mm about the z axis through the origin. Centre criterion (d <= R): x = 0, 2 mm. Overlap
+  // criterion (d < R + r = 4 mm): x = 0, 2 mm, and not x = 4 mm (it only touches, d = R + r).
+  State s;
+  for (int k = 0; k < 4; ++k) test::add_sphere(s, Vec3(2e-3 * k, 0, 0), 1e-3, 7900.0);
+  SetSelector sel;
+  sel.kind = SetSelector::Kind::Cylinder;
+  sel.axis_point = Vec3(0, 0, 5e-3);  // any point of the axis
+  sel.axis = Vec3(0, 0, -2);          // any non-zero length, either sense
+  sel.radius = 3e-3;
+  CHECK(select_particles(s, sel) == std::vector<Index>{0, 1});
+  sel.overlap = true;
+  CHECK(select_particles(s, sel) == std::vector<Index>{0, 1});
+  sel.radius = 3.5e-3;  // now x = 4 mm reaches 0.5 mm into it; x = 6 mm does not
+  CHECK(select_particles(s, sel) == std::vector<Index>{0, 1, 2});
+  sel.overlap = false;
+  CHECK(select_particles(s, sel) == std::vector<Index>{0, 1});
+  // An axis along x through (0, 0, 0): every centre lies on it, distance 0.
+  sel.axis_point = Vec3::Zero();
+  sel.axis = Vec3(1, 0, 0);
+  CHECK(select_particles(s, sel).size() == 4);
+  // A tilted axis: along (1, 1, 0) through the origin, d = x / sqrt(2); R = 2 mm keeps x <= 2.83 mm.
+  sel.axis = Vec3(1, 1, 0);
+  sel.radius = 2e-3;
+  CHECK(select_particles(s, sel) == std::vector<Index>{0, 1});
+  sel.axis = Vec3::Zero();
+  CHECK_THROWS_AS(select_particles(s, sel), SetupError);
+  sel.axis = Vec3::UnitZ();
+  sel.radius = 0.0;
+  CHECK_THROWS_AS(select_particles(s, sel), SetupError);
+}

@@ -188,6 +188,21 @@ TEST_CASE("each class of configuration error names its JSON path (exit 2, no out
     ok["stages"][0]["generator"]["mean_radius"] = 1e-5;
     CHECK_NOTHROW(sparkdem::io::load_scenario(ok, registry(), SPARKDEM_SOURCE_DIR));
   }
+  SECTION("cylinder particle set: radius, axis and criterion are checked with their paths") {
+    json j = valid_scene();
+    j["particle_sets"] = {{"src", {{"type", "cylinder"}, {"axis", {0, 0, 0}}}},
+                          {"neg", {{"type", "cylinder"}, {"radius", -1e-3}}},
+                          {"crit", {{"type", "cylinder"}, {"radius", 1e-3}, {"criterion", "centre_inside"}}},
+                          {"short", {{"type", "cylinder"}, {"radius", 1e-3}, {"axis_point", {0, 0}}}}};
+    expect_rejected(j, {{"/particle_sets/src/radius", "a cylinder set needs radius > 0 [m], found nothing"},
+                        {"/particle_sets/src/axis", "non-zero axis direction"},
+                        {"/particle_sets/neg/radius", "found -0.001"},
+                        {"/particle_sets/crit/criterion", "centre_inside"},
+                        {"/particle_sets/short/axis_point", "expected an array of 3 numbers"}});
+    json ok = valid_scene();
+    ok["particle_sets"] = {{"src", {{"type", "cylinder"}, {"axis_point", {0.01, 0.01, 0}}, {"radius", 3e-3}, {"criterion", "overlap"}}}};
+    CHECK_NOTHROW(sparkdem::io::load_scenario(ok, registry(), SPARKDEM_SOURCE_DIR));
+  }
   SECTION("absurdly deep nesting is rejected before anything copies it") {
     // 100000 nested arrays: copying such a value recursively overflowed the stack (segfault).
     ScratchDir dir;
