@@ -484,6 +484,8 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
       ctx.wall_names.clear();
       ctx.walls = snap.walls;
       for (const auto& w : snap.walls) ctx.wall_names.insert(w.name);
+    } catch (const SetupError&) {
+      throw;  // a damaged snapshot is a set-up failure (exit 4), as when the stage starts
     } catch (const std::exception& e) {
       errors.push_back({path + "/from_snapshot", std::string("cannot load the snapshot: ") + e.what()});
     }
