@@ -83,6 +83,15 @@ ElectricalNetwork::Params holm_params() {
 
 }  // namespace
 
+namespace {
+/// A chain of n spheres along z with overlap delta, and the sets "bottom" / "top" on its ends.
+void electroded_chain(State& s, int n, double delta) {
+  chain(s, n, delta);
+  box_set(s, "bottom", Vec3(-1, -1, -0.5 * kR), Vec3(1, 1, 0.5 * kR));
+  box_set(s, "top", Vec3(-1, -1, (n - 1) * (2 * kR - delta) - 0.5 * kR), Vec3(1, 1, 1));
+}
+}  // namespace
+
 TEST_CASE("electrical_network: a chain and two parallel chains of Holm contacts", "[electrical]") {
   const int n = 6;
   const double delta = 1e-5;
@@ -90,9 +99,7 @@ TEST_CASE("electrical_network: a chain and two parallel chains of Holm contacts"
   const double R_chain = (n - 1) / (2.0 * a * kKappa);
   SECTION("one chain") {
     State s;
-    chain(s, n, delta);
-    box_set(s, "bottom", Vec3(-1, -1, -0.5 * kR), Vec3(1, 1, 0.5 * kR));
-    box_set(s, "top", Vec3(-1, -1, (n - 1) * (2 * kR - delta) - 0.5 * kR), Vec3(1, 1, 1));
+    electroded_chain(s, n, delta);
     const auto r = solve(s, holm_params());
     CHECK(test::relative_error(r.resistance, R_chain) < 1e-12);
     CHECK(r.current_mismatch < 1e-12);
@@ -104,9 +111,7 @@ TEST_CASE("electrical_network: a chain and two parallel chains of Holm contacts"
   }
   SECTION("one chain evaluated at 393.15 K with a linear resistivity law") {
     State s;
-    chain(s, n, delta);
-    box_set(s, "bottom", Vec3(-1, -1, -0.5 * kR), Vec3(1, 1, 0.5 * kR));
-    box_set(s, "top", Vec3(-1, -1, (n - 1) * (2 * kR - delta) - 0.5 * kR), Vec3(1, 1, 1));
+    electroded_chain(s, n, delta);
     ElectricalNetwork::Params p = holm_params();
     p.temperature = 393.15;
     p.resistivity_coefficient = 0.004;  // rho(T) = rho_ref (1 + 0.004 x 100 K) = 1.4 rho_ref
@@ -114,9 +119,7 @@ TEST_CASE("electrical_network: a chain and two parallel chains of Holm contacts"
   }
   SECTION("one chain evaluated at 393.15 K with a tabulated conductivity") {
     State s;
-    chain(s, n, delta);
-    box_set(s, "bottom", Vec3(-1, -1, -0.5 * kR), Vec3(1, 1, 0.5 * kR));
-    box_set(s, "top", Vec3(-1, -1, (n - 1) * (2 * kR - delta) - 0.5 * kR), Vec3(1, 1, 1));
+    electroded_chain(s, n, delta);
     ElectricalNetwork::Params p = holm_params();
     p.temperature = 393.15;
     // kappa falls linearly from kKappa at 293.15 K to kKappa / 2 at 493.15 K: at 393.15 K it is
@@ -130,9 +133,7 @@ TEST_CASE("electrical_network: a chain and two parallel chains of Holm contacts"
   }
   SECTION("one chain driven by an injected current: V = I R, the same R") {
     State s;
-    chain(s, n, delta);
-    box_set(s, "bottom", Vec3(-1, -1, -0.5 * kR), Vec3(1, 1, 0.5 * kR));
-    box_set(s, "top", Vec3(-1, -1, (n - 1) * (2 * kR - delta) - 0.5 * kR), Vec3(1, 1, 1));
+    electroded_chain(s, n, delta);
     ElectricalNetwork::Params p = holm_params();
     p.current = 3.0;
     const auto r = solve(s, p);

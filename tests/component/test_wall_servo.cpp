@@ -11,22 +11,31 @@
 
 using namespace sparkdem;
 
-TEST_CASE("a pressure-controlled punch settles on its target force", "[walls]") {
-  // One frozen sphere (r = 1 mm) on a floor; a punch starts 0.1 mm above it and is driven to
-  // p = 1e5 Pa over A = 1e-6 m^2, i.e. F = 0.1 N. Servo: u_dot = v_max (F_t - F)/F_t.
-  // At rest the punch force must equal F_t within 0.5 % (the servo's steady state is exact; the
-  // band covers the residual oscillation of the undamped servo loop at the end of the run).
-  State s;
+namespace {
+/// One frozen sphere (r = 1 mm, set "all") on a floor under a punch plane at height z_punch [m],
+/// and the Hertz law (E = 1 GPa) of the servo tests.
+ContactModelT<physics::HertzMindlin> frozen_sphere_under_punch(State& s, double z_punch) {
   test::add_sphere(s, Vec3(0, 0, 1e-3), 1e-3, 2500.0);
   s.walls.push_back(test::plane_wall("floor", Vec3::Zero(), Vec3::UnitZ()));
-  s.walls.push_back(test::plane_wall("punch", Vec3(0, 0, 2.1e-3), -Vec3::UnitZ()));
+  s.walls.push_back(test::plane_wall("punch", Vec3(0, 0, z_punch), -Vec3::UnitZ()));
   SetSelector all;
   all.kind = SetSelector::Kind::Ids;
   all.ids = {0};
   assign_set(s, "all", all);
   physics::HertzMindlin::Params lp;
   lp.youngs_modulus = 1e9;
-  ContactModelT<physics::HertzMindlin> law(lp);
+  return ContactModelT<physics::HertzMindlin>(lp);
+}
+}  // namespace
+
+
+TEST_CASE("a pressure-controlled punch settles on its target force", "[walls]") {
+  // One frozen sphere (r = 1 mm) on a floor; a punch starts 0.1 mm above it and is driven to
+  // p = 1e5 Pa over A = 1e-6 m^2, i.e. F = 0.1 N. Servo: u_dot = v_max (F_t - F)/F_t.
+  // At rest the punch force must equal F_t within 0.5 % (the servo's steady state is exact; the
+  // band covers the residual oscillation of the undamped servo loop at the end of the run).
+  State s;
+  const auto law = frozen_sphere_under_punch(s, 2.1e-3);
   Simulation sim(s, law);
   StageConfig cfg = test::stage(1e-6, 40000, 1e-4);
   cfg.prescribed_sets["all"] = Vec3::Zero();
@@ -90,16 +99,7 @@ TEST_CASE("a pressure ramp in physical time reaches its target at time_scale x t
   // 0.1 N within 0.5 % at the end (0.06 s). Lag: with contact stiffness k ~ 5e4 N/m and v_max =
   // 0.05 m/s the proportional servo trails a ramp of rate R = 2 N/s by a relative R / (k v_max).
   State s;
-  test::add_sphere(s, Vec3(0, 0, 1e-3), 1e-3, 2500.0);
-  s.walls.push_back(test::plane_wall("floor", Vec3::Zero(), Vec3::UnitZ()));
-  s.walls.push_back(test::plane_wall("punch", Vec3(0, 0, 2.05e-3), -Vec3::UnitZ()));
-  SetSelector all;
-  all.kind = SetSelector::Kind::Ids;
-  all.ids = {0};
-  assign_set(s, "all", all);
-  physics::HertzMindlin::Params lp;
-  lp.youngs_modulus = 1e9;
-  ContactModelT<physics::HertzMindlin> law(lp);
+  const auto law = frozen_sphere_under_punch(s, 2.05e-3);
   Simulation sim(s, law);
   StageConfig cfg = test::stage(1e-6, 60000, 1e-4);
   cfg.time_scale = 1000.0;
