@@ -1,0 +1,63 @@
+/// Seed 001's uniform-field validation (Hubert et al. 2017, section 3.1) on the shipped scenario
+/// configs/resistance_cylinder.json at N = 5000 ([slow]: the fill takes several minutes on one
+/// core): the equivalent resistance of the transmission-surface network against
+/// R_th = rho_e (l_d - 2 r_mean) / (pi r_d^2), and the network's own consistency (Kirchhoff, power).
+///
+/// Tolerance. GranOO's three N = 5000 cylinders are off by 4.0-5.8 % (seed 001 Table III). This
+/// engine's packings (benchmarks/resistance_cylinder/results.csv) were off by +5.0 and +5.2 % at
+/// N = 5000 (two seeds) and +5.0 to +5.6 % over every run with N >= 5000; at N = 1000 three seeds
+/// spread over 5.7-11.6 % (sample standard deviation 3.0 points). 8 % is 2.4 points above the
+/// largest N >= 5000 error measured, far outside the N = 5000 seed-to-seed spread (0.15 points)
+/// but inside what a packing of a different character (N = 1000's jammed ones) gives, so a failure
+/// means the packing or the network changed, not that a seed drew badly. It is a regression guard,
+/// not the 1.5 % target (not met: see results.md).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+TEST_CASE("seed 001 cylinder: R_DEM against rho_e l / A at N = 5000", "[electrical][slow]") {
+  const fs::path src = fs::path(SPARKDEM_SOURCE_DIR) / "configs" / "resistance_cylinder.json";
+  json scene = json::parse(std::ifstream(src));
+  json& gen = scene["stages"][0]["generator"];
+  REQUIRE(scene["stages"][0]["type"] == "fill");
+  gen["particles"] = 5000;
+  const fs::path dir = fs::temp_directory_path() / ("sparkdem_cylinder_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "scene.json") << scene.dump(1);
+  const std::string cmd = std::string(SPARKDEM_BINARY) + " run " + (dir / "scene.json").string() + " -o " +
+                          (dir / "out").string() + " --quiet --threads 1";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  const json s = json::parse(std::ifstream(dir / "out" / "summary.json"));
+  fs::remove_all(dir);
+  REQUIRE(s["status"] == "completed");
+
+  const json& el = scene["stages"][1]["modules"]["electrical_network"];
+  const double rho_e = el["resistivity"].get<double>();
+  const double r_d = gen["radius"].get<double>(), l_d = gen["length"].get<double>();
+  const double r_mean = s["stages"][0]["packing"]["mean_radius"].get<double>();
+  const json& fin = s["stages"][1]["final"];
+  // At N = 5000 the fill reaches its target (density, settled, grown) before the hard stop.
+  CHECK(s["stages"][0]["until_reached"].get<bool>());
+  const double r_dem = fin["electrical_resistance"].get<double>();
+  const double r_th = rho_e * (l_d - 2.0 * r_mean) / (M_PI * r_d * r_d);
+  const double error = r_dem / r_th - 1.0;
+  INFO("R_DEM = " << r_dem << " Ohm, R_th = " << r_th << " Ohm, error = " << 100.0 * error << " %, r_mean = " << r_mean
+                  << " m");
+
+  // The network itself: Kirchhoff at both electrodes, power = V I, almost no floating particle.
+  CHECK(fin["electrical_current_mismatch"].get<double>() < 1e-9);
+  CHECK(fin["electrical_power_mismatch"].get<double>() < 1e-9);
+  CHECK(fin["electrical_floating_nodes"].get<double>() <= 0.01 * 5000);
+  // Against the continuum.
+  CHECK(std::abs(error) <= 0.08);
+}
