@@ -160,4 +160,20 @@ inline void advance_wall(Wall& w, double t_stage, double dt, double area_hint, d
   }
 }
 
+/// Move a plane wall along its normal so that the nearest of the given spheres' surfaces is `gap`
+/// [m] away (a punch put on top of a packing). No-op for a cylinder or no spheres.
+inline void place_plane_at_clearance(Wall& w, const std::vector<Vec3>& centres, const std::vector<double>& radii,
+                                     double gap) {
+  if (!w.is_plane() || centres.empty()) return;
+  double nearest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < centres.size(); ++i) {
+    Vec3 n;
+    double d;
+    w.distance(centres[i], n, d);
+    nearest = std::min(nearest, d - radii[i]);
+  }
+  auto& plane = std::get<PlaneShape>(w.shape);
+  plane.point += (nearest - gap) * plane.normal;
+}
+
 }  // namespace sparkdem

@@ -1,3 +1,4 @@
+#include <limits>
 #include "io/scenario/pipeline.hpp"
 
 #include <omp.h>
@@ -308,7 +309,12 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         }
         for (const auto& n : st.remove_walls)
           std::erase_if(s.walls, [&](const Wall& w) { return w.name == n; });
-        for (const auto& w : st.add_walls) s.walls.push_back(w);
+        for (std::size_t k = 0; k < st.add_walls.size(); ++k) {
+          Wall w = st.add_walls[k];
+          const double gap = k < st.add_wall_clearance.size() ? st.add_wall_clearance[k] : -1.0;
+          if (gap >= 0.0) place_plane_at_clearance(w, s.particles.position, s.particles.radius, gap);
+          s.walls.push_back(std::move(w));
+        }
         if (st.generator) st.generator->generate(s);
         s.stage_index = stage_index;
       }

@@ -49,6 +49,7 @@ struct WallParams {
   Vec3 base = Vec3::Zero();
   Vec3 axis = Vec3::UnitZ();
   double radius = 0.0;
+  double clearance = -1.0;
 };
 ParamSpec<WallParams> wall_spec() {
   ParamSpec<WallParams> s("wall", "wall", "a plane (normal into the domain) or a cylinder (particles inside)");
@@ -56,6 +57,8 @@ ParamSpec<WallParams> wall_spec() {
   s.add("type", &WallParams::type).choices({"plane", "cylinder"}).doc("shape");
   s.add_vec3("point", &WallParams::point).unit("m").doc("plane: a point on the plane");
   s.add_vec3("normal", &WallParams::normal).unit("1").doc("plane: normal pointing into the particle domain");
+  s.add("clearance", &WallParams::clearance).unit("m")
+      .doc("plane added by a stage: placed along its normal at this gap from the nearest particle surface at the stage start (e.g. a punch on a packing); < 0: at `point`");
   s.add_vec3("base", &WallParams::base).unit("m").doc("cylinder: a point on the axis");
   s.add_vec3("axis", &WallParams::axis).unit("1").doc("cylinder: axis direction");
   s.add("radius", &WallParams::radius).unit("m").nonnegative().doc("cylinder: radius");
@@ -605,6 +608,10 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
       for (std::size_t q = 0; q < js["add_walls"].size(); ++q) {
         json rw;
         st.add_walls.push_back(make_wall(js["add_walls"][q], path + "/add_walls/" + std::to_string(q), errors, rw));
+        const double clearance = rw.value("clearance", -1.0);
+        if (clearance >= 0.0 && !st.add_walls.back().is_plane())
+          errors.push_back({path + "/add_walls/" + std::to_string(q) + "/clearance", "expected a plane wall for `clearance`, found a cylinder"});
+        st.add_wall_clearance.push_back(clearance);
         if (!ctx.wall_names.insert(st.add_walls.back().name).second)
           errors.push_back({path + "/add_walls/" + std::to_string(q) + "/name", "duplicate wall name \"" + st.add_walls.back().name + "\""});
         r["add_walls"].push_back(rw);

@@ -42,6 +42,9 @@ struct StageDef {
   std::vector<std::unique_ptr<Module>> modules;
   std::unique_ptr<ContactModel> law;  ///< stage override, else the scenario's
   std::vector<Wall> add_walls;
+  /// Per added wall: >= 0 places the plane along its normal at this gap [m] from the nearest
+  /// particle surface when the stage starts (a punch put on top of a packing); < 0: as given.
+  std::vector<double> add_wall_clearance;
   std::vector<std::string> remove_walls;
   std::string from_snapshot;          ///< load particles, contacts and walls from a checkpoint
   double create_bonds_gap = -1.0;     ///< >= 0: bond every pair with gap <= this at the stage start [m]

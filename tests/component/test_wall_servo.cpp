@@ -129,3 +129,17 @@ TEST_CASE("a pressure ramp in physical time reaches its target at time_scale x t
   }
   CHECK(force.at(60000) == Approx(0.1).epsilon(5e-3));
 }
+
+TEST_CASE("a plane placed at a clearance above a packing touches its highest sphere", "[walls]") {
+  // Spheres whose tops are at z = 1.0, 2.5 and 1.9 mm; a punch (normal -z) placed with
+  // clearance 0.1 mm must end 0.1 mm above the highest top, z = 2.6 mm, whatever its point was;
+  // a floor (normal +z) with clearance 0 touches the lowest bottom, z = 0.
+  const std::vector<Vec3> x = {Vec3(0, 0, 0.5e-3), Vec3(1e-3, 0, 2.0e-3), Vec3(0, 2e-3, 1.6e-3)};
+  const std::vector<double> r = {0.5e-3, 0.5e-3, 0.3e-3};
+  Wall punch = test::plane_wall("punch", Vec3(5, 5, 40e-3), -Vec3::UnitZ());
+  place_plane_at_clearance(punch, x, r, 0.1e-3);
+  CHECK(std::get<PlaneShape>(punch.shape).point.z() == Approx(2.6e-3).epsilon(1e-12));
+  Wall floor = test::plane_wall("floor", Vec3(0, 0, -7e-3), Vec3::UnitZ());
+  place_plane_at_clearance(floor, x, r, 0.0);
+  CHECK(std::abs(std::get<PlaneShape>(floor.shape).point.z()) < 1e-15);
+}
