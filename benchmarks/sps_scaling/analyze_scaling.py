@@ -32,7 +32,7 @@ def load(run):
     u = np.array([float(r["wall_punch_offset"]) for r in rows])
     work = np.concatenate([[0.0], np.cumsum(0.5 * (F[1:] + F[:-1]) * np.diff(u))])
     on = work > 0.01 * work[-1]
-    ratio = float(np.max(ke[on] / work[on])) if on.any() else float("nan")
+    ratio = float(np.max(ke[on] / work[on])) if on.any() and work[-1] > 0 else float("nan")
     phi_at_T = {}
     for t in T_GRID:
         k = np.argmax(T >= t - 1e-9)
