@@ -1,3 +1,4 @@
+#include <cstdio>
 #include "engine/simulation.hpp"
 
 #include <algorithm>
@@ -9,6 +10,15 @@
 #include "engine/core/interrupt.hpp"
 #include "engine/integrate/velocity_verlet.hpp"
 #include "engine/state/pair_transfer.hpp"
+
+namespace {
+/// A number with 6 significant digits (std::to_string prints 1e-9 s as 0.000000).
+std::string fmt_g(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+}  // namespace
 
 namespace sparkdem {
 
@@ -442,9 +452,9 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.stable_dt_at_start = mechanical_stable_dt();
   res.dt_fraction_used = dt_used / res.stable_dt_at_start;
   if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt)
-    throw SetupError("stage '" + cfg.name + "': dt = " + std::to_string(dt_used) + " s is " +
-                     std::to_string(res.dt_fraction_used) + " of the stable step " +
-                     std::to_string(res.stable_dt_at_start) + " s of the contact law; lower dt or set allow_unstable_dt");
+    throw SetupError("stage '" + cfg.name + "': dt = " + fmt_g(dt_used) + " s is " + fmt_g(res.dt_fraction_used) +
+                     " of the stable step " + fmt_g(res.stable_dt_at_start) +
+                     " s of the contact law; lower dt or set allow_unstable_dt");
   // Fixed-clock modules: their step against their own stable step (in their time domain).
   // Adaptive clocks choose their substeps from it; event clocks run quasi-static solves.
   auto check_modules = [&](bool at_start) {
@@ -544,7 +554,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
       const double st = mechanical_stable_dt();
       if (dt_used > st)
         throw PhysicsError(s_.step, {}, "time step",
-                           "dt = " + std::to_string(dt_used) + " s now exceeds the stable step " + std::to_string(st) +
+                           "dt = " + fmt_g(dt_used) + " s now exceeds the stable step " + fmt_g(st) +
                                " s of the current state (contacts stiffened); lower dt_fraction or dt");      check_modules(false);
     }
     const bool row = cfg.timeseries_every > 0 && kk % cfg.timeseries_every == 0;

@@ -11,7 +11,9 @@
 ///   double tangential_stiffness(const ContactGeometry&) const; // [N/m]
 ///   double rayleigh_dt(double radius, double density) const; // +inf if not applicable [s]
 /// and optionally normal_stiffness(g, state) / tangential_stiffness(g, state) when the stiffness
-/// of a pair depends on its state (used for the stable step of the contact table's pairs).
+/// of a pair depends on its state (used for the stable step of the contact table's pairs), and
+/// damping(g, state) -> {c_n, c_t} [N s/m] when its dashpots are strong enough to limit the step
+/// (explicit damping: dt <= (2/w)(sqrt(1 + z^2) - z) per Gershgorin row, z the row's damping ratio).
 /// and optionally, for pairs whose life the law decides (a sintered neck outlives zero or
 /// negative overlap):
 ///   static constexpr bool kPersistent = true;
@@ -216,6 +218,10 @@ class ContactModelT final : public ContactModel {
     double dt = std::numeric_limits<double>::infinity();
     const std::size_t n = p.size();
     std::vector<double> row = extra_rows ? *extra_rows : std::vector<double>(n, 0.0);
+    // Damping rows [1/s] (laws that report their dashpots): the same Gershgorin structure as the
+    // stiffness rows, beta_i = sum_j [c_n (1/m_i + 1/sqrt(m_i m_j)) + c_t (... rotations ...)].
+    constexpr bool damped = requires(const Law& l, const ContactGeometry& g, const double* st) { l.damping(g, st); };
+    std::vector<double> beta(damped ? n : 0, 0.0);
     for (std::size_t i = 0; i < n; ++i) {
       const double vol = 4.0 / 3.0 * detail::kPi * p.radius[i] * p.radius[i] * p.radius[i];
       dt = std::min(dt, law_.rayleigh_dt(p.radius[i], p.mass[i] / vol));
@@ -244,6 +250,11 @@ class ContactModelT final : public ContactModel {
       const double iij = p.radius[i] * p.radius[j] / std::sqrt(p.inertia[i] * p.inertia[j]);
       row[i] += kn * (1.0 / p.mass[i] + mij) + kt * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i] + mij + iij);
       row[j] += kn * (1.0 / p.mass[j] + mij) + kt * (1.0 / p.mass[j] + p.radius[j] * p.radius[j] / p.inertia[j] + mij + iij);
+      if constexpr (damped) {
+        const auto [cn, ct] = law_.damping(g, t.state(r));
+        beta[i] += cn * (1.0 / p.mass[i] + mij) + ct * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i] + mij + iij);
+        beta[j] += cn * (1.0 / p.mass[j] + mij) + ct * (1.0 / p.mass[j] + p.radius[j] * p.radius[j] / p.inertia[j] + mij + iij);
+      }
     }
     for (std::size_t i = 0; i < n; ++i) {
       for (const Wall& w : walls) {
@@ -261,7 +272,17 @@ class ContactModelT final : public ContactModel {
         row[i] += law_.normal_stiffness(g) / p.mass[i] +
                   law_.tangential_stiffness(g) * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i]);
       }
-      if (row[i] > 0.0) dt = std::min(dt, 2.0 / std::sqrt(row[i]));
+      if (row[i] > 0.0) {
+        const double w = std::sqrt(row[i]);
+        if constexpr (damped) {
+          // Velocity Verlet with explicit damping: stable for dt <= (2/w)(sqrt(1 + z^2) - z),
+          // z = beta / (2 w) the damping ratio of the row (-> 2/beta when damping dominates).
+          const double z = 0.5 * beta[i] / w;
+          dt = std::min(dt, 2.0 / w * (std::sqrt(1.0 + z * z) - z));
+        } else {
+          dt = std::min(dt, 2.0 / w);
+        }
+      }
     }
     return dt;
   }

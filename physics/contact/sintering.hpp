@@ -65,6 +65,7 @@
 #include <limits>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "engine/contact/geometry.hpp"
@@ -306,6 +307,11 @@ struct Sintering {
   }
   double tangential_stiffness(const ContactGeometry& g, const double* st) const {
     return 8.0 * g_star_ * std::sqrt(g.r_eff * std::abs(g.overlap - st[kViscous]));
+  }
+  /// Numerical dashpots of a live pair {c_n, c_t} [N s/m] (the explicit-damping step limit).
+  std::pair<double, double> damping(const ContactGeometry& g, const double* st) const {
+    return {2.0 * p_.damping_ratio * std::sqrt(g.m_eff * normal_stiffness(g, st)),
+            2.0 * p_.damping_ratio * std::sqrt(g.m_eff * tangential_stiffness(g, st))};
   }
   double normal_stiffness(const ContactGeometry& g) const { return kernel::hertz_stiffness(e_star_, g.r_eff, std::abs(g.overlap)); }
   double tangential_stiffness(const ContactGeometry& g) const { return 8.0 * g_star_ * std::sqrt(g.r_eff * std::abs(g.overlap)); }

@@ -205,3 +205,37 @@ TEST_CASE("Sintering neck: persistent beyond contact, bonded when cold", "[sinte
   CHECK(fc.force.dot(g.n) == Approx(kernel::hertz_force(law.params().youngs_modulus / (2 * (1 - 0.09)), g.r_eff, g.overlap)));
   CHECK_FALSE(law.alive(cold.data()));
 }
+
+TEST_CASE("Sintering: the stable step accounts for the numerical dashpots", "[sintering]") {
+  // A cold (elastic) pair of equal spheres overlapping by 0.05 r. Gershgorin rows (equal masses,
+  // I = 2/5 m r^2): w^2 = (2 k_n + 7 k_t) / m, beta = (2 c_n + 7 c_t) / m, c = 2 zeta sqrt(m* k);
+  // the explicit-damping bound is dt = (2/w)(sqrt(1 + z^2) - z), z = beta / (2 w), to 1e-12.
+  // (A hot press at time scale 4e3 with damping_ratio 0.5 blew up at 3x this bound while the
+  // undamped bound 2/w held: benchmarks/README.md, "SPS hot press".) Damping ratio 0: 2/w.
+  auto stable = [&](double damping_ratio) {
+    State s;
+    const double h0 = 0.05 * kR;
+    test::add_sphere(s, Vec3(-(kR - 0.5 * h0), 0, 0), kR, kRho);
+    test::add_sphere(s, Vec3(kR - 0.5 * h0, 0, 0), kR, kRho);
+    auto p = law_params();
+    p.temperature = 300.0;
+    p.damping_ratio = damping_ratio;
+    const ContactModelT<Sintering> law(p);
+    Simulation sim(s, law);
+    test::NullObserver obs;
+    sim.run_stage(test::stage(1e-18, 1, 0.2 * kR), obs);  // builds the contact row; moves nothing
+    return sim.mechanical_stable_dt();
+  };
+  const auto p = law_params();
+  const double m = test::sphere_mass(kR, kRho), m_eff = 0.5 * m, r_eff = 0.5 * kR, h = 0.05 * kR;
+  const double kn = 2.0 * kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio) * std::sqrt(r_eff * h);
+  const double kt = 8.0 * kernel::effective_shear_modulus(p.youngs_modulus, p.poisson_ratio) * std::sqrt(r_eff * h);
+  const double w = std::sqrt((2.0 * kn + 7.0 * kt) / m);
+  for (double zeta : {0.0, 0.5, 3.0}) {
+    const double cn = 2.0 * zeta * std::sqrt(m_eff * kn), ct = 2.0 * zeta * std::sqrt(m_eff * kt);
+    const double z = 0.5 * (2.0 * cn + 7.0 * ct) / m / w;
+    const double expected = 2.0 / w * (std::sqrt(1.0 + z * z) - z);
+    INFO("damping ratio " << zeta << ": stable step " << stable(zeta) << " s, closed form " << expected << " s");
+    CHECK(stable(zeta) == Approx(expected).epsilon(1e-9));
+  }
+}
