@@ -112,12 +112,20 @@ struct MaxwellStep {
   double force;       ///< F at the end of the step
   double flow;        ///< du: dashpot displacement over the step
 };
+/// The step's decay factors {e^-x, phi(x)} for x = k dt / eta (eta = +inf: {1, 1}).
+struct MaxwellFactors {
+  double decay;  ///< e^-x
+  double phi;    ///< (1 - e^-x)/x
+};
+inline MaxwellFactors maxwell_factors(double k, double eta, double dt) {
+  if (!(eta < std::numeric_limits<double>::infinity())) return {1.0, 1.0};
+  const double x = k * dt / eta;
+  return {std::exp(-x), x > 1e-8 ? -std::expm1(-x) / x : 1.0 - 0.5 * x};
+}
 inline MaxwellStep maxwell_step(double force, double k, double eta, double v, double dt) {
   if (!(eta < std::numeric_limits<double>::infinity())) return {force + k * v * dt, 0.0};
-  const double x = k * dt / eta;
-  const double ex = std::exp(-x);
-  const double phi = x > 1e-8 ? -std::expm1(-x) / x : 1.0 - 0.5 * x;
-  return {force * ex + k * v * dt * phi, dt * (v * (1.0 - phi) + phi * force / eta)};
+  const MaxwellFactors m = maxwell_factors(k, eta, dt);
+  return {force * m.decay + k * v * dt * m.phi, dt * (v * (1.0 - m.phi) + m.phi * force / eta)};
 }
 
 }  // namespace kernel
@@ -254,10 +262,8 @@ struct Sintering {
     const double vt = m.vt.norm();
     if (vt > 0.0 || mag > 0.0) {
       // Same exponential step on each component (the element is linear and isotropic in-plane).
-      const double x = std::isfinite(eta_t) ? kt * dt / eta_t : 0.0;
-      const double ex = std::exp(-x);
-      const double phi = x > 1e-8 ? -std::expm1(-x) / x : 1.0 - 0.5 * x;
-      ft = ft * ex - kt * dt * phi * m.vt;
+      const kernel::MaxwellFactors mf = kernel::maxwell_factors(kt, eta_t, dt);
+      ft = ft * mf.decay - kt * dt * mf.phi * m.vt;
     }
     const double ct = 2.0 * p_.damping_ratio * std::sqrt(g.m_eff * kt);
     Vec3 ftot = ft - ct * m.vt;
