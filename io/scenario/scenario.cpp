@@ -212,6 +212,22 @@ ParamSpec<SweepParams> sweep_spec() {
   s.add("parameter", &SweepParams::parameter).doc("JSON pointer relative to the stage (e.g. /modules/gravity/acceleration/2) substituted by each of `values`");
   return s;
 }
+using Calibration = SweepDef::Calibration;
+ParamSpec<Calibration> calibrate_spec() {
+  ParamSpec<Calibration> s("calibrate", "object",
+                           "with snapshots_of: find the value of `parameter` for which the final `column` on snapshot "
+                           "`snapshot` equals `target` (a scan for the map, then a bracketed search), then run every "
+                           "snapshot at that value");
+  s.add("parameter", &Calibration::parameter).doc("JSON pointer relative to the stage of the calibrated number");
+  s.add("column", &Calibration::column).doc("time-series column whose final value is matched");
+  s.add("snapshot", &Calibration::snapshot).min(0).doc("index k of the calibration snapshot (its at[k])");
+  s.add("target", &Calibration::target).doc("value of `column` to reach");
+  s.add("scan", &Calibration::scan).doc("increasing positive values of the parameter run first (the map); the target must lie between two of them");
+  s.add("tolerance", &Calibration::tolerance).unit("1").positive().doc("relative tolerance on `column`");
+  s.add("max_iterations", &Calibration::max_iterations).min(1).doc("search items after the scan");
+  return s;
+}
+
 json sweep_schema() {
   json j = spec_to_json(sweep_spec().spec());
   j["params"].push_back({{"name", "values"}, {"type", "array"}, {"doc", "parameter: one item per value (any JSON value, validated in place)"}});
@@ -839,8 +855,22 @@ void parse_sweep(const json& js, const std::string& path, const std::vector<Earl
   const std::string sp = path + "/sweep";
   const json& j = js["sweep"];
   json r;
-  const SweepParams p = build(sweep_spec(), j, sp, errors, r, {"values", "seeds", "collect"});
+  const SweepParams p = build(sweep_spec(), j, sp, errors, r, {"values", "seeds", "collect", "calibrate"});
   if (!j.is_object()) return;
+  if (j.contains("calibrate")) {
+    json rc;
+    const Calibration c = build(calibrate_spec(), j["calibrate"], sp + "/calibrate", errors, rc, {});
+    if (!j.contains("snapshots_of")) errors.push_back({sp + "/calibrate", "calibrate goes with snapshots_of (it calibrates on one snapshot)"});
+    for (const char* k : {"parameter", "column", "target", "scan"})
+      if (j["calibrate"].is_object() && !j["calibrate"].contains(k)) errors.push_back({sp + "/calibrate/" + k, "required"});
+    bool increasing = c.scan.size() >= 2;
+    for (std::size_t q = 0; q < c.scan.size(); ++q)
+      if (!(c.scan[q] > 0.0) || (q > 0 && !(c.scan[q] > c.scan[q - 1]))) increasing = false;
+    if (j["calibrate"].is_object() && j["calibrate"].contains("scan") && !increasing)
+      errors.push_back({sp + "/calibrate/scan", "expected at least two positive, increasing values, found " + describe(j["calibrate"]["scan"])});
+    sw.calibrate = c;
+    r["calibrate"] = rc;
+  }
   std::vector<std::string> kinds;
   for (const char* k : {"snapshots_of", "parameter", "seeds"})
     if (j.contains(k)) kinds.push_back(k);
@@ -916,7 +946,7 @@ void parse_sweep(const json& js, const std::string& path, const std::vector<Earl
   resolved = json::object();
   if (j.contains("snapshots_of")) resolved["snapshots_of"] = j["snapshots_of"];
   if (j.contains("parameter")) resolved["parameter"] = j["parameter"];
-  for (const char* k : {"values", "seeds", "collect"})
+  for (const char* k : {"values", "seeds", "collect", "calibrate"})
     if (r.contains(k)) resolved[k] = r[k];
 }
 
@@ -982,6 +1012,21 @@ StageDef build_sweep_stage(StageContext& ctx, const json& js, const std::string&
           errors.push_back(d);
         }
       }
+    }
+  } else if (sw->calibrate && !sw->calibrate->scan.empty()) {
+    // Bind the stage with the first scan value (the others differ only in that number).
+    const std::string bad = check_parameter(sw->stage_json, sw->calibrate->parameter, ptr);
+    StageContext c = item_ctx;
+    if (!bad.empty()) {
+      errors.push_back({path + "/sweep/calibrate/parameter", bad});
+      st = build_stage(c, sw->stage_json, path, errors, r);
+    } else {
+      st = build_stage(c, sw->calibration_json(sw->calibrate->scan.front()), path, errors, r);
+    }
+    columns = c.columns;
+    if (columns) {
+      const std::string unknown = unknown_column(sw->calibrate->column, *columns);
+      if (!unknown.empty()) errors.push_back({path + "/sweep/calibrate/column", unknown});
     }
   } else {
     StageContext c = item_ctx;
@@ -1247,6 +1292,12 @@ json schema_json(const Registry& reg) {
 json SweepDef::item_json(std::size_t k) const {
   json j = stage_json;
   if (kind == Kind::Parameter && k < values.size()) j[json::json_pointer(parameter)] = values[k];
+  return j;
+}
+
+json SweepDef::calibration_json(double value) const {
+  json j = stage_json;
+  if (calibrate) j[json::json_pointer(calibrate->parameter)] = value;
   return j;
 }
 

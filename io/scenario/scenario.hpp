@@ -63,6 +63,7 @@ struct StageDef {
 ///   parameter     one item per value, substituted at a JSON pointer relative to the stage
 ///                 before the stage is bound (each value validated at load time)
 ///   seeds         one item per seed of the state's random generator (an ensemble)
+/// A sweep over snapshots may `calibrate` one parameter on one snapshot first (see Calibration).
 struct SweepDef {
   enum class Kind { Snapshots, Parameter, Seeds };
   Kind kind = Kind::Seeds;
@@ -72,12 +73,29 @@ struct SweepDef {
   std::vector<json> values;          ///< Parameter: one item per value
   std::vector<std::uint64_t> seeds;  ///< Seeds: one item per seed
   std::vector<std::string> collect;  ///< table columns; empty: every final value
+  /// Snapshots + `calibrate`: the items are first `scan` (the parameter's values on snapshot
+  /// `snapshot`: the map), then a bracketed search on that snapshot (secant in (ln value,
+  /// ln column), kept inside the middle 80 % of the bracket) until the final `column` is within
+  /// `tolerance` (relative) of `target`, then one item per snapshot at the calibrated value
+  /// (the validation). Rows carry "phase" (scan | search | validate) and "value".
+  struct Calibration {
+    std::string parameter;           ///< JSON pointer relative to the stage
+    std::string column;              ///< final time-series value matched to the target
+    std::int64_t snapshot = 0;       ///< index k of the snapshot (its `at[k]`)
+    double target = 0.0;
+    std::vector<double> scan;        ///< > 0, increasing
+    double tolerance = 1e-3;
+    std::int64_t max_iterations = 40;
+  };
+  std::optional<Calibration> calibrate;
   json stage_json;                   ///< the stage as written, without "sweep"
   /// A fresh stage (own modules, generator and law) from an item's stage JSON and its resolved
   /// form; the JSON was validated at load time (throws ConfigError otherwise).
   std::function<StageDef(const json& stage_json, json& resolved)> build;
   /// Stage JSON of parameter item k (the value substituted), or the stage JSON.
   json item_json(std::size_t k) const;
+  /// Stage JSON with the calibrated parameter set to `value`.
+  json calibration_json(double value) const;
 };
 
 struct Scenario {

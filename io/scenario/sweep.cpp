@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <fstream>
 #include <numeric>
+#include <optional>
 #include <set>
 
 #include "engine/core/error.hpp"
@@ -63,8 +64,9 @@ std::string cell(const json& v) {
 }
 
 /// The columns of a row that identify its item, per sweep kind.
-std::vector<std::string> key_columns(SweepDef::Kind kind) {
-  switch (kind) {
+std::vector<std::string> key_columns(const SweepDef& sw) {
+  if (sw.calibrate) return {"phase", "value", "snapshot", "snapshot_step", "snapshot_time", "snapshot_value"};
+  switch (sw.kind) {
     case SweepDef::Kind::Parameter: return {"value"};
     case SweepDef::Kind::Seeds: return {"seed"};
     case SweepDef::Kind::Snapshots: return {"snapshot", "snapshot_step", "snapshot_time", "snapshot_value"};
@@ -99,7 +101,7 @@ std::string table_csv(const SweepDef& sw, const json& rows, const std::vector<st
     out += ',';
     out += c;
   };
-  const auto keys = key_columns(sw.kind);
+  const auto keys = key_columns(sw);
   for (const auto& k : keys) add(k);
   add("status");
   for (const auto& c : cols) add(cell(json(c)));
@@ -136,6 +138,87 @@ json values_of(const json& entry) {
     for (auto it = entry["packing"].begin(); it != entry["packing"].end(); ++it)
       if (it.value().is_number() || it.value().is_null()) v["packing." + it.key()] = it.value();
   return v;
+}
+
+/// One item of a sweep: which snapshot (Snapshots) and, when calibrating, which value and phase.
+struct Item {
+  std::size_t index = 0;       ///< snapshot / value / seed index
+  double value = std::nan(""); ///< calibrated parameter's value
+  std::string phase;           ///< scan | search | validate (calibration only)
+};
+
+/// The calibration's state from the rows so far: the evaluated (value, column) points on the
+/// calibration snapshot, and the calibrated value once one is within tolerance.
+struct CalibrationState {
+  std::vector<std::pair<double, double>> points;  ///< sorted by value
+  double found = std::nan("");
+  double achieved = std::nan("");
+  std::size_t searches = 0;
+};
+
+CalibrationState calibration_state(const SweepDef::Calibration& c, const json& rows) {
+  CalibrationState st;
+  for (const auto& r : rows) {
+    const std::string phase = r.value("phase", "");
+    if (phase == "search") ++st.searches;
+    if ((phase != "scan" && phase != "search") || r.value("status", "") != "completed") continue;
+    const double v = number_of(r.value("value", json(nullptr)));
+    const double y = number_of(r.value("values", json::object()).value(c.column, json(nullptr)));
+    if (!std::isfinite(v) || !(y > 0.0)) continue;
+    st.points.emplace_back(v, y);
+    if (std::abs(y / c.target - 1.0) <= c.tolerance && (!std::isfinite(st.found) || std::abs(y / c.target - 1.0) < std::abs(st.achieved / c.target - 1.0))) {
+      st.found = v;
+      st.achieved = y;
+    }
+  }
+  std::sort(st.points.begin(), st.points.end());
+  return st;
+}
+
+/// Next search value: the secant of f = ln(column / target) against ln(value) across the
+/// tightest sign change among the evaluated points, kept in the middle 80 % of that bracket
+/// (in ln value) so the bracket shrinks by at least 10 % per item.
+double next_search_value(const SweepDef::Calibration& c, const CalibrationState& st, const std::string& stage) {
+  for (std::size_t q = 0; q + 1 < st.points.size(); ++q) {
+    const double fa = std::log(st.points[q].second / c.target), fb = std::log(st.points[q + 1].second / c.target);
+    if ((fa < 0.0) == (fb < 0.0)) continue;
+    const double a = std::log(st.points[q].first), b = std::log(st.points[q + 1].first);
+    double x = a - fa * (b - a) / (fb - fa);
+    x = std::clamp(x, a + 0.1 * (b - a), b - 0.1 * (b - a));
+    return std::exp(x);
+  }
+  std::string seen;
+  for (const auto& [v, y] : st.points) seen += (seen.empty() ? "" : ", ") + std::to_string(v) + " -> " + std::to_string(y);
+  throw SetupError("stage '" + stage + "': the calibration target " + c.column + " = " + std::to_string(c.target) +
+                     " is not bracketed by the scan (" + (seen.empty() ? std::string("no completed item") : seen) +
+                     "); widen calibrate/scan");
+}
+
+/// Item j of the sweep given the rows of items 0..j-1, or nothing when the sweep is complete.
+/// `cal_pos`: position of the calibration snapshot among the n taken ones (-1: not taken).
+std::optional<Item> plan_item(const SweepDef& sw, std::size_t j, std::size_t n, const json& rows, const std::string& stage,
+                              std::int64_t cal_pos) {
+  if (!sw.calibrate) {
+    if (j >= n) return std::nullopt;
+    return Item{j, std::nan(""), ""};
+  }
+  const auto& c = *sw.calibrate;
+  if (cal_pos < 0)
+    throw SetupError("stage '" + stage + "': calibrate/snapshot " + std::to_string(c.snapshot) + " was not taken (" +
+                       std::to_string(n) + " snapshots taken)");
+  const auto ks = static_cast<std::size_t>(cal_pos);
+  if (j < c.scan.size()) return Item{ks, c.scan[j], "scan"};
+  const CalibrationState st = calibration_state(c, rows);
+  if (!std::isfinite(st.found)) {
+    if (st.searches >= static_cast<std::size_t>(c.max_iterations))
+      throw SetupError("stage '" + stage + "': the calibration did not reach " + c.column + " within " +
+                         std::to_string(c.tolerance) + " of the target in " + std::to_string(c.max_iterations) + " search items");
+    return Item{ks, next_search_value(c, st, stage), "search"};
+  }
+  std::size_t validated = 0;
+  for (const auto& r : rows) validated += r.value("phase", "") == "validate";
+  if (validated >= n) return std::nullopt;
+  return Item{validated, st.found, "validate"};
 }
 
 }  // namespace
@@ -326,13 +409,27 @@ SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record,
     n = snaps.size();
   }
 
+  std::int64_t cal_pos = -1;
+  if (sw.calibrate)
+    for (std::size_t q = 0; q < snaps.size(); ++q)
+      if (snaps[q].index == sw.calibrate->snapshot) cal_pos = static_cast<std::int64_t>(q);
+
   SweepOutcome out;
   auto write_table = [&] { write_text_atomic(table, table_csv(sw, shown_rows(rows, opt.outdir), table_columns(sw, rows))); };
-  for (std::size_t j = first; j < n; ++j) {
+  for (std::size_t j = first;; ++j) {
+    std::optional<Item> item;
+    try {
+      item = plan_item(sw, j, n, rows, st.cfg.name, cal_pos);
+    } catch (...) {
+      write_table();
+      throw;
+    }
+    if (!item) break;
+    const std::size_t i = item->index;
     const bool resume_item = resuming && j == first;
     json resolved_stage;
     Scenario sub;
-    sub.stages.push_back(sw.build(sw.item_json(j), resolved_stage));
+    sub.stages.push_back(sw.build(sw.calibrate ? sw.calibration_json(item->value) : sw.item_json(i), resolved_stage));
     sub.name = sc.name;
     sub.seed = sc.seed;
     sub.materials = sc.materials;
@@ -345,15 +442,19 @@ SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record,
 
     json row;
     row["item"] = j;
+    if (sw.calibrate) {
+      row["phase"] = item->phase;
+      row["value"] = item->value;
+    }
     switch (sw.kind) {
-      case SweepDef::Kind::Parameter: row["value"] = sw.values[j]; break;
-      case SweepDef::Kind::Seeds: row["seed"] = sw.seeds[j]; break;
+      case SweepDef::Kind::Parameter: row["value"] = sw.values[i]; break;
+      case SweepDef::Kind::Seeds: row["seed"] = sw.seeds[i]; break;
       case SweepDef::Kind::Snapshots:
-        row["snapshot"] = snaps[j].file;
-        row["snapshot_index"] = snaps[j].index;
-        row["snapshot_step"] = snaps[j].step;
-        row["snapshot_time"] = snaps[j].time;
-        row["snapshot_value"] = number_or_null(snaps[j].value);
+        row["snapshot"] = snaps[i].file;
+        row["snapshot_index"] = snaps[i].index;
+        row["snapshot_step"] = snaps[i].step;
+        row["snapshot_time"] = snaps[i].time;
+        row["snapshot_value"] = number_or_null(snaps[i].value);
         break;
     }
     const fs::path item_dir = dir / std::to_string(j);
@@ -363,12 +464,12 @@ SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record,
     State start;
     if (!resume_item) {
       if (sw.kind == SweepDef::Kind::Snapshots) {
-        read_checkpoint(snaps[j].file, start);
+        read_checkpoint(snaps[i].file, start);
         start.materials = sc.materials;
         start.rng = input.rng;
       } else {
         start = input;
-        if (sw.kind == SweepDef::Kind::Seeds) start.rng.seed(sw.seeds[j]);
+        if (sw.kind == SweepDef::Kind::Seeds) start.rng.seed(sw.seeds[i]);
       }
     }
     RunOptions o;
@@ -420,6 +521,16 @@ SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record,
   x["kind"] = kind_name(sw.kind);
   if (sw.kind == SweepDef::Kind::Parameter) x["parameter"] = sw.parameter;
   if (sw.kind == SweepDef::Kind::Snapshots) x["snapshots_of"] = sw.snapshots_of;
+  if (sw.calibrate) {
+    const auto& c = *sw.calibrate;
+    const CalibrationState cs = calibration_state(c, rows);
+    json& cj = x["calibration"];
+    cj = {{"parameter", c.parameter}, {"column", c.column}, {"snapshot", c.snapshot}, {"target", c.target},
+          {"tolerance", c.tolerance}, {"value", number_or_null(cs.found)}, {"achieved", number_or_null(cs.achieved)},
+          {"search_items", cs.searches}};
+    cj["map"] = json::array();
+    for (const auto& [v, y] : cs.points) cj["map"].push_back({v, y});
+  }
   x["table"] = table.filename().string();
   x["directory"] = dir.filename().string();
   x["input_state"] = shown(input_file, opt.outdir);

@@ -471,8 +471,15 @@ TEST_CASE("sweep and snapshot configuration errors are all reported at once with
   scene["stages"].push_back(stage("c1", {{"snapshots_of", "fall"}, {"collect", {"time", "max_sped", "packing.particles"}}}));
   json typo = scene["stages"][3];
   typo["name"] = "t1";
+  const json cal_ok = {{"parameter", "/dt"}, {"column", "max_speed"}, {"target", 1.0}, {"scan", {1e-5, 2e-5}}};
+  json cal_bad = cal_ok;
+  cal_bad["scan"] = {2e-5, 1e-5};
+  cal_bad["column"] = "max_sped";
+  cal_bad.erase("target");
   typo["snapshots"] = {{"column", "tme"}, {"at", {0.1}}};
   scene["stages"].push_back(typo);
+  scene["stages"].push_back(stage("k1", {{"seeds", {1}}, {"calibrate", cal_ok}}));
+  scene["stages"].push_back(stage("k2", {{"snapshots_of", "fall"}, {"calibrate", cal_bad}}));
   const std::vector<std::pair<std::string, std::string>> expected = {
       {"/stages/1/snapshots/column", "`at` needs the time-series column"},
       {"/stages/2/sweep/snapshots_of", "no earlier stage named \"fal\" takes snapshots (did you mean \"fall\"?)"},
@@ -487,6 +494,10 @@ TEST_CASE("sweep and snapshot configuration errors are all reported at once with
       {"/stages/11/sweep/collect/1", "\"max_sped\" is not a time-series column of this stage (did you mean \"max_speed\"?)"},
       {"/stages/11/sweep/collect/2", "no generator, so no packing report"},
       {"/stages/12/snapshots/column", "\"tme\" is not a time-series column of this stage (did you mean \"time\"?)"},
+      {"/stages/13/sweep/calibrate", "calibrate goes with snapshots_of"},
+      {"/stages/14/sweep/calibrate/scan", "expected at least two positive, increasing values"},
+      {"/stages/14/sweep/calibrate/target", "required"},
+      {"/stages/14/sweep/calibrate/column", "\"max_sped\" is not a time-series column"},
   };
   // In process: one ConfigError with every expected diagnostic and none at another path (a
   // rejected dt also leaves the stage without a step: "set dt or dt_fraction", at the same value).
@@ -515,4 +526,64 @@ TEST_CASE("sweep and snapshot configuration errors are all reported at once with
     for (const auto& [path, fragment] : expected) CHECK(r.err.find(path + ": ") != std::string::npos);
     CHECK_FALSE(fs::exists(out));
   }
+}
+
+/// A chain of spheres (Holm branches in series): its resistance is inversely proportional to the
+/// material conductivity, so calibrating the conductivity to a target resistance on one snapshot
+/// has the closed form kappa* = kappa_1 R(kappa_1) / target, and the secant in
+/// (ln value, ln column) of the search lands on it in one item.
+TEST_CASE("a calibrating sweep over snapshots: scan, search to the closed form, validation on every snapshot", "[sweeps][scenario]") {
+  ScratchDir tmp;
+  json scene = json::parse(R"({
+    "name": "calibrate_chain", "materials": [{"name": "m", "density": 8000}],
+    "contact": {"law": "hertz_mindlin", "params": {"youngs_modulus": 1e9}},
+    "particle_sets": {"top": {"type": "top_layer", "thickness": 0.001},
+                      "bottom": {"type": "bottom_layer", "thickness": 0.001}},
+    "stages": [
+      {"name": "chain", "type": "lattice",
+       "generator": {"lo": [0, 0, 0], "hi": [0.0005, 0.0005, 0.0096], "spacing": 0.00199, "diameter": 0.002}},
+      {"name": "relax", "type": "dynamics", "dt_fraction": 0.1, "stop": {"steps": 30},
+       "snapshots": {"every_steps": 10}},
+      {"name": "fit", "type": "dynamics", "dt_fraction": 0.1, "sets": ["top", "bottom"],
+       "modules": {"electrical_network": {"model": "holm", "conductivity": 1e6, "high": "top", "low": "bottom", "voltage": 0.5}},
+       "stop": {"steps": 0},
+       "sweep": {"snapshots_of": "relax",
+                 "calibrate": {"parameter": "/modules/electrical_network/conductivity",
+                               "column": "electrical_resistance", "snapshot": 1, "target": 0.01,
+                               "scan": [1e5, 1e6, 1e7, 1e8], "tolerance": 1e-9}}}
+    ]})");
+  const fs::path A = tmp.path / "A";
+  run(write_scene(tmp.path, "cal.json", scene), A, tmp.path);
+  const json sw = read_json(A / "summary.json")["stages"][2]["sweep"];
+  const json& rows = sw["rows"];
+  REQUIRE(rows.size() == 4 + 1 + 3);  // scan, one search item, three snapshots
+  double r_at_1e6 = 0.0;
+  for (std::size_t r = 0; r < 4; ++r) {
+    CHECK(rows[r]["phase"] == "scan");
+    CHECK(rows[r]["snapshot_index"] == 1);
+    if (rows[r]["value"].get<double>() == 1e6) r_at_1e6 = rows[r]["values"]["electrical_resistance"].get<double>();
+  }
+  REQUIRE(r_at_1e6 > 0.0);
+  // R is inverse in kappa: each scan value gives R = r_at_1e6 * 1e6 / value (1e-12).
+  for (std::size_t r = 0; r < 4; ++r)
+    CHECK(std::abs(rows[r]["values"]["electrical_resistance"].get<double>() / (r_at_1e6 * 1e6 / rows[r]["value"].get<double>()) - 1.0) < 1e-12);
+  const double expect = 1e6 * r_at_1e6 / 0.01;
+  CHECK(rows[4]["phase"] == "search");
+  const json& cal = sw["calibration"];
+  CHECK(std::abs(cal["value"].get<double>() / expect - 1.0) < 1e-9);
+  CHECK(std::abs(cal["achieved"].get<double>() / 0.01 - 1.0) < 1e-9);
+  CHECK(cal["map"].size() == 5);
+  for (std::size_t r = 5; r < 8; ++r) {
+    CHECK(rows[r]["phase"] == "validate");
+    CHECK(rows[r]["snapshot_index"] == static_cast<int>(r - 5));
+    CHECK(rows[r]["value"].get<double>() == cal["value"].get<double>());
+  }
+  CHECK(std::abs(rows[6]["values"]["electrical_resistance"].get<double>() / 0.01 - 1.0) < 1e-9);
+
+  // A target outside the scan's range is refused with both ends of the scan named.
+  scene["stages"][2]["sweep"]["calibrate"]["target"] = 1e-15;
+  const Cli r = cli("run " + q(write_scene(tmp.path, "cal_out.json", scene)) + " -o " + q(tmp.path / "B") + " --quiet", tmp.path);
+  CHECK(r.code != 0);
+  CHECK(r.err.find("is not bracketed by the scan") != std::string::npos);
+  CHECK(read_csv(tmp.path / "B" / "sweep_fit.csv").size() == 5);  // header + the four scan rows
 }
