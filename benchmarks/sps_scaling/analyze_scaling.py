@@ -9,10 +9,13 @@ For each run directory (scene.json, out/, time.txt) it reports:
   - the conductivity of each snapshot with and without the grain-boundary layer;
   - max kinetic energy / punch work after the punch has done 1 % of its final work.
 Differences are given against the run with the smallest time scale (the slowest, reference).
-Needs h5py (Debian python3-h5py).
+Needs h5py (Debian python3-h5py); the snapshot and sweep readers are in tools/sps_outputs.py.
 """
 import argparse, csv, json, os, sys
-import h5py, numpy as np
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
+from sps_outputs import find_stage, neck_histogram, neck_ratios, sweep_values  # noqa: E402
 
 T_GRID = [1100.0, 1200.0, 1300.0, 1400.0, 1500.0, 1573.0]
 
@@ -22,7 +25,7 @@ def load(run):
     scene = json.load(open(os.path.join(run, "scene.json")))
     press = next(s for s in scene["stages"] if s["name"] == "hot_press")
     summary = json.load(open(os.path.join(out, "summary.json")))
-    st = next(s for s in summary["stages"] if s["name"] == "hot_press")
+    st = find_stage(summary, "hot_press")
     rows = [r for r in csv.DictReader(open(os.path.join(out, "timeseries.csv")))
             if "temperature" in r and r["temperature"] not in ("", "nan")]
     T = np.array([float(r["temperature"]) for r in rows])
@@ -39,24 +42,13 @@ def load(run):
         phi_at_T[t] = float(phi[k]) if T[k] >= t - 1e-9 else float("nan")
     snaps = []
     for s in st.get("snapshots", {}).get("taken", []):
-        with h5py.File(os.path.join(out, s["file"]), "r") as f:
-            cols = f["state/contacts/state_columns"][()].decode().split()
-            a = f["state/contacts/state"][:, cols.index("neck_radius")]
-            ids = f["state/particles/id"][:]
-            r = f["state/particles/radius"][:]
-            rad = dict(zip(ids.tolist(), r.tolist()))
-            rmin = np.minimum([rad[i] for i in f["state/contacts/id_i"][:]], [rad[j] for j in f["state/contacts/id_j"][:]])
-        x = a[a > 0] / rmin[a > 0]
-        hist, _ = np.histogram(x, bins=10, range=(0.0, 1.0))
+        x = neck_ratios(os.path.join(out, s["file"]))
+        hist = neck_histogram(x)
         snaps.append({"target": s["target"], "value": s["value"], "necks": int(x.size),
                       "mean_a_over_rmin": float(x.mean()) if x.size else float("nan"),
-                      "hist": (hist / max(1, x.size)).tolist()})
-    kappa = {}
-    for name in ("conductivity_gb", "conductivity_no_gb"):
-        stg = next((s for s in summary["stages"] if s["name"] == name), None)
-        if stg:
-            for row in stg["sweep"]["rows"]:
-                kappa[(name, row["snapshot_index"])] = row["values"]["electrical_conductivity_eff"]
+                      "hist": hist.tolist()})
+    kappa = {(name, k): v for name in ("conductivity_gb", "conductivity_no_gb")
+             for k, v in sweep_values(summary, name).items()}
     wall, user, sys_ = (float(v) for v in open(os.path.join(run, "time.txt")).read().split()[:3])
     return {"run": run, "time_scale": press["time_scale"], "press_steps": st["steps"],
             "press_wall_s": st["wall_time_s"], "run_wall_s": wall, "run_cpu_s": user + sys_,

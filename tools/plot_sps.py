@@ -1,0 +1,264 @@
+#!/usr/bin/env python3
+"""Plots and validation table of an SPS pipeline run (e.g. configs/sps_nial_small.json).
+
+    /usr/bin/python3 tools/plot_sps.py RUN_DIR [-o OUT_DIR] [--press-stage hot_press]
+        [--gb-stage conductivity_gb] [--no-gb-stage conductivity_no_gb] [--stages a,b,c]
+
+RUN_DIR is the output directory of `sparkdem run` (summary.json, timeseries.csv, the snapshot
+files). Writes into OUT_DIR (default RUN_DIR):
+  conductivity_vs_porosity.png  kappa_eff of each snapshot against its porosity, one series per
+                                conductivity sweep stage, the measured NiAl samples (seed 000
+                                Table 1) with a +-5 % band and the bulk kappa_0;
+  neck_histograms.png           per snapshot the histogram of a / r_min over the sintered necks
+                                (10 bins on [0, 1], % of necks; seed 000 Fig. 6);
+  densification.png             porosity against physical time and against temperature during
+                                the hot press, the snapshots marked;
+  sps_table.csv                 per snapshot target: porosity taken, kappa_eff of each stage,
+                                measured kappa, relative error [%]; then each stage's wall time.
+The table is also printed. Snapshots not reached (summary.json "not_reached") are reported and
+skipped. Conductivity stages: sweeps over the press stage's snapshots whose rows have
+electrical_conductivity_eff (all of them unless --stages is given); --gb-stage / --no-gb-stage name
+the series with / without the grain-boundary layer (by default the stages so named, else the
+stage whose name contains "no_gb" and the one that contains "gb" but not "no_gb").
+Needs numpy, matplotlib and h5py (Debian python3-matplotlib python3-h5py).
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+from sps_outputs import NECK_BINS, find_stage, neck_histogram, neck_ratios, sweep_values
+
+KAPPA_COLUMN = "electrical_conductivity_eff"
+KAPPA_BULK = 9.8e6  # S/m, NiAl
+# Measured NiAl samples (seed 000 Table 1): porosity -> effective conductivity [S/m].
+MEASURED = {0.216: 4.33e6, 0.164: 6.14e6, 0.106: 7.44e6, 0.050: 8.77e6}
+BAND = 0.05
+
+
+class InputError(Exception):
+    pass
+
+
+def measured_at(porosity):
+    """Measured kappa of the sample at this (target) porosity, or None."""
+    return next((k for p, k in MEASURED.items() if abs(p - porosity) < 1e-9), None)
+
+
+def load_json(path):
+    if not os.path.isfile(path):
+        raise InputError(f"missing {path}")
+    with open(path) as fh:
+        return json.load(fh)
+
+
+def conductivity_stages(summary, press, chosen):
+    """Names of the sweep stages over the press stage's snapshots that report kappa_eff."""
+    names = []
+    for st in summary["stages"]:
+        sw = st.get("sweep", {})
+        if sw.get("snapshots_of") == press and any(KAPPA_COLUMN in r.get("values", {}) for r in sw.get("rows", [])):
+            names.append(st["name"])
+    if chosen:
+        unknown = [n for n in chosen if n not in names]
+        if unknown:
+            raise InputError(f"--stages: {', '.join(unknown)} not among the conductivity stages ({', '.join(names) or 'none'})")
+        names = chosen
+    if not names:
+        raise InputError(f"no sweep stage over the snapshots of '{press}' reports {KAPPA_COLUMN}")
+    return names
+
+
+def pick(names, given, default, match):
+    """The stage named `given` (must exist), else `default` if present, else the first that matches."""
+    if given:
+        if given not in names:
+            raise InputError(f"stage '{given}' is not among the conductivity stages ({', '.join(names)})")
+        return given
+    if default in names:
+        return default
+    return next((n for n in names if match(n)), None)
+
+
+def load_run(a):
+    run = a.run_dir
+    summary = load_json(os.path.join(run, "summary.json"))
+    ts_path = os.path.join(run, "timeseries.csv")
+    if not os.path.isfile(ts_path):
+        raise InputError(f"missing {ts_path}")
+    names = [s["name"] for s in summary.get("stages", [])]
+    if a.press_stage not in names:
+        raise InputError(f"no stage '{a.press_stage}' in summary.json (stages: {', '.join(names)}); see --press-stage")
+    press_index = names.index(a.press_stage)
+    snap = find_stage(summary, a.press_stage).get("snapshots")
+    if not snap or not snap.get("taken"):
+        raise InputError(f"stage '{a.press_stage}' took no snapshots")
+    snap["taken"] = [s for s in snap["taken"] if s.get("value") is not None]  # porosity not finite: nothing to plot
+    for s in snap["taken"]:
+        if not os.path.isfile(os.path.join(run, s["file"])):
+            raise InputError(f"missing snapshot file {os.path.join(run, s['file'])}")
+    stages = conductivity_stages(summary, a.press_stage, [x for x in (a.stages or "").split(",") if x])
+    gb = pick(stages, a.gb_stage, "conductivity_gb", lambda n: "gb" in n and "no_gb" not in n)
+    no_gb = pick(stages, a.no_gb_stage, "conductivity_no_gb", lambda n: "no_gb" in n)
+    with open(ts_path, newline="") as fh:
+        rows = [r for r in csv.DictReader(fh) if r.get("stage") == str(press_index)]
+    if not rows:
+        raise InputError(f"timeseries.csv has no rows of stage {press_index} ('{a.press_stage}')")
+    for c in ("time", "physical_time", "temperature", "porosity_mass"):
+        if c not in rows[0]:
+            raise InputError(f"timeseries.csv has no column '{c}'")
+    return {"summary": summary, "snap": snap, "rows": rows, "stages": stages, "gb": gb, "no_gb": no_gb,
+            "kappa": {n: sweep_values(summary, n, KAPPA_COLUMN) for n in stages}}
+
+
+def column(rows, name):
+    return np.array([float(r[name]) if r[name] not in ("", None) else math.nan for r in rows])
+
+
+def label(d, name):
+    if name == d["gb"]:
+        return f"{name} (with grain-boundary layer)"
+    if name == d["no_gb"]:
+        return f"{name} (without layer)"
+    return name
+
+
+def plot_conductivity(d, plt, path):
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    by_index = {s["index"]: s for s in d["snap"]["taken"]}
+    for name, marker in zip(d["stages"], "os^Dv<>p*h"):
+        pts = sorted((by_index[k]["value"], v) for k, v in d["kappa"][name].items() if k in by_index and v is not None)
+        if pts:
+            x, y = zip(*pts)
+            ax.plot(x, y, marker=marker, label=label(d, name))
+    p = np.array(sorted(MEASURED))
+    k = np.array([MEASURED[x] for x in p])
+    ax.fill_between(p, k * (1 - BAND), k * (1 + BAND), color="0.8", label=f"measured ±{100 * BAND:g} %")
+    ax.plot(p, k, "k*", ms=10, ls="none", label="measured NiAl (seed 000 Table 1)")
+    ax.axhline(KAPPA_BULK, color="k", ls="--", lw=1, label=f"bulk κ0 = {KAPPA_BULK:.3g} S/m")
+    ax.set_xlabel("porosity (snapshot, porosity_mass)")
+    ax.set_ylabel("κ_eff [S/m]")
+    ax.set_ylim(bottom=0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_necks(d, run, plt, path):
+    taken = d["snap"]["taken"]
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    width = 0.9 / NECK_BINS / len(taken)
+    centres = (np.arange(NECK_BINS) + 0.5) / NECK_BINS
+    for j, s in enumerate(taken):
+        x = neck_ratios(os.path.join(run, s["file"]))
+        ax.bar(centres + (j - (len(taken) - 1) / 2) * width, 100 * neck_histogram(x), width,
+               label=f"porosity {s['value']:.3f} ({x.size} necks)")
+    ax.set_xticks(np.linspace(0, 1, NECK_BINS + 1))
+    ax.set_xlim(0, 1)
+    ax.set_xlabel("a / r_min (neck radius / smaller particle radius)")
+    ax.set_ylabel("necks [%]")
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_densification(d, press, plt, path):
+    rows = d["rows"]
+    t, T, sim_t = column(rows, "physical_time"), column(rows, "temperature"), column(rows, "time")
+    series = [c for c in ("porosity_mass", "porosity") if c in rows[0]]
+    taken = d["snap"]["taken"]
+    # Snapshots are taken between timeseries rows: place them by their simulation time.
+    st_ = np.array([s["time"] for s in taken])
+    sv = np.array([s["value"] for s in taken])
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
+    for ax, xs, xlabel in ((axes[0], t, "physical time [s]"), (axes[1], T, "temperature [K]")):
+        for c in series:
+            ax.plot(xs, column(rows, c), label=c)
+        ax.plot(np.interp(st_, sim_t, xs), sv, "ko", mfc="none", label=f"snapshots ({d['snap'].get('column', '')})")
+        ax.set_xlabel(xlabel)
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("porosity")
+    axes[0].legend(fontsize=8)
+    fig.suptitle(f"densification during '{press}'")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def table(d):
+    """Rows of sps_table.csv: one per snapshot target, then one per stage (wall time)."""
+    stages = d["stages"]
+    head = (["row", "target_porosity", "porosity_taken"] + [f"kappa_{n} [S/m]" for n in stages]
+            + ["kappa_measured [S/m]"] + [f"rel_err_{n} [%]" for n in stages] + ["wall_time_s"])
+    by_target = {s.get("target"): s for s in d["snap"]["taken"]}
+    targets = sorted(set(by_target) | set(d["snap"].get("not_reached", [])) - {None}, reverse=True)
+    out = [head]
+    for p in targets:
+        s = by_target.get(p)
+        km = measured_at(p)
+        ks = [d["kappa"][n].get(s["index"]) if s else None for n in stages]
+        out.append(["snapshot", f"{p:g}", f"{s['value']:.4f}" if s else "not reached"]
+                   + [f"{k:.4g}" if k is not None else "" for k in ks]
+                   + [f"{km:.4g}" if km else ""]
+                   + [f"{100 * (k / km - 1):+.1f}" if k is not None and km else "" for k in ks] + [""])
+    for st in d["summary"]["stages"]:
+        out.append([f"stage {st['name']}"] + [""] * (len(head) - 2) + [f"{st.get('wall_time_s', math.nan):.2f}"])
+    return out
+
+
+def print_table(rows):
+    """The snapshot rows as aligned columns (without the wall-time column), then the wall times."""
+    snaps = [r[:-1] for r in rows if not r[0].startswith("stage ")]
+    w = [max(len(r[i]) for r in snaps) for i in range(len(snaps[0]))]
+    for r in snaps:
+        print("  ".join(x.ljust(n) for x, n in zip(r, w)).rstrip())
+    for r in rows:
+        if r[0].startswith("stage "):
+            print(f"{r[0]}: wall time {r[-1]} s")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("run_dir", help="output directory of the pipeline run")
+    ap.add_argument("-o", "--outdir", help="where to write the PNGs and sps_table.csv (default: run_dir)")
+    ap.add_argument("--press-stage", default="hot_press", help="name of the hot-press stage (default hot_press)")
+    ap.add_argument("--gb-stage", help="conductivity stage with the grain-boundary layer (default conductivity_gb)")
+    ap.add_argument("--no-gb-stage", help="conductivity stage without the layer (default conductivity_no_gb)")
+    ap.add_argument("--stages", help="comma-separated conductivity stages to plot (default: all)")
+    a = ap.parse_args()
+    try:
+        d = load_run(a)
+    except InputError as e:
+        print(f"plot_sps.py: {a.run_dir}: {e}", file=sys.stderr)
+        return 2
+    out = a.outdir or a.run_dir
+    os.makedirs(out, exist_ok=True)
+    for p in d["snap"].get("not_reached", []):
+        print(f"snapshot at porosity {p:g} not reached in this run: skipped")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    paths = [os.path.join(out, f) for f in ("conductivity_vs_porosity.png", "neck_histograms.png", "densification.png",
+                                             "sps_table.csv")]
+    plot_conductivity(d, plt, paths[0])
+    plot_necks(d, a.run_dir, plt, paths[1])
+    plot_densification(d, a.press_stage, plt, paths[2])
+    rows = table(d)
+    with open(paths[3], "w", newline="") as fh:
+        csv.writer(fh).writerows(rows)
+    print_table(rows)
+    for p in paths:
+        print("wrote", p)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,45 @@
+"""Readers for the outputs of an SPS pipeline run (summary.json, snapshot HDF5 files), shared by
+tools/plot_sps.py and benchmarks/sps_scaling/analyze_scaling.py.
+
+Snapshots are checkpoint-format HDF5: per-contact state in state/contacts/state (one row per
+contact, columns named by the space-separated string state/contacts/state_columns), the pair in
+state/contacts/id_i / id_j (particle ids), particles in state/particles/id and radius.
+Needs numpy and h5py (Debian python3-h5py).
+"""
+import numpy as np
+
+NECK_BINS = 10
+
+
+def find_stage(summary, name):
+    """The stage of summary.json named `name`, or None."""
+    return next((s for s in summary["stages"] if s["name"] == name), None)
+
+
+def neck_ratios(h5_path):
+    """a / r_min over the sintered necks (neck_radius > 0) of one snapshot file; r_min is the smaller
+    radius of the contact's two particles."""
+    import h5py
+    with h5py.File(h5_path, "r") as f:
+        cols = f["state/contacts/state_columns"][()].decode().split()
+        a = f["state/contacts/state"][:, cols.index("neck_radius")]
+        rad = dict(zip(f["state/particles/id"][:].tolist(), f["state/particles/radius"][:].tolist()))
+        ri = np.array([rad[i] for i in f["state/contacts/id_i"][:].tolist()])
+        rj = np.array([rad[j] for j in f["state/contacts/id_j"][:].tolist()])
+    neck = a > 0
+    return a[neck] / np.minimum(ri, rj)[neck]
+
+
+def neck_histogram(x):
+    """Fractions of necks in NECK_BINS equal bins of a / r_min on [0, 1] (all zero if no neck)."""
+    hist, _ = np.histogram(x, bins=NECK_BINS, range=(0.0, 1.0))
+    return hist / max(1, len(x))
+
+
+def sweep_values(summary, stage_name, column="electrical_conductivity_eff"):
+    """{snapshot_index: value of `column`} over the sweep rows of stage `stage_name` ({} if absent)."""
+    st = find_stage(summary, stage_name)
+    if not st or "sweep" not in st:
+        return {}
+    return {row["snapshot_index"]: row["values"][column] for row in st["sweep"]["rows"]
+            if column in row.get("values", {})}
