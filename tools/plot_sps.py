@@ -31,7 +31,7 @@ import sys
 
 import numpy as np
 
-from sps_outputs import NECK_BINS, find_stage, neck_histogram, neck_ratios, sweep_values
+from sps_outputs import NECK_BINS, calibration, find_stage, neck_histogram, neck_ratios, sweep_values
 
 KAPPA_COLUMN = "electrical_conductivity_eff"
 KAPPA_BULK = 9.8e6  # S/m, NiAl
@@ -193,6 +193,47 @@ def plot_densification(d, press, plt, path):
     plt.close(fig)
 
 
+def gb_epsilon(run, stage):
+    """gb_epsilon of the electrical module of `stage` as run (resolved.json)."""
+    res = load_json(os.path.join(run, "resolved.json"))
+    st = next(s for s in res["stages"] if s.get("name") == stage)
+    return float(st["modules"]["electrical_network"]["gb_epsilon"])
+
+
+def plot_calibration(d, run, plt, path):
+    """Seed 000 Fig. 9: kappa_eff of the calibration snapshot over (delta_gb, epsilon). Only the ratio
+    epsilon / delta_gb enters the layer conductance (Eq. 26), so the map is the scanned curve
+    kappa(delta_gb at the run's epsilon) read at delta_gb * epsilon_run / epsilon (ln-ln
+    interpolation between scanned points; blank outside the scan)."""
+    cal = calibration(d["summary"], d["gb"])
+    if not cal or not cal.get("map") or not cal["parameter"].endswith("/gb_thickness"):
+        return False
+    eps_run = gb_epsilon(run, d["gb"])
+    pts = sorted(cal["map"])
+    lx, ly = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
+    delta = np.linspace(0.1e-6, 0.3e-6, 81)
+    eps = np.linspace(0.1, 0.5, 81)
+    D, E = np.meshgrid(delta, eps)
+    x = np.log(D * eps_run / E)
+    K = np.exp(np.interp(x, lx, ly, left=np.nan, right=np.nan))
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    cs = ax.contourf(D * 1e6, E, K / 1e6, levels=20, cmap="viridis")
+    fig.colorbar(cs, ax=ax, label="kappa_eff [1e6 S/m]")
+    t = cal["target"]
+    ax.contour(D * 1e6, E, K, levels=[0.95 * t, 1.05 * t], colors="w", linestyles="--")
+    ax.contour(D * 1e6, E, K, levels=[t], colors="w")
+    if cal.get("value") is not None:
+        ax.plot([cal["value"] * 1e6], [eps_run], "r*", ms=12, label=f"calibrated: delta_gb = {cal['value'] * 1e6:.3g} um at eps = {eps_run:g}")
+        ax.legend(loc="upper left", fontsize=8)
+    ax.set_xlabel("delta_gb [um]")
+    ax.set_ylabel("epsilon")
+    ax.set_title(f"calibration snapshot {cal['snapshot']}: target {t:.3g} S/m (white: target and +-5 %)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return True
+
+
 def table(d):
     """Rows of sps_table.csv: one per snapshot target, then one per stage (wall time)."""
     stages = d["stages"]
@@ -251,6 +292,12 @@ def main():
     plot_conductivity(d, plt, paths[0])
     plot_necks(d, a.run_dir, plt, paths[1])
     plot_densification(d, a.press_stage, plt, paths[2])
+    cal_png = os.path.join(out, "calibration_map.png")
+    if plot_calibration(d, a.run_dir, plt, cal_png):
+        paths.append(cal_png)
+        cal = calibration(d["summary"], d["gb"])
+        print(f"calibration: {cal['parameter']} = {cal['value']:.6g} gives {cal['column']} = {cal['achieved']:.6g} "
+              f"(target {cal['target']:.6g}; {len(cal['map'])} evaluated points, {cal['search_items']} search items)")
     rows = table(d)
     with open(paths[3], "w", newline="") as fh:
         csv.writer(fh).writerows(rows)

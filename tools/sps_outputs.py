@@ -37,9 +37,20 @@ def neck_histogram(x):
 
 
 def sweep_values(summary, stage_name, column="electrical_conductivity_eff"):
-    """{snapshot_index: value of `column`} over the sweep rows of stage `stage_name` ({} if absent)."""
+    """{snapshot_index: value of `column`} over the sweep rows of stage `stage_name` ({} if absent).
+    For a calibrating sweep only its validation rows (every snapshot at the calibrated value) count;
+    the scan and search rows are the calibration map (calibration_map)."""
     st = find_stage(summary, stage_name)
     if not st or "sweep" not in st:
         return {}
     return {row["snapshot_index"]: row["values"][column] for row in st["sweep"]["rows"]
-            if column in row.get("values", {})}
+            if column in row.get("values", {}) and row.get("phase", "validate") == "validate"}
+
+
+def calibration(summary, stage_name):
+    """The calibration record of a calibrating sweep stage (value, achieved, map of [value, column]
+    pairs, parameter, target), or None."""
+    st = find_stage(summary, stage_name)
+    if not st or "sweep" not in st:
+        return None
+    return st["sweep"].get("calibration")

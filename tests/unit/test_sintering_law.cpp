@@ -239,3 +239,52 @@ TEST_CASE("Sintering: the stable step accounts for the numerical dashpots", "[si
     CHECK(stable(zeta) == Approx(expected).epsilon(1e-9));
   }
 }
+
+TEST_CASE("Sintering beyond the equilibrium neck: frozen stops the dashpot, creep keeps it under load", "[sintering]") {
+  // A pair whose neck exceeds a_eq = r sin(psi/2), loaded by an elastic force F0 and held still
+  // (v = 0) for one step dt: frozen keeps F_e and u_s (Kratos); creep relaxes the Maxwell element
+  // exactly: F_e' = F0 e^-x, du_s = dt phi(x) F0 / eta, x = k_n dt / eta, eta = pi a^4 / (8 D_eff),
+  // and in neither is there a driving force (F_n = F_e').
+  auto p = law_params();
+  ContactGeometry g;
+  g.n = Vec3::UnitX();
+  g.r_i = g.r_j = kR;
+  g.r_eff = 0.5 * kR;
+  g.m_eff = 0.5 * test::sphere_mass(kR, kRho);
+  g.temperature = kT;
+  g.time_scale = 1.0;
+  g.overlap = 0.9 * kR;
+  const double a = std::min(neck_of(g.overlap), kR);
+  REQUIRE(a > kR * std::sin(0.5 * p.dihedral_angle));
+  RelativeMotion m;
+  m.vt = Vec3::Zero();
+  const double F0 = 1e-3, us0 = 0.85 * kR, dt = 1e-4;
+  for (const char* mode : {"frozen", "creep"}) {
+    p.after_equilibrium = mode;
+    const Sintering law(p);
+    std::vector<double> st(Sintering::state_columns().size(), 0.0);
+    st[Sintering::kNeck] = a;
+    st[Sintering::kElastic] = F0;
+    st[Sintering::kViscous] = us0;
+    const ContactForces f = law(g, m, dt, st.data());
+    INFO(mode);
+    CHECK(st[Sintering::kNeck] == a);
+    if (std::string(mode) == "frozen") {
+      CHECK(st[Sintering::kElastic] == F0);
+      CHECK(st[Sintering::kViscous] == us0);
+      CHECK(f.force.dot(g.n) == F0);
+    } else {
+      const double eta = kernel::neck_viscosity(a, kernel::gb_effective_diffusivity(p.gb_diffusivity_prefactor, p.gb_activation_energy,
+                                                                                    p.gb_width, p.atomic_volume, kT));
+      const double kn = 2.0 * law.params().youngs_modulus / (2 * (1 - p.poisson_ratio * p.poisson_ratio)) *
+                        std::sqrt(g.r_eff * (g.overlap - us0));
+      const double x = kn * dt / eta, phi = -std::expm1(-x) / x;
+      REQUIRE(x > 0.01);  // the step relaxes visibly
+      CHECK(st[Sintering::kElastic] == Approx(F0 * std::exp(-x)).epsilon(1e-12));
+      CHECK(st[Sintering::kViscous] - us0 == Approx(dt * phi * F0 / eta).epsilon(1e-9));
+      // F_n = F_e' + c_n (0 - du_s/dt): no driving force term.
+      const double cn = 2.0 * p.damping_ratio * std::sqrt(g.m_eff * kn);
+      CHECK(f.force.dot(g.n) == Approx(st[Sintering::kElastic] - cn * (st[Sintering::kViscous] - us0) / dt).epsilon(1e-9));
+    }
+  }
+}
