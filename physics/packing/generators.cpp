@@ -523,6 +523,8 @@ void RelaxGenerator::generate(State& s) {
   std::vector<std::array<Index, 2>> pairs;
   std::vector<Vec3> fpair;
   std::vector<std::int64_t> inc_start, inc_row;
+  const std::size_t nw = s.walls.size();
+  std::vector<char> near_wall;  // [i * nw + w]: particle i is a candidate of wall w
   std::int64_t it = 0;
   double fmax = 0.0, overlap_max = 0.0;
   auto forces = [&]() {
@@ -532,6 +534,17 @@ void RelaxGenerator::generate(State& s) {
       build_incidence(N, pairs.size(), [&](std::size_t r) { return pairs[r][0]; }, [&](std::size_t r) { return pairs[r][1]; },
                       inc_start, inc_row);
       fpair.resize(pairs.size());
+      // Wall candidates: within r + skin of the wall at the build (valid until the next rebuild,
+      // as the pairs); the others have q > 1 against that wall and feel no force from it.
+      near_wall.assign(N * nw, 0);
+#pragma omp parallel for schedule(static)
+      for (std::int64_t i = static_cast<std::int64_t>(first); i < n; ++i)
+        for (std::size_t w = 0; w < nw; ++w) {
+          Vec3 nrm;
+          double d;
+          s.walls[w].distance(p.position[i], nrm, d);
+          near_wall[i * nw + w] = d < p.radius[i] + skin;
+        }
     }
     const std::int64_t np = static_cast<std::int64_t>(pairs.size());
     double om = 0.0;
@@ -547,12 +560,12 @@ void RelaxGenerator::generate(State& s) {
         if (inc_row[c] >= 0) f += fpair[inc_row[c]];
         else f -= fpair[~inc_row[c]];
       }
-      if (static_cast<std::size_t>(i) >= first)
-        for (const auto& w : s.walls) {
-          Vec3 fw;
-          om = std::max(om, relax_wall(k, w, p.position[i], p.radius[i], fw).overlap);
-          f += fw;
-        }
+      for (std::size_t w = 0; w < nw; ++w) {
+        if (!near_wall[i * nw + w]) continue;
+        Vec3 fw;
+        om = std::max(om, relax_wall(k, s.walls[w], p.position[i], p.radius[i], fw).overlap);
+        f += fw;
+      }
       F[i] = f;
       fm = std::max(fm, f.norm());
     }
