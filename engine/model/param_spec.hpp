@@ -72,6 +72,8 @@ class ParamEditor {
   ParamEditor& nonnegative() { p_.min = 0.0; return *this; }
   ParamEditor& choices(std::vector<std::string> c) { p_.choices = std::move(c); return *this; }
   ParamEditor& no_default() { p_.default_value = std::monostate{}; return *this; }
+  /// Default differing from the member initialiser (a spec shared by several owners).
+  ParamEditor& defaults_to(ParamValue v) { p_.default_value = std::move(v); return *this; }
 
  private:
   ParamInfo& p_;

@@ -44,15 +44,8 @@ void PairRows::reset_results(std::size_t n_particles) {
 }
 
 void PairRows::build_incidence(std::size_t n) {
-  inc_start_.assign(n + 1, 0);
-  for (std::size_t r = 0; r < size(); ++r) { ++inc_start_[i_[r] + 1]; ++inc_start_[j_[r] + 1]; }
-  for (std::size_t p = 0; p < n; ++p) inc_start_[p + 1] += inc_start_[p];
-  inc_row_.assign(inc_start_[n], 0);
-  std::vector<std::int64_t> fill(inc_start_.begin(), inc_start_.end() - 1);
-  for (std::size_t r = 0; r < size(); ++r) {
-    inc_row_[fill[i_[r]]++] = static_cast<std::int64_t>(r);
-    inc_row_[fill[j_[r]]++] = ~static_cast<std::int64_t>(r);
-  }
+  sparkdem::build_incidence(
+      n, size(), [&](std::size_t r) { return i_[r]; }, [&](std::size_t r) { return j_[r]; }, inc_start_, inc_row_);
 }
 
 void PairRows::gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const {

@@ -22,6 +22,24 @@ inline std::uint64_t pair_key(Id a, Id b) {
   return (static_cast<std::uint64_t>(a) << 32) ^ static_cast<std::uint64_t>(b);
 }
 
+/// Per-particle incidence (CSR) of rows r = 0..rows-1 joining particles end_i(r) and end_j(r):
+/// the rows touching particle p are row[start[p] .. start[p+1]) in increasing r, coded r for
+/// side i and ~r for side j. Summing per-row values per particle in this order reproduces the
+/// serial loop over rows exactly, whatever the thread count.
+template <class EndI, class EndJ>
+void build_incidence(std::size_t n, std::size_t rows, EndI end_i, EndJ end_j, std::vector<std::int64_t>& start,
+                     std::vector<std::int64_t>& row) {
+  start.assign(n + 1, 0);
+  for (std::size_t r = 0; r < rows; ++r) { ++start[end_i(r) + 1]; ++start[end_j(r) + 1]; }
+  for (std::size_t p = 0; p < n; ++p) start[p + 1] += start[p];
+  row.assign(start[n], 0);
+  std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t r = 0; r < rows; ++r) {
+    row[fill[end_i(r)]++] = static_cast<std::int64_t>(r);
+    row[fill[end_j(r)]++] = ~static_cast<std::int64_t>(r);
+  }
+}
+
 class PairRows {
  public:
   /// Names of the per-row state columns (set once by the active law); clears the state.

@@ -5,6 +5,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/neighbor/neighbor_search.hpp"
+#include "engine/state/pair_rows.hpp"
 #include "physics/body/gravity.hpp"
 
 namespace sparkdem::physics {
@@ -41,6 +42,58 @@ void add_box_walls(State& s, const Vec3& lo, const Vec3& hi) {
   add_wall(s, plane("yhi", hi, -Vec3::UnitY()));
   add_wall(s, plane("bottom", lo, Vec3::UnitZ()));
   add_wall(s, plane("top", hi, -Vec3::UnitZ()));
+}
+/// Expected particle count for a size distribution: `particles` if > 0, else the solid volume
+/// [m^3] over the expected particle volume of the number distribution (quadrature of the
+/// quantile function). Builds the distribution, so an invalid one throws ConfigError.
+double expected_count(const SizeDistributionParams& sp, std::int64_t particles, double solid_volume) {
+  const SizeDistribution d = make_distribution(sp);
+  if (particles > 0) return static_cast<double>(particles);
+  double v = 0.0;
+  const int n = 2000;
+  for (int k = 0; k < n; ++k) {
+    const double dd = quantile_number(d, (k + 0.5) / n);
+    v += kPi / 6.0 * dd * dd * dd / n;
+  }
+  return solid_volume / v;
+}
+/// Diameters [m] drawn from a size distribution: `particles` draws, or (particles = 0) draws
+/// until their solid volume reaches solid_volume [m^3] (sample_until_volume). `sampling`
+/// receives the requested vs sampled statistics (psd_* report keys).
+std::vector<double> sample_diameters(const SizeDistributionParams& sp, std::int64_t particles, double solid_volume,
+                                     std::mt19937_64& rng, std::map<std::string, double>& sampling) {
+  const SizeDistribution dist = make_distribution(sp);
+  std::vector<double> d;
+  if (particles > 0) {
+    for (std::int64_t k = 0; k < particles; ++k) d.push_back(sample_diameter(dist, rng));
+  } else {
+    d = sample_until_volume(dist, solid_volume, rng);
+  }
+  const DistributionReport rep = compare(dist, d);
+  sampling = {{"psd_ks_distance", rep.ks_distance},       {"psd_d10_requested", rep.requested_d[0]},
+              {"psd_d50_requested", rep.requested_d[1]}, {"psd_d90_requested", rep.requested_d[2]},
+              {"psd_d10_sampled", rep.sampled_d[0]},     {"psd_d50_sampled", rep.sampled_d[1]},
+              {"psd_d90_sampled", rep.sampled_d[2]},     {"psd_mean_d_sampled", rep.mean_d_sampled},
+              {"psd_mean_d_requested", rep.mean_d_requested}};
+  return d;
+}
+/// Report keys diameter_min, diameter_max [m] of the particles.
+void add_diameter_range(const State& s, std::map<std::string, double>& r) {
+  double dmin = 1e300, dmax = 0.0;
+  for (double x : s.particles.radius) { dmin = std::min(dmin, 2 * x); dmax = std::max(dmax, 2 * x); }
+  r["diameter_min"] = dmin;
+  r["diameter_max"] = dmax;
+}
+/// Closed container of fill and relax: cylinder "die" (axis z through the origin, given radius)
+/// with planes "bottom" (z = 0) and "top" (z = length), or the six planes of the box [lo, hi].
+void add_container_walls(State& s, bool cylindrical, double radius, double length, const Vec3& lo, const Vec3& hi) {
+  if (cylindrical) {
+    add_wall(s, cylinder("die", Vec3::Zero(), Vec3::UnitZ(), radius));
+    add_wall(s, plane("bottom", Vec3::Zero(), Vec3::UnitZ()));
+    add_wall(s, plane("top", Vec3(0, 0, length), -Vec3::UnitZ()));
+  } else {
+    add_box_walls(s, lo, hi);
+  }
 }
 void add_common_until(StageConfig& cfg, double density, double ke, double overlap) {
   if (density > 0.0) cfg.until.push_back({"packing_density", true, density});
@@ -110,33 +163,15 @@ ParamSpec<DepositGenerator::Params> DepositGenerator::spec() {
   return s;
 }
 double DepositGenerator::estimated_particles() const {
-  // Built first so that the loader validates the distribution even when `particles` is given.
-  const SizeDistribution d = make_distribution(p_.size_distribution);
-  if (p_.particles > 0) return static_cast<double>(p_.particles);
-  // Expected particle volume from the number distribution, by quadrature of the quantile function.
-  double v = 0.0;
-  const int n = 2000;
-  for (int k = 0; k < n; ++k) {
-    const double dd = quantile_number(d, (k + 0.5) / n);
-    v += kPi / 6.0 * dd * dd * dd / n;
-  }
-  return p_.target_density * kPi * p_.container_radius * p_.container_radius * p_.container_height / v;
+  // Builds the distribution, so that the loader validates it even when `particles` is given.
+  return expected_count(p_.size_distribution, p_.particles,
+                        p_.target_density * kPi * p_.container_radius * p_.container_radius * p_.container_height);
 }
 void DepositGenerator::generate(State& s) {
   const double rho = material_density(s, p_.material);
-  const SizeDistribution dist = make_distribution(p_.size_distribution);
-  std::vector<double> d;
-  if (p_.particles > 0) {
-    for (std::int64_t k = 0; k < p_.particles; ++k) d.push_back(sample_diameter(dist, s.rng));
-  } else {
-    d = sample_until_volume(dist, p_.target_density * kPi * p_.container_radius * p_.container_radius * p_.container_height, s.rng);
-  }
-  const DistributionReport rep = compare(dist, d);
-  sampling_ = {{"psd_ks_distance", rep.ks_distance},       {"psd_d10_requested", rep.requested_d[0]},
-               {"psd_d50_requested", rep.requested_d[1]}, {"psd_d90_requested", rep.requested_d[2]},
-               {"psd_d10_sampled", rep.sampled_d[0]},     {"psd_d50_sampled", rep.sampled_d[1]},
-               {"psd_d90_sampled", rep.sampled_d[2]},     {"psd_mean_d_sampled", rep.mean_d_sampled},
-               {"psd_mean_d_requested", rep.mean_d_requested}};
+  const std::vector<double> d =
+      sample_diameters(p_.size_distribution, p_.particles,
+                       p_.target_density * kPi * p_.container_radius * p_.container_radius * p_.container_height, s.rng, sampling_);
   double vsum = 0.0;
   std::vector<double> radii;
   for (double x : d) { radii.push_back(0.5 * x); vsum += kPi / 6.0 * x * x * x; }
@@ -180,10 +215,7 @@ std::map<std::string, double> DepositGenerator::report(const State& s) const {
   auto r = packing_report(s);
   r.insert(sampling_.begin(), sampling_.end());
   r["packing_gravity"] = p_.gravity;
-  double dmin = 1e300, dmax = 0.0;
-  for (double x : s.particles.radius) { dmin = std::min(dmin, 2 * x); dmax = std::max(dmax, 2 * x); }
-  r["diameter_min"] = dmin;
-  r["diameter_max"] = dmax;
+  add_diameter_range(s, r);
   return r;
 }
 
@@ -211,8 +243,7 @@ ParamSpec<FillGenerator::Params> FillGenerator::spec() {
   return s;
 }
 double FillGenerator::container_volume() const {
-  if (p_.shape == "cylinder") return kPi * p_.radius * p_.radius * p_.length;
-  return (p_.hi - p_.lo).prod();
+  return p_.shape == "cylinder" ? kPi * p_.radius * p_.radius * p_.length : (p_.hi - p_.lo).prod();
 }
 double FillGenerator::expected_density() const {
   if (p_.mean_radius <= 0.0) return p_.target_density;
@@ -244,13 +275,7 @@ void FillGenerator::generate(State& s) {
   if (!insert_random(s, small, region, rho, static_cast<std::int32_t>(p_.material)))
     throw SetupError("fill: random insertion failed; lower initial_scale");
   // Masses of the full-size particles are restored by the growth module.
-  if (p_.shape == "cylinder") {
-    add_wall(s, cylinder("die", Vec3::Zero(), Vec3::UnitZ(), p_.radius));
-    add_wall(s, plane("bottom", Vec3::Zero(), Vec3::UnitZ()));
-    add_wall(s, plane("top", Vec3(0, 0, p_.length), -Vec3::UnitZ()));
-  } else {
-    add_box_walls(s, p_.lo, p_.hi);
-  }
+  add_container_walls(s, p_.shape == "cylinder", p_.radius, p_.length, p_.lo, p_.hi);
 }
 void FillGenerator::configure_stage(StageConfig& cfg) const {
   // Reached = grown (or jammed), settled, small overlaps, and within 0.01 of the target density.
@@ -355,19 +380,74 @@ void RadiusGrowth::advance(State& s, const StepInfo& step) {
 ParamSpec<RelaxGenerator::Params> RelaxGenerator::spec() {
   ParamSpec<Params> s("relax", "generator",
                       "seed 003: minimise U = sum k (q-1) ln q over overlapping pairs and walls with FIRE from a random "
-                      "overlapping start in a box");
+                      "overlapping start in a box or a cylinder");
+  s.add("shape", &Params::shape).choices({"box", "cylinder"}).doc("container shape");
   s.add_vec3("lo", &Params::lo).unit("m").doc("box lower corner");
   s.add_vec3("hi", &Params::hi).unit("m").doc("box upper corner");
-  s.add("particles", &Params::particles).min(1).doc("number of particles");
-  s.add("target_density", &Params::target_density).unit("1").range(0.05, 0.7).doc("solid fraction setting the mean radius");
-  s.add("spread", &Params::spread).unit("1").range(0.0, 0.9).doc("radii uniform in r(1 +- spread)");
+  s.add("radius", &Params::radius).unit("m").positive().doc("cylinder radius (axis z through the origin)");
+  s.add("length", &Params::length).unit("m").positive().doc("cylinder length along z from z = 0");
+  s.add_group("size_distribution", &Params::size_distribution, size_distribution_spec(true));
+  s.add("particles", &Params::particles).nonnegative()
+      .doc("number of particles; with a size_distribution 0 = as many as fill target_density * container volume");
+  s.add("target_density", &Params::target_density).unit("1").range(0.05, 0.7)
+      .doc("solid fraction: sets the mean radius (uniform spread) or the amount of powder (size_distribution, particles = 0)");
+  s.add("spread", &Params::spread).unit("1").range(0.0, 0.9).doc("radii uniform in r(1 +- spread) (no size_distribution)");
   s.add("stiffness", &Params::stiffness).unit("J").positive().doc("k of the potential w(q)");
   s.add("max_iterations", &Params::max_iterations).min(1).doc("FIRE iteration limit");
   s.add("force_tolerance", &Params::force_tolerance).unit("1").positive().doc("stop when max|F| < tol k / r_mean");
   s.add("max_step", &Params::max_step).unit("1").positive().doc("largest move per iteration / radius");
-  s.add("density", &Params::density).unit("kg/m^3").positive().doc("particle density");
+  s.add("max_overlap", &Params::max_overlap).unit("1").nonnegative()
+      .doc("also stop once the largest overlap / smaller radius (pairs and walls) is at most this; 0 = off");
+  s.add("density", &Params::density).unit("kg/m^3").positive()
+      .doc("particle density for the masses of later stages (set it to the material's; `material` only labels the particles)");
   s.add("material", &Params::material).nonnegative().doc("material index");
   return s;
+}
+
+double RelaxGenerator::container_volume() const {
+  return p_.shape == "cylinder" ? kPi * p_.radius * p_.radius * p_.length : (p_.hi - p_.lo).prod();
+}
+
+double RelaxGenerator::estimated_particles() const {
+  if (p_.size_distribution.type == "none") {
+    if (p_.particles < 1) throw ConfigError("/particles", "relax without a size_distribution needs particles >= 1, found 0");
+    return static_cast<double>(p_.particles);
+  }
+  try {
+    return expected_count(p_.size_distribution, p_.particles, p_.target_density * container_volume());
+  } catch (const ConfigError& e) {
+    std::vector<Diagnostic> d = e.diagnostics();
+    for (auto& x : d) x.path = "/size_distribution" + x.path;
+    throw ConfigError(d);
+  }
+}
+
+std::vector<double> RelaxGenerator::radii(State& s) {
+  std::vector<double> radii;
+  if (p_.size_distribution.type != "none") {
+    // Drawn diameters kept as they are (the distribution is the point); the solid volume is
+    // target_density * V to within half the last particle (sample_until_volume).
+    for (double d : sample_diameters(p_.size_distribution, p_.particles, p_.target_density * container_volume(), s.rng, sampling_))
+      radii.push_back(0.5 * d);
+    double rs = 0.0;
+    for (double r : radii) rs += r;
+    scale_radius_ = rs / static_cast<double>(radii.size());
+    result_["mean_radius"] = scale_radius_;
+    return radii;
+  }
+  const double n = static_cast<double>(p_.particles);
+  // Mean radius such that sum of volumes = target_density * V, with radii uniform in r(1 +- a):
+  //   <r^3> = r^3 (1 + a^2)  for r(1 + a u), u uniform in [-1, 1]
+  const double rbar = std::cbrt(p_.target_density * container_volume() / (n * 4.0 / 3.0 * kPi * (1.0 + p_.spread * p_.spread)));
+  for (std::int64_t k = 0; k < p_.particles; ++k) radii.push_back(rbar * (1.0 + p_.spread * (2.0 * uniform_open01(s.rng) - 1.0)));
+  // Exact target: rescale so the solid volume is exactly target_density * V.
+  double v = 0.0;
+  for (double r : radii) v += 4.0 / 3.0 * kPi * r * r * r;
+  const double fix = std::cbrt(p_.target_density * container_volume() / v);
+  for (double& r : radii) r *= fix;
+  scale_radius_ = rbar;
+  result_["mean_radius"] = rbar * fix;
+  return radii;
 }
 
 namespace {
@@ -375,33 +455,65 @@ namespace {
 ///   w(q) = k (q - 1) ln q for 0 < q < 1, else 0;   w'(q) = k (ln q + 1 - 1/q)
 inline double relax_w(double k, double q) { return q < 1.0 ? k * (q - 1.0) * std::log(q) : 0.0; }
 inline double relax_dw(double k, double q) { return q < 1.0 ? k * (std::log(q) + 1.0 - 1.0 / q) : 0.0; }
+
+/// One term of U: its value w(q) [J] and the overlap / smaller radius [1] (0 without contact).
+struct RelaxTerm {
+  double w = 0.0;
+  double overlap = 0.0;
+};
+/// Pair term of U (seed 003): q = |x_j - x_i| / (r_i + r_j) (clamped at 1e-6); force on i
+///   f_i = w'(q) / (r_i + r_j) (x_j - x_i) / |x_j - x_i|   (w' < 0: repulsive; j gets -f_i),
+/// overlap ratio (1 - q)(r_i + r_j) / min(r_i, r_j). f_i = 0 and a zero term for q >= 1.
+inline RelaxTerm relax_pair(double k, const Vec3& xi, const Vec3& xj, double ri, double rj, Vec3& fi) {
+  const Vec3 d = xj - xi;
+  const double dist = d.norm(), R = ri + rj;
+  const double q = std::max(dist / R, 1e-6);
+  fi.setZero();
+  if (q >= 1.0) return {};
+  const Vec3 dir = dist > 0.0 ? Vec3(d / dist) : Vec3(Vec3::UnitX());
+  fi = relax_dw(k, q) / R * dir;
+  return {relax_w(k, q), (1.0 - q) * R / std::min(ri, rj)};
+}
+/// Wall term of U: q = (distance of the centre from the wall) / r_i; force -w'(q)/r_i n along the
+/// wall normal n (pointing into the container); overlap ratio 1 - q. Zero for q >= 1.
+inline RelaxTerm relax_wall(double k, const Wall& w, const Vec3& x, double r, Vec3& f) {
+  Vec3 nrm;
+  double dd;
+  w.distance(x, nrm, dd);
+  const double q = std::max(dd / r, 1e-6);
+  f.setZero();
+  if (q >= 1.0) return {};
+  f = -relax_dw(k, q) / r * nrm;
+  return {relax_w(k, q), 1.0 - q};
+}
 }  // namespace
 
 void RelaxGenerator::generate(State& s) {
   auto& p = s.particles;
-  const double vbox = (p_.hi - p_.lo).prod();
-  const double n = static_cast<double>(p_.particles);
-  // Mean radius such that sum of volumes = target_density * V, with radii uniform in r(1 +- a):
-  //   <r^3> = r^3 (1 + a^2)  for r(1 + a u), u uniform in [-1, 1]
-  const double rbar = std::cbrt(p_.target_density * vbox / (n * 4.0 / 3.0 * kPi * (1.0 + p_.spread * p_.spread)));
   const std::size_t first = p.size();
-  std::vector<double> radii;
-  for (std::int64_t k = 0; k < p_.particles; ++k) radii.push_back(rbar * (1.0 + p_.spread * (2.0 * uniform_open01(s.rng) - 1.0)));
-  // Exact target: rescale so the solid volume is exactly target_density * V.
-  double v = 0.0;
-  for (double r : radii) v += 4.0 / 3.0 * kPi * r * r * r;
-  const double fix = std::cbrt(p_.target_density * vbox / v);
-  for (double& r : radii) r *= fix;
-  for (double r : radii) {
+  const std::vector<double> rad = radii(s);
+  const double rbar = scale_radius_;
+  for (double r : rad) {
     Vec3 x;
-    for (int d = 0; d < 3; ++d) x[d] = p_.lo[d] + r + uniform_open01(s.rng) * (p_.hi[d] - p_.lo[d] - 2 * r);
+    if (p_.shape == "cylinder") {
+      // Centre uniform in the cylinder shrunk by r: within radius - r of the axis, z in [r, length - r].
+      const double rho = (p_.radius - r) * std::sqrt(uniform_open01(s.rng));
+      const double phi = 2.0 * kPi * uniform_open01(s.rng);
+      x = Vec3(rho * std::cos(phi), rho * std::sin(phi), r + uniform_open01(s.rng) * (p_.length - 2.0 * r));
+    } else {
+      for (int d = 0; d < 3; ++d) x[d] = p_.lo[d] + r + uniform_open01(s.rng) * (p_.hi[d] - p_.lo[d] - 2 * r);
+    }
     p.add(x, r, p_.density * 4.0 / 3.0 * kPi * r * r * r, static_cast<std::int32_t>(p_.material));
   }
-  add_box_walls(s, p_.lo, p_.hi);
+  add_container_walls(s, p_.shape == "cylinder", p_.radius, p_.length, p_.lo, p_.hi);
 
   // FIRE (Bitzek et al., PRL 97, 170201, 2006) on U, unit masses, positions in metres.
+  // Parallel and deterministic: per-pair forces into an array, summed per particle through the
+  // CSR incidence in increasing pair order (the serial order: bit-identical for any thread
+  // count); the FIRE scalars P, |v|, |F| are summed serially.
   const double k = p_.stiffness;
   const std::size_t N = p.size();
+  const std::int64_t n = static_cast<std::int64_t>(N);
   std::vector<Vec3> v_(N, Vec3::Zero()), F(N);
   double dt = 0.1 * rbar, dt_max = 1.0 * rbar;  // scaled "time": displacement per unit force rbar/k
   double alpha = 0.1;
@@ -409,57 +521,80 @@ void RelaxGenerator::generate(State& s) {
   const double skin = 0.5 * rbar;
   VerletTracker tracker;
   std::vector<std::array<Index, 2>> pairs;
+  std::vector<Vec3> fpair;
+  std::vector<std::int64_t> inc_start, inc_row;
+  const std::size_t nw = s.walls.size();
+  std::vector<char> near_wall;  // [i * nw + w]: particle i is a candidate of wall w
   std::int64_t it = 0;
-  double fmax = 0.0, energy = 0.0;
+  double fmax = 0.0, overlap_max = 0.0;
   auto forces = [&]() {
     if (tracker.needs_rebuild(p.position, p.radius, skin)) {
       pairs = find_pairs(p.position, p.radius, skin);
       tracker.mark_built(p.position, p.radius);
+      build_incidence(N, pairs.size(), [&](std::size_t r) { return pairs[r][0]; }, [&](std::size_t r) { return pairs[r][1]; },
+                      inc_start, inc_row);
+      fpair.resize(pairs.size());
+      // Wall candidates: within r + skin of the wall at the build (valid until the next rebuild,
+      // as the pairs); the others have q > 1 against that wall and feel no force from it.
+      near_wall.assign(N * nw, 0);
+#pragma omp parallel for schedule(static)
+      for (std::int64_t i = static_cast<std::int64_t>(first); i < n; ++i)
+        for (std::size_t w = 0; w < nw; ++w) {
+          Vec3 nrm;
+          double d;
+          s.walls[w].distance(p.position[i], nrm, d);
+          near_wall[i * nw + w] = d < p.radius[i] + skin;
+        }
     }
-    for (auto& f : F) f.setZero();
-    energy = 0.0;
-    for (const auto& pr : pairs) {
-      const Vec3 d = p.position[pr[1]] - p.position[pr[0]];
-      const double dist = d.norm(), R = p.radius[pr[0]] + p.radius[pr[1]];
-      const double q = std::max(dist / R, 1e-6);
-      if (q >= 1.0) continue;
-      energy += relax_w(k, q);
-      const Vec3 dir = dist > 0.0 ? Vec3(d / dist) : Vec3(Vec3::UnitX());
-      const Vec3 f = relax_dw(k, q) / R * dir;  // on i: w'(q)/R * (p_j - p_i)/|.| (w' < 0: repulsive)
-      F[pr[0]] += f;
-      F[pr[1]] -= f;
-    }
-    for (std::size_t i = first; i < N; ++i)
-      for (const auto& w : s.walls) {
-        Vec3 nrm;
-        double dd;
-        w.distance(p.position[i], nrm, dd);
-        const double q = std::max(dd / p.radius[i], 1e-6);
-        if (q >= 1.0) continue;
-        energy += relax_w(k, q);
-        F[i] -= relax_dw(k, q) / p.radius[i] * nrm;
+    const std::int64_t np = static_cast<std::int64_t>(pairs.size());
+    double om = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : om)
+    for (std::int64_t r = 0; r < np; ++r)
+      om = std::max(om, relax_pair(k, p.position[pairs[r][0]], p.position[pairs[r][1]], p.radius[pairs[r][0]],
+                                   p.radius[pairs[r][1]], fpair[r]).overlap);
+    double fm = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : fm, om)
+    for (std::int64_t i = 0; i < n; ++i) {
+      Vec3 f = Vec3::Zero();
+      for (std::int64_t c = inc_start[i]; c < inc_start[i + 1]; ++c) {
+        if (inc_row[c] >= 0) f += fpair[inc_row[c]];
+        else f -= fpair[~inc_row[c]];
       }
-    fmax = 0.0;
-    for (const auto& f : F) fmax = std::max(fmax, f.norm());
+      for (std::size_t w = 0; w < nw; ++w) {
+        if (!near_wall[i * nw + w]) continue;
+        Vec3 fw;
+        om = std::max(om, relax_wall(k, s.walls[w], p.position[i], p.radius[i], fw).overlap);
+        f += fw;
+      }
+      F[i] = f;
+      fm = std::max(fm, f.norm());
+    }
+    fmax = fm;
+    overlap_max = om;
   };
   forces();
   const double ftol = p_.force_tolerance * k / rbar;
-  for (it = 0; it < p_.max_iterations && fmax > ftol; ++it) {
+  // Converged: forces below the tolerance, or (max_overlap > 0) overlaps small enough.
+  auto converged = [&]() { return fmax <= ftol || (p_.max_overlap > 0.0 && overlap_max <= p_.max_overlap); };
+  for (it = 0; it < p_.max_iterations && !converged(); ++it) {
     double P = 0.0, vn = 0.0, fn = 0.0;
     for (std::size_t i = 0; i < N; ++i) { P += F[i].dot(v_[i]); vn += v_[i].squaredNorm(); fn += F[i].squaredNorm(); }
     vn = std::sqrt(vn);
     fn = std::sqrt(fn);
+    const double mix = P > 0.0 ? alpha : 1.0, vf = P > 0.0 ? alpha * vn / fn : 0.0;
     if (P > 0.0) {
-      for (std::size_t i = 0; i < N; ++i) v_[i] = (1.0 - alpha) * v_[i] + alpha * vn / fn * F[i];
       if (++since_neg > 5) { dt = std::min(dt * 1.1, dt_max); alpha *= 0.99; }
     } else {
-      for (auto& x : v_) x.setZero();
       dt *= 0.5;
       alpha = 0.1;
       since_neg = 0;
     }
-    // Semi-implicit Euler with a displacement cap of max_step * r.
-    for (std::size_t i = 0; i < N; ++i) {
+    // FIRE mixing v = (1 - alpha) v + alpha |v| F/|F| (P > 0) or v = 0 (P <= 0), then
+    // semi-implicit Euler with a displacement cap of max_step * r.
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i) {
+      if (mix < 1.0) v_[i] = (1.0 - mix) * v_[i] + vf * F[i];
+      else v_[i].setZero();
       v_[i] += dt * F[i];
       Vec3 dx = dt * v_[i];
       const double cap = p_.max_step * p.radius[i];
@@ -468,13 +603,29 @@ void RelaxGenerator::generate(State& s) {
     }
     forces();
   }
-  result_ = {{"fire_iterations", static_cast<double>(it)}, {"fire_max_force_relative", fmax * rbar / k},
-             {"fire_energy", energy}, {"mean_radius", rbar * fix}};
+  // Final energy, serially in the order of the pair list, then particles x walls.
+  double energy = 0.0;
+  for (const auto& pr : pairs) {
+    Vec3 f;
+    energy += relax_pair(k, p.position[pr[0]], p.position[pr[1]], p.radius[pr[0]], p.radius[pr[1]], f).w;
+  }
+  for (std::size_t i = first; i < N; ++i)
+    for (const auto& w : s.walls) {
+      Vec3 f;
+      energy += relax_wall(k, w, p.position[i], p.radius[i], f).w;
+    }
+  result_["fire_iterations"] = static_cast<double>(it);
+  result_["fire_max_force_relative"] = fmax * rbar / k;
+  result_["fire_energy"] = energy;
   for (auto& vel : p.velocity) vel.setZero();
 }
 std::map<std::string, double> RelaxGenerator::report(const State& s) const {
   auto r = packing_report(s);
   r.insert(result_.begin(), result_.end());
+  if (!sampling_.empty()) {
+    r.insert(sampling_.begin(), sampling_.end());
+    add_diameter_range(s, r);
+  }
   return r;
 }
 

@@ -7,10 +7,10 @@
 ///            r = (phi V / (4/3 pi N))^(1/3) (Eq. 1, phi = 0.63), random insertion at reduced
 ///            size, frictionless growth to the size giving the target density, then settling
 ///   relax    seed 003: minimise U = sum w(q), w(q) = k (q - 1) ln q for q = d/(r_i + r_j) < 1
-///            (and q = d/r_i against walls) with FIRE from an overlapping random start
+///            (and q = d/r_i against walls) with FIRE from an overlapping random start; radii
+///            uniform in r(1 +- spread), or drawn from a size distribution (kept as drawn)
 /// Container walls created: deposit -> "die" (cylinder) + "bottom" (plane);
-/// fill -> "die" + "bottom" + "top" (cylinder) or "xlo","xhi","ylo","yhi","bottom","top" (box);
-/// relax -> the six box planes as for fill.
+/// fill and relax -> "die" + "bottom" + "top" (cylinder) or "xlo","xhi","ylo","yhi","bottom","top" (box).
 #include <map>
 #include <memory>
 #include <string>
@@ -119,15 +119,21 @@ class FillGenerator final : public Generator {
 class RelaxGenerator final : public Generator {
  public:
   struct Params {
-    Vec3 lo = Vec3::Zero();                ///< [m]
-    Vec3 hi = Vec3::Ones() * 1e-3;         ///< [m]
-    std::int64_t particles = 1000;
-    double target_density = 0.6;           ///< [1] sets the mean radius from N and the box
+    std::string shape = "box";             ///< box | cylinder
+    Vec3 lo = Vec3::Zero();                ///< [m] box
+    Vec3 hi = Vec3::Ones() * 1e-3;         ///< [m] box
+    double radius = 5e-4;                  ///< [m] cylinder radius (axis z through the origin)
+    double length = 1e-3;                  ///< [m] cylinder length along z from z = 0
+    /// type "none": radii uniform in r(1 +- spread); otherwise diameters drawn from it, unscaled
+    SizeDistributionParams size_distribution = no_size_distribution();
+    std::int64_t particles = 1000;         ///< with a size distribution, 0 = fill target_density * V
+    double target_density = 0.6;           ///< [1] solid volume / container volume
     double spread = 0.125;                 ///< [1] radii uniform in r(1 +- spread)
     double stiffness = 1.0;                ///< [J] k of w(q) (the minimum does not depend on it)
     std::int64_t max_iterations = 200000;
     double force_tolerance = 1e-6;         ///< [1] stop when max |F| < tol k / r_mean
     double max_step = 0.05;                ///< [1] largest displacement per iteration / radius
+    double max_overlap = 0.0;              ///< [1] also stop when max overlap / smaller radius <= this (0 = off)
     double density = 1000.0;               ///< [kg/m^3] particle density (for later stages)
     std::int64_t material = 0;
   };
@@ -135,13 +141,18 @@ class RelaxGenerator final : public Generator {
   explicit RelaxGenerator(const Params& p) : p_(p) {}
   std::string name() const override { return "relax"; }
   void generate(State& s) override;
-  double estimated_particles() const override { return static_cast<double>(p_.particles); }
+  double estimated_particles() const override;
+  double container_volume() const;
   std::map<std::string, double> report(const State& s) const override;
   std::vector<int> coordination_histogram(const State& s) const override { return packing_histogram(s); }
 
  private:
+  /// Radii: uniform spread rescaled to exactly target_density (no distribution), else drawn.
+  std::vector<double> radii(State& s);
   Params p_;
   std::map<std::string, double> result_;
+  std::map<std::string, double> sampling_;
+  double scale_radius_ = 0.0;  ///< [m] length scale of the FIRE step, skin and force tolerance
 };
 
 /// Radius growth used by `fill`: r_i(t) = r_i,final * s(t), s rising linearly from s0 to s1

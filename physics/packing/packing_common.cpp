@@ -16,10 +16,13 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 }
 
-ParamSpec<SizeDistributionParams> size_distribution_spec() {
+ParamSpec<SizeDistributionParams> size_distribution_spec(bool optional) {
   using P = SizeDistributionParams;
   ParamSpec<P> s("size_distribution", "object", "particle size distribution (diameters)");
-  s.add("type", &P::type).choices({"lognormal", "table", "uniform"}).doc("kind of distribution");
+  std::vector<std::string> kinds = {"lognormal", "table", "uniform"};
+  if (optional) kinds.insert(kinds.begin(), "none");
+  auto type = s.add("type", &P::type).choices(kinds).doc(optional ? "kind of distribution; none = not used" : "kind of distribution");
+  if (optional) type.defaults_to(std::string("none"));
   s.add("d50", &P::d50).unit("m").positive().doc("lognormal median diameter (number basis)");
   s.add("sigma", &P::sigma).unit("1").positive().doc("lognormal standard deviation of ln d");
   s.add("d_min", &P::d_min).unit("m").nonnegative().doc("lower truncation (lognormal) or lower bound (uniform)");

@@ -30,7 +30,15 @@ struct SizeDistributionParams {
 };
 
 
-ParamSpec<SizeDistributionParams> size_distribution_spec();
+/// optional = true: `type` also takes "none" (the default): no distribution, the owner's own
+/// radii (relax: uniform spread).
+ParamSpec<SizeDistributionParams> size_distribution_spec(bool optional = false);
+/// The default of an optional distribution: type "none".
+inline SizeDistributionParams no_size_distribution() {
+  SizeDistributionParams p;
+  p.type = "none";
+  return p;
+}
 
 /// Builds the distribution (reading the CSV if given). Throws ConfigError with paths relative
 /// to the size_distribution object.

@@ -173,6 +173,14 @@ TEST_CASE("each class of configuration error names its JSON path (exit 2, no out
                       {{"/stages/0/generator/size_distribution/cumulative_fraction", "last cumulative fraction is 0.9"}});
     }
   }
+  SECTION("relax: particles = 0 needs a size distribution, and the distribution is checked at load") {
+    const json base = {{"shape", "cylinder"}, {"radius", 20e-6}, {"length", 40e-6}, {"particles", 0}};
+    expect_rejected(generator_scene("relax", base), {{"/stages/0/generator/particles", "needs particles >= 1"}});
+    json gen = base;
+    gen["size_distribution"] = {{"type", "table"}, {"diameters", {2e-6, 4e-6}}, {"cumulative_fraction", {0.2, 0.9}}};
+    expect_rejected(generator_scene("relax", gen),
+                    {{"/stages/0/generator/size_distribution/cumulative_fraction", "last cumulative fraction is 0.9"}});
+  }
   SECTION("walls that do not enclose the lattice") {
     json j = valid_scene();
     j["stages"][0]["generator"]["hi"] = {0.03, 0.015, 0.02};  // 12 columns in x; the xhi wall is at 0.0175 m

@@ -5,6 +5,7 @@
 /// GranOO reports 6.7 for 5,000 elements).
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -62,6 +63,34 @@ TEST_CASE("relax reaches its density with FIRE on a small box", "[generators]") 
   check_packing(s, generator_params(scene), false, false);
   // FIRE converged: largest force below force_tolerance k / r_mean (default 1e-6).
   CHECK(s["stages"][0]["packing"]["fire_max_force_relative"].get<double>() <= 1e-6);
+}
+
+TEST_CASE("relax packs a lognormal size distribution into a small cylinder without rescaling it", "[generators]") {
+  const std::string scene = data + "gen_relax_cylinder_psd.json";
+  const json s = run_scene(scene, "relax_cyl");
+  const json& p = s["stages"][0]["packing"];
+  const json gen = generator_params(scene);
+  INFO("packing report: " << p.dump());
+  // FIRE stops once the largest overlap / smaller radius is at most max_overlap (1e-3); the report
+  // recomputes it from the final positions (1e-9 relative margin for the rounding).
+  const double tol = gen["max_overlap"].get<double>() * (1.0 + 1e-9);
+  // Inside the die and between the planes: for every particle and wall, (r - d)/r <= tol, with d
+  // the distance of the centre from the wall (negative outside), so no centre is outside.
+  CHECK(p["max_overlap_ratio_walls"].get<double>() <= tol);
+  CHECK(p["max_overlap_ratio"].get<double>() <= tol);
+  // Solid volume / container volume: the drawing stops within half the last particle of
+  // target_density * V (sample_until_volume), at most pi/12 d_max^3 / V = 0.0043 here; 1 % of
+  // the target (0.0065) bounds it.
+  const double target = gen["target_density"].get<double>();
+  CHECK(std::abs(p["solid_volume"].get<double>() / p["container_volume"].get<double>() - target) <= 0.01 * target);
+  CHECK(p["container_volume"].get<double>() == Approx(3.14159265358979 * 22e-6 * 22e-6 * 40e-6).epsilon(1e-9));
+  // The radii are the drawn ones: KS distance below the 1 % critical value 1.63/sqrt(n), plus
+  // 1/n for the last draw that the volume criterion keeps or drops.
+  const double n = p["particles"].get<double>();
+  CHECK(n >= 300);
+  CHECK(p["psd_ks_distance"].get<double>() <= 1.63 / std::sqrt(n) + 1.0 / n);
+  CHECK(p["diameter_max"].get<double>() <= 1e-5);
+  CHECK(p["diameter_min"].get<double>() >= 1.5e-6);
 }
 
 TEST_CASE("fill (cooker) reaches its density on a small box", "[generators]") {
