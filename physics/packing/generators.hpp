@@ -134,7 +134,7 @@ class RelaxGenerator final : public Generator {
     double force_tolerance = 1e-6;         ///< [1] stop when max |F| < tol k / r_mean
     double max_step = 0.05;                ///< [1] largest displacement per iteration / radius
     double max_overlap = 0.0;              ///< [1] also stop when max overlap / smaller radius <= this (0 = off)
-    double density = 1000.0;               ///< [kg/m^3] particle density (for later stages)
+    double density = 1000.0;               ///< [kg/m^3] particle density for the masses (not read from materials)
     std::int64_t material = 0;
   };
   static ParamSpec<Params> spec();
