@@ -24,6 +24,9 @@ namespace sparkdem {
 
 namespace {
 
+/// Per-particle mass factor of a stage with mass scaling (see StageConfig::mass_floor_radius).
+const std::string kMassFactorField = "mass_factor";
+
 const std::vector<std::string> kCoreFields = {"position", "velocity", "orientation", "omega", "force",
                                               "torque",   "radius",   "mass",        "inertia"};
 
@@ -420,8 +423,18 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     for (const PlanItem& it : plan_.items)
       if (it.kind == PlanItem::Kind::Module)
         std::erase_if(s_.marks, [&](const auto& kv) { return kv.first.rfind("trigger/" + it.name + "/", 0) == 0; });
-    if (cfg.mass_scaling != 1.0)
-      for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] *= cfg.mass_scaling; p.inertia[i] *= cfg.mass_scaling; }
+    if (cfg.mass_scaling != 1.0 || cfg.mass_floor_radius > 0.0) {
+      // The factor of each particle is kept in a field (checkpointed), so the end of the stage
+      // undoes exactly what its start did, also after a restart and with radii that changed.
+      p.fields.declare(FieldInfo{kMassFactorField, 1, "1", 1.0, false}, p.size());
+      auto& f = p.fields.data(kMassFactorField);
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        const double fines = p.radius[i] < cfg.mass_floor_radius ? std::pow(cfg.mass_floor_radius / p.radius[i], 3) : 1.0;
+        f[i] = cfg.mass_scaling * fines;
+        p.mass[i] *= f[i];
+        p.inertia[i] *= f[i];
+      }
+    }
   }
   if (resume) {
     skin_ = s_.stage_skin;
@@ -582,8 +595,11 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   obs.timeseries(cols, vals);
   obs.watch(s_, cols, vals);
   for (std::size_t q = 0; q < cols.size(); ++q) res.final_values[cols[q]] = vals[q];
-  if (cfg.mass_scaling != 1.0)
-    for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] /= cfg.mass_scaling; p.inertia[i] /= cfg.mass_scaling; }
+  if (p.fields.has(kMassFactorField)) {
+    const auto& f = p.fields.data(kMassFactorField);
+    for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] /= f[i]; p.inertia[i] /= f[i]; }
+    p.fields.remove(kMassFactorField);
+  }
   for (auto& f : p.fixed) f = 0;
   prescribed_.clear();
   res.wall_seconds = std::chrono::duration<double>(clock::now() - t_start).count();

@@ -43,6 +43,10 @@ struct StageConfig {
   bool require_until = false;      ///< a hard stop before `until` holds is an error
   double skin = 0.0;               ///< [m] Verlet skin; 0 = 0.3 * smallest radius
   double mass_scaling = 1.0;       ///< multiplies masses and inertias during the stage (reported)
+  /// > 0: during the stage a particle smaller than this radius [m] also takes the mass of a
+  /// sphere of this radius and its own density (inertia likewise): density scaling of the fines,
+  /// whose stable step limits dt (quasi-static stages only; reported).
+  double mass_floor_radius = 0.0;
   double time_scale = 1.0;         ///< physical seconds per mechanical second (TimeDomain::Physical modules)
   Step stability_check_every = 1000;
   double blowup_speed = 0.0;       ///< [m/s] a speed above this is a blow-up; 0 = radius/dt rule

@@ -375,6 +375,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         js["particles"] = r.particles;
         js["particle_steps_per_s"] = r.particle_steps_per_second;
         js["mass_scaling"] = st.cfg.mass_scaling;
+        js["mass_floor_radius"] = st.cfg.mass_floor_radius;
         js["step_plan"] = r.plan;
         for (const auto& [c, v] : r.final_values) js["final"][c] = finite_or_null(v);
         if (st.snapshots) js["snapshots"] = snapshots_summary(record, stage_index, *st.snapshots, opt.outdir);

@@ -124,6 +124,7 @@ struct StageParams {
   double dt_fraction = 0.0;
   bool allow_unstable_dt = false;
   double mass_scaling = 1.0;
+  double mass_floor_radius = 0.0;
   double time_scale = 1.0;
   double skin = 0.0;
   double blowup_speed = 0.0;
@@ -172,6 +173,7 @@ ParamSpec<StageParams> stage_spec(const Registry& reg) {
   s.add("dt_fraction", &StageParams::dt_fraction).unit("1").range(0.0, 10.0).doc("time step as a fraction of the stable step at stage start");
   s.add("allow_unstable_dt", &StageParams::allow_unstable_dt).doc("run above the stable step (explicit override)");
   s.add("mass_scaling", &StageParams::mass_scaling).unit("1").min(1.0).doc("mass scaling factor (reported; 1 = off)");
+  s.add("mass_floor_radius", &StageParams::mass_floor_radius).unit("m").nonnegative().doc("particles smaller than this radius take the mass (and inertia) of a sphere of this radius during the stage, on top of mass_scaling: density scaling of the fines for quasi-static stages (0 = off)");
   s.add("time_scale", &StageParams::time_scale).unit("1").positive().doc("physical seconds per mechanical second: modules in physical time (thermal, sintering kinetics) advance time_scale x dt per step; both clocks are reported");
   s.add("skin", &StageParams::skin).unit("m").nonnegative().doc("Verlet skin (0: 0.3 x smallest radius)");
   s.add("blowup_speed", &StageParams::blowup_speed).unit("m/s").nonnegative().doc("speed that counts as a blow-up (0: radius per step)");
@@ -479,6 +481,7 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
   c.dt_fraction = p.dt_fraction;
   c.allow_unstable_dt = p.allow_unstable_dt;
   c.mass_scaling = p.mass_scaling;
+  c.mass_floor_radius = p.mass_floor_radius;
   c.time_scale = p.time_scale;
   c.skin = p.skin;
   c.blowup_speed = p.blowup_speed;

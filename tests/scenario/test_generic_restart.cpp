@@ -103,6 +103,9 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
       {{"name", "fall"}, {"type", "dynamics"}, {"dt_fraction", 0.3},
        {"modules", {{"gravity", {{"acceleration", {0, 0, -9.81}}}}, {"mock_c", {{"clock", {{"kind", "substeps"}, {"n", 3}}}}}}},
        {"stop", {{"steps", 600}}}});
+  json scaled_press = load_data("hot_press_small.json");
+  scaled_press["stages"][1]["mass_scaling"] = 10.0;
+  scaled_press["stages"][1]["mass_floor_radius"] = 0.0012;  // every particle (r = 1 mm) is a "fine"
   const Case cases[] = {
       {"lattice + bonded pull with event, adaptive and every-N mock modules, electrical network, time scaling", load_data("restart_contracts.json"), 1, 180},
       {"deposit generator (settling, die contraction)", with_steps(load_data("gen_deposit_small.json"), 0, 3000), 0, 1777},
@@ -112,6 +115,7 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
       {"dynamics taking snapshots, then a sweep over them and a stage after it", load_data("sweep_fall.json"), 1, 170},
       {"hot press: temperature_history with thermal expansion, pressure table in physical time, compact monitor",
        load_data("hot_press_small.json"), 1, 2333},
+      {"hot press with mass scaling and a mass floor (per-particle factors in the checkpoint)", scaled_press, 1, 2333},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.label) {
