@@ -423,6 +423,13 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     for (const PlanItem& it : plan_.items)
       if (it.kind == PlanItem::Kind::Module)
         std::erase_if(s_.marks, [&](const auto& kv) { return kv.first.rfind("trigger/" + it.name + "/", 0) == 0; });
+    // A state saved inside a mass-scaled stage (a snapshot) carries its factors: undo them first,
+    // so every stage starts from the true masses.
+    if (p.fields.has(kMassFactorField)) {
+      const auto& f = p.fields.data(kMassFactorField);
+      for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] /= f[i]; p.inertia[i] /= f[i]; }
+      p.fields.remove(kMassFactorField);
+    }
     if (cfg.mass_scaling != 1.0 || cfg.mass_floor_radius > 0.0) {
       // The factor of each particle is kept in a field (checkpointed), so the end of the stage
       // undoes exactly what its start did, also after a restart and with radii that changed.

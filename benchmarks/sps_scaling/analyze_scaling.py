@@ -7,7 +7,9 @@ For each run directory (scene.json, out/, time.txt) it reports:
   - each snapshot: target, porosity taken, mean and histogram (10 bins on [0, 1]) of a / r_min
     over the sintered necks (neck_radius > 0, from the snapshot's contact state);
   - the conductivity of each snapshot with and without the grain-boundary layer;
-  - max kinetic energy / punch work after the punch has done 1 % of its final work.
+  - max kinetic energy / punch work during the hot press, the work counted as the total mechanical
+    work exchanged through the punch, W(t) = integral |F du| (the compact also pushes the punch back
+    when it expands), after W has reached 1 % of its final value.
 Differences are given against the run with the smallest time scale (the slowest, reference).
 Needs h5py (Debian python3-h5py); the snapshot and sweep readers are in tools/sps_outputs.py.
 """
@@ -31,9 +33,9 @@ def load(run):
     T = np.array([float(r["temperature"]) for r in rows])
     phi = np.array([float(r["porosity_mass"]) for r in rows])
     ke = np.array([float(r["kinetic_energy"]) for r in rows])
-    F = np.array([float(r["wall_punch_normal_force"]) for r in rows])
-    u = np.array([float(r["wall_punch_offset"]) for r in rows])
-    work = np.concatenate([[0.0], np.cumsum(0.5 * (F[1:] + F[:-1]) * np.diff(u))])
+    F = np.array([float(r["wall_top_normal_force"]) for r in rows])
+    u = np.array([float(r["wall_top_offset"]) for r in rows])
+    work = np.concatenate([[0.0], np.cumsum(np.abs(0.5 * (F[1:] + F[:-1]) * np.diff(u)))])
     on = work > 0.01 * work[-1]
     ratio = float(np.max(ke[on] / work[on])) if on.any() and work[-1] > 0 else float("nan")
     phi_at_T = {}

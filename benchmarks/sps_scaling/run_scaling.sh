@@ -39,8 +39,14 @@ for st in j["stages"]:
         cycle_end = max(st["modules"]["temperature_history"]["time"])
         st["time_scale"] = ts
         st["stop"]["time"] = cycle_end / ts
-        st["contact"]["params"]["$include"] = cfgdir + "/" + st["contact"]["params"]["$include"]
-json.dump(j, open(dst, "w"), indent=1)
+def absolute_includes(x):
+    """Every "$include" made absolute (the variant scene is written elsewhere)."""
+    if isinstance(x, dict):
+        return {k: (cfgdir + "/" + v if k == "$include" else absolute_includes(v)) for k, v in x.items()}
+    if isinstance(x, list):
+        return [absolute_includes(v) for v in x]
+    return x
+json.dump(absolute_includes(j), open(dst, "w"), indent=1)
 PY
   OMP_NUM_THREADS=1 OMP_WAIT_POLICY=PASSIVE /usr/bin/time -f "%e %U %S" -o "$dir/time.txt" \
     "$sparkdem" run "$dir/scene.json" -o "$dir/out" --threads 1 --quiet

@@ -37,6 +37,8 @@ ParamSpec<TemperatureHistory::Params> TemperatureHistory::spec() {
   s.add("temperature", &Params::temperature).unit("K").required().doc("temperature at each time (> 0)");
   s.add("expansion_coefficient", &Params::expansion_coefficient).unit("1/K")
       .doc("alpha_T, linear thermal expansion coefficient (0: radii unchanged)");
+  s.add("start_from_current", &Params::start_from_current)
+      .doc("replace the first tabulated temperature by the particles' mean temperature at the stage start (cooling a state taken hot, e.g. a snapshot)");
   s.add("reference_temperature", &Params::reference_temperature).unit("K").positive()
       .doc("T_0: the radii when the reference radii are first captured are the radii at this temperature (keep it the same in every stage)");
   return s;
@@ -62,6 +64,7 @@ TemperatureHistory::TemperatureHistory(const Params& p) : p_(p) {
   }
   if (!d.empty()) throw ConfigError(d);
   current_ = p_.temperature.front();
+  table_ = p_.temperature;
 }
 
 void TemperatureHistory::declare(Declarations& d) const {
@@ -81,6 +84,18 @@ void TemperatureHistory::bind(State& s) {
     return;
   }
   auto& p = s.particles;
+  table_ = p_.temperature;
+  if (p_.start_from_current && p.size() > 0) {
+    // The field exists (declared); a state that never had a temperature module holds 0 there.
+    const auto& f = p.fields.data("temperature");
+    double sum = 0.0;
+    for (double x : f) sum += x;
+    const double mean = sum / static_cast<double>(f.size());
+    if (!(mean > 0.0))
+      throw SetupError("temperature_history: start_from_current needs the particles' temperature, but the state has none "
+                       "(no earlier stage prescribed one)");
+    table_.front() = mean;
+  }
   if (p_.expansion_coefficient != 0.0) {
     auto& rr = p.fields.data("radius_ref");
     auto& tr = p.fields.data("radius_ref_temperature");
@@ -123,6 +138,11 @@ void TemperatureHistory::advance(State& s, const StepInfo& step) {
 
 void TemperatureHistory::visit(Archive& ar, const std::string& prefix) {
   ar.visit(prefix + "/temperature", current_);
+  if (p_.start_from_current) {
+    double t0 = table_.front();
+    ar.visit(prefix + "/start_temperature", t0);
+    table_.front() = t0;
+  }
   if (ar.reading()) restored_ = true;
 }
 

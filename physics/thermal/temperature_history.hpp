@@ -56,6 +56,7 @@ class TemperatureHistory final : public Module {
   struct Params {
     std::vector<double> time;               ///< [s] physical, from the stage start
     std::vector<double> temperature;        ///< [K]
+    bool start_from_current = false;        ///< the first table value is the particles' mean temperature at the stage start
     double expansion_coefficient = 0.0;     ///< [1/K]
     double reference_temperature = 293.15;  ///< [K]
   };
@@ -73,12 +74,13 @@ class TemperatureHistory final : public Module {
   void visit(Archive& ar, const std::string& prefix) override;
 
   /// T at physical time `t` since the stage start [K].
-  double temperature_at(double t) const { return thermal::table_temperature(p_.time, p_.temperature, t); }
+  double temperature_at(double t) const { return thermal::table_temperature(p_.time, table_, t); }
 
  private:
   void apply(State& s, double T);
   Params p_;
   double current_ = 0.0;  ///< temperature last written [K]
+  std::vector<double> table_;  ///< the temperature table as used (start_from_current: first value replaced; checkpointed)
   bool restored_ = false; ///< set by visit() when reading: bind() leaves the restored state alone
 };
 

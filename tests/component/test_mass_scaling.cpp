@@ -46,4 +46,20 @@ TEST_CASE("mass_scaling and mass_floor_radius scale the fines during the stage a
     CHECK(s.particles.inertia[i] == Approx(i0[i]).epsilon(1e-14));
   }
   CHECK_FALSE(s.particles.fields.has("mass_factor"));
+
+  // A state saved inside a scaled stage (a snapshot) carries the factors with scaled masses: the
+  // next stage starts from the true masses, whatever its own scaling.
+  auto& p = s.particles;
+  p.fields.declare(FieldInfo{"mass_factor", 1, "1", 1.0, false}, p.size());
+  p.fields.data("mass_factor") = {7.0, 3.0};
+  p.mass[0] *= 7.0;
+  p.inertia[0] *= 7.0;
+  p.mass[1] *= 3.0;
+  p.inertia[1] *= 3.0;
+  StageConfig plain = test::stage(1e-5, 1, 1e-3);
+  test::StepObserver check([&](const State& st, Step) {
+    for (std::size_t i = 0; i < 2; ++i) CHECK(st.particles.mass[i] == Approx(m0[i]).epsilon(1e-14));
+  });
+  sim.run_stage(plain, check);
+  CHECK_FALSE(p.fields.has("mass_factor"));
 }

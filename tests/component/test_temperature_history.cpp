@@ -199,3 +199,37 @@ TEST_CASE("temperature_history reports every table problem at once with its path
   p.expansion_coefficient = -1e-3;  // 1 + alpha (T - T0) < 0: a negative radius
   CHECK_THROWS_AS(TemperatureHistory(p), ConfigError);
 }
+
+TEST_CASE("temperature_history start_from_current cools a state from the temperature it holds", "[thermal][modules]") {
+  // The state holds 1500 K (as a snapshot taken hot); the table [0, 100] s -> [ignored, 300] K
+  // with start_from_current starts at 1500 K: T(t) = 1500 - 12 t, held at 300 K after 100 s.
+  State s = separated_spheres();
+  s.particles.fields.declare(FieldInfo{"temperature", 1, "K", 0.0, true}, s.particles.size());
+  auto& f0 = s.particles.fields.data("temperature");
+  std::fill(f0.begin(), f0.end(), 1500.0);
+  TemperatureHistory::Params p;
+  p.time = {0.0, 100.0};
+  p.temperature = {293.15, 300.0};
+  p.start_from_current = true;
+  TemperatureHistory th(p);
+  auto law = soft_law();
+  Simulation sim(s, law);
+  sim.add_module(&th);
+  StageConfig cfg = test::stage(1e-6, 2000, 1e-4);
+  cfg.time_scale = 1e5;
+  double worst = 0.0;
+  test::StepObserver obs([&](const State& st, Step k) {
+    const double t = 1e5 * (static_cast<double>(k) * 1e-6);
+    const double expect = t >= 100.0 ? 300.0 : 1500.0 - 12.0 * t;
+    for (double T : st.particles.fields.data("temperature")) worst = std::max(worst, test::relative_error(T, expect));
+  });
+  sim.run_stage(cfg, obs);
+  CHECK(worst <= 1e-12);
+  // A state without any temperature cannot start from it.
+  State cold = separated_spheres();
+  TemperatureHistory th2(p);
+  Simulation sim2(cold, law);
+  sim2.add_module(&th2);
+  test::NullObserver none;
+  CHECK_THROWS_WITH(sim2.run_stage(cfg, none), Catch::Contains("start_from_current needs the particles' temperature"));
+}
