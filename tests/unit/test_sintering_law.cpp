@@ -170,9 +170,9 @@ TEST_CASE("Sintering pair: the answer does not depend on the time scale", "[sint
   }
 }
 
-TEST_CASE("Sintering neck: persistent beyond contact, bonded when cold", "[sintering]") {
-  auto p = law_params();
-  const Sintering law(p);
+namespace {
+/// Two equal spheres of radius kR along x at temperature kT, time scale 1 (overlap to be set).
+ContactGeometry equal_pair_geometry() {
   ContactGeometry g;
   g.n = Vec3::UnitX();
   g.r_i = g.r_j = kR;
@@ -180,6 +180,14 @@ TEST_CASE("Sintering neck: persistent beyond contact, bonded when cold", "[sinte
   g.m_eff = 0.5 * test::sphere_mass(kR, kRho);
   g.temperature = kT;
   g.time_scale = 1.0;
+  return g;
+}
+}  // namespace
+
+TEST_CASE("Sintering neck: persistent beyond contact, bonded when cold", "[sintering]") {
+  auto p = law_params();
+  const Sintering law(p);
+  ContactGeometry g = equal_pair_geometry();
   g.overlap = 0.01 * kR;
   RelativeMotion m;
   m.vt = Vec3::Zero();
@@ -246,13 +254,7 @@ TEST_CASE("Sintering beyond the equilibrium neck: frozen stops the dashpot, cree
   // exactly: F_e' = F0 e^-x, du_s = dt phi(x) F0 / eta, x = k_n dt / eta, eta = pi a^4 / (8 D_eff),
   // and in neither is there a driving force (F_n = F_e').
   auto p = law_params();
-  ContactGeometry g;
-  g.n = Vec3::UnitX();
-  g.r_i = g.r_j = kR;
-  g.r_eff = 0.5 * kR;
-  g.m_eff = 0.5 * test::sphere_mass(kR, kRho);
-  g.temperature = kT;
-  g.time_scale = 1.0;
+  ContactGeometry g = equal_pair_geometry();
   g.overlap = 0.9 * kR;
   const double a = std::min(neck_of(g.overlap), kR);
   REQUIRE(a > kR * std::sin(0.5 * p.dihedral_angle));
