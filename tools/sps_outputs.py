@@ -36,6 +36,32 @@ def neck_histogram(x):
     return hist / max(1, len(x))
 
 
+def snapshots(out_dir, stage):
+    """The snapshots taken by `stage` (its summary.json entry), in order: each record of
+    snapshots.taken (index = position in snapshots.at, target, value, step, time, file) with the
+    necks of its file: necks (count), mean_a_over_rmin (nan without necks), hist (neck_histogram)."""
+    import os
+    res = []
+    for s in stage.get("snapshots", {}).get("taken", []):
+        x = neck_ratios(os.path.join(out_dir, s["file"]))
+        res.append(dict(s, necks=int(x.size), mean_a_over_rmin=float(x.mean()) if x.size else float("nan"),
+                        hist=neck_histogram(x).tolist()))
+    return res
+
+
+def timeseries(out_dir):
+    """timeseries.csv of a run as {column: numpy array} (non-numeric or empty cells are nan)."""
+    import csv, os
+    rows = list(csv.DictReader(open(os.path.join(out_dir, "timeseries.csv"))))
+
+    def num(v):
+        try:
+            return float(v)
+        except (TypeError, ValueError):
+            return float("nan")
+    return {c: np.array([num(r.get(c)) for r in rows]) for c in (rows[0].keys() if rows else [])}
+
+
 def sweep_values(summary, stage_name, column="electrical_conductivity_eff"):
     """{snapshot_index: value of `column`} over the sweep rows of stage `stage_name` ({} if absent).
     For a calibrating sweep only its validation rows (every snapshot at the calibrated value) count;

@@ -5,25 +5,9 @@
 # and the kinetic-energy / punch-work ratio. Usage:
 #   run_scaling.sh --sparkdem build/sparkdem [--scales "4e5 1.2e5 4e4"] [--workdir DIR] [--csv FILE]
 set -euo pipefail
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-sparkdem=""
+source "$(dirname "$0")/../sps_bench.sh"
 scales="4e5 1.2e5 4e4"
-workdir=""
-csv="$here/results.csv"
-while [ $# -gt 0 ]; do
-  case "$1" in
-    --sparkdem) sparkdem=$2; shift 2 ;;
-    --scales) scales=$2; shift 2 ;;
-    --workdir) workdir=$2; shift 2 ;;
-    --csv) csv=$2; shift 2 ;;
-    *) echo "usage: $0 --sparkdem BIN [--scales \"4e5 1.2e5 4e4\"] [--workdir DIR] [--csv FILE]" >&2; exit 2 ;;
-  esac
-done
-[ -x "$sparkdem" ] || { echo "give --sparkdem PATH (an executable)" >&2; exit 2; }
-[ -n "$workdir" ] || workdir=$(mktemp -d "${TMPDIR:-/tmp}/sps_scaling.XXXXXX")
-mkdir -p "$workdir"
-echo "load average: $(cut -d' ' -f1-3 /proc/loadavg); workdir $workdir"
+sps_setup sps_scaling "$0 --sparkdem BIN [--scales \"4e5 1.2e5 4e4\"] [--workdir DIR] [--csv FILE]" "sparkdem scales workdir csv" "" "$@"
 runs=()
 for s in $scales; do
   dir="$workdir/ts_$s"
@@ -42,8 +26,7 @@ for st in j["stages"]:
         st["contact"]["params"]["$include"] = cfgdir + "/" + st["contact"]["params"]["$include"]
 json.dump(j, open(dst, "w"), indent=1)
 PY
-  OMP_NUM_THREADS=1 OMP_WAIT_POLICY=PASSIVE /usr/bin/time -f "%e %U %S" -o "$dir/time.txt" \
-    "$sparkdem" run "$dir/scene.json" -o "$dir/out" --threads 1 --quiet
+  sps_run "$dir/scene.json" "$dir"
   runs+=("$dir")
 done
 /usr/bin/python3 "$here/analyze_scaling.py" --csv "$csv" "${runs[@]}"
