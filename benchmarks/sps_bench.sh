@@ -40,9 +40,11 @@ sps_setup() {
 # sps_run SCENE DIR: runs SCENE with one thread into DIR/out (DIR made, out replaced), "wall user system" seconds
 # in the last line of DIR/time.txt. A failed run is reported, not fatal (the analyzers report it).
 sps_run() {
+  local rc=0
   mkdir -p "$2"
   rm -rf "$2/out"
   OMP_NUM_THREADS=1 OMP_WAIT_POLICY=PASSIVE /usr/bin/time -f "%e %U %S" -o "$2/time.txt" \
-    "$sparkdem" run "$1" -o "$2/out" --threads 1 --quiet || echo "$(basename "$2"): sparkdem failed (exit $?)"
+    "$sparkdem" run "$1" -o "$2/out" --threads 1 --quiet || rc=$?
+  [ "$rc" = 0 ] || echo "$(basename "$2"): sparkdem failed (exit $rc)"
   echo "$(basename "$2"): $(tail -n 1 "$2/time.txt" | cut -d' ' -f1) s"
 }

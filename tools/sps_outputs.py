@@ -1,5 +1,6 @@
-"""Readers for the outputs of an SPS pipeline run (summary.json, snapshot HDF5 files), shared by
-tools/plot_sps.py and benchmarks/sps_scaling/analyze_scaling.py.
+"""Readers for the outputs of an SPS pipeline run (summary.json, snapshot HDF5 files, timeseries.csv),
+shared by tools/plot_sps.py and the analyzers of benchmarks/sps_*; absolute_includes for the
+benchmarks' variant scenes.
 
 Snapshots are checkpoint-format HDF5: per-contact state in state/contacts/state (one row per
 contact, columns named by the space-separated string state/contacts/state_columns), the pair in
@@ -9,6 +10,20 @@ Needs numpy and h5py (Debian python3-h5py).
 import numpy as np
 
 NECK_BINS = 10
+
+
+def absolute_includes(node, config_dir):
+    """Make every "$include" of a scene loaded from `config_dir` absolute (in place), so that a
+    variant of it can be written anywhere."""
+    import os
+    if isinstance(node, dict):
+        if "$include" in node:
+            node["$include"] = os.path.join(config_dir, node["$include"])
+        for v in node.values():
+            absolute_includes(v, config_dir)
+    elif isinstance(node, list):
+        for v in node:
+            absolute_includes(v, config_dir)
 
 
 def find_stage(summary, name):

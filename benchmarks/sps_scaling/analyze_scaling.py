@@ -7,7 +7,7 @@ For each run directory (scene.json, out/, time.txt) it reports:
   - each snapshot: target, porosity taken, mean and histogram (10 bins on [0, 1]) of a / r_min
     over the sintered necks (neck_radius > 0, from the snapshot's contact state);
   - the conductivity of each snapshot with and without the grain-boundary layer;
-  - max kinetic energy / punch work after the punch has done 1 % of its final work.
+  - max kinetic energy / punch work (wall 'top') after the punch has done 1 % of its final work.
 Differences are given against the run with the smallest time scale (the slowest, reference).
 Needs h5py (Debian python3-h5py); the snapshot and sweep readers are in tools/sps_outputs.py.
 """
@@ -31,8 +31,8 @@ def load(run):
     T = np.array([float(r["temperature"]) for r in rows])
     phi = np.array([float(r["porosity_mass"]) for r in rows])
     ke = np.array([float(r["kinetic_energy"]) for r in rows])
-    F = np.array([float(r["wall_punch_normal_force"]) for r in rows])
-    u = np.array([float(r["wall_punch_offset"]) for r in rows])
+    F = np.array([float(r["wall_top_normal_force"]) for r in rows])
+    u = np.array([float(r["wall_top_offset"]) for r in rows])
     work = np.concatenate([[0.0], np.cumsum(0.5 * (F[1:] + F[:-1]) * np.diff(u))])
     on = work > 0.01 * work[-1]
     ratio = float(np.max(ke[on] / work[on])) if on.any() and work[-1] > 0 else float("nan")

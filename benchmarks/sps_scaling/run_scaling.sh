@@ -14,16 +14,18 @@ for s in $scales; do
   mkdir -p "$dir"
   # Same scenario, only the hot press's time_scale and (so that the same physical cycle is
   # simulated) its mechanical stop time change.
-  /usr/bin/python3 - "$root/configs/sps_nial_small.json" "$dir/scene.json" "$s" "$root/configs" <<'PY'
+  /usr/bin/python3 - "$root/configs/sps_nial_small.json" "$dir/scene.json" "$s" "$root/configs" "$root/tools" <<'PY'
 import json, sys
 src, dst, ts, cfgdir = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
+sys.path.insert(0, sys.argv[5])
+from sps_outputs import absolute_includes
 j = json.load(open(src))
+absolute_includes(j, cfgdir)  # the scene is written elsewhere
 for st in j["stages"]:
     if st["name"] == "hot_press":
         cycle_end = max(st["modules"]["temperature_history"]["time"])
         st["time_scale"] = ts
         st["stop"]["time"] = cycle_end / ts
-        st["contact"]["params"]["$include"] = cfgdir + "/" + st["contact"]["params"]["$include"]
 json.dump(j, open(dst, "w"), indent=1)
 PY
   sps_run "$dir/scene.json" "$dir"

@@ -25,22 +25,13 @@ sps_setup sps_sensitivity "$0 --sparkdem BIN [--variants \"P=V ...\"] [--workdir
 run() {
   local dir="$workdir/${1//=/_}"
   mkdir -p "$dir"
-  /usr/bin/python3 - "$root/configs" "$dir/scene.new.json" "$1" "${2:-}" <<'PY'
+  /usr/bin/python3 - "$root/configs" "$dir/scene.new.json" "$1" "${2:-}" "$root/tools" <<'PY'
 import json, os, sys
-cfgdir, dst, variant, gb = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
+cfgdir, dst, variant, gb, tools = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5]
+sys.path.insert(0, tools)
+from sps_outputs import absolute_includes
 j = json.load(open(os.path.join(cfgdir, "sps_nial_small.json")))
-
-def absolute_includes(x):  # the scene is written elsewhere: includes relative to configs/
-    if isinstance(x, dict):
-        if "$include" in x:
-            x["$include"] = os.path.join(cfgdir, x["$include"])
-        for v in x.values():
-            absolute_includes(v)
-    elif isinstance(x, list):
-        for v in x:
-            absolute_includes(v)
-
-absolute_includes(j)
+absolute_includes(j, cfgdir)  # the scene is written elsewhere
 stages = {s["name"]: s for s in j["stages"]}
 if variant != "baseline":
     key, value = variant.split("=")
