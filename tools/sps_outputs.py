@@ -1,5 +1,6 @@
-"""Readers for the outputs of an SPS pipeline run (summary.json, snapshot HDF5 files), shared by
-tools/plot_sps.py and benchmarks/sps_scaling/analyze_scaling.py.
+"""Readers for the outputs of an SPS pipeline run (summary.json, snapshot HDF5 files, timeseries.csv),
+shared by tools/plot_sps.py and the analyzers of benchmarks/sps_*; absolute_includes for the
+benchmarks' variant scenes.
 
 Snapshots are checkpoint-format HDF5: per-contact state in state/contacts/state (one row per
 contact, columns named by the space-separated string state/contacts/state_columns), the pair in
@@ -9,6 +10,20 @@ Needs numpy and h5py (Debian python3-h5py).
 import numpy as np
 
 NECK_BINS = 10
+
+
+def absolute_includes(node, config_dir):
+    """Make every "$include" of a scene loaded from `config_dir` absolute (in place), so that a
+    variant of it can be written anywhere."""
+    import os
+    if isinstance(node, dict):
+        if "$include" in node:
+            node["$include"] = os.path.join(config_dir, node["$include"])
+        for v in node.values():
+            absolute_includes(v, config_dir)
+    elif isinstance(node, list):
+        for v in node:
+            absolute_includes(v, config_dir)
 
 
 def find_stage(summary, name):
@@ -34,6 +49,32 @@ def neck_histogram(x):
     """Fractions of necks in NECK_BINS equal bins of a / r_min on [0, 1] (all zero if no neck)."""
     hist, _ = np.histogram(x, bins=NECK_BINS, range=(0.0, 1.0))
     return hist / max(1, len(x))
+
+
+def snapshots(out_dir, stage):
+    """The snapshots taken by `stage` (its summary.json entry), in order: each record of
+    snapshots.taken (index = position in snapshots.at, target, value, step, time, file) with the
+    necks of its file: necks (count), mean_a_over_rmin (nan without necks), hist (neck_histogram)."""
+    import os
+    res = []
+    for s in stage.get("snapshots", {}).get("taken", []):
+        x = neck_ratios(os.path.join(out_dir, s["file"]))
+        res.append(dict(s, necks=int(x.size), mean_a_over_rmin=float(x.mean()) if x.size else float("nan"),
+                        hist=neck_histogram(x).tolist()))
+    return res
+
+
+def timeseries(out_dir):
+    """timeseries.csv of a run as {column: numpy array} (non-numeric or empty cells are nan)."""
+    import csv, os
+    rows = list(csv.DictReader(open(os.path.join(out_dir, "timeseries.csv"))))
+
+    def num(v):
+        try:
+            return float(v)
+        except (TypeError, ValueError):
+            return float("nan")
+    return {c: np.array([num(r.get(c)) for r in rows]) for c in (rows[0].keys() if rows else [])}
 
 
 def sweep_values(summary, stage_name, column="electrical_conductivity_eff"):

@@ -7,8 +7,8 @@ For each run directory (scene.json, out/, time.txt) it reports:
   - each snapshot: target, porosity taken, mean and histogram (10 bins on [0, 1]) of a / r_min
     over the sintered necks (neck_radius > 0, from the snapshot's contact state);
   - the conductivity of each snapshot with and without the grain-boundary layer;
-  - max kinetic energy / punch work during the hot press, the work counted as the total mechanical
-    work exchanged through the punch, W(t) = integral |F du| (the compact also pushes the punch back
+  - max kinetic energy / punch work (wall 'top'), the work counted as the total mechanical work
+    exchanged through the punch, W(t) = integral |F du| (the compact also pushes the punch back
     when it expands), after W has reached 1 % of its final value.
 Differences are given against the run with the smallest time scale (the slowest, reference).
 Needs h5py (Debian python3-h5py); the snapshot and sweep readers are in tools/sps_outputs.py.
@@ -17,7 +17,7 @@ import argparse, csv, json, os, sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
-from sps_outputs import find_stage, neck_histogram, neck_ratios, sweep_values  # noqa: E402
+from sps_outputs import find_stage, snapshots, sweep_values  # noqa: E402
 
 T_GRID = [1100.0, 1200.0, 1300.0, 1400.0, 1500.0, 1573.0]
 
@@ -42,16 +42,10 @@ def load(run):
     for t in T_GRID:
         k = np.argmax(T >= t - 1e-9)
         phi_at_T[t] = float(phi[k]) if T[k] >= t - 1e-9 else float("nan")
-    snaps = []
-    for s in st.get("snapshots", {}).get("taken", []):
-        x = neck_ratios(os.path.join(out, s["file"]))
-        hist = neck_histogram(x)
-        snaps.append({"target": s["target"], "value": s["value"], "necks": int(x.size),
-                      "mean_a_over_rmin": float(x.mean()) if x.size else float("nan"),
-                      "hist": hist.tolist()})
+    snaps = snapshots(out, st)
     kappa = {(name, k): v for name in ("conductivity_gb", "conductivity_no_gb")
              for k, v in sweep_values(summary, name).items()}
-    wall, user, sys_ = (float(v) for v in open(os.path.join(run, "time.txt")).read().split()[:3])
+    wall, user, sys_ = (float(v) for v in open(os.path.join(run, "time.txt")).read().splitlines()[-1].split()[:3])
     return {"run": run, "time_scale": press["time_scale"], "press_steps": st["steps"],
             "press_wall_s": st["wall_time_s"], "run_wall_s": wall, "run_cpu_s": user + sys_,
             "phi_at_T": phi_at_T, "snaps": snaps, "kappa": kappa, "ke_over_work_max": ratio}

@@ -5,51 +5,30 @@
 # and the kinetic-energy / punch-work ratio. Usage:
 #   run_scaling.sh --sparkdem build/sparkdem [--scales "4e5 1.2e5 4e4"] [--workdir DIR] [--csv FILE]
 set -euo pipefail
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-sparkdem=""
+source "$(dirname "$0")/../sps_bench.sh"
 scales="4e5 1.2e5 4e4"
-workdir=""
-csv="$here/results.csv"
-while [ $# -gt 0 ]; do
-  case "$1" in
-    --sparkdem) sparkdem=$2; shift 2 ;;
-    --scales) scales=$2; shift 2 ;;
-    --workdir) workdir=$2; shift 2 ;;
-    --csv) csv=$2; shift 2 ;;
-    *) echo "usage: $0 --sparkdem BIN [--scales \"4e5 1.2e5 4e4\"] [--workdir DIR] [--csv FILE]" >&2; exit 2 ;;
-  esac
-done
-[ -x "$sparkdem" ] || { echo "give --sparkdem PATH (an executable)" >&2; exit 2; }
-[ -n "$workdir" ] || workdir=$(mktemp -d "${TMPDIR:-/tmp}/sps_scaling.XXXXXX")
-mkdir -p "$workdir"
-echo "load average: $(cut -d' ' -f1-3 /proc/loadavg); workdir $workdir"
+sps_setup sps_scaling "$0 --sparkdem BIN [--scales \"4e5 1.2e5 4e4\"] [--workdir DIR] [--csv FILE]" "sparkdem scales workdir csv" "" "$@"
 runs=()
 for s in $scales; do
   dir="$workdir/ts_$s"
   mkdir -p "$dir"
   # Same scenario, only the hot press's time_scale and (so that the same physical cycle is
   # simulated) its mechanical stop time change.
-  /usr/bin/python3 - "$root/configs/sps_nial_small.json" "$dir/scene.json" "$s" "$root/configs" <<'PY'
+  /usr/bin/python3 - "$root/configs/sps_nial_small.json" "$dir/scene.json" "$s" "$root/configs" "$root/tools" <<'PY'
 import json, sys
 src, dst, ts, cfgdir = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
+sys.path.insert(0, sys.argv[5])
+from sps_outputs import absolute_includes
 j = json.load(open(src))
+absolute_includes(j, cfgdir)  # the scene is written elsewhere
 for st in j["stages"]:
     if st["name"] == "hot_press":
         cycle_end = max(st["modules"]["temperature_history"]["time"])
         st["time_scale"] = ts
         st["stop"]["time"] = cycle_end / ts
-def absolute_includes(x):
-    """Every "$include" made absolute (the variant scene is written elsewhere)."""
-    if isinstance(x, dict):
-        return {k: (cfgdir + "/" + v if k == "$include" else absolute_includes(v)) for k, v in x.items()}
-    if isinstance(x, list):
-        return [absolute_includes(v) for v in x]
-    return x
-json.dump(absolute_includes(j), open(dst, "w"), indent=1)
+json.dump(j, open(dst, "w"), indent=1)
 PY
-  OMP_NUM_THREADS=1 OMP_WAIT_POLICY=PASSIVE /usr/bin/time -f "%e %U %S" -o "$dir/time.txt" \
-    "$sparkdem" run "$dir/scene.json" -o "$dir/out" --threads 1 --quiet
+  sps_run "$dir/scene.json" "$dir"
   runs+=("$dir")
 done
 /usr/bin/python3 "$here/analyze_scaling.py" --csv "$csv" "${runs[@]}"
