@@ -34,7 +34,9 @@
 /// (`creep`: grain-boundary diffusion creep driven by the applied pressure, as in the
 /// Bouvard-McMeeking law N = eta du/dt - F_s, which has no equilibrium stop; a capped at r_min).
 /// With `frozen` a pressed compact stops densifying once its necks reach a_eq (a 300-particle
-/// NiAl compact at 1300 C / 30 MPa stalls at porosity 0.144).
+/// NiAl compact at 1300 C / 30 MPa stalls at porosity 0.144). `creep` stops at the overlap
+/// h = creep_overlap_limit x r_min (default 1: the smaller particle's centre reaches the other's
+/// surface; beyond it a pair-wise neck means nothing and the small particle would be swallowed).
 ///
 /// Tangential: a Maxwell element too, k_t = 8 G* sqrt(R* |h - u_s|) in series with
 /// eta_t = tangential_factor x eta_n, state = the elastic tangential force (rotated into the
@@ -161,6 +163,7 @@ struct Sintering {
     std::string sintering_radius = "r_min";
     std::string cold_necks = "bonded";
     std::string after_equilibrium = "frozen";
+    double creep_overlap_limit = 1.0;
   };
   static ParamSpec<Params> spec() {
     using P = Params;
@@ -186,6 +189,7 @@ struct Sintering {
     s.add("neck", &P::neck).choices({"kratos", "coble", "cv"}).doc("neck radius from the overlap: Kratos 1.43 sqrt(r_min^2 - x^2), Coble, constant volume");
     s.add("sintering_radius", &P::sintering_radius).choices({"r_min", "r_eff", "two_r_eff"}).doc("R of the driving force for unequal spheres");
     s.add("cold_necks", &P::cold_necks).choices({"bonded", "contact"}).doc("a neck below the start temperature: elastic bond (tension too) or frictional contact");
+    s.add("creep_overlap_limit", &P::creep_overlap_limit).unit("1").positive().doc("creep: the dashpot stops at overlap h = this x r_min");
     s.add("after_equilibrium", &P::after_equilibrium).choices({"frozen", "creep"}).doc("neck at a_eq: the dashpot stops (frozen, Kratos) or keeps creeping under load (creep); the driving force stops in both");
     return s;
   }
@@ -238,7 +242,7 @@ struct Sintering {
     const bool neck = a > 0.0;
     const double a_eq = r_min * sin_half_;
     const bool sintering = hot && neck && a < a_eq;
-    const bool flowing = sintering || (hot && neck && creep_);
+    const bool flowing = sintering || (hot && neck && creep_ && h < p_.creep_overlap_limit * r_min);
     // Mechanical-time viscosity: eta / s.
     const double eta_n = flowing ? viscosity(a, T) / g.time_scale : std::numeric_limits<double>::infinity();
     const double he = h - st[kViscous];

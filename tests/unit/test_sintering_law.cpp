@@ -261,8 +261,10 @@ TEST_CASE("Sintering beyond the equilibrium neck: frozen stops the dashpot, cree
   RelativeMotion m;
   m.vt = Vec3::Zero();
   const double F0 = 1e-3, us0 = 0.85 * kR, dt = 1e-4;
-  for (const char* mode : {"frozen", "creep"}) {
-    p.after_equilibrium = mode;
+  // A third pass: creep with the overlap beyond creep_overlap_limit x r_min (0.8 r < 0.9 r) is frozen.
+  for (const char* mode : {"frozen", "creep", "creep beyond its limit"}) {
+    p.after_equilibrium = std::string(mode) == "frozen" ? "frozen" : "creep";
+    p.creep_overlap_limit = std::string(mode) == "creep" ? 1.0 : 0.8;
     const Sintering law(p);
     std::vector<double> st(Sintering::state_columns().size(), 0.0);
     st[Sintering::kNeck] = a;
@@ -271,7 +273,7 @@ TEST_CASE("Sintering beyond the equilibrium neck: frozen stops the dashpot, cree
     const ContactForces f = law(g, m, dt, st.data());
     INFO(mode);
     CHECK(st[Sintering::kNeck] == a);
-    if (std::string(mode) == "frozen") {
+    if (std::string(mode) != "creep") {
       CHECK(st[Sintering::kElastic] == F0);
       CHECK(st[Sintering::kViscous] == us0);
       CHECK(f.force.dot(g.n) == F0);
