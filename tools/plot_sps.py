@@ -201,7 +201,8 @@ def gb_epsilon(run, stage):
 
 
 def plot_calibration(d, run, plt, path):
-    """Seed 000 Fig. 9: kappa_eff of the calibration snapshot over (delta_gb, epsilon). Only the ratio
+    """Seed 000 Fig. 9: kappa_eff of the calibration snapshot over (delta_gb, epsilon) (delta_gb from
+    0.1 um to 0.3 um or 1.25x the calibrated value, epsilon 0.1-0.5). Only the ratio
     epsilon / delta_gb enters the layer conductance (Eq. 26), so the map is the scanned curve
     kappa(delta_gb at the run's epsilon) read at delta_gb * epsilon_run / epsilon (ln-ln
     interpolation between scanned points; blank outside the scan)."""
@@ -211,7 +212,8 @@ def plot_calibration(d, run, plt, path):
     eps_run = gb_epsilon(run, d["gb"])
     pts = sorted(cal["map"])
     lx, ly = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
-    delta = np.linspace(0.1e-6, 0.3e-6, 81)
+    # The seed's ranges (delta_gb 0.1-0.3 um), widened to show the calibrated point.
+    delta = np.linspace(0.1e-6, max(0.3e-6, 1.25 * (cal.get("value") or 0.0)), 81)
     eps = np.linspace(0.1, 0.5, 81)
     D, E = np.meshgrid(delta, eps)
     x = np.log(D * eps_run / E)
