@@ -7,7 +7,7 @@ For each run directory (scene.json, out/, time.txt) it reports:
   - each snapshot: target, porosity taken, mean and histogram (10 bins on [0, 1]) of a / r_min
     over the sintered necks (neck_radius > 0, from the snapshot's contact state);
   - the conductivity of each snapshot with and without the grain-boundary layer;
-  - max kinetic energy / punch work (wall 'top'), the work counted as the total mechanical work
+  - max kinetic energy / punch work (wall 'top') during the hot press, the work counted as the total mechanical work
     exchanged through the punch, W(t) = integral |F du| (the compact also pushes the punch back
     when it expands), after W has reached 1 % of its final value.
 Differences are given against the run with the smallest time scale (the slowest, reference).
@@ -36,7 +36,11 @@ def load(run):
     F = np.array([float(r["wall_top_normal_force"]) for r in rows])
     u = np.array([float(r["wall_top_offset"]) for r in rows])
     work = np.concatenate([[0.0], np.cumsum(np.abs(0.5 * (F[1:] + F[:-1]) * np.diff(u)))])
-    on = work > 0.01 * work[-1]
+    # The ratio over the hot press only (the stage whose time scale the study changes); the work
+    # is counted from the start of the run (the cold pressing before it included).
+    press_index = str([s["name"] for s in summary["stages"]].index("hot_press"))
+    in_press = np.array([r.get("stage") == press_index for r in rows])
+    on = (work > 0.01 * work[-1]) & in_press
     ratio = float(np.max(ke[on] / work[on])) if on.any() and work[-1] > 0 else float("nan")
     phi_at_T = {}
     for t in T_GRID:
