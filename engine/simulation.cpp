@@ -27,6 +27,18 @@ namespace {
 /// Per-particle mass factor of a stage with mass scaling (see StageConfig::mass_floor_radius).
 const std::string kMassFactorField = "mass_factor";
 
+/// Divides masses and inertias by the per-particle factors of a mass-scaled stage and drops them
+/// (no-op without the field).
+void undo_mass_factors(ParticleStore& p) {
+  if (!p.fields.has(kMassFactorField)) return;
+  const auto& f = p.fields.data(kMassFactorField);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    p.mass[i] /= f[i];
+    p.inertia[i] /= f[i];
+  }
+  p.fields.remove(kMassFactorField);
+}
+
 const std::vector<std::string> kCoreFields = {"position", "velocity", "orientation", "omega", "force",
                                               "torque",   "radius",   "mass",        "inertia"};
 
@@ -425,11 +437,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
         std::erase_if(s_.marks, [&](const auto& kv) { return kv.first.rfind("trigger/" + it.name + "/", 0) == 0; });
     // A state saved inside a mass-scaled stage (a snapshot) carries its factors: undo them first,
     // so every stage starts from the true masses.
-    if (p.fields.has(kMassFactorField)) {
-      const auto& f = p.fields.data(kMassFactorField);
-      for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] /= f[i]; p.inertia[i] /= f[i]; }
-      p.fields.remove(kMassFactorField);
-    }
+    undo_mass_factors(p);
     if (cfg.mass_scaling != 1.0 || cfg.mass_floor_radius > 0.0) {
       // The factor of each particle is kept in a field (checkpointed), so the end of the stage
       // undoes exactly what its start did, also after a restart and with radii that changed.
@@ -602,11 +610,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   obs.timeseries(cols, vals);
   obs.watch(s_, cols, vals);
   for (std::size_t q = 0; q < cols.size(); ++q) res.final_values[cols[q]] = vals[q];
-  if (p.fields.has(kMassFactorField)) {
-    const auto& f = p.fields.data(kMassFactorField);
-    for (std::size_t i = 0; i < p.size(); ++i) { p.mass[i] /= f[i]; p.inertia[i] /= f[i]; }
-    p.fields.remove(kMassFactorField);
-  }
+  undo_mass_factors(p);
   for (auto& f : p.fixed) f = 0;
   prescribed_.clear();
   res.wall_seconds = std::chrono::duration<double>(clock::now() - t_start).count();
