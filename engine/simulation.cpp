@@ -138,7 +138,6 @@ void Simulation::sample(std::vector<std::string>& cols, std::vector<double>& val
 }
 
 StepPlan Simulation::prepare(const StageConfig& cfg) {
-  (void)cfg;
   // Contact law state columns (history is kept if the law's columns are unchanged).
   if (s_.contacts.state_columns() != law_.state_columns()) s_.contacts.set_state_columns(law_.state_columns());
   alive_rule_ = law_.alive_rule();
@@ -165,7 +164,7 @@ StepPlan Simulation::prepare(const StageConfig& cfg) {
     for (const auto& f : d.particle_fields) s_.particles.fields.declare(f, s_.particles.size());
   }
   for (Module* m : modules_) m->bind(s_);
-  plan_ = build_step_plan(modules_, kCoreFields, bond_law_ != nullptr);
+  plan_ = build_step_plan(modules_, kCoreFields, bond_law_ != nullptr, cfg.mechanics);
   // Event clocks keep their references in fields (permuted and checkpointed with the particles).
   for (const PlanItem& it : plan_.items) {
     if (it.kind != PlanItem::Kind::Module || it.clock.kind != Clock::Kind::OnEvent) continue;
@@ -196,6 +195,16 @@ std::map<std::string, double> Simulation::module_stable_dts() const {
 
 double Simulation::resolve_dt(const StageConfig& cfg) const {
   if (cfg.dt > 0.0) return cfg.dt;
+  if (!cfg.mechanics) {  // frozen: the smallest stable step of the modules, in mechanical time
+    double stable = std::numeric_limits<double>::infinity();
+    for (const Module* m : modules_) {
+      const double scale = m->time_domain() == TimeDomain::Physical ? time_scale_ : 1.0;
+      stable = std::min(stable, m->stable_dt(s_) / scale);
+    }
+    if (!std::isfinite(stable))
+      throw SetupError("stage '" + cfg.name + "': a frozen stage with dt_fraction needs a module with a finite stable step; set dt");
+    return cfg.dt_fraction * stable;
+  }
   const double stable = mechanical_stable_dt();
   if (!std::isfinite(stable))
     throw SetupError("stage '" + cfg.name + "': dt_fraction needs a finite stable step, but the contact law gives none; set dt");
@@ -477,7 +486,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
   s_.stage_dt = dt_used;
   res.dt = dt_used;
-  res.stable_dt_at_start = mechanical_stable_dt();
+  res.stable_dt_at_start = cfg.mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
   res.dt_fraction_used = dt_used / res.stable_dt_at_start;
   if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt)
     throw SetupError("stage '" + cfg.name + "': dt = " + fmt_g(dt_used) + " s is " + fmt_g(res.dt_fraction_used) +
@@ -500,6 +509,41 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     }
   };
   check_modules(true);
+  // What each module will do (printed at the stage start by the I/O layer).
+  for (const auto& it : plan_.items) {
+    if (it.kind != PlanItem::Kind::Module) continue;
+    const double scale = it.module->time_domain() == TimeDomain::Physical ? time_scale_ : 1.0;
+    ModuleStep ms;
+    ms.name = it.name;
+    ms.stable_dt = it.module->stable_dt(s_);
+    const Clock& c = it.clock;
+    const double dtm = dt_used * scale;
+    switch (c.kind) {
+      case Clock::Kind::EveryStep: ms.dt = dtm; ms.clock = "every step"; break;
+      case Clock::Kind::EveryNSteps:
+        ms.dt = static_cast<double>(c.n) * dtm;
+        ms.calls_per_step = 1.0 / static_cast<double>(c.n);
+        ms.clock = "every " + std::to_string(c.n) + " steps";
+        break;
+      case Clock::Kind::SubstepsPerStep:
+        ms.dt = dtm / static_cast<double>(c.n);
+        ms.calls_per_step = static_cast<double>(c.n);
+        ms.clock = std::to_string(c.n) + " substeps per step";
+        break;
+      case Clock::Kind::AdaptiveSubsteps: {
+        Step k = c.n;
+        if (std::isfinite(ms.stable_dt) && ms.stable_dt > 0.0)
+          k = std::max<Step>(c.n, static_cast<Step>(std::ceil(dtm / ms.stable_dt * (1.0 - 1e-12))));
+        ms.dt = dtm / static_cast<double>(k);
+        ms.calls_per_step = static_cast<double>(k);
+        ms.clock = "adaptive substeps (now " + std::to_string(k) + ")";
+        break;
+      }
+      case Clock::Kind::OnEvent: ms.dt = 0.0; ms.calls_per_step = 0.0; ms.clock = "on event (quasi-static)"; break;
+    }
+    res.module_steps.push_back(ms);
+  }
+  obs.steps_planned(dt_used, res.stable_dt_at_start, res.module_steps);
   const double t_area = die_area(s_.walls);
   if (!resume) {
     for (auto& w : s_.walls) advance_wall(w, 0.0, dt_used, t_area, time_scale_);
@@ -579,7 +623,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     const Step kk = k + 1;
     if (kk % 10 == 0) check_finite(dt_used, cfg.blowup_speed);
     if (cfg.stability_check_every > 0 && kk % cfg.stability_check_every == 0 && !cfg.allow_unstable_dt) {
-      const double st = mechanical_stable_dt();
+      const double st = cfg.mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
       if (dt_used > st)
         throw PhysicsError(s_.step, {}, "time step",
                            "dt = " + fmt_g(dt_used) + " s now exceeds the stable step " + fmt_g(st) +

@@ -35,6 +35,9 @@ struct StageConfig {
   std::string name = "stage";
   double dt = 0.0;                 ///< [s] fixed step; 0 = dt_fraction * stable step at stage start
   double dt_fraction = 0.0;        ///< fraction of the stable step (used when dt == 0)
+  /// false: frozen stage, no mechanical step (scheduler.hpp); dt is then `dt`, or dt_fraction x
+  /// the smallest stable step of the modules (in mechanical time).
+  bool mechanics = true;
   bool allow_unstable_dt = false;  ///< run above the stable step (blow-ups are still caught)
   double duration = std::numeric_limits<double>::infinity();  ///< [s] hard stop
   Step max_steps = std::numeric_limits<Step>::max();           ///< hard stop
@@ -61,6 +64,17 @@ struct StageConfig {
   std::map<std::string, Vec3> prescribed_sets;
 };
 
+/// A module's step at the stage start: its own stable step and the step it runs with (both in
+/// its time domain) and its calls per mechanical step (k substeps, 1/N for every N steps, 0 for
+/// an event clock).
+struct ModuleStep {
+  std::string name;
+  double stable_dt = 0.0;
+  double dt = 0.0;
+  double calls_per_step = 1.0;
+  std::string clock;
+};
+
 /// Callbacks to the I/O layer (the engine never writes files itself).
 class Observer {
  public:
@@ -69,6 +83,10 @@ class Observer {
   virtual void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) { (void)cols; (void)vals; }
   virtual void checkpoint(State&) {}
   virtual void progress(const State&, Step stage_steps, double stage_time, double dt) { (void)stage_steps; (void)stage_time; (void)dt; }
+  /// At the stage start (also on resume): the mechanical step and each module's step.
+  virtual void steps_planned(double dt_mechanical, double stable_mechanical, const std::vector<ModuleStep>& modules) {
+    (void)dt_mechanical; (void)stable_mechanical; (void)modules;
+  }
   /// Stage steps between extra watch() calls (0: none beyond the time-series rows).
   virtual Step watch_every() const { return 0; }
   /// The monitor values together with the state they were sampled from: at the stage start
@@ -95,6 +113,7 @@ struct StageResult {
   std::map<std::string, double> final_values;  ///< last monitor values
   std::map<std::string, Step> module_calls;    ///< calls per module in this stage (substeps counted)
   std::map<std::string, Step> max_substeps;    ///< largest per-step substep count (adaptive clocks)
+  std::vector<ModuleStep> module_steps;  ///< per module at the stage start
 };
 
 class Simulation {

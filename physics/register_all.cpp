@@ -14,6 +14,7 @@
 #include "physics/contact/lammps_granular.hpp"
 #include "physics/electrical/electrical_network.hpp"
 #include "physics/packing/generators.hpp"
+#include "physics/thermal/heat_conduction.hpp"
 #include "physics/thermal/temperature_history.hpp"
 
 namespace sparkdem::physics {
@@ -28,6 +29,7 @@ void register_all(Registry& r) {
   r.module<ViscousDamping>();
   r.module<ElectricalNetwork>();
   r.module<TemperatureHistory>();
+  r.module<HeatConduction>();
   r.generator<LatticeGenerator>();
   r.generator<DepositGenerator>();
   r.generator<FillGenerator>();

@@ -88,6 +88,11 @@ struct EdgeOutput {
 struct Declarations {
   std::vector<FieldInfo> particle_fields;  ///< optional per-particle fields to allocate
   std::vector<std::string> reads;          ///< fields read (must be written by someone or core)
+  /// Fields read as they were at the end of the previous step: they must exist like `reads`, but
+  /// impose no order. This is how a feedback loop is declared (electrical_network reads the
+  /// temperature that heat_conduction wrote in the previous step, heat_conduction reads the
+  /// joule_power of this step), instead of a read/write cycle.
+  std::vector<std::string> reads_previous;
   std::vector<std::string> writes;         ///< fields written
 };
 

@@ -9,16 +9,18 @@
 namespace sparkdem {
 
 StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields,
-                         bool bonds) {
+                         bool bonds, bool mechanics) {
   using K = PlanItem::Kind;
   StepPlan plan;
-  plan.items.push_back({K::IntegrateFirstHalf, "integrate_first_half", nullptr, {}});
-  plan.items.push_back({K::Walls, "walls", nullptr, {}});
-  plan.items.push_back({K::Neighbors, "neighbors", nullptr, {}});
-  plan.items.push_back({K::ZeroForces, "zero_forces", nullptr, {}});
-  plan.items.push_back({K::ContactPairs, "contact_pairs", nullptr, {}});
-  if (bonds) plan.items.push_back({K::Bonds, "bonds", nullptr, {}});
-  plan.items.push_back({K::ContactWalls, "contact_walls", nullptr, {}});
+  if (mechanics) {
+    plan.items.push_back({K::IntegrateFirstHalf, "integrate_first_half", nullptr, {}});
+    plan.items.push_back({K::Walls, "walls", nullptr, {}});
+    plan.items.push_back({K::Neighbors, "neighbors", nullptr, {}});
+    plan.items.push_back({K::ZeroForces, "zero_forces", nullptr, {}});
+    plan.items.push_back({K::ContactPairs, "contact_pairs", nullptr, {}});
+    if (bonds) plan.items.push_back({K::Bonds, "bonds", nullptr, {}});
+    plan.items.push_back({K::ContactWalls, "contact_walls", nullptr, {}});
+  }
 
   std::set<std::string> available(core_fields.begin(), core_fields.end());
   std::vector<Module*> coupling;
@@ -37,6 +39,8 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
     m->declare(d);
     for (const auto& f : d.particle_fields) available.insert(f.name);
     for (const auto& w : d.writes) available.insert(w);
+    if (m->phase() == Phase::Force && !mechanics)
+      throw SetupError("module '" + m->name() + "' adds forces, but the stage's mechanics are frozen (\"mechanics\": \"frozen\")");
     if (m->phase() == Phase::Force && c.kind != Clock::Kind::EveryStep)
       throw SetupError("module '" + m->name() + "' adds forces, so it must run every mechanical step (its clock is not EveryStep)");
     if (m->phase() == Phase::Force) plan.items.push_back({K::Module, m->name(), m, c});
@@ -46,7 +50,9 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
   for (Module* m : modules) {
     Declarations d;
     m->declare(d);
-    for (const auto& r : d.reads)
+    std::vector<std::string> all_reads = d.reads;
+    all_reads.insert(all_reads.end(), d.reads_previous.begin(), d.reads_previous.end());
+    for (const auto& r : all_reads)
       if (!available.count(r))
         throw SetupError("module '" + m->name() + "' reads '" + r + "', which no active module or the core provides");
     const Clock c = m->effective_clock();
@@ -54,7 +60,7 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
       throw SetupError("module '" + m->name() + "' is triggered by changes of '" + c.trigger.field +
                        "', which no active module or the core provides");
   }
-  plan.items.push_back({K::IntegrateSecondHalf, "integrate_second_half", nullptr, {}});
+  if (mechanics) plan.items.push_back({K::IntegrateSecondHalf, "integrate_second_half", nullptr, {}});
   // Coupling modules: topological order, writers before readers; ties keep declaration order.
   std::vector<Module*> ordered;
   std::vector<bool> placed(coupling.size(), false);
@@ -74,7 +80,8 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
       }
       if (!blocked) { ordered.push_back(coupling[a]); placed[a] = true; progress = true; break; }
     }
-    if (!progress) throw SetupError("coupling modules form a read/write cycle");
+    if (!progress)
+      throw SetupError("coupling modules form a read/write cycle; declare one of the reads as reads_previous (the value of the previous step)");
   }
   for (Module* m : ordered) plan.items.push_back({K::Module, m->name(), m, m->effective_clock()});
   return plan;

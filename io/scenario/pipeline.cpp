@@ -169,6 +169,18 @@ class OutputObserver final : public Observer {
     if (tty_) std::cerr << "\r" << buf << "\033[K" << std::flush;
     else std::cerr << buf << "\n";
   }
+  void steps_planned(double dt, double stable, const std::vector<ModuleStep>& modules) override {
+    if (quiet_) return;
+    char buf[400];
+    std::snprintf(buf, sizeof buf, "[%s] mechanical step %.4g s (stable %.4g s)%s\n", stage_.c_str(), dt, stable,
+                  cfg_.mechanics ? "" : ", mechanics frozen");
+    std::cerr << buf;
+    for (const auto& m : modules) {
+      std::snprintf(buf, sizeof buf, "[%s]   %-22s stable step %.4g s, runs with %.4g s, %s (%.4g calls per step)\n",
+                    stage_.c_str(), m.name.c_str(), m.stable_dt, m.dt, m.clock.c_str(), m.calls_per_step);
+      std::cerr << buf;
+    }
+  }
   void end_stage_line() { if (tty_ && !quiet_) std::cerr << "\n"; }
   void set_k0(Step k0) { k0_ = k0; }
   /// Rewrites results.h5, results.xdmf and timeseries.csv with everything so far.
@@ -377,6 +389,10 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         js["mass_scaling"] = st.cfg.mass_scaling;
         js["mass_floor_radius"] = st.cfg.mass_floor_radius;
         js["step_plan"] = r.plan;
+        js["mechanics"] = st.cfg.mechanics ? "on" : "frozen";
+        for (const auto& m : r.module_steps)
+          js["module_steps"][m.name] = {{"stable_dt_s", finite_or_null(m.stable_dt)}, {"dt_s", m.dt},
+                                        {"calls_per_step", m.calls_per_step}, {"clock", m.clock}};
         for (const auto& [c, v] : r.final_values) js["final"][c] = finite_or_null(v);
         if (st.snapshots) js["snapshots"] = snapshots_summary(record, stage_index, *st.snapshots, opt.outdir);
         total_steps += r.steps;
@@ -409,6 +425,29 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
     error = e.what();
   }
   obs.end_stage_line();
+  // Validation figures: the last stage of each check's name that ran in this process.
+  for (const auto& c : sc.checks) {
+    json jc = {{"stage", c.stage}, {"column", c.column}, {"reference", c.reference}, {"offset", c.offset}, {"source", c.source}};
+    const json* stage = nullptr;
+    for (const auto& js : summary["stages"])
+      if (js.value("name", "") == c.stage) stage = &js;
+    if (!stage || !stage->contains("final") || !(*stage)["final"].contains(c.column) || (*stage)["final"][c.column].is_null()) {
+      jc["error"] = stage ? "the stage has no final value of this column" : "the stage did not run in this process";
+    } else {
+      const double v = (*stage)["final"][c.column].get<double>() - c.offset;
+      const double err = (v - c.reference) / std::abs(c.reference);
+      jc["value"] = v;
+      jc["error_rel"] = err;
+      jc["stage_wall_time_s"] = stage->value("wall_time_s", 0.0);
+      if (c.tolerance > 0.0) {
+        jc["tolerance"] = c.tolerance;
+        jc["within_tolerance"] = std::abs(err) <= c.tolerance;
+      }
+      log.line("check '" + c.name + "': " + short_number(v) + " against " + short_number(c.reference) + " (" +
+               short_number(100.0 * err) + " %)");
+    }
+    summary["checks"][c.name] = jc;
+  }
   const double wall = std::chrono::duration<double>(steady::now() - t0).count();
   summary["status"] = status;
   if (!error.empty()) summary["error"] = error;

@@ -31,6 +31,20 @@ ParamSpec<TopParams> top_spec() {
   s.add("description", &TopParams::description).doc("free text: what the scenario is and the choices behind it (not used by the run)");
   return s;
 }
+
+ParamSpec<CheckDef> check_spec() {
+  ParamSpec<CheckDef> s("check", "object",
+                        "a validation figure: the final value of a stage's time-series column minus `offset`, against a reference "
+                        "fixed before the run; summary.json gets value, reference, relative error, band and the stage's wall time");
+  s.add("name", &CheckDef::name).required().doc("name of the figure in summary.json \"checks\"");
+  s.add("stage", &CheckDef::stage).required().doc("stage name");
+  s.add("column", &CheckDef::column).required().doc("time-series column (final value)");
+  s.add("offset", &CheckDef::offset).doc("subtracted from the value (column unit)");
+  s.add("reference", &CheckDef::reference).required().doc("reference value (column unit), fixed before the run");
+  s.add("tolerance", &CheckDef::tolerance).unit("1").nonnegative().doc("relative band; 0: report only");
+  s.add("source", &CheckDef::source).doc("where the reference comes from");
+  return s;
+}
 struct MaterialParams {
   std::string name = "material";
   double density = 0.0;
@@ -122,6 +136,7 @@ struct StageParams {
   std::string type = "dynamics";
   double dt = 0.0;
   double dt_fraction = 0.0;
+  std::string mechanics = "on";
   bool allow_unstable_dt = false;
   double mass_scaling = 1.0;
   double mass_floor_radius = 0.0;
@@ -171,6 +186,8 @@ ParamSpec<StageParams> stage_spec(const Registry& reg) {
   s.add("type", &StageParams::type).choices(types).doc("dynamics or a generator name");
   s.add("dt", &StageParams::dt).unit("s").nonnegative().doc("time step (0: dt_fraction of the stable step)");
   s.add("dt_fraction", &StageParams::dt_fraction).unit("1").range(0.0, 10.0).doc("time step as a fraction of the stable step at stage start");
+  s.add("mechanics", &StageParams::mechanics).choices({"on", "frozen"})
+      .doc("frozen: no mechanical step (positions and contacts of the stage start kept; only coupling modules run); dt_fraction then refers to the smallest module stable step");
   s.add("allow_unstable_dt", &StageParams::allow_unstable_dt).doc("run above the stable step (explicit override)");
   s.add("mass_scaling", &StageParams::mass_scaling).unit("1").min(1.0).doc("mass scaling factor (reported; 1 = off)");
   s.add("mass_floor_radius", &StageParams::mass_floor_radius).unit("m").nonnegative().doc("particles smaller than this radius take the mass (and inertia) of a sphere of this radius during the stage, on top of mass_scaling: density scaling of the fines for quasi-static stages (0 = off)");
@@ -479,6 +496,7 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
   c.name = p.name;
   c.dt = p.dt;
   c.dt_fraction = p.dt_fraction;
+  c.mechanics = p.mechanics != "frozen";
   c.allow_unstable_dt = p.allow_unstable_dt;
   c.mass_scaling = p.mass_scaling;
   c.mass_floor_radius = p.mass_floor_radius;
@@ -1132,7 +1150,7 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
   expand_includes(j, base_dir, "", 0, errors);
   if (!errors.empty()) throw ConfigError(std::move(errors));
   json resolved_top;
-  const TopParams top = build(top_spec(), j, "", errors, resolved_top, {"materials", "contact", "bonds", "walls", "stages", "particle_sets"});
+  const TopParams top = build(top_spec(), j, "", errors, resolved_top, {"materials", "contact", "bonds", "walls", "stages", "particle_sets", "checks"});
   // Particle sets
   std::map<std::string, SetSelector> sets;
   if (j.contains("particle_sets")) {
@@ -1264,6 +1282,21 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
         }
     }
   }
+  // Checks (validation figures in summary.json)
+  if (j.contains("checks")) {
+    if (!j["checks"].is_array()) errors.push_back({"/checks", "expected an array of checks, found " + describe(j["checks"])});
+    else
+      for (std::size_t k = 0; k < j["checks"].size(); ++k) {
+        const std::string cp = "/checks/" + std::to_string(k);
+        json r;
+        CheckDef c = build(check_spec(), j["checks"][k], cp, errors, r);
+        if (c.reference == 0.0) errors.push_back({cp + "/reference", "expected a non-zero reference value, found 0"});
+        if (!std::any_of(sc.stages.begin(), sc.stages.end(), [&c](const StageDef& st) { return st.cfg.name == c.stage; }))
+          errors.push_back({cp + "/stage", "expected the name of a stage of this scenario, found \"" + c.stage + "\""});
+        sc.checks.push_back(c);
+        sc.resolved["checks"].push_back(r);
+      }
+  }
   if (!errors.empty()) throw ConfigError(errors);
   return sc;
 }
@@ -1276,6 +1309,7 @@ json schema_json(const Registry& reg) {
   j["motion"] = spec_to_json(motion_spec().spec());
   j["stage"] = spec_to_json(stage_spec(reg).spec());
   j["particle_set"] = spec_to_json(set_spec().spec());
+  j["check"] = spec_to_json(check_spec().spec());
   j["stage"]["sets"] = "array of particle-set names evaluated at the stage start";
   j["stage"]["prescribe"] = "object {set name: [vx, vy, vz] m/s}: the set moves at this velocity (zero = frozen)";
   j["stage"]["until"] = "object {quantity: {\"above\"|\"below\": value}}; quantities are time-series columns";

@@ -98,6 +98,18 @@ struct SweepDef {
   json calibration_json(double value) const;
 };
 
+/// A validation figure recorded in summary.json: the final value of a time-series column of a
+/// stage, minus `offset`, against a reference fixed in the scenario before the run.
+struct CheckDef {
+  std::string name;
+  std::string stage;      ///< stage name (the last stage of that name)
+  std::string column;     ///< time-series column (its final value)
+  double offset = 0.0;    ///< subtracted from the value (e.g. the initial temperature) [column unit]
+  double reference = 0.0; ///< reference value [column unit] (non-zero)
+  double tolerance = 0.0; ///< relative band |value - reference| / |reference| (0: report only)
+  std::string source;     ///< where the reference comes from (free text, copied to the summary)
+};
+
 struct Scenario {
   json resolved;                       ///< the scenario as run (defaults filled in)
   std::string name;
@@ -108,6 +120,7 @@ struct Scenario {
   BondTable::ContactRule bond_contact_rule = BondTable::ContactRule::Exclude;
   std::vector<Wall> walls;
   std::vector<StageDef> stages;
+  std::vector<CheckDef> checks;
   const ContactModel& law_of(const StageDef& st) const { return st.law ? *st.law : *law; }
 };
 

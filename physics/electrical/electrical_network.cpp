@@ -7,6 +7,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/state/state.hpp"
+#include "physics/electrical/branch_models.hpp"
 #include "physics/electrical/conductance_kernels.hpp"
 
 namespace sparkdem::physics {
@@ -19,13 +20,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 bool is_wall_electrode(const std::string& e) { return e.rfind("wall:", 0) == 0; }
-
-el::HemisphereLaw hemisphere_law(const std::string& name) {
-  if (name == "reading_b") return el::HemisphereLaw::reading_b();
-  if (name == "reading_c") return el::HemisphereLaw::reading_c();
-  if (name == "fe_table") return el::HemisphereLaw::fe_table();
-  return el::HemisphereLaw::reading_a();
-}
 
 /// Nodes of one electrode: the particles of a set, or a wall node.
 std::vector<Index> electrode_nodes(const State& s, const InteractionGraph& g, const std::string& e) {
@@ -63,9 +57,10 @@ struct ResistorNet {
   std::size_t nodes = 0;
   std::vector<Index> a, b, heat_a, heat_b;
   std::vector<double> g;
+  std::vector<double> share;  ///< share of the resistor's dissipation that heats heat_a (the rest heats heat_b)
   std::vector<Index> high, low;
-  void add(Index x, Index y, double gxy, Index ha, Index hb) {
-    a.push_back(x); b.push_back(y); g.push_back(gxy); heat_a.push_back(ha); heat_b.push_back(hb);
+  void add(Index x, Index y, double gxy, Index ha, Index hb, double share_a = 0.5) {
+    a.push_back(x); b.push_back(y); g.push_back(gxy); heat_a.push_back(ha); heat_b.push_back(hb); share.push_back(share_a);
   }
 };
 
@@ -113,6 +108,11 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
       .doc("tabulated kappa(T): temperatures, strictly increasing (>= 2 points; empty: the linear law). Replaces conductivity / resistivity_coefficient");
   s.add("conductivity_table_values", &P::conductivity_table_values).unit("S/m")
       .doc("tabulated kappa(T): conductivities at conductivity_table_temperature (piecewise linear, constant beyond the ends)");
+  s.add("temperature_field", &P::temperature_field)
+      .doc("evaluate kappa(T) per branch at the mean of its particles' `temperature` field (written by heat_conduction or temperature_history) instead of at `temperature`");
+  s.add("resolve_temperature_change", &P::resolve_temperature_change).unit("K").positive()
+      .doc("default clock with temperature_field: re-solve when a particle's temperature changed by more than this since the last solve");
+  s.add("resolve_every", &P::resolve_every).min(0).doc("default clock: also re-solve every this many mechanical steps (0: only on the events)");
   s.add("high", &P::high).doc("electrode held at `voltage`: a particle-set name or \"wall:<name>\"");
   s.add("low", &P::low).doc("electrode held at 0 V: a particle-set name or \"wall:<name>\"");
   s.add("voltage", &P::voltage).unit("V").positive().doc("potential difference between the electrodes");
@@ -153,17 +153,18 @@ ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
         throw ConfigError("", "expected as many conductivities as temperatures, found " +
                                   std::to_string(p.conductivity_table_values.size()) + " and " +
                                   std::to_string(p.conductivity_table_temperature.size()));
-      kappa_ = el::conductivity(el::ConductivityTable(p.conductivity_table_temperature, p.conductivity_table_values),
-                                p.temperature);
+      law_ = el::ConductivityTable(p.conductivity_table_temperature, p.conductivity_table_values);
     } else {
-      kappa_ = el::conductivity(el::LinearResistivityLaw{p.conductivity, p.resistivity_coefficient, p.reference_temperature},
-                                p.temperature);
+      law_ = el::LinearResistivityLaw{p.conductivity, p.resistivity_coefficient, p.reference_temperature};
     }
+    kappa_ = el::conductivity(law_, p.temperature);
   } catch (const ConfigError& e) {
     const std::string why = e.diagnostics().empty() ? e.what() : e.diagnostics().front().message;
     throw ConfigError(tabulated ? "/conductivity_table_values" : "/resistivity_coefficient",
                       "kappa(T) at the evaluation temperature: " + why);
   }
+  branch_ = BranchModel{p.model, p.contact_radius, p.neck, p.hemisphere, p.gb_epsilon, p.gb_thickness, p.gbf_correction,
+                        p.alpha_constant, p.touch_tolerance, p.unit_conductance, p.tunnel_g0, p.tunnel_length, p.tunnel_cutoff};
   LaplacianOptions o;
   o.method = p.solver == "cg_ic"              ? LaplacianMethod::CgIncompleteCholesky
              : p.solver == "cg_jacobi"        ? LaplacianMethod::CgDiagonal
@@ -183,6 +184,9 @@ void ElectricalNetwork::declare(Declarations& d) const {
   d.particle_fields.push_back({"electric_potential", 1, "V", 0.0, true});
   d.particle_fields.push_back({"joule_power", 1, "W", 0.0, true});
   d.reads = {"position", "radius"};
+  // The temperature of the previous step: a feedback loop with heat_conduction (which reads this
+  // step's joule_power), not an ordering constraint.
+  if (p_.temperature_field) d.reads_previous.push_back("temperature");
   d.writes = {"electric_potential", "joule_power"};
 }
 
@@ -195,79 +199,37 @@ void ElectricalNetwork::bind(State& s) {
   default_clock_.trigger.moved_beyond = p_.resolve_distance > 0.0 ? p_.resolve_distance
                                         : std::isfinite(rmin)     ? 0.05 * rmin
                                                                   : 1.0;
+  if (p_.temperature_field) {
+    default_clock_.trigger.field = "temperature";
+    default_clock_.trigger.field_change = p_.resolve_temperature_change;
+  }
+  default_clock_.trigger.max_interval = p_.resolve_every;
   if (p_.model == "transmission_surface" && (is_wall_electrode(p_.high) || is_wall_electrode(p_.low)))
     throw SetupError("electrical_network: the transmission_surface model takes particle-set electrodes, not walls");
 }
 
 std::vector<double> ElectricalNetwork::conductances(const State& s, const InteractionGraph& g, std::vector<double>& share_a) const {
-  const auto& p = s.particles;
-  const double kappa = kappa_;
-  auto radius = [&](Index v) { return g.is_wall_node(v) ? kInf : p.radius[v]; };
-  std::vector<double> G(g.size(), 0.0);
-  share_a.assign(g.size(), 0.5);  // equal halves unless the model says otherwise
-  if (p_.model == "holm") {
+  // Bulk conductivity per branch: at `temperature`, or at the mean temperature of the branch's
+  // particles (a wall end takes its particle's) when temperature_field is set.
+  std::vector<double> k(g.size(), kappa_);
+  if (p_.temperature_field) {
+    const auto& T = s.particles.fields.data("temperature");
     for (std::size_t e = 0; e < g.size(); ++e) {
-      double a = 0.0;
-      if (g.kind[e] == EdgeKind::Neck || (g.kind[e] == EdgeKind::Bond && g.radius[e] > 0.0)) a = g.radius[e];
-      else if (g.overlap[e] > 0.0)
-        a = p_.contact_radius == "hertz" ? el::hertz_contact_radius(radius(g.a[e]), radius(g.b[e]), g.overlap[e]) : g.radius[e];
-      G[e] = a > 0.0 ? el::holm_conductance(a, kappa, kappa) : 0.0;
-    }
-  } else if (p_.model == "sintered_neck") {
-    std::vector<double> a(g.size(), 0.0);
-    for (std::size_t e = 0; e < g.size(); ++e) {
-      const double ra = radius(g.a[e]), rb = radius(g.b[e]);
-      const bool law_neck = p_.neck == "law" && g.kind[e] == EdgeKind::Neck;
-      if (law_neck) a[e] = g.radius[e];
-      else if (g.overlap[e] > 0.0 && std::isfinite(ra) && std::isfinite(rb))
-        a[e] = p_.neck == "cv" ? el::cv_neck_radius(ra, rb, g.overlap[e]) : el::coble_neck_radius(ra, rb, g.overlap[e]);
-    }
-    if (p_.gbf_correction) {
-      std::vector<double> node_r(g.nodes());
-      for (std::size_t v = 0; v < g.nodes(); ++v) node_r[v] = radius(static_cast<Index>(v));
-      a = el::corrected_neck_radii(g.a, g.b, a, node_r);
-    }
-    const el::HemisphereLaw law = hemisphere_law(p_.hemisphere);
-    const el::GrainBoundaryLayer layer =
-        p_.gb_thickness > 0.0 ? el::GrainBoundaryLayer::layer(p_.gb_epsilon, p_.gb_thickness) : el::GrainBoundaryLayer::none();
-    for (std::size_t e = 0; e < g.size(); ++e) {
-      if (!(a[e] > 0.0)) continue;
-      const double ra = radius(g.a[e]), rb = radius(g.b[e]);
-      G[e] = el::sintered_neck_conductance(law, layer, kappa, kappa, ra, rb, a[e]);
-      // Side a: its hemisphere and half the grain-boundary layer (Eq. 17).
-      const double Ka = std::isfinite(ra) ? el::hemisphere_conductance(law, kappa, ra, a[e]) : kInf;
-      const double Kc = layer.enabled ? el::grain_boundary_layer_conductance(kappa, a[e], layer.epsilon, layer.thickness_m) : kInf;
-      if (G[e] > 0.0) share_a[e] = (1.0 / Ka + 0.5 / Kc) * G[e];
-    }
-  } else if (p_.model == "transmission_surface") {
-    const double rho = p_.resistivity > 0.0 ? p_.resistivity * p_.conductivity / kappa : 1.0 / kappa;
-    std::vector<double> S;
-    if (p_.alpha_constant > 0.0) {
-      S.resize(g.nodes());
-      for (std::size_t v = 0; v < g.nodes(); ++v) S[v] = p_.alpha_constant * p.radius[v] * p.radius[v];
-    } else {
-      S = el::transmission_surfaces(el::TransmissionSurfaceModel::platonic(), p.position, p.radius, g.a, g.b);
-    }
-    for (std::size_t e = 0; e < g.size(); ++e)
-      if (g.overlap[e] >= -p_.touch_tolerance || g.kind[e] == EdgeKind::Bond)
-        G[e] = el::transmission_conductance(rho, g.distance[e], S[g.a[e]], S[g.b[e]]);
-  } else {  // touching, tunnelling: the whole resistance is at the contact
-    share_a.assign(g.size(), kNaN);
-    for (std::size_t e = 0; e < g.size(); ++e) {
-      if (g.overlap[e] >= -p_.touch_tolerance) G[e] = el::touching_conductance(g.overlap[e], p_.touch_tolerance, p_.unit_conductance);
-      else if (p_.model == "tunnelling")
-        G[e] = el::tunnelling_conductance(-g.overlap[e], p_.tunnel_g0, p_.tunnel_length, p_.tunnel_cutoff);
+      const double ta = T[g.a[e]], tb = g.is_wall_node(g.b[e]) ? ta : T[g.b[e]];
+      k[e] = el::conductivity(law_, 0.5 * (ta + tb));
     }
   }
-  return G;
+  // transmission_surface with `resistivity`: rho_e(T) = resistivity * kappa_ref / kappa(T).
+  if (p_.model == "transmission_surface" && p_.resistivity > 0.0)
+    for (double& x : k) x /= p_.resistivity * p_.conductivity;
+  return branch_conductances(branch_, s, g, k, share_a);
 }
 
 void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   const auto t0 = std::chrono::steady_clock::now();
   GraphOptions go;
   go.walls = is_wall_electrode(p_.high) || is_wall_electrode(p_.low);
-  if (p_.model == "tunnelling") go.near_gap = p_.tunnel_cutoff;
-  if (p_.model == "touching" || p_.model == "transmission_surface") go.near_gap = p_.touch_tolerance;
+  go.near_gap = branch_model_near_gap(branch_);
   const InteractionGraph g = build_interaction_graph(s, go);
   std::vector<double> G, share;
   try {
@@ -288,7 +250,10 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   std::vector<std::vector<std::pair<Index, double>>> star;  // per graph node: (contact node, access conductance)
   if (p_.topology == "particle_centred") {
     net.nodes = g.nodes();
-    for (std::size_t e = 0; e < g.size(); ++e) net.add(g.a[e], g.b[e], G[e], particle(g.a[e]), particle(g.b[e]));
+    // Joule split: each side is heated by the part of the branch resistance on its side (its
+    // half-particle and half of any contact layer; a one-resistance branch half-half).
+    for (std::size_t e = 0; e < g.size(); ++e)
+      net.add(g.a[e], g.b[e], G[e], particle(g.a[e]), particle(g.b[e]), std::isfinite(share[e]) ? share[e] : 0.5);
     net.high = high;
     net.low = low;
   } else {
@@ -393,8 +358,8 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
     if (!(edge_g[e] > 0.0) || res.flux[e] == 0.0) continue;
     const double pe = res.flux[e] * res.flux[e] / edge_g[e];  // I^2 R
     power += pe;
-    if (net.heat_a[e] >= 0) q[net.heat_a[e]] += 0.5 * pe;
-    if (net.heat_b[e] >= 0) q[net.heat_b[e]] += 0.5 * pe;
+    if (net.heat_a[e] >= 0) q[net.heat_a[e]] += net.share[e] * pe;
+    if (net.heat_b[e] >= 0) q[net.heat_b[e]] += (1.0 - net.share[e]) * pe;
   }
   std::size_t floating = 0;
   for (std::size_t i = 0; i < np; ++i) {
@@ -441,6 +406,8 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   r_.current_mismatch = I != 0.0 ? std::abs(I + I_low) / std::abs(I) : std::abs(I_low);
   r_.resistance = I > 0.0 ? V / I : kInf;
   r_.power = power;
+  r_.power_particles = 0.0;
+  for (double x : q) r_.power_particles += x;
   r_.power_mismatch = I > 0.0 ? std::abs(power - V * I) / (V * I) : power;
   r_.residual = res.relative_residual;
   r_.floating = static_cast<double>(floating);
@@ -460,23 +427,23 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
 
 std::vector<std::string> ElectricalNetwork::columns() const {
   return {"electrical_current", "electrical_voltage", "electrical_current_mismatch", "electrical_resistance", "electrical_conductivity_eff",
-          "electrical_power", "electrical_power_mismatch", "electrical_residual", "electrical_floating_nodes",
+          "electrical_power", "electrical_power_particles", "electrical_power_mismatch", "electrical_residual", "electrical_floating_nodes",
           "electrical_iterations", "electrical_solve_time", "electrical_length", "electrical_solves"};
 }
 
 std::vector<double> ElectricalNetwork::column_values(const State&) const {
-  return {r_.current, r_.voltage, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power, r_.power_mismatch,
+  return {r_.current, r_.voltage, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power, r_.power_particles, r_.power_mismatch,
           r_.residual, r_.floating, r_.iterations, r_.seconds, r_.length, r_.solves};
 }
 
 void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
   // The held outputs (not the wall-clock solve time, which no result depends on) and the warm start.
   std::vector<double> held = {r_.current, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power,
-                              r_.power_mismatch, r_.residual, r_.floating, r_.iterations, r_.length, r_.solves, r_.voltage};
+                              r_.power_mismatch, r_.residual, r_.floating, r_.iterations, r_.length, r_.solves, r_.voltage, r_.power_particles};
   ar.visit(prefix + "/held", held);
   if (ar.reading()) {
-    if (held.size() != 12) throw SetupError("checkpoint electrical_network state has " + std::to_string(held.size()) + " values, expected 12");
-    r_ = Result{held[0], held[1], held[2], held[3], held[4], held[5], held[6], held[7], held[8], 0.0, held[9], held[10], held[11]};
+    if (held.size() != 13) throw SetupError("checkpoint electrical_network state has " + std::to_string(held.size()) + " values, expected 13");
+    r_ = Result{held[0], held[1], held[2], held[3], held[4], held[5], held[6], held[7], held[8], 0.0, held[9], held[10], held[11], held[12]};
   }
   solver_.visit(ar, prefix + "/solver");
   // The held per-branch results (written with every frame until the next solve).

@@ -20,22 +20,34 @@
 ///   touching              G = unit_conductance for every touching pair (seed 002)
 ///   tunnelling            touching pairs unit_conductance, gaps g0 exp(-2 gap/xi) up to the cut-off
 ///
-/// Outputs: fields electric_potential [V] (NaN on floating particles) and joule_power [W] (each
-/// branch's I^2 R split half-half between its two particles; a wall's half is not counted);
+/// Outputs: fields electric_potential [V] (NaN on floating particles) and joule_power [W]: each
+/// branch's I^2 R goes where it is dissipated: a branch of resistances in series (half-particle
+/// i, contact layer, half-particle j; sintered_neck) heats i with I^2 R_i + I^2 R_c / 2 and j with
+/// I^2 R_j + I^2 R_c / 2; a branch of one resistance (transmission_surface, holm between equal
+/// conductivities, touching, tunnelling) heats each end with half. Each branch is counted ONCE
+/// (seed 001's Eq. 16 as printed adds the whole branch power at both ends, which doubles the
+/// heat; cohesive-joule-torsion.md §5). A wall electrode's share heats the wall (column
+/// electrical_power_particles is the part that heats particles);
 /// time-series columns electrical_current [A] (leaving the high electrode), its mismatch with the
 /// low electrode, electrical_resistance [Ohm] (+inf without a spanning path), the effective
 /// conductivity kappa_eff = I L / (dV A) (seed 000 Eq. 28), electrical_power [W] (sum I^2 R) and
 /// its mismatch with V I, the Kirchhoff residual, floating nodes, iterations, solve time.
 ///
 /// Clock: on an event by default — on the initial state, when any particle moved more than
-/// `resolve_distance` (default 0.05 x the smallest radius) or a bond broke; a scenario can set
-/// any clock (e.g. every N steps). Between solves the outputs are held.
+/// `resolve_distance` (default 0.05 x the smallest radius), a bond broke, (temperature_field) a
+/// particle's temperature changed by more than `resolve_temperature_change`, or `resolve_every`
+/// steps passed; a scenario can set any clock (e.g. every N steps). The solve is quasi-static:
+/// between solves the potentials, currents and joule_power are held (zero-order hold), so the
+/// heat released between two solves is the power of the last solve times the elapsed time.
 ///
 /// | parameter          | unit  | meaning                                                        |
 /// |--------------------|-------|----------------------------------------------------------------|
 /// | model              | -     | holm, sintered_neck, transmission_surface, touching, tunnelling |
 /// | conductivity       | S/m   | bulk conductivity kappa at reference_temperature              |
 /// | temperature        | K     | evaluation temperature (default 293.15 K: samples are measured cold) |
+/// | temperature_field  | -     | true: kappa(T) per branch at its particles' mean `temperature` field |
+/// | resolve_temperature_change | K | default clock with temperature_field: re-solve after this change |
+/// | resolve_every      | steps | default clock: also re-solve every this many steps (0: never)  |
 /// | resistivity_coefficient | 1/K | beta of kappa(T) = kappa / (1 + beta (T - T_ref)) (0: constant) |
 /// | conductivity_table_temperature, _values | K, S/m | tabulated kappa(T) instead (piecewise linear) |
 /// | high, low          | -     | electrodes: a particle-set name, or "wall:<name>"              |
@@ -50,6 +62,8 @@
 #include "engine/graph/laplacian.hpp"
 #include "engine/model/module.hpp"
 #include "engine/model/param_spec.hpp"
+#include "physics/electrical/branch_models.hpp"
+#include "physics/electrical/conductance_kernels.hpp"
 
 namespace sparkdem::physics {
 
@@ -61,6 +75,9 @@ class ElectricalNetwork final : public Module {
     bool chord_scaling = true;
     double conductivity = 1e6;
     double temperature = 293.15;
+    bool temperature_field = false;
+    double resolve_temperature_change = 1.0;
+    std::int64_t resolve_every = 0;
     double reference_temperature = 293.15;
     double resistivity_coefficient = 0.0;
     std::vector<double> conductivity_table_temperature;  // K; empty: the linear law
@@ -133,6 +150,7 @@ class ElectricalNetwork final : public Module {
     double length = 0.0;             ///< L used in Eq. 28 [m]
     double solves = 0.0;
     double voltage = 0.0;            ///< potential of the high electrode [V] (given, or from the injected current)
+    double power_particles = 0.0;    ///< part of `power` that heats particles (joule_power summed) [W]; the rest heats wall electrodes
   };
   const Result& result() const { return r_; }
 
@@ -142,6 +160,8 @@ class ElectricalNetwork final : public Module {
   std::vector<double> conductances(const State& s, const InteractionGraph& g, std::vector<double>& share_a) const;
   Params p_;
   double kappa_ = 0.0;  ///< bulk conductivity at the evaluation temperature [S/m]
+  electrical::ConductivityLaw law_;  ///< kappa(T)
+  BranchModel branch_;
   Clock default_clock_;
   LaplacianSolver solver_;
   Result r_;

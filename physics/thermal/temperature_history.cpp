@@ -70,12 +70,7 @@ TemperatureHistory::TemperatureHistory(const Params& p) : p_(p) {
 void TemperatureHistory::declare(Declarations& d) const {
   d.particle_fields.push_back({"temperature", 1, "K", 0.0, true});
   d.writes = {"temperature"};
-  if (p_.expansion_coefficient != 0.0) {
-    d.particle_fields.push_back({"radius_ref", 1, "m", 0.0, true});
-    d.particle_fields.push_back({"radius_ref_temperature", 1, "K", 0.0, false});
-    d.reads = {"mass"};
-    d.writes.insert(d.writes.end(), {"radius", "inertia"});
-  }
+  if (p_.expansion_coefficient != 0.0) thermal::declare_expansion(d);
 }
 
 void TemperatureHistory::bind(State& s) {
@@ -96,21 +91,7 @@ void TemperatureHistory::bind(State& s) {
                        "(no earlier stage prescribed one)");
     table_.front() = mean;
   }
-  if (p_.expansion_coefficient != 0.0) {
-    auto& rr = p.fields.data("radius_ref");
-    auto& tr = p.fields.data("radius_ref_temperature");
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (rr[i] > 0.0) {
-        if (tr[i] != p_.reference_temperature)
-          throw SetupError("temperature_history: the reference radii were captured at T_0 = " + num(tr[i]) +
-                           " K (particle id " + std::to_string(p.id[i]) + "), but this stage gives reference_temperature = " +
-                           num(p_.reference_temperature) + " K; keep it the same in every stage");
-        continue;
-      }
-      rr[i] = p.radius[i];  // captured once: the current radius is the radius at T_0
-      tr[i] = p_.reference_temperature;
-    }
-  }
+  if (p_.expansion_coefficient != 0.0) thermal::capture_reference_radii(s, p_.reference_temperature, "temperature_history");
   apply(s, temperature_at(0.0));  // the stage's first force pass sees T(0)
 }
 
@@ -119,15 +100,7 @@ void TemperatureHistory::apply(State& s, double T) {
   current_ = T;
   auto& f = p.fields.data("temperature");
   std::fill(f.begin(), f.end(), T);
-  if (p_.expansion_coefficient == 0.0) return;
-  const auto& rr = p.fields.data("radius_ref");
-  const double a = p_.expansion_coefficient, T0 = p_.reference_temperature;
-  const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static)
-  for (std::int64_t i = 0; i < n; ++i) {
-    p.radius[i] = thermal::expanded_radius(rr[i], a, T, T0);
-    p.inertia[i] = 0.4 * p.mass[i] * p.radius[i] * p.radius[i];
-  }
+  if (p_.expansion_coefficient != 0.0) thermal::apply_expansion(s, p_.expansion_coefficient, p_.reference_temperature, T);
 }
 
 void TemperatureHistory::advance(State& s, const StepInfo& step) {

@@ -40,6 +40,7 @@
 #include "engine/model/module.hpp"
 #include "engine/model/param_spec.hpp"
 #include "engine/state/state.hpp"
+#include "physics/thermal/expansion.hpp"
 
 namespace sparkdem::physics {
 
@@ -47,8 +48,6 @@ namespace thermal {
 /// T(t) [K]: piecewise linear through (t_k, T_k), constant beyond the ends. `t` strictly
 /// increasing, same length as `T`, at least one point.
 double table_temperature(const std::vector<double>& t, const std::vector<double>& T, double time);
-/// Thermally expanded radius [m]: r = r_ref (1 + alpha (T - T0))   (notes §3.3).
-inline double expanded_radius(double r_ref, double alpha, double T, double T0) { return r_ref * (1.0 + alpha * (T - T0)); }
 }  // namespace thermal
 
 class TemperatureHistory final : public Module {

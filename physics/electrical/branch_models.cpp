@@ -1,0 +1,92 @@
+#include "physics/electrical/branch_models.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "physics/electrical/conductance_kernels.hpp"
+
+namespace sparkdem::physics {
+
+namespace el = electrical;
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+el::HemisphereLaw hemisphere_law(const std::string& name) {
+  if (name == "reading_b") return el::HemisphereLaw::reading_b();
+  if (name == "reading_c") return el::HemisphereLaw::reading_c();
+  if (name == "fe_table") return el::HemisphereLaw::fe_table();
+  return el::HemisphereLaw::reading_a();
+}
+}  // namespace
+
+double branch_model_near_gap(const BranchModel& m) {
+  if (m.model == "tunnelling") return m.tunnel_cutoff;
+  if (m.model == "touching" || m.model == "transmission_surface") return m.touch_tolerance;
+  return 0.0;
+}
+
+std::vector<double> branch_conductances(const BranchModel& m, const State& s, const InteractionGraph& g,
+                                        const std::vector<double>& k_edge, std::vector<double>& share_a) {
+  const auto& p = s.particles;
+  auto radius = [&](Index v) { return g.is_wall_node(v) ? kInf : p.radius[v]; };
+  std::vector<double> G(g.size(), 0.0);
+  share_a.assign(g.size(), 0.5);  // equal halves unless the model says otherwise
+  if (m.model == "holm") {
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      double a = 0.0;
+      if (g.kind[e] == EdgeKind::Neck || (g.kind[e] == EdgeKind::Bond && g.radius[e] > 0.0)) a = g.radius[e];
+      else if (g.overlap[e] > 0.0)
+        a = m.contact_radius == "hertz" ? el::hertz_contact_radius(radius(g.a[e]), radius(g.b[e]), g.overlap[e]) : g.radius[e];
+      G[e] = a > 0.0 ? el::holm_conductance(a, k_edge[e], k_edge[e]) : 0.0;
+    }
+  } else if (m.model == "sintered_neck") {
+    std::vector<double> a(g.size(), 0.0);
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      const double ra = radius(g.a[e]), rb = radius(g.b[e]);
+      const bool law_neck = m.neck == "law" && g.kind[e] == EdgeKind::Neck;
+      if (law_neck) a[e] = g.radius[e];
+      else if (g.overlap[e] > 0.0 && std::isfinite(ra) && std::isfinite(rb))
+        a[e] = m.neck == "cv" ? el::cv_neck_radius(ra, rb, g.overlap[e]) : el::coble_neck_radius(ra, rb, g.overlap[e]);
+    }
+    if (m.gbf_correction) {
+      std::vector<double> node_r(g.nodes());
+      for (std::size_t v = 0; v < g.nodes(); ++v) node_r[v] = radius(static_cast<Index>(v));
+      a = el::corrected_neck_radii(g.a, g.b, a, node_r);
+    }
+    const el::HemisphereLaw law = hemisphere_law(m.hemisphere);
+    const el::GrainBoundaryLayer layer =
+        m.gb_thickness > 0.0 ? el::GrainBoundaryLayer::layer(m.gb_epsilon, m.gb_thickness) : el::GrainBoundaryLayer::none();
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      if (!(a[e] > 0.0)) continue;
+      const double ra = radius(g.a[e]), rb = radius(g.b[e]), k = k_edge[e];
+      G[e] = el::sintered_neck_conductance(law, layer, k, k, ra, rb, a[e]);
+      // Side a: its hemisphere and half the grain-boundary layer (Eq. 17).
+      const double Ka = std::isfinite(ra) ? el::hemisphere_conductance(law, k, ra, a[e]) : kInf;
+      const double Kc = layer.enabled ? el::grain_boundary_layer_conductance(k, a[e], layer.epsilon, layer.thickness_m) : kInf;
+      if (G[e] > 0.0) share_a[e] = (1.0 / Ka + 0.5 / Kc) * G[e];
+    }
+  } else if (m.model == "transmission_surface") {
+    std::vector<double> S;
+    if (m.alpha_constant > 0.0) {
+      S.resize(g.nodes());
+      for (std::size_t v = 0; v < g.nodes(); ++v) S[v] = m.alpha_constant * p.radius[v] * p.radius[v];
+    } else {
+      S = el::transmission_surfaces(el::TransmissionSurfaceModel::platonic(), p.position, p.radius, g.a, g.b);
+    }
+    for (std::size_t e = 0; e < g.size(); ++e)
+      if (g.overlap[e] >= -m.touch_tolerance || g.kind[e] == EdgeKind::Bond)
+        G[e] = el::transmission_conductance(1.0 / k_edge[e], g.distance[e], S[g.a[e]], S[g.b[e]]);
+  } else {  // touching, tunnelling: the whole resistance is at the contact
+    share_a.assign(g.size(), kNaN);
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      if (g.overlap[e] >= -m.touch_tolerance) G[e] = el::touching_conductance(g.overlap[e], m.touch_tolerance, m.unit_conductance);
+      else if (m.model == "tunnelling")
+        G[e] = el::tunnelling_conductance(-g.overlap[e], m.tunnel_g0, m.tunnel_length, m.tunnel_cutoff);
+    }
+  }
+  return G;
+}
+
+}  // namespace sparkdem::physics

@@ -1,0 +1,54 @@
+#pragma once
+/// Branch models of the particle networks: one conductance per edge of the interaction graph
+/// from its geometry and a bulk conductivity. Shared by the electrical network (kappa [S/m],
+/// conductance [S]) and heat conduction (lambda [W/(m K)], conductance [W/K]): the same
+/// geometric models serve both (seed 001 §2.3 uses the transmission surface for both; seed 000's
+/// hemisphere law comes from the thermal "pipe network" model, sintering-electrical.md §2.4).
+/// The kernels and their equations are in physics/electrical/conductance_kernels.hpp:
+///
+///   holm                  G = 2 a k (Holm; for heat the Batchelor-O'Brien contact conductance
+///                         2 k a), a = Hertz sqrt(R* delta) or the lens radius; a neck or a bond
+///                         with a radius uses it; a wall contact a = sqrt(r delta)
+///   sintered_neck         hemispheres in series with the grain-boundary layer (Eq. 17-26)
+///   transmission_surface  G = k sqrt(S_i S_j) / l_ij (seed 001 Eq. 2-5)
+///   touching, tunnelling  unit conductances (seed 002; electrical only in practice)
+///
+/// Conductivity per edge: `k_edge[e]` (e.g. the bulk value at the pair's mean temperature). The
+/// share of the branch RESISTANCE that lies on side a (its half-particle, and half of any
+/// contact layer) is returned per edge for the Joule split; NaN when the whole resistance is at
+/// the contact (touching, tunnelling), 0.5 when the model is symmetric.
+#include <string>
+#include <vector>
+
+#include "engine/graph/interaction_graph.hpp"
+#include "engine/state/state.hpp"
+
+namespace sparkdem::physics {
+
+struct BranchModel {
+  std::string model = "holm";          ///< holm, sintered_neck, transmission_surface, touching, tunnelling
+  std::string contact_radius = "hertz";  ///< holm: hertz or geometric
+  std::string neck = "law";            ///< sintered_neck: law, coble, cv
+  std::string hemisphere = "reading_a";  ///< sintered_neck: reading_a/b/c, fe_table
+  double gb_epsilon = 1.0;             ///< sintered_neck: layer conductivity ratio [-]
+  double gb_thickness = 0.0;           ///< sintered_neck: layer thickness [m] (0: none)
+  bool gbf_correction = true;          ///< sintered_neck: grain-boundary-fraction correction
+  double alpha_constant = 0.0;         ///< transmission_surface: fixed alpha (0: alpha(n), f(e))
+  double touch_tolerance = 0.0;        ///< [m] gap up to which a pair counts as touching
+  double unit_conductance = 1.0;       ///< touching/tunnelling [S]
+  double tunnel_g0 = 1.0;              ///< [S]
+  double tunnel_length = 1e-9;         ///< [m]
+  double tunnel_cutoff = 0.0;          ///< [m]
+};
+
+/// Conductance per graph edge; `share_a` receives the resistance share of side a per edge.
+/// `k_edge` has one bulk conductivity per edge (> 0). Throws ConfigError (from the kernels) on
+/// invalid geometry or parameters.
+std::vector<double> branch_conductances(const BranchModel& m, const State& s, const InteractionGraph& g,
+                                        const std::vector<double>& k_edge, std::vector<double>& share_a);
+
+/// The near-pair gap the model needs in the interaction graph (tunnelling cut-off, touching
+/// tolerance, 0 otherwise).
+double branch_model_near_gap(const BranchModel& m);
+
+}  // namespace sparkdem::physics
