@@ -66,6 +66,22 @@ const std::unordered_set<std::uint64_t>& BondTable::intact_keys() const {
   return keys_;
 }
 
+std::size_t BondTable::erase_particles(const std::unordered_set<Id>& gone) {
+  const std::size_t n = size();
+  std::vector<char> keep(n, 1);
+  std::size_t q = 0;
+  for (std::size_t r = 0; r < n; ++r) {
+    keep[r] = !(gone.count(id_i_[r]) || gone.count(id_j_[r]));
+    if (!keep[r]) continue;
+    ref_[q] = ref_[r]; broken_[q] = broken_[r]; broken_step_[q] = broken_step_[r];
+    ++q;
+  }
+  ref_.resize(q); broken_.resize(q); broken_step_.resize(q);
+  keep_rows(keep);
+  if (q != n) { ++version_; dirty_ = true; }
+  return n - q;
+}
+
 HandedState BondTable::handed_state(std::size_t r) const {
   HandedState h;
   h.names = state_names_;

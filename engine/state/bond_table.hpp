@@ -52,6 +52,11 @@ class BondTable : public PairRows {
   void prepare(std::size_t n_particles) {
     if (incidence_n_ != n_particles || dirty_) { reset_results(n_particles); incidence_n_ = n_particles; dirty_ = false; }
   }
+  /// Drop every row (intact or broken) that involves a particle whose global id is in `gone`
+  /// (particle deletion); returns the rows dropped. Local indices are stale until
+  /// remap_after_permutation.
+  std::size_t erase_particles(const std::unordered_set<Id>& gone);
+
   /// Named state of row r (for handing over to the contact table).
   HandedState handed_state(std::size_t r) const;
 

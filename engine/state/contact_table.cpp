@@ -55,6 +55,28 @@ void ContactTable::rebuild(const std::vector<std::array<Index, 2>>& pairs, const
   reset_results(n_particles);
 }
 
+std::size_t ContactTable::erase_particles(const std::unordered_set<Id>& gone) {
+  const std::size_t n = size();
+  std::vector<char> keep(n, 1);
+  std::size_t dropped = 0;
+  for (std::size_t r = 0; r < n; ++r)
+    if (gone.count(id_i_[r]) || gone.count(id_j_[r])) { keep[r] = 0; ++dropped; }
+  const bool have_overlap = overlap_.size() == n;
+  std::size_t q = 0;
+  if (have_overlap)
+    for (std::size_t r = 0; r < n; ++r)
+      if (keep[r]) overlap_[q++] = overlap_[r];
+  keep_rows(keep);
+  overlap_.resize(size(), 0.0);
+  // A pending key is pair_key(a, b) = (min << 32) ^ max: both ids are recovered when they fit
+  // 32 bits (always for ids issued by ParticleStore::add below 2^32).
+  std::erase_if(pending_, [&](const auto& kv) {
+    const Id a = static_cast<Id>(kv.first >> 32), b = static_cast<Id>(kv.first & 0xffffffffu);
+    return gone.count(a) || gone.count(b);
+  });
+  return dropped;
+}
+
 void ContactTable::visit(Archive& ar, const std::string& prefix) {
   visit_rows(ar, prefix, "contact");
   if (ar.reading()) overlap_.assign(size(), 0.0);

@@ -41,6 +41,11 @@ class ContactTable : public PairRows {
   void hand_over(std::uint64_t key, HandedState st) { pending_[key] = std::move(st); }
   bool has_pending_hand_over() const { return !pending_.empty(); }
 
+  /// Drop every row and pending hand-over that involves a particle whose global id is in `gone`
+  /// (particle deletion); returns the rows dropped. Local indices are stale until
+  /// remap_after_permutation.
+  std::size_t erase_particles(const std::unordered_set<Id>& gone);
+
   /// Store/restore rows (ids, local indices, state, overlaps, pending hand-overs).
   void visit(Archive& ar, const std::string& prefix);
 

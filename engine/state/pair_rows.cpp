@@ -28,6 +28,23 @@ void PairRows::remap_after_permutation(const std::vector<Id>& ids) {
   build_incidence(ids.size());
 }
 
+void PairRows::keep_rows(const std::vector<char>& keep) {
+  const std::size_t w = state_names_.size(), n = size();
+  const bool results = force_.size() == n && torque_i_.size() == n && torque_j_.size() == n;
+  std::size_t q = 0;
+  for (std::size_t r = 0; r < n; ++r) {
+    if (!keep[r]) continue;
+    i_[q] = i_[r]; j_[q] = j_[r]; id_i_[q] = id_i_[r]; id_j_[q] = id_j_[r];
+    std::copy_n(state_.begin() + r * w, w, state_.begin() + q * w);
+    if (results) { force_[q] = force_[r]; torque_i_[q] = torque_i_[r]; torque_j_[q] = torque_j_[r]; }
+    ++q;
+  }
+  i_.resize(q); j_.resize(q); id_i_.resize(q); id_j_.resize(q);
+  state_.resize(q * w);
+  force_.resize(results ? q : 0); torque_i_.resize(results ? q : 0); torque_j_.resize(results ? q : 0);
+  if (!results) { force_.assign(q, Vec3::Zero()); torque_i_.assign(q, Vec3::Zero()); torque_j_.assign(q, Vec3::Zero()); }
+}
+
 void PairRows::copy_named_state(std::size_t r, const std::vector<std::string>& from_names, const double* from) {
   double* to = state(r);
   for (std::size_t a = 0; a < from_names.size(); ++a) {

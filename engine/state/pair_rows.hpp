@@ -81,6 +81,10 @@ class PairRows {
   /// Sum per-row forces/torques into particle arrays (adds to force/torque).
   void gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
 
+  /// Rows r with keep[r] == 0 removed (order of the others preserved): ids, cached local indices,
+  /// state and per-row results. The local indices are stale until remap_after_permutation.
+  void keep_rows(const std::vector<char>& keep);
+
  protected:
   /// Copy same-named columns of `from` (names `from_names`) into row r; others keep their value.
   void copy_named_state(std::size_t r, const std::vector<std::string>& from_names, const double* from);

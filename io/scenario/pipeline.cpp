@@ -12,6 +12,7 @@
 #include <map>
 
 #include "engine/core/error.hpp"
+#include "engine/state/delete_particles.hpp"
 #include "engine/state/pair_transfer.hpp"
 #include "io/files/durable_file.hpp"
 #include "io/hdf5/results_writer.hpp"
@@ -244,6 +245,45 @@ std::pair<std::int64_t, bool> read_state(Hdf5Archive& ar, State& s) {
 
 }  // namespace
 
+namespace {
+
+constexpr const char* kDeletedMark = "stage_start/deleted/";
+
+/// `delete_sets` of a stage: every set's selector is evaluated on the state at the stage start
+/// and the union of the members is deleted (delete_particles). The counts go to the state's
+/// marks (checkpointed), so that a stage resumed from a checkpoint reports them too; the marks
+/// of an earlier stage are cleared at every stage start.
+void delete_stage_sets(State& s, const std::vector<std::pair<std::string, SetSelector>>& sets) {
+  std::erase_if(s.marks, [](const auto& kv) { return kv.first.rfind(kDeletedMark, 0) == 0; });
+  if (sets.empty()) return;
+  std::vector<bool> remove(s.particles.size(), false);
+  for (const auto& [name, sel] : sets) {
+    std::size_t n = 0;  // members not already taken by an earlier set of the list
+    for (Index i : select_particles(s, sel))
+      if (!remove[i]) { remove[i] = true; ++n; }
+    s.marks[std::string(kDeletedMark) + "set/" + name] = static_cast<double>(n);
+  }
+  const DeletionCounts c = delete_particles(s, remove);
+  s.marks[std::string(kDeletedMark) + "total"] = static_cast<double>(c.particles);
+  s.marks[std::string(kDeletedMark) + "contacts"] = static_cast<double>(c.contacts);
+  s.marks[std::string(kDeletedMark) + "bonds"] = static_cast<double>(c.bonds);
+}
+
+json deletion_summary(const State& s, const std::vector<std::pair<std::string, SetSelector>>& sets) {
+  auto mark = [&](const std::string& k) {
+    const auto it = s.marks.find(kDeletedMark + k);
+    return it == s.marks.end() ? json(nullptr) : json(static_cast<std::int64_t>(it->second));
+  };
+  json j;
+  j["total"] = mark("total");
+  for (const auto& [name, sel] : sets) j["sets"][name] = mark("set/" + name);
+  j["contacts_removed"] = mark("contacts");
+  j["bonds_removed"] = mark("bonds");
+  return j;
+}
+
+}  // namespace
+
 std::pair<std::int64_t, bool> read_checkpoint(const std::filesystem::path& file, State& s) {
   Hdf5Archive ar = Hdf5Archive::for_reading(file);
   return read_state(ar, s);
@@ -330,6 +370,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         if (st.generator) st.generator->generate(s);
         s.stage_index = stage_index;
       }
+      if (!resuming) delete_stage_sets(s, st.delete_sets);
       std::size_t bonds_made = 0;
       if (!resuming && st.create_bonds_gap >= 0.0) {
         if (s.bonds.state_columns() != sc.bond_law->state_columns()) s.bonds.set_state_columns(sc.bond_law->state_columns());
@@ -360,6 +401,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
       js["name"] = st.cfg.name;
       js["type"] = st.type;
       if (!set_counts.is_null()) js["particle_sets"] = set_counts;
+      if (!st.delete_sets.empty()) js["deleted_particles"] = deletion_summary(s, st.delete_sets);
       if (st.create_bonds_gap >= 0.0) js["bonds_created"] = bonds_made;
       if (st.dynamics) {
         std::optional<SnapshotObserver> snap;

@@ -488,7 +488,7 @@ std::string unknown_column(const std::string& column, const std::vector<std::str
 /// `errors` and the resolved stage to `r`.
 StageDef build_stage(StageContext& ctx, const json& js, const std::string& path, std::vector<Diagnostic>& errors, json& r) {
   const std::size_t before = errors.size();
-  const StageParams p = build(stage_spec(*ctx.reg), js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact", "sets", "prescribe", "snapshots", "sweep", "create_bonds", "compact"});
+  const StageParams p = build(stage_spec(*ctx.reg), js, path, errors, r, {"generator", "modules", "walls", "add_walls", "remove_walls", "until", "contact", "sets", "delete_sets", "prescribe", "snapshots", "sweep", "create_bonds", "compact"});
   StageDef st;
   st.path = path;
   st.type = p.type;
@@ -706,6 +706,30 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
         else use_set(js["sets"][q].get<std::string>(), path + "/sets/" + std::to_string(q));
       }
     r["sets"] = js["sets"];
+  }
+  if (js.contains("delete_sets")) {
+    const std::string dp = path + "/delete_sets";
+    std::vector<std::string> defined;
+    for (const auto& [k, v] : ctx.sets) defined.push_back(k);
+    const std::string known = defined.empty() ? std::string("none is defined") : "defined: " + list_names(defined);
+    if (!js["delete_sets"].is_array())
+      errors.push_back({dp, "expected an array of names of particle sets in /particle_sets (" + known + "), found " + describe(js["delete_sets"])});
+    else
+      for (std::size_t q = 0; q < js["delete_sets"].size(); ++q) {
+        const json& x = js["delete_sets"][q];
+        const std::string at = dp + "/" + std::to_string(q);
+        if (!x.is_string() || !ctx.sets.count(x.get<std::string>())) {
+          const auto dym = x.is_string() ? did_you_mean(x.get<std::string>(), defined) : std::string();
+          errors.push_back({at, "expected the name of a particle set in /particle_sets (" + known + "), found " + describe(x) +
+                                    (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});
+          continue;
+        }
+        bool dup = false;
+        for (const auto& [n, s2] : st.delete_sets) dup = dup || n == x.get<std::string>();
+        if (dup) errors.push_back({at, "expected each set once, found \"" + x.get<std::string>() + "\" twice"});
+        else st.delete_sets.emplace_back(x.get<std::string>(), ctx.sets.at(x.get<std::string>()));
+      }
+    r["delete_sets"] = js["delete_sets"];
   }
   if (js.contains("prescribe")) {
     if (!js["prescribe"].is_object()) errors.push_back({path + "/prescribe", "expected an object {set name: [vx, vy, vz]}"});
@@ -1311,6 +1335,8 @@ json schema_json(const Registry& reg) {
   j["particle_set"] = spec_to_json(set_spec().spec());
   j["check"] = spec_to_json(check_spec().spec());
   j["stage"]["sets"] = "array of particle-set names evaluated at the stage start";
+  j["stage"]["delete_sets"] = "array of particle-set names: their members at the stage start (after the generator) are deleted, "
+                              "with their contacts and bonds; summary.json reports the counts (deleted_particles)";
   j["stage"]["prescribe"] = "object {set name: [vx, vy, vz] m/s}: the set moves at this velocity (zero = frozen)";
   j["stage"]["until"] = "object {quantity: {\"above\"|\"below\": value}}; quantities are time-series columns";
   j["stage"]["snapshots"] = spec_to_json(snapshot_spec().spec());

@@ -50,6 +50,9 @@ struct StageDef {
   double create_bonds_gap = -1.0;     ///< >= 0: bond every pair with gap <= this at the stage start [m]
   bool dynamics = true;               ///< false: a generator stage with nothing to settle (lattice, relax)
   std::vector<std::pair<std::string, SetSelector>> sets;  ///< particle sets (re)evaluated at the stage start
+  /// `"delete_sets"`: particle sets evaluated at the stage start (after the generator, before
+  /// `sets`) whose members are deleted (LAMMPS `delete_atoms region`); see delete_particles.
+  std::vector<std::pair<std::string, SetSelector>> delete_sets;
   std::optional<SnapshotSpec> snapshots;   ///< states saved during the stage (dynamics stages)
   std::shared_ptr<const SweepDef> sweep;   ///< run once per item (see SweepDef); null: once
   std::vector<std::shared_ptr<const Monitor>> monitors;  ///< stage-key monitors (e.g. "compact"), after the generator's
