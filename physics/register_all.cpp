@@ -9,6 +9,7 @@
 #include "physics/body/gravity.hpp"
 #include "physics/bonds/spring_bond.hpp"
 #include "physics/contact/hertz_mindlin.hpp"
+#include "physics/control/temperature_controller.hpp"
 #include "physics/contact/sintering.hpp"
 #include "physics/contact/hooke.hpp"
 #include "physics/contact/lammps_granular.hpp"
@@ -30,6 +31,7 @@ void register_all(Registry& r) {
   r.module<ElectricalNetwork>();
   r.module<TemperatureHistory>();
   r.module<HeatConduction>();
+  r.module<TemperatureController>();
   r.generator<LatticeGenerator>();
   r.generator<DepositGenerator>();
   r.generator<FillGenerator>();

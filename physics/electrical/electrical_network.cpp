@@ -113,6 +113,8 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("resolve_temperature_change", &P::resolve_temperature_change).unit("K").positive()
       .doc("default clock with temperature_field: re-solve when a particle's temperature changed by more than this since the last solve");
   s.add("resolve_every", &P::resolve_every).min(0).doc("default clock: also re-solve every this many mechanical steps (0: only on the events)");
+  s.add("voltage_signal", &P::voltage_signal)
+      .doc("take the voltage from this signal at every solve (written by a controller, e.g. temperature_controller); \"\" = `voltage`");
   s.add("high", &P::high).doc("electrode held at `voltage`: a particle-set name or \"wall:<name>\"");
   s.add("low", &P::low).doc("electrode held at 0 V: a particle-set name or \"wall:<name>\"");
   s.add("voltage", &P::voltage).unit("V").positive().doc("potential difference between the electrodes");
@@ -183,11 +185,13 @@ ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
 void ElectricalNetwork::declare(Declarations& d) const {
   d.particle_fields.push_back({"electric_potential", 1, "V", 0.0, true});
   d.particle_fields.push_back({"joule_power", 1, "W", 0.0, true});
-  d.reads = {"position", "radius"};
-  // The temperature of the previous step: a feedback loop with heat_conduction (which reads this
-  // step's joule_power), not an ordering constraint.
+  // Geometry and temperature as they were at the end of the previous step (or as earlier modules
+  // of this step left them): a feedback loop with heat_conduction, which reads this step's
+  // joule_power and writes the temperature and the expanded radii, is not an ordering cycle.
+  d.reads_previous = {"position", "radius"};
   if (p_.temperature_field) d.reads_previous.push_back("temperature");
-  d.writes = {"electric_potential", "joule_power"};
+  d.writes = {"electric_potential", "joule_power", "signal/electrical_resistance"};
+  if (!p_.voltage_signal.empty()) d.reads.push_back("signal/" + p_.voltage_signal);
 }
 
 void ElectricalNetwork::bind(State& s) {
@@ -315,6 +319,16 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   // Current-driven: the high electrode is one equipotential node fed with `current`; the low
   // one is grounded. Otherwise both electrodes are held at their potentials.
   const bool driven = p_.current > 0.0;
+  // Applied voltage: the parameter, or the controller's signal. The network is linear, so a zero
+  // voltage is solved at 1 V and scaled by 0: the resistance stays known (a controller needs it).
+  double applied = p_.voltage;
+  if (!p_.voltage_signal.empty()) {
+    const auto it = s.marks.find("signal/" + p_.voltage_signal);
+    if (it != s.marks.end()) applied = it->second;
+    if (!(applied >= 0.0) || !std::isfinite(applied))
+      throw PhysicsError(info.step, {}, "voltage", "electrical_network: the voltage signal '" + p_.voltage_signal + "' is " + std::to_string(applied));
+  }
+  const double solved_voltage = applied > 0.0 ? applied : 1.0;
   const Index super = net.high.front();
   std::vector<Index> ma, mb;
   std::vector<double> mg, source;
@@ -335,7 +349,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
     prob.source = source;
     prob.dirichlet = {DirichletGroup{net.low, 0.0}};
   } else {
-    prob.dirichlet = {DirichletGroup{net.high, p_.voltage}, DirichletGroup{net.low, 0.0}};
+    prob.dirichlet = {DirichletGroup{net.high, solved_voltage}, DirichletGroup{net.low, 0.0}};
   }
   std::vector<double> cap;
   if (p_.solver == "pseudo_transient") {
@@ -346,6 +360,14 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
     prob.capacitance = cap;
   }
   LaplacianResult res = solver_.solve(prob);
+  double unit_resistance = kInf;  // dV / I of the solve, whatever the applied voltage
+  if (!driven && !res.dirichlet_flux.empty() && res.dirichlet_flux[0] > 0.0) unit_resistance = solved_voltage / res.dirichlet_flux[0];
+  if (!driven && applied != solved_voltage) {
+    const double f = applied / solved_voltage;
+    for (double& x : res.value) if (std::isfinite(x)) x *= f;
+    for (double& x : res.flux) x *= f;
+    for (double& x : res.dirichlet_flux) x *= f;
+  }
   if (driven)
     for (Index v : net.high) res.value[v] = res.value[super];  // the merged electrode nodes
   const std::vector<double>& edge_g = driven ? mg : net.g;
@@ -400,11 +422,12 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
                            "' has no path to '" + p_.low + "' (the network is open)");
   const double I = !spans ? 0.0 : driven ? p_.current : res.dirichlet_flux[0];
   const double I_low = !spans ? 0.0 : driven ? res.dirichlet_flux[0] : res.dirichlet_flux[1];
-  const double V = driven ? res.value[super] : p_.voltage;
+  const double V = driven ? res.value[super] : applied;
   r_.current = I;
   r_.voltage = V;
   r_.current_mismatch = I != 0.0 ? std::abs(I + I_low) / std::abs(I) : std::abs(I_low);
-  r_.resistance = I > 0.0 ? V / I : kInf;
+  r_.resistance = I > 0.0 ? V / I : (spans && !driven ? unit_resistance : kInf);
+  s.marks["signal/electrical_resistance"] = std::isfinite(r_.resistance) ? r_.resistance : -1.0;
   r_.power = power;
   r_.power_particles = 0.0;
   for (double x : q) r_.power_particles += x;
@@ -420,7 +443,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
     for (const auto& w : s.walls)
       if (!w.is_plane()) { A = el::kPi * w.cylinder_radius() * w.cylinder_radius(); break; }
   r_.length = L > 0.0 ? L : kNaN;
-  r_.conductivity_eff = (L > 0.0 && A > 0.0) ? I * L / (V * A) : kNaN;
+  r_.conductivity_eff = (L > 0.0 && A > 0.0) ? L / (r_.resistance * A) : kNaN;  // = I L / (dV A)
   r_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   r_.solves += 1.0;
 }

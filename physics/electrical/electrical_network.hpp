@@ -20,6 +20,8 @@
 ///   touching              G = unit_conductance for every touching pair (seed 002)
 ///   tunnelling            touching pairs unit_conductance, gaps g0 exp(-2 gap/xi) up to the cut-off
 ///
+/// Signals: writes "signal/electrical_resistance" [Ohm] (-1 without a spanning path) after every
+/// solve (a controller's plant measurement); reads "signal/<voltage_signal>" when set.
 /// Outputs: fields electric_potential [V] (NaN on floating particles) and joule_power [W]: each
 /// branch's I^2 R goes where it is dissipated: a branch of resistances in series (half-particle
 /// i, contact layer, half-particle j; sintered_neck) heats i with I^2 R_i + I^2 R_c / 2 and j with
@@ -52,6 +54,7 @@
 /// | conductivity_table_temperature, _values | K, S/m | tabulated kappa(T) instead (piecewise linear) |
 /// | high, low          | -     | electrodes: a particle-set name, or "wall:<name>"              |
 /// | voltage            | V     | potential of `high` (low = 0)                                  |
+/// | voltage_signal     | -     | take the voltage from State signal "signal/<name>" at each solve (a controller's output) |
 /// | current            | A     | > 0: inject this current at `high` instead (electrode equipotential) |
 /// | length, area       | m, m2 | L and A of Eq. 28 (0: distance of the electrodes' centroids; the die cross-section) |
 /// | solver, tolerance  | -, 1  | direct, cg_ic, cg_jacobi, amg, pseudo_transient; iterative relative residual |
@@ -85,6 +88,7 @@ class ElectricalNetwork final : public Module {
     std::string high = "top";
     std::string low = "bottom";
     double voltage = 1.0;
+    std::string voltage_signal;
     double current = 0.0;
     double length = 0.0;
     double area = 0.0;

@@ -139,8 +139,28 @@ Clock HeatConduction::clock() const {
   return c;
 }
 
+namespace {
+/// FNV-1a over the bytes of the geometry the network depends on (positions, radii, table sizes):
+/// the network is rebuilt whenever any of them changed, whoever calls (advance, stable_dt, the
+/// columns) and whenever (a restart rebuilds the same network from the same state).
+std::uint64_t geometry_key(const State& s) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* data, std::size_t bytes) {
+    const auto* c = static_cast<const unsigned char*>(data);
+    for (std::size_t k = 0; k < bytes; ++k) { h ^= c[k]; h *= 1099511628211ull; }
+  };
+  const auto& p = s.particles;
+  if (!p.position.empty()) mix(p.position.data(), p.position.size() * sizeof(Vec3));
+  if (!p.radius.empty()) mix(p.radius.data(), p.radius.size() * sizeof(double));
+  const std::size_t sizes[3] = {s.contacts.size(), s.bonds.size(), s.bonds.broken_count()};
+  mix(sizes, sizeof sizes);
+  return h;
+}
+}  // namespace
+
 const HeatConduction::Network& HeatConduction::network(const State& s) const {
-  if (net_.valid && net_.step == s.step) return net_;
+  const std::uint64_t key = geometry_key(s);
+  if (net_.valid && net_.key == key) return net_;
   GraphOptions go;
   go.near_gap = branch_model_near_gap(branch_);
   const InteractionGraph g = build_interaction_graph(s, go);
@@ -154,7 +174,7 @@ const HeatConduction::Network& HeatConduction::network(const State& s) const {
   net_.b = g.b;
   net_.degree = laplacian_diagonal(g.nodes(), net_.a, net_.b, net_.g);
   net_.inc.build(g.nodes(), net_.a, net_.b);
-  net_.step = s.step;
+  net_.key = key;
   net_.valid = true;
   return net_;
 }

@@ -28,8 +28,8 @@
 /// those of the step it runs in); `implicit` (backward Euler, sparse LDL^T through the shared
 /// LaplacianSolver; unconditionally stable, every step by default).
 ///
-/// The network (graph and conductances) is rebuilt once per mechanical step (substeps share it:
-/// the geometry does not change within a step). Time domain: physical (a stage time_scale
+/// The network (graph and conductances) is rebuilt whenever the geometry changed (a hash of the
+/// positions, radii and table sizes), so substeps and frozen stages reuse it. Time domain: physical (a stage time_scale
 /// multiplies its step).
 ///
 /// Thermal expansion (expansion_coefficient != 0): r_i = r_ref,i (1 + alpha (T_i - T_0)) after
@@ -43,6 +43,7 @@
 /// (sum C_i (T_i - T_i,0)); heat_balance_error = |stored - (joule + flux - lost - fixed)| /
 /// (joule + flux + lost + |fixed|) closes to round-off with either scheme (both conserve energy
 /// exactly: the conduction fluxes cancel pairwise).
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -112,9 +113,9 @@ class HeatConduction final : public Module {
   const Energy& energy() const { return e_; }
 
  private:
-  /// The conduction network of the current geometry (cached for one mechanical step).
+  /// The conduction network of the current geometry (cached while the geometry is unchanged).
   struct Network {
-    Step step = -1;
+    std::uint64_t key = 0;
     bool valid = false;
     std::vector<Index> a, b;
     std::vector<double> g;       ///< [W/K]

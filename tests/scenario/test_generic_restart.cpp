@@ -106,6 +106,11 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
   json scaled_press = load_data("hot_press_small.json");
   scaled_press["stages"][1]["mass_scaling"] = 10.0;
   scaled_press["stages"][1]["mass_floor_radius"] = 0.0012;  // every particle (r = 1 mm) is a "fine"
+  json explicit_heat = load_data("joule_press_small.json");
+  explicit_heat["stages"][1]["modules"]["heat_conduction"]["scheme"] = "explicit";
+  explicit_heat["stages"][1]["modules"]["heat_conduction"]["model"] = "transmission_surface";
+  explicit_heat["stages"][1]["modules"]["heat_conduction"]["touch_tolerance"] = 1e-5;
+  explicit_heat["stages"][1]["modules"]["heat_conduction"]["density"] = 59.1;  // small capacities: several substeps per step
   const Case cases[] = {
       {"lattice + bonded pull with event, adaptive and every-N mock modules, electrical network, time scaling", load_data("restart_contracts.json"), 1, 180},
       {"deposit generator (settling, die contraction)", with_steps(load_data("gen_deposit_small.json"), 0, 3000), 0, 1777},
@@ -116,6 +121,9 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
       {"hot press: temperature_history with thermal expansion, pressure table in physical time, compact monitor",
        load_data("hot_press_small.json"), 1, 2333},
       {"hot press with mass scaling and a mass floor (per-particle factors in the checkpoint)", scaled_press, 1, 2333},
+      {"coupled Joule press: temperature_controller, electrical_network on a voltage signal with kappa(T), implicit heat_conduction with losses and expansion",
+       load_data("joule_press_small.json"), 1, 1777},
+      {"explicit heat_conduction on adaptive substeps, electrical every 7 steps", explicit_heat, 1, 1777},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.label) {
