@@ -336,6 +336,7 @@ void Simulation::mark_event_run(const PlanItem& it, Step step) {
 }
 
 void Simulation::run_module(const PlanItem& it, Step step, double t_stage, double dt_m) {
+  const auto t_call = std::chrono::steady_clock::now();
   const Clock& c = it.clock;
   const bool physical = it.module->time_domain() == TimeDomain::Physical;
   const double scale = physical ? time_scale_ : 1.0;
@@ -378,6 +379,7 @@ void Simulation::run_module(const PlanItem& it, Step step, double t_stage, doubl
     }
   }
   if (stats_) {
+    stats_->module_seconds[it.name] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t_call).count();
     stats_->module_calls[it.name] += calls;
     auto& m = stats_->max_substeps[it.name];
     m = std::max(m, substeps);

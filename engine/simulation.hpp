@@ -113,6 +113,7 @@ struct StageResult {
   std::map<std::string, double> final_values;  ///< last monitor values
   std::map<std::string, Step> module_calls;    ///< calls per module in this stage (substeps counted)
   std::map<std::string, Step> max_substeps;    ///< largest per-step substep count (adaptive clocks)
+  std::map<std::string, double> module_seconds;  ///< wall time inside each module's calls [s] (the rest is mechanics and I/O)
   std::vector<ModuleStep> module_steps;  ///< per module at the stage start
 };
 

@@ -418,6 +418,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         js["physical_time_s"] = r.physical_time;
         js["time_scale"] = st.cfg.time_scale;
         for (const auto& [m, n] : r.module_calls) js["module_calls"][m] = n;
+        for (const auto& [m, t] : r.module_seconds) js["module_wall_time_s"][m] = t;
         for (const auto& [m, n] : r.max_substeps)
           if (n > 1) js["max_substeps"][m] = n;
         if (sc.bond_law) js["bonds"] = {{"intact", s.bonds.intact_count()}, {"broken", s.bonds.broken_count()}};
