@@ -389,10 +389,14 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
     if (!std::isfinite(T[i]) || !(T[i] > 0.0)) bad.push_back(p.id[i]);
   if (!bad.empty()) {
     std::vector<Id> first(bad.begin(), bad.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(bad.size(), 10)));
+    std::string limit = "unconditionally stable";
+    if (p_.scheme == "explicit") {
+      const double sdt = stable_dt(s);  // sets limiting_id_ (evaluated before it is printed)
+      limit = "stable step " + num(sdt) + " s, set by particle id " + std::to_string(limiting_id_);
+    }
     throw PhysicsError(info.step, first, "temperature",
                        "heat_conduction: " + std::to_string(bad.size()) + " particle temperature(s) not finite or <= 0 K after the " +
-                           p_.scheme + " step of " + num(dt) + " s (stable step " + num(stable_dt(s)) +
-                           " s, set by particle id " + std::to_string(limiting_id_) + ")");
+                           p_.scheme + " step of " + num(dt) + " s (" + limit + ")");
   }
   if (p_.expansion_coefficient != 0.0) {
     thermal::apply_expansion(s, p_.expansion_coefficient, p_.reference_temperature, T);
