@@ -504,8 +504,8 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
       const double scale = it.module->time_domain() == TimeDomain::Physical ? time_scale_ : 1.0;
       const double mdt = it.clock.dt(dt_used) * scale, sdt = it.module->stable_dt(s_);
       if (!(mdt > sdt) || cfg.allow_unstable_dt) continue;
-      const std::string msg = "module '" + it.name + "' runs with dt = " + std::to_string(mdt) + " s above its stable step " +
-                              std::to_string(sdt) + " s";
+      const std::string msg = "module '" + it.name + "' runs with dt = " + fmt_g(mdt) + " s above its stable step " +
+                              fmt_g(sdt) + " s";
       if (at_start) throw SetupError("stage '" + cfg.name + "': " + msg);
       throw PhysicsError(s_.step, {}, "time step", msg + " of the current state; use an adaptive clock or a smaller step");
     }

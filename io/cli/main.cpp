@@ -9,9 +9,11 @@
 #include <csignal>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 
 #include "engine/core/error.hpp"
 #include "engine/core/interrupt.hpp"
+#include "engine/state/particle_set.hpp"
 #include "io/scenario/json_binder.hpp"
 #include "io/scenario/pipeline.hpp"
 #include "io/scenario/scenario.hpp"
@@ -53,11 +55,13 @@ sparkdem::io::json check_report(sparkdem::io::Scenario& sc) {
       st.generator->generate(s);
     }
     if (!known || !st.dynamics) continue;
+    for (const auto& [name, sel] : st.sets) assign_set(s, name, sel);  // as the run does (modules bind to them)
     Simulation sim(s, sc.law_of(st));
     for (auto& m : st.modules) sim.add_module(m.get());
     sim.prepare(st.cfg);
     s.contacts.rebuild(find_pairs(s.particles.position, s.particles.radius, 0.0), s.particles.id, s.particles.size());
-    const double stable = sim.mechanical_stable_dt();
+    // A frozen stage (mechanics off) has no mechanical step limit, as in the run.
+    const double stable = st.cfg.mechanics ? sim.mechanical_stable_dt() : std::numeric_limits<double>::infinity();
     js["derived"]["particles_at_start"] = s.particles.size();
     js["derived"]["mechanical_stable_dt_s"] = stable;
     try {

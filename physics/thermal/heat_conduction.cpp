@@ -65,6 +65,9 @@ ParamSpec<HeatConduction::Params> HeatConduction::spec() {
   s.add("fixed_temperatures", &P::fixed_temperatures).unit("K").doc("one temperature per fixed set");
   s.add("flux_sets", &P::flux_sets).doc("comma-separated particle sets receiving flux_powers");
   s.add("flux_powers", &P::flux_powers).unit("W").doc("heat flow into each flux set (split in proportion to the heat capacities; < 0 extracts)");
+  s.add("conductivity_sets", &P::conductivity_sets)
+      .doc("comma-separated particle sets of another material: their conductivity is conductivity_factors x lambda (series halves per branch)");
+  s.add("conductivity_factors", &P::conductivity_factors).unit("1").doc("one factor > 0 per conductivity set");
   s.add("loss_set", &P::loss_set).doc("particles losing heat to the ambient: a set name, \"all\", or \"\" (adiabatic)");
   s.add("convection_coefficient", &P::convection_coefficient).unit("W/(m^2 K)").nonnegative().doc("h of the convective loss");
   s.add("emissivity", &P::emissivity).unit("1").range(0.0, 1.0).doc("emissivity of the radiative loss");
@@ -91,6 +94,13 @@ HeatConduction::HeatConduction(const Params& p) : p_(p) {
   std::vector<Diagnostic> d;
   fixed_names_ = split_names(p.fixed_sets);
   flux_names_ = split_names(p.flux_sets);
+  factor_names_ = split_names(p.conductivity_sets);
+  if (factor_names_.size() != p.conductivity_factors.size())
+    d.push_back({"/conductivity_factors", "expected one factor per conductivity set (" + std::to_string(factor_names_.size()) +
+                                              "), found " + std::to_string(p.conductivity_factors.size())});
+  for (std::size_t k = 0; k < p.conductivity_factors.size(); ++k)
+    if (!(p.conductivity_factors[k] > 0.0) || !std::isfinite(p.conductivity_factors[k]))
+      d.push_back({"/conductivity_factors/" + std::to_string(k), "expected a finite factor > 0, found " + num(p.conductivity_factors[k])});
   if (fixed_names_.size() != p.fixed_temperatures.size())
     d.push_back({"/fixed_temperatures", "expected one temperature per fixed set (" + std::to_string(fixed_names_.size()) +
                                             "), found " + std::to_string(p.fixed_temperatures.size())});
@@ -126,6 +136,7 @@ void HeatConduction::declare(Declarations& d) const {
   d.particle_fields.push_back({"temperature", 1, "K", 0.0, true});
   d.particle_fields.push_back({"heat_capacity", 1, "J/K", 0.0, false});
   d.particle_fields.push_back({"temperature_initial", 1, "K", 0.0, false});
+  d.particle_fields.push_back({"temperature_carry", 1, "K", 0.0, false});
   d.reads = {"position", "radius"};
   if (p_.joule_heating) d.reads.push_back("joule_power");
   d.writes = {"temperature"};
@@ -170,6 +181,24 @@ const HeatConduction::Network& HeatConduction::network(const State& s) const {
   } catch (const ConfigError& e) {
     throw PhysicsError(s.step, {}, "thermal conductance", e.what());
   }
+  if (!factor_names_.empty()) {  // series halves: G / (s_a / f_a + (1 - s_a) / f_b)
+    const auto& p = s.particles;
+    std::vector<double> f(g.nodes(), 1.0);
+    std::vector<char> seen(p.size(), 0);
+    for (std::size_t k = 0; k < factor_names_.size(); ++k) {
+      const auto& m = set_field(s, factor_names_[k]);
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        if (!(m[i] > 0.5)) continue;
+        if (seen[i]) throw SetupError("heat_conduction: particle id " + std::to_string(p.id[i]) + " belongs to two conductivity sets");
+        seen[i] = 1;
+        f[i] = p_.conductivity_factors[k];
+      }
+    }
+    for (std::size_t e = 0; e < g.size(); ++e) {
+      const double sa = std::isnan(share[e]) ? 0.5 : share[e];
+      net_.g[e] /= sa / f[g.a[e]] + (1.0 - sa) / f[g.b[e]];
+    }
+  }
   net_.a = g.a;
   net_.b = g.b;
   net_.degree = laplacian_diagonal(g.nodes(), net_.a, net_.b, net_.g);
@@ -184,6 +213,7 @@ void HeatConduction::bind(State& s) {
   auto& p = s.particles;
   for (const auto& n : fixed_names_) (void)set_field(s, n);
   for (const auto& n : flux_names_) (void)set_field(s, n);
+  for (const auto& n : factor_names_) (void)set_field(s, n);
   if (!p_.loss_set.empty() && p_.loss_set != "all") (void)set_field(s, p_.loss_set);
   if (restored_) {  // resumed mid-stage: temperatures, capacities and energies come from the checkpoint
     restored_ = false;
@@ -227,6 +257,8 @@ void HeatConduction::bind(State& s) {
     for (double& c : C) c *= p_.domain_volume / vsum;
   capacity_ratio_ = p_.domain_volume > 0.0 ? vfsum / p_.domain_volume : kNaN;
   p.fields.data("temperature_initial") = T;
+  auto& carry = p.fields.data("temperature_carry");
+  std::fill(carry.begin(), carry.end(), 0.0);
   e_ = Energy{};
 }
 
@@ -246,6 +278,7 @@ double HeatConduction::stable_dt(const State& s) const {
   const bool all_lose = p_.loss_set == "all";
   const std::vector<double>* lose = (!p_.loss_set.empty() && !all_lose) ? &set_field(s, p_.loss_set) : nullptr;
   double dt = kInf;
+  limiting_id_ = -1;
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (fixed[i]) continue;
     double rate = n.degree[i];
@@ -253,7 +286,10 @@ double HeatConduction::stable_dt(const State& s) const {
       const double A = p_.loss_area_fraction * 4.0 * thermal::kPi * p.radius[i] * p.radius[i];
       rate += thermal::ambient_loss_slope(p_.convection_coefficient, p_.emissivity, A, T[i]);
     }
-    if (rate > 0.0) dt = std::min(dt, C[i] / rate);
+    if (rate > 0.0 && C[i] / rate < dt) {
+      dt = C[i] / rate;
+      limiting_id_ = p.id[i];
+    }
   }
   return p_.safety * dt;
 }
@@ -304,18 +340,25 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
   if (p_.scheme == "explicit") {
     laplacian_apply(n.inc, n.g, T, y);
     std::vector<double> Tn(np);
+    auto& carry = p.fields.data("temperature_carry");
     for (std::size_t i = 0; i < np; ++i) {
       const double Pi = P ? (*P)[i] : 0.0;
       de.electrical += Pi;
       if (!std::isnan(fixed_value[i])) {
         de.fixed += eta * Pi - y[i];
         Tn[i] = fixed_value[i];
+        carry[i] = 0.0;
         continue;
       }
       const double Q = area[i] > 0.0 ? thermal::ambient_loss(h, em, area[i], T[i], Ta) : 0.0;
       de.lost += Q;
       de.flux += F[i];
-      Tn[i] = T[i] + dt / C[i] * (eta * Pi + F[i] - Q - y[i]);
+      // Compensated (Kahan) update: an increment below half an ulp of T (a weak branch over
+      // many substeps, e.g. 1e-14 K per step on 300 K) accumulates in the carry instead of
+      // being lost to round-off.
+      const double inc = dt / C[i] * (eta * Pi + F[i] - Q - y[i]) - carry[i];
+      Tn[i] = T[i] + inc;
+      carry[i] = (Tn[i] - T[i]) - inc;
     }
     T.swap(Tn);
   } else {
@@ -352,6 +395,8 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
       de.flux += F[i];
     }
     T = res.value;
+    auto& carry = p.fields.data("temperature_carry");
+    std::fill(carry.begin(), carry.end(), 0.0);
   }
   e_.electrical += dt * de.electrical;
   e_.joule += dt * eta * de.electrical;
@@ -364,9 +409,14 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
     if (!std::isfinite(T[i]) || !(T[i] > 0.0)) bad.push_back(p.id[i]);
   if (!bad.empty()) {
     std::vector<Id> first(bad.begin(), bad.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(bad.size(), 10)));
+    std::string limit = "unconditionally stable";
+    if (p_.scheme == "explicit") {
+      const double sdt = stable_dt(s);  // sets limiting_id_ (evaluated before it is printed)
+      limit = "stable step " + num(sdt) + " s, set by particle id " + std::to_string(limiting_id_);
+    }
     throw PhysicsError(info.step, first, "temperature",
-                       "heat_conduction: " + std::to_string(bad.size()) + " particle temperature(s) not finite or <= 0 K after a " +
-                           p_.scheme + " step of " + num(dt) + " s (stable step " + num(stable_dt(s)) + " s)");
+                       "heat_conduction: " + std::to_string(bad.size()) + " particle temperature(s) not finite or <= 0 K after the " +
+                           p_.scheme + " step of " + num(dt) + " s (" + limit + ")");
   }
   if (p_.expansion_coefficient != 0.0) {
     thermal::apply_expansion(s, p_.expansion_coefficient, p_.reference_temperature, T);

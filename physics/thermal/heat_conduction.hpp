@@ -20,6 +20,15 @@
 ///     radiation (emissivity) through area loss_area_fraction x 4 pi r^2; "" = adiabatic (default).
 /// Walls take no part (adiabatic).
 ///
+/// Several materials: conductivity_sets / conductivity_factors give the particles of each set
+/// the conductivity f_k lambda (1 elsewhere). A branch joins two sides in series, so its
+/// conductance is G_ij = G_ij(lambda) / (s_ij / f_i + (1 - s_ij) / f_j), s_ij the share of the
+/// branch resistance on side i returned by the branch model (0.5 for the symmetric models:
+/// Batchelor-O'Brien then gives 4 a lambda_i lambda_j / (lambda_i + lambda_j), the transmission
+/// surface lambda_ij = the harmonic mean; the sintered neck's share includes half of its layer,
+/// which therefore takes the factor of its side). Exact for models in which each side's
+/// resistance scales as 1 / lambda of that side.
+///
 /// Schemes: `explicit` (forward Euler) with its own stable step from the current network
 /// (Gershgorin: safety x min_i C_i / (sum_j G_ij + dQ_i/dT)), run on the scheduler's adaptive
 /// substeps by default (k = ceil(dt / stable) calls per mechanical step), or on any clock the
@@ -36,7 +45,8 @@
 /// every call (physics/thermal/expansion.hpp).
 ///
 /// Fields: temperature [K] (written), heat_capacity [J/K] (computed at the stage start),
-/// temperature_initial [K] (the stage-start temperatures, for the stored heat).
+/// temperature_initial [K] (the stage-start temperatures, for the stored heat), temperature_carry
+/// [K] (explicit: the round-off of the compensated update T += dT, carried to the next call).
 /// Energy balance columns [J] from the stage start: heat_electrical_energy (integral of the summed
 /// joule_power), heat_joule_energy (eta x that), heat_flux_energy (prescribed), heat_lost_energy
 /// (to the ambient), heat_fixed_energy (absorbed by the fixed sets), heat_stored_energy
@@ -71,6 +81,8 @@ class HeatConduction final : public Module {
     std::string flux_sets;
     std::vector<double> flux_powers;  ///< [W], one per flux set
     std::string loss_set;
+    std::string conductivity_sets;            ///< comma-separated set names
+    std::vector<double> conductivity_factors;  ///< [-] one per conductivity set: lambda_i = f lambda
     double convection_coefficient = 0.0;  ///< h [W/(m^2 K)]
     double emissivity = 0.0;
     double ambient_temperature = 293.15;  ///< [K]
@@ -111,6 +123,8 @@ class HeatConduction final : public Module {
     double electrical = 0.0, joule = 0.0, flux = 0.0, lost = 0.0, fixed = 0.0;
   };
   const Energy& energy() const { return e_; }
+  /// Id of the particle that set the last stable_dt() (min C_i / rate_i), -1 if none.
+  Id stable_dt_particle() const { return limiting_id_; }
 
  private:
   /// The conduction network of the current geometry (cached while the geometry is unchanged).
@@ -126,7 +140,8 @@ class HeatConduction final : public Module {
   Params p_;
   BranchModel branch_;
   mutable Network net_;
-  std::vector<std::string> fixed_names_, flux_names_;
+  std::vector<std::string> fixed_names_, flux_names_, factor_names_;
+  mutable Id limiting_id_ = -1;
   LaplacianSolver solver_;
   Energy e_;
   bool restored_ = false;
