@@ -58,13 +58,18 @@ void TemperatureController::declare(Declarations& d) const {
 double TemperatureController::setpoint(double t) const { return thermal::table_temperature(p_.time, p_.temperature, t); }
 
 double TemperatureController::measured(const State& s) const {
+  // Capacity-weighted mean (the temperature of the set's heat content), arithmetic without capacities.
   const auto& f = s.particles.fields.data("set/" + p_.set);
   const auto& T = s.particles.fields.data("temperature");
-  double sum = 0.0;
-  std::size_t n = 0;
+  const std::vector<double>* C = s.particles.fields.has("heat_capacity") ? &s.particles.fields.data("heat_capacity") : nullptr;
+  double sum = 0.0, w = 0.0;
   for (std::size_t i = 0; i < f.size(); ++i)
-    if (f[i] > 0.5) { sum += T[i]; ++n; }
-  return n ? sum / static_cast<double>(n) : std::nan("");
+    if (f[i] > 0.5) {
+      const double c = C && (*C)[i] > 0.0 ? (*C)[i] : 1.0;
+      sum += c * T[i];
+      w += c;
+    }
+  return w > 0.0 ? sum / w : std::nan("");
 }
 
 void TemperatureController::bind(State& s) {

@@ -3,8 +3,11 @@
 /// a programmed temperature cycle (a spark-plasma-sintering machine's loop)
 ///
 /// Loop (physical time t from the stage start, one call per mechanical step):
-///   e(t)   = T_set(t) - T_c,   T_c = mean temperature of the particles of `set` at the end of the
-///            previous step (the thermocouple sample: a reads_previous of `temperature`)
+///   e(t)   = T_set(t) - T_c,   T_c = capacity-weighted mean temperature (heat_capacity field when
+///            present, else the plain mean) of the particles of `set` at the end of the previous
+///            step (the sensor sample: a reads_previous of `temperature`). In a loose powder single
+///            particles differ by tens of K (Joule heating concentrates where the current
+///            crowds), so the control set should hold many particles.
 ///   P(t)   = clamp(P_ff + k_p e + k_i I, 0, max_power),   I = integral of e dt
 ///            P_ff = feedforward_capacity x dT_set/dt (optional, J/K; 0 = off)
 ///   anti-windup: I is not integrated while P is clamped and e pushes further into the clamp
