@@ -112,12 +112,16 @@ def main():
             continue
         rows = stage_rows(rc, sc, st["name"])
         spread = [num(r["heat_temperature_max"]) - num(r["heat_temperature_min"]) for r in rows]
+        std = [num(r["heat_temperature_std"]) for r in rows]
+        iso = [num(r["heat_isolated_particles"]) for r in rows]
         ctrl_vs_mean = [num(r["controller_temperature"]) - num(r["heat_temperature_mean"]) for r in rows]
         res["control"][st["name"]] = {
             "max_abs_error_after_track_after_K": f["controller_max_error_after"],
             "final_setpoint_K": f["controller_setpoint"], "final_control_temperature_K": f["controller_temperature"],
             "max_temperature_spread_K": max(spread) if spread else None,
             "final_temperature_spread_K": spread[-1] if spread else None,
+            "max_temperature_std_K": max(std) if std else None, "final_temperature_std_K": std[-1] if std else None,
+            "final_isolated_particles": iso[-1] if iso else None,
             "max_control_minus_mean_K": max(ctrl_vs_mean, key=abs) if ctrl_vs_mean else None,
             "final_power_W": f["controller_power"], "final_voltage_V": f["controller_voltage"],
         }
@@ -163,9 +167,10 @@ def main():
     md += ["| stage | joule [J] | lost [J] | stored [J] | balance error |", "|---|---|---|---|---|"]
     for k, e in res["energy"].items():
         md.append(f"| {k} | {e['joule']:.4e} | {e['lost']:.4e} | {e['stored']:.4e} | {e['balance_error']:.2e} |")
-    md += ["", "| stage | max abs control error after track_after [K] | max spread T_max - T_min [K] | final spread [K] |", "|---|---|---|---|"]
+    md += ["", "| stage | max abs control error after track_after [K] | T std (capacity-weighted) max / final [K] | T_max - T_min final [K] | isolated particles | control - mean [K] |", "|---|---|---|---|---|---|"]
     for k, c in res["control"].items():
-        md.append(f"| {k} | {c['max_abs_error_after_track_after_K']:.3f} | {c['max_temperature_spread_K']:.2f} | {c['final_temperature_spread_K']:.2f} |")
+        md.append(f"| {k} | {c['max_abs_error_after_track_after_K']:.3f} | {c['max_temperature_std_K']:.2f} / {c['final_temperature_std_K']:.2f} | "
+                  f"{c['final_temperature_spread_K']:.1f} | {c['final_isolated_particles']:.0f} | {c['max_control_minus_mean_K']:.2f} |")
     d = res["densification"]
     md += ["", f"Final porosity: coupled {d['coupled_final_porosity']:.4f} at {d['coupled_cycle_time_s']:.1f} s of the cycle, "
                f"prescribed {d['prescribed_final_porosity']:.4f} at {d['prescribed_cycle_time_s']:.1f} s; largest porosity "

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "engine/core/error.hpp"
+#include "engine/core/format.hpp"
 #include "engine/graph/interaction_graph.hpp"
 #include "engine/state/state.hpp"
 #include "physics/electrical/conductance_kernels.hpp"
@@ -35,12 +36,7 @@ const std::vector<double>& set_field(const State& s, const std::string& name) {
   return s.particles.fields.data("set/" + name);
 }
 
-std::string num(double x) {
-  std::ostringstream os;
-  os.precision(10);
-  os << x;
-  return os.str();
-}
+std::string num(double x) { return format_number(x); }
 }  // namespace
 
 ParamSpec<HeatConduction::Params> HeatConduction::spec() {
@@ -260,6 +256,8 @@ void HeatConduction::bind(State& s) {
   auto& carry = p.fields.data("temperature_carry");
   std::fill(carry.begin(), carry.end(), 0.0);
   e_ = Energy{};
+  // The stage's first force pass sees the radii of the initial temperatures.
+  if (expands) thermal::apply_expansion(s, p_.expansion_coefficient, p_.reference_temperature, T);
 }
 
 double HeatConduction::stable_dt(const State& s) const {
@@ -427,7 +425,8 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
 std::vector<std::string> HeatConduction::columns() const {
   return {"heat_temperature_mean", "heat_temperature_min", "heat_temperature_max", "heat_electrical_energy",
           "heat_joule_energy", "heat_flux_energy", "heat_lost_energy", "heat_fixed_energy", "heat_stored_energy",
-          "heat_balance_error", "heat_stable_dt", "heat_capacity_total", "heat_capacity_ratio"};
+          "heat_balance_error", "heat_stable_dt", "heat_capacity_total", "heat_capacity_ratio", "heat_temperature_std",
+          "heat_isolated_particles"};
 }
 
 std::vector<double> HeatConduction::column_values(const State& s) const {
@@ -444,11 +443,18 @@ std::vector<double> HeatConduction::column_values(const State& s) const {
     tmax = std::max(tmax, T[i]);
     stored += C[i] * (T[i] - T0[i]);
   }
+  const double mean = ct / csum;
+  double var = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) var += C[i] * (T[i] - mean) * (T[i] - mean);
+  const Network& n = network(s);
+  double isolated = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (!(n.degree[i] > 0.0)) isolated += 1.0;
   const double expected = e_.joule + e_.flux - e_.lost - e_.fixed;
   const double scale = std::abs(e_.joule) + std::abs(e_.flux) + std::abs(e_.lost) + std::abs(e_.fixed);
   const double err = scale > 0.0 ? std::abs(stored - expected) / scale : std::abs(stored);
   return {ct / csum, tmin, tmax, e_.electrical, e_.joule, e_.flux, e_.lost, e_.fixed, stored, err,
-          stable_dt(s), csum, capacity_ratio_};
+          stable_dt(s), csum, capacity_ratio_, std::sqrt(var / csum), isolated};
 }
 
 void HeatConduction::visit(Archive& ar, const std::string& prefix) {

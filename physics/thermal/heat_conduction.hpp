@@ -44,6 +44,9 @@
 /// Thermal expansion (expansion_coefficient != 0): r_i = r_ref,i (1 + alpha (T_i - T_0)) after
 /// every call (physics/thermal/expansion.hpp).
 ///
+/// Temperature columns: heat_temperature_mean (capacity-weighted), _min, _max, _std
+/// (capacity-weighted standard deviation), heat_isolated_particles (no conducting branch: they
+/// exchange heat only through their sources and losses).
 /// Fields: temperature [K] (written), heat_capacity [J/K] (computed at the stage start),
 /// temperature_initial [K] (the stage-start temperatures, for the stored heat), temperature_carry
 /// [K] (explicit: the round-off of the compensated update T += dT, carried to the next call).

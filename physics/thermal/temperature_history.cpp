@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "engine/core/error.hpp"
+#include "engine/core/format.hpp"
 
 namespace sparkdem::physics {
 
@@ -20,12 +21,7 @@ double table_temperature(const std::vector<double>& t, const std::vector<double>
 }  // namespace thermal
 
 namespace {
-std::string num(double x) {
-  std::ostringstream os;
-  os.precision(10);
-  os << x;
-  return os.str();
-}
+std::string num(double x) { return format_number(x); }
 }  // namespace
 
 ParamSpec<TemperatureHistory::Params> TemperatureHistory::spec() {
