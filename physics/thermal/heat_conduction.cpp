@@ -69,6 +69,8 @@ ParamSpec<HeatConduction::Params> HeatConduction::spec() {
   s.add("emissivity", &P::emissivity).unit("1").range(0.0, 1.0).doc("emissivity of the radiative loss");
   s.add("ambient_temperature", &P::ambient_temperature).unit("K").positive().doc("T_a of the losses");
   s.add("loss_area_fraction", &P::loss_area_fraction).unit("1").range(0.0, 1.0).doc("exposed area of a loss particle / 4 pi r^2");
+  s.add("report_sets", &P::report_sets)
+      .doc("comma-separated particle sets: one column heat_temperature_mean_<set> each, the capacity-weighted mean temperature of the set");
   s.add("scheme", &P::scheme).choices({"explicit", "implicit"}).doc("forward Euler on its own stable step, or backward Euler (sparse LDL^T)");
   s.add("safety", &P::safety).unit("1").range(0.0, 1.0).doc("explicit: fraction of the Gershgorin bound min C_i / sum_j G_ij used as the stable step");
   s.add("solver", &P::solver).choices({"direct", "cg_ic", "cg_jacobi"}).doc("implicit: linear solver");
@@ -97,6 +99,11 @@ HeatConduction::HeatConduction(const Params& p) : p_(p) {
   for (std::size_t k = 0; k < p.conductivity_factors.size(); ++k)
     if (!(p.conductivity_factors[k] > 0.0) || !std::isfinite(p.conductivity_factors[k]))
       d.push_back({"/conductivity_factors/" + std::to_string(k), "expected a finite factor > 0, found " + num(p.conductivity_factors[k])});
+  report_names_ = split_names(p.report_sets);
+  for (std::size_t k = 0; k < report_names_.size(); ++k)
+    for (std::size_t j = 0; j < k; ++j)
+      if (report_names_[j] == report_names_[k])
+        d.push_back({"/report_sets", "set '" + report_names_[k] + "' is listed twice"});
   if (fixed_names_.size() != p.fixed_temperatures.size())
     d.push_back({"/fixed_temperatures", "expected one temperature per fixed set (" + std::to_string(fixed_names_.size()) +
                                             "), found " + std::to_string(p.fixed_temperatures.size())});
@@ -210,6 +217,7 @@ void HeatConduction::bind(State& s) {
   for (const auto& n : fixed_names_) (void)set_field(s, n);
   for (const auto& n : flux_names_) (void)set_field(s, n);
   for (const auto& n : factor_names_) (void)set_field(s, n);
+  for (const auto& n : report_names_) (void)set_field(s, n);
   if (!p_.loss_set.empty() && p_.loss_set != "all") (void)set_field(s, p_.loss_set);
   if (restored_) {  // resumed mid-stage: temperatures, capacities and energies come from the checkpoint
     restored_ = false;
@@ -423,10 +431,12 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
 }
 
 std::vector<std::string> HeatConduction::columns() const {
-  return {"heat_temperature_mean", "heat_temperature_min", "heat_temperature_max", "heat_electrical_energy",
-          "heat_joule_energy", "heat_flux_energy", "heat_lost_energy", "heat_fixed_energy", "heat_stored_energy",
-          "heat_balance_error", "heat_stable_dt", "heat_capacity_total", "heat_capacity_ratio", "heat_temperature_std",
-          "heat_isolated_particles"};
+  std::vector<std::string> c = {"heat_temperature_mean", "heat_temperature_min", "heat_temperature_max", "heat_electrical_energy",
+                                "heat_joule_energy", "heat_flux_energy", "heat_lost_energy", "heat_fixed_energy", "heat_stored_energy",
+                                "heat_balance_error", "heat_stable_dt", "heat_capacity_total", "heat_capacity_ratio",
+                                "heat_temperature_std", "heat_isolated_particles"};
+  for (const auto& n : report_names_) c.push_back("heat_temperature_mean_" + n);
+  return c;
 }
 
 std::vector<double> HeatConduction::column_values(const State& s) const {
@@ -453,8 +463,19 @@ std::vector<double> HeatConduction::column_values(const State& s) const {
   const double expected = e_.joule + e_.flux - e_.lost - e_.fixed;
   const double scale = std::abs(e_.joule) + std::abs(e_.flux) + std::abs(e_.lost) + std::abs(e_.fixed);
   const double err = scale > 0.0 ? std::abs(stored - expected) / scale : std::abs(stored);
-  return {ct / csum, tmin, tmax, e_.electrical, e_.joule, e_.flux, e_.lost, e_.fixed, stored, err,
-          stable_dt(s), csum, capacity_ratio_, std::sqrt(var / csum), isolated};
+  std::vector<double> v = {ct / csum, tmin, tmax, e_.electrical, e_.joule, e_.flux, e_.lost, e_.fixed, stored, err,
+                           stable_dt(s), csum, capacity_ratio_, std::sqrt(var / csum), isolated};
+  for (const auto& name : report_names_) {  // capacity-weighted mean temperature of each reported set
+    const auto& f = set_field(s, name);
+    double cs = 0.0, cts = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (f[i] > 0.5) {
+        cs += C[i];
+        cts += C[i] * T[i];
+      }
+    v.push_back(cs > 0.0 ? cts / cs : kNaN);
+  }
+  return v;
 }
 
 void HeatConduction::visit(Archive& ar, const std::string& prefix) {

@@ -56,6 +56,10 @@
 /// (sum C_i (T_i - T_i,0)); heat_balance_error = |stored - (joule + flux - lost - fixed)| /
 /// (joule + flux + lost + |fixed|) closes to round-off with either scheme (both conserve energy
 /// exactly: the conduction fluxes cancel pairwise).
+/// Set means (report_sets = "a,b"): one column heat_temperature_mean_<set> per set, the
+/// capacity-weighted mean temperature sum_{i in set} C_i T_i / sum_{i in set} C_i [K] of the
+/// particles in the set at the row (NaN when the set is empty); e.g. the slab-mean temperature
+/// of a notch (configs/joule_notch.json).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -90,6 +94,7 @@ class HeatConduction final : public Module {
     double emissivity = 0.0;
     double ambient_temperature = 293.15;  ///< [K]
     double loss_area_fraction = 0.5;
+    std::string report_sets;  ///< comma-separated sets: columns heat_temperature_mean_<set>
     std::string scheme = "explicit";
     double safety = 0.9;
     std::string solver = "direct";
@@ -143,7 +148,7 @@ class HeatConduction final : public Module {
   Params p_;
   BranchModel branch_;
   mutable Network net_;
-  std::vector<std::string> fixed_names_, flux_names_, factor_names_;
+  std::vector<std::string> fixed_names_, flux_names_, factor_names_, report_names_;
   mutable Id limiting_id_ = -1;
   LaplacianSolver solver_;
   Energy e_;

@@ -259,3 +259,71 @@ TEST_CASE("heat_conduction: an explicit step above the stable one is refused; wi
     CHECK(T <= 500.0 + 1e-9);
   }
 }
+
+TEST_CASE("heat_conduction: report_sets gives the capacity-weighted mean temperature of each set", "[thermal][heat]") {
+  // Invariants: the column equals sum_{i in set} C_i T_i / sum C_i computed from the fields (to
+  // round-off); a set and its complement recombine to heat_temperature_mean; an empty set is NaN;
+  // a set that is not in the stage is refused at bind.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const double L = 1.2e-3;
+  State s;
+  for (int k = 0; k < 300; ++k) test::add_sphere(s, Vec3(U(rng), U(rng), U(rng)) * L, 1.5 * (40e-6 + 20e-6 * U(rng)), kRho);
+  std::vector<double> T0(s.particles.size());
+  for (std::size_t i = 0; i < T0.size(); ++i) T0[i] = 293.15 + 100.0 * s.particles.position[i].z() / L;  // a gradient
+  set_temperatures(s, T0);
+  SetSelector lower, upper, none;
+  lower.kind = upper.kind = none.kind = SetSelector::Kind::Box;
+  lower.lo = Vec3(-1, -1, -1); lower.hi = Vec3(1, 1, 0.5 * L);
+  upper.lo = Vec3(-1, -1, 0.5 * L); upper.hi = Vec3(1, 1, 1);
+  none.lo = Vec3(5, 5, 5); none.hi = Vec3(6, 6, 6);
+  assign_set(s, "lower", lower);
+  assign_set(s, "upper", upper);
+  assign_set(s, "nothing", none);
+  HeatConduction::Params hp = heat_params("explicit");
+  hp.capacity = "volume_fraction";  // unequal capacities: the weighting matters
+  hp.report_sets = "lower, upper,nothing";
+  HeatConduction heat(hp);
+  ContactModelT<HertzMindlin> law{HertzMindlin::Params{}};
+  Simulation sim(s, law);
+  sim.add_module(&heat);
+  test::NullObserver obs;
+  sim.run_stage(frozen(1e-4, 5), obs);
+  const auto cols = heat.columns();
+  const auto vals = heat.column_values(s);
+  REQUIRE(cols.size() == vals.size());
+  auto col = [&](const std::string& c) {
+    const auto it = std::find(cols.begin(), cols.end(), c);
+    REQUIRE(it != cols.end());
+    return vals[it - cols.begin()];
+  };
+  const auto& T = s.particles.fields.data("temperature");
+  const auto& C = s.particles.fields.data("heat_capacity");
+  const auto& in_lower = s.particles.fields.data("set/lower");
+  double cl = 0.0, ctl = 0.0, cu = 0.0, ctu = 0.0;
+  std::size_t nl = 0;
+  for (std::size_t i = 0; i < T.size(); ++i) {
+    if (in_lower[i] > 0.5) { cl += C[i]; ctl += C[i] * T[i]; ++nl; }
+    else { cu += C[i]; ctu += C[i] * T[i]; }
+  }
+  REQUIRE(nl > 50);
+  REQUIRE(nl < T.size() - 50);
+  const double ml = col("heat_temperature_mean_lower"), mu = col("heat_temperature_mean_upper");
+  INFO("lower " << ml << " K, upper " << mu << " K, all " << col("heat_temperature_mean") << " K");
+  CHECK(test::relative_error(ml, ctl / cl) <= 1e-13);
+  CHECK(test::relative_error(mu, ctu / cu) <= 1e-13);
+  CHECK(mu - ml > 20.0);  // the gradient is still there after 5 steps (conduction time ~ L^2/D ~ 0.4 s)
+  CHECK(test::relative_error((cl * ml + cu * mu) / (cl + cu), col("heat_temperature_mean")) <= 1e-13);
+  CHECK(std::isnan(col("heat_temperature_mean_nothing")));
+
+  HeatConduction::Params bad = hp;
+  bad.report_sets = "lower,missing";
+  HeatConduction heat_bad(bad);
+  State s2 = s;
+  ContactModelT<HertzMindlin> law2{HertzMindlin::Params{}};
+  Simulation sim2(s2, law2);
+  sim2.add_module(&heat_bad);
+  CHECK_THROWS_WITH(sim2.run_stage(frozen(1e-4, 1), obs), Catch::Contains("'missing' is not a particle set"));
+  hp.report_sets = "lower,lower";
+  CHECK_THROWS_WITH(HeatConduction(hp), Catch::Contains("listed twice"));
+}
