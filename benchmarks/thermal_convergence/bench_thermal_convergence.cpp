@@ -54,42 +54,30 @@ struct Row {
   double error = 0.0, ref_excursion = 0.0, order = NAN, wall = 0.0;
 };
 
-StageConfig frozen(double dt, Step steps) {
-  StageConfig c = test::stage(dt, steps);
-  c.mechanics = false;
-  return c;
+/// Build the contact table (a zero-step stage), then run n frozen steps of dt; the wall time of
+/// the n steps [s].
+double timed_run(Simulation& sim, double dt, Step n) {
+  test::NullObserver obs;
+  sim.run_stage(test::frozen_stage(dt, 0), obs);
+  const auto t0 = std::chrono::steady_clock::now();
+  sim.run_stage(test::frozen_stage(dt, n), obs);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 // ---------------------------------------------------------------------------------- stiff
-HeatConduction::Params stiff_params(const std::string& scheme) {
-  HeatConduction::Params p;
-  p.model = "batchelor_obrien";
-  p.conductivity = StiffScene::lambda;
-  p.density = StiffScene::rho;
-  p.specific_heat = StiffScene::c;
-  p.scheme = scheme;
-  p.conductivity_sets = "insulator";
-  p.conductivity_factors = {StiffScene::factor};
-  return p;
-}
-
 Row run_stiff(const std::string& scheme, double factor, double s_exp, double t_end) {
   State s;
   StiffScene::build(s);
-  HeatConduction heat(stiff_params(scheme));
+  HeatConduction heat(test::StiffScene::heat_params(scheme));
   Clock one;
   one.kind = Clock::Kind::EveryStep;
   heat.set_clock(one);
   ContactModelT<HertzMindlin> law{HertzMindlin::Params{}};
   Simulation sim(s, law);
   sim.add_module(&heat);
-  test::NullObserver obs;
   const double dt = factor * s_exp * (scheme == "explicit" ? 1.0 - 1e-12 : 1.0);
   const Step n = static_cast<Step>(std::llround(t_end / (factor * s_exp)));
-  sim.run_stage(frozen(dt, 0), obs);
-  const auto t0 = std::chrono::steady_clock::now();
-  sim.run_stage(frozen(dt, n), obs);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double wall = timed_run(sim, dt, n);
   const test::ModalSolution modal(StiffScene::laplacian(), StiffScene::capacities());
   const Eigen::VectorXd ref = modal.exact(StiffScene::initial(), static_cast<double>(n) * dt);
   const auto& T = s.particles.fields.data("temperature");
@@ -179,13 +167,9 @@ Row run_chain(const std::string& scheme, double factor, double s_exp, double t_e
   Simulation sim(s, law);
   sim.add_module(&el);
   sim.add_module(&heat);
-  test::NullObserver obs;
   const double dt = factor * s_exp * (scheme == "explicit" ? 1.0 - 1e-12 : 1.0);
   const Step n = static_cast<Step>(std::llround(t_end / (factor * s_exp)));
-  sim.run_stage(frozen(dt, 0), obs);
-  const auto t0 = std::chrono::steady_clock::now();
-  sim.run_stage(frozen(dt, n), obs);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double wall = timed_run(sim, dt, n);
   const Eigen::VectorXd ref = chain_reference(static_cast<double>(n) * dt);
   const auto& T = s.particles.fields.data("temperature");
   Row r{"chain", scheme, factor, dt, static_cast<double>(n) * dt, n};

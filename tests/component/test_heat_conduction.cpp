@@ -55,12 +55,6 @@ void set_temperatures(State& s, const std::vector<double>& T) {
   s.particles.fields.data("temperature") = T;
 }
 
-StageConfig frozen(double dt, Step steps) {
-  StageConfig c = test::stage(dt, steps);
-  c.mechanics = false;
-  return c;
-}
-
 }  // namespace
 
 TEST_CASE("heat_conduction: two spheres relax exponentially with tau = C1 C2 / (G (C1 + C2))", "[thermal][heat]") {
@@ -86,10 +80,10 @@ TEST_CASE("heat_conduction: two spheres relax exponentially with tau = C1 C2 / (
       // The stable step of the explicit scheme is safety x min C_i / G (Gershgorin).
       test::NullObserver obs;
       if (scheme == "explicit") {
-        sim.run_stage(frozen(dt, 0), obs);  // builds the contact table of the packing
+        sim.run_stage(test::frozen_stage(dt, 0), obs);  // builds the contact table of the packing
         CHECK(test::relative_error(heat.stable_dt(s), 0.9 * std::min(C1, C2) / G) <= 1e-12);
       }
-      sim.run_stage(frozen(dt, n), obs);
+      sim.run_stage(test::frozen_stage(dt, n), obs);
       const auto& T = s.particles.fields.data("temperature");
       const double dT = T[0] - T[1];
       const double discrete = scheme == "explicit" ? 100.0 * std::pow(1.0 - dt / tau, n) : 100.0 * std::pow(1.0 / (1.0 + dt / tau), n);
@@ -139,7 +133,7 @@ TEST_CASE("heat_conduction: a chain with fixed ends and uniform Joule heating re
       const double L = (n - 1) * l, D = kLambda / (kRho * kC);
       const bool impl = scheme == "implicit";
       test::NullObserver obs;
-      sim.run_stage(frozen(impl ? 0.5 * L * L / D : 0.05 * L * L / D, impl ? 40 : 200), obs);
+      sim.run_stage(test::frozen_stage(impl ? 0.5 * L * L / D : 0.05 * L * L / D, impl ? 40 : 200), obs);
       // Closed form: each interior node receives P = I^2 R_b (two half branches), R_b = rho_e l / S.
       const double S = 4.0 * r * r, Rb = 0.73e-6 * l / S, I = ep.voltage / ((n - 1) * Rb);
       const double P = I * I * Rb;
@@ -199,7 +193,7 @@ TEST_CASE("heat_conduction: adiabatic Joule heating of a random packing stores e
       sim.add_module(&el);
       sim.add_module(&heat);
       test::NullObserver obs;
-      sim.run_stage(frozen(1e-3, 50), obs);
+      sim.run_stage(test::frozen_stage(1e-3, 50), obs);
       const auto cols = heat.columns();
       const auto vals = heat.column_values(s);
       auto col = [&](const char* c) { return vals[std::find(cols.begin(), cols.end(), c) - cols.begin()]; };
@@ -231,11 +225,11 @@ TEST_CASE("heat_conduction: an explicit step above the stable one is refused; wi
   Simulation sim(s, law);
   sim.add_module(&heat);
   test::NullObserver obs;
-  sim.run_stage(frozen(1e-9, 0), obs);  // builds the contact table of the packing
+  sim.run_stage(test::frozen_stage(1e-9, 0), obs);  // builds the contact table of the packing
   const double stable = heat.stable_dt(s);
   REQUIRE(std::isfinite(stable));
-  CHECK_THROWS_AS(sim.run_stage(frozen(3.0 * stable / 0.9, 50), obs), SetupError);
-  StageConfig over = frozen(3.0 * stable / 0.9, 400);
+  CHECK_THROWS_AS(sim.run_stage(test::frozen_stage(3.0 * stable / 0.9, 50), obs), SetupError);
+  StageConfig over = test::frozen_stage(3.0 * stable / 0.9, 400);
   over.allow_unstable_dt = true;
   try {
     sim.run_stage(over, obs);
@@ -253,7 +247,7 @@ TEST_CASE("heat_conduction: an explicit step above the stable one is refused; wi
   heat2.set_clock(one);
   Simulation sim2(s2, law);
   sim2.add_module(&heat2);
-  sim2.run_stage(frozen(stable, 400), obs);
+  sim2.run_stage(test::frozen_stage(stable, 400), obs);
   for (double T : s2.particles.fields.data("temperature")) {
     CHECK(T >= 300.0 - 1e-9);
     CHECK(T <= 500.0 + 1e-9);
@@ -288,7 +282,7 @@ TEST_CASE("heat_conduction: report_sets gives the capacity-weighted mean tempera
   Simulation sim(s, law);
   sim.add_module(&heat);
   test::NullObserver obs;
-  sim.run_stage(frozen(1e-4, 5), obs);
+  sim.run_stage(test::frozen_stage(1e-4, 5), obs);
   const auto cols = heat.columns();
   const auto vals = heat.column_values(s);
   REQUIRE(cols.size() == vals.size());
@@ -323,7 +317,7 @@ TEST_CASE("heat_conduction: report_sets gives the capacity-weighted mean tempera
   ContactModelT<HertzMindlin> law2{HertzMindlin::Params{}};
   Simulation sim2(s2, law2);
   sim2.add_module(&heat_bad);
-  CHECK_THROWS_WITH(sim2.run_stage(frozen(1e-4, 1), obs), Catch::Contains("'missing' is not a particle set"));
+  CHECK_THROWS_WITH(sim2.run_stage(test::frozen_stage(1e-4, 1), obs), Catch::Contains("'missing' is not a particle set"));
   hp.report_sets = "lower,lower";
   CHECK_THROWS_WITH(HeatConduction(hp), Catch::Contains("listed twice"));
 }

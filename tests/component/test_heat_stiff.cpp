@@ -28,25 +28,6 @@ using test::StiffScene;
 
 namespace {
 
-HeatConduction::Params stiff_params(const std::string& scheme) {
-  HeatConduction::Params p;
-  p.model = "batchelor_obrien";
-  p.contact_radius = "hertz";
-  p.conductivity = StiffScene::lambda;
-  p.density = StiffScene::rho;
-  p.specific_heat = StiffScene::c;
-  p.scheme = scheme;
-  p.conductivity_sets = "insulator";
-  p.conductivity_factors = {StiffScene::factor};
-  return p;
-}
-
-StageConfig frozen(double dt, Step steps) {
-  StageConfig c = test::stage(dt, steps);
-  c.mechanics = false;
-  return c;
-}
-
 Eigen::VectorXd temperatures(const State& s) {
   const auto& T = s.particles.fields.data("temperature");
   return Eigen::Map<const Eigen::VectorXd>(T.data(), static_cast<Eigen::Index>(T.size()));
@@ -62,17 +43,17 @@ struct Run {
 Run run_stiff(const std::string& scheme, double dt, Step steps, const Clock* clock = nullptr) {
   State s;
   StiffScene::build(s);
-  HeatConduction heat(stiff_params(scheme));
+  HeatConduction heat(test::StiffScene::heat_params(scheme));
   if (clock) heat.set_clock(*clock);
   ContactModelT<HertzMindlin> law{HertzMindlin::Params{}};
   Simulation sim(s, law);
   sim.add_module(&heat);
   test::NullObserver obs;
-  sim.run_stage(frozen(dt, 0), obs);  // contact table of the packing
+  sim.run_stage(test::frozen_stage(dt, 0), obs);  // contact table of the packing
   Run r;
   r.stable = heat.stable_dt(s);
   r.limiting = heat.stable_dt_particle();
-  r.res = sim.run_stage(frozen(dt, steps), obs);
+  r.res = sim.run_stage(test::frozen_stage(dt, steps), obs);
   r.T = temperatures(s);
   return r;
 }
@@ -95,7 +76,7 @@ TEST_CASE("heat_conduction: conductivity factors put the two sides of a branch i
       sel.kind = SetSelector::Kind::Ids;
       sel.ids = {1};
       assign_set(s, "other", sel);
-      HeatConduction::Params hp = stiff_params("implicit");
+      HeatConduction::Params hp = test::StiffScene::heat_params("implicit");
       hp.scheme = "explicit";
       hp.model = model;
       hp.alpha_constant = 4.0;  // transmission surface S = 4 r^2
@@ -106,7 +87,7 @@ TEST_CASE("heat_conduction: conductivity factors put the two sides of a branch i
       Simulation sim(s, law);
       sim.add_module(&heat);
       test::NullObserver obs;
-      sim.run_stage(frozen(1e-6, 0), obs);
+      sim.run_stage(test::frozen_stage(1e-6, 0), obs);
       const double lam = StiffScene::lambda, harmonic = 2.0 * lam * f * lam / (lam + f * lam);
       const double G = model == "batchelor_obrien" ? 2.0 * harmonic * std::sqrt(0.5 * r * overlap)
                                                     : harmonic * 4.0 * r * r / (2 * r - overlap);
@@ -114,7 +95,7 @@ TEST_CASE("heat_conduction: conductivity factors put the two sides of a branch i
     }
   }
   SECTION("one factor per set, positive") {
-    HeatConduction::Params hp = stiff_params("explicit");
+    HeatConduction::Params hp = test::StiffScene::heat_params("explicit");
     hp.conductivity_factors = {};
     CHECK_THROWS_AS(HeatConduction(hp), ConfigError);
     hp.conductivity_factors = {0.0};
@@ -197,16 +178,16 @@ TEST_CASE("heat_conduction: on the stiff network an explicit step above the boun
   one.kind = Clock::Kind::EveryStep;
   State s;
   StiffScene::build(s);
-  HeatConduction heat(stiff_params("explicit"));
+  HeatConduction heat(test::StiffScene::heat_params("explicit"));
   heat.set_clock(one);  // a fixed clock: the stage step is the module's step
   ContactModelT<HertzMindlin> law{HertzMindlin::Params{}};
   Simulation sim(s, law);
   sim.add_module(&heat);
   test::NullObserver obs;
-  sim.run_stage(frozen(1e-9, 0), obs);
+  sim.run_stage(test::frozen_stage(1e-9, 0), obs);
   const double H = 1000.0 * s_exp;
   try {
-    sim.run_stage(frozen(H, 5), obs);
+    sim.run_stage(test::frozen_stage(H, 5), obs);
     FAIL("the step above the stable one was accepted");
   } catch (const SetupError& e) {
     const std::string what = e.what();
@@ -217,8 +198,8 @@ TEST_CASE("heat_conduction: on the stiff network an explicit step above the boun
     CHECK(what.find(std::string("above its stable step ") + buf) != std::string::npos);
   }
   // 1.5 x the stable step (1.35 x the Gershgorin bound): refused too.
-  CHECK_THROWS_AS(sim.run_stage(frozen(1.5 * s_exp, 5), obs), SetupError);
-  StageConfig over = frozen(2.5 * s_exp, 200);
+  CHECK_THROWS_AS(sim.run_stage(test::frozen_stage(1.5 * s_exp, 5), obs), SetupError);
+  StageConfig over = test::frozen_stage(2.5 * s_exp, 200);
   over.allow_unstable_dt = true;
   try {
     sim.run_stage(over, obs);

@@ -53,6 +53,13 @@ inline StageConfig stage(double dt, Step steps, double skin = 0.0) {
   return c;
 }
 
+/// The same with the mechanics frozen (only the coupling modules run; StageConfig::mechanics).
+inline StageConfig frozen_stage(double dt, Step steps) {
+  StageConfig c = stage(dt, steps);
+  c.mechanics = false;
+  return c;
+}
+
 /// Observer that ignores everything.
 class NullObserver : public Observer {};
 

@@ -19,10 +19,12 @@
 #include <cmath>
 #include <functional>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
+#include "physics/thermal/heat_conduction.hpp"
 #include "tests/support/scene.hpp"
 
 namespace sparkdem::test {
@@ -101,6 +103,20 @@ struct StiffScene {
   static constexpr double factor = 1.0 / (2e6 - 1.0);     // insulator conductivity factor [-]
   /// Local indices (and ids) in the order added.
   enum : int { L0 = 0, L1 = 1, L2 = 2, L3 = 3, T = 4, N = 5 };
+
+  /// heat_conduction parameters of the scene (Batchelor-O'Brien branches, the insulator's factor).
+  static physics::HeatConduction::Params heat_params(const std::string& scheme) {
+    physics::HeatConduction::Params p;
+    p.model = "batchelor_obrien";
+    p.contact_radius = "hertz";
+    p.conductivity = lambda;
+    p.density = rho;
+    p.specific_heat = c;
+    p.scheme = scheme;
+    p.conductivity_sets = "insulator";
+    p.conductivity_factors = {factor};
+    return p;
+  }
 
   static void build(State& s) {
     const double x1 = 2 * R - d_ll;
