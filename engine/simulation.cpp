@@ -52,10 +52,16 @@ double die_area(const std::vector<Wall>& walls) {
 
 }  // namespace
 
+std::vector<std::string> prescribed_set_columns(const std::string& name) {
+  std::vector<std::string> c;
+  for (const char* x : {"_count", "_fx", "_fy", "_fz", "_tx", "_ty", "_tz", "_angle"}) c.push_back("set_" + name + x);
+  return c;
+}
+
 std::vector<std::string> builtin_columns(const State& s) {
   std::vector<std::string> c = {"step", "time", "physical_time", "stage", "particles", "kinetic_energy",
                                 "kinetic_energy_per_mass", "max_speed", "contacts", "coordination", "max_overlap_ratio"};
-  if (s.bonds_active) c.insert(c.end(), {"bonds", "bonds_broken"});
+  if (s.bonds_active) c.insert(c.end(), {"bonds", "bonds_broken", "bonds_elastic_energy", "bonds_max_failure_stress"});
   for (const auto& w : s.walls) {
     c.push_back("wall_" + w.name + "_offset");
     c.push_back("wall_" + w.name + "_normal_force");
@@ -66,7 +72,7 @@ std::vector<std::string> builtin_columns(const State& s) {
   return c;
 }
 
-std::vector<double> builtin_values(const State& s) {
+std::vector<double> builtin_values(const State& s, const BondModel* bonds) {
   const auto& p = s.particles;
   double ke = 0.0, m = 0.0, vmax2 = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -96,6 +102,8 @@ std::vector<double> builtin_values(const State& s) {
   if (s.bonds_active) {
     v.push_back(static_cast<double>(s.bonds.intact_count()));
     v.push_back(static_cast<double>(s.bonds.broken_count()));
+    v.push_back(bonds ? bonds->elastic_energy(p, s.bonds) : std::numeric_limits<double>::quiet_NaN());
+    v.push_back(bonds ? bonds->max_failure_stress(p, s.bonds) : std::numeric_limits<double>::quiet_NaN());
   }
   for (const auto& w : s.walls) {
     v.push_back(w.u);
@@ -109,16 +117,23 @@ std::vector<double> builtin_values(const State& s) {
 
 void Simulation::sample(std::vector<std::string>& cols, std::vector<double>& vals) const {
   cols = builtin_columns(s_);
-  vals = builtin_values(s_);
-  for (const auto& [name, v] : prescribed_) {
-    (void)v;
+  vals = builtin_values(s_, bond_law_);
+  const double t_stage = s_.time - s_.stage_t0;
+  for (const auto& [name, m] : prescribed_) {
     const auto& f = s_.particles.fields.data("set/" + name);
-    Vec3 F = Vec3::Zero();
+    const auto& p = s_.particles;
+    const Vec3 c = m.center + t_stage * m.velocity;
+    Vec3 F = Vec3::Zero(), T = Vec3::Zero();
     double n = 0.0;
     for (std::size_t i = 0; i < f.size(); ++i)
-      if (f[i] > 0.5) { F += s_.particles.force[i]; n += 1.0; }
-    cols.insert(cols.end(), {"set_" + name + "_count", "set_" + name + "_fx", "set_" + name + "_fy", "set_" + name + "_fz"});
-    vals.insert(vals.end(), {n, F[0], F[1], F[2]});
+      if (f[i] > 0.5) {
+        F += p.force[i];
+        T += (p.position[i] - c).cross(p.force[i]) + p.torque[i];
+        n += 1.0;
+      }
+    const auto names = prescribed_set_columns(name);
+    cols.insert(cols.end(), names.begin(), names.end());
+    vals.insert(vals.end(), {n, F[0], F[1], F[2], T[0], T[1], T[2], m.angular_velocity.norm() * t_stage});
   }
   for (const Monitor* m : monitors_) {
     auto c = m->columns(s_);
@@ -254,6 +269,25 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
   s_.verlet.mark_built(p.position, p.radius, wall_u);
 }
 
+void Simulation::rotate_prescribed(double dt, double t_stage_new) {
+  auto& p = s_.particles;
+  for (const auto& [name, m] : prescribed_) {
+    if (!m.rotates()) continue;
+    const double w = m.angular_velocity.norm();
+    const Quat dq(Eigen::AngleAxisd(w * dt, m.angular_velocity / w));
+    const Eigen::Matrix3d R = dq.toRotationMatrix();
+    const Vec3 c_old = m.center + (t_stage_new - dt) * m.velocity, c_new = m.center + t_stage_new * m.velocity;
+    const auto& f = p.fields.data("set/" + name);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (f[i] <= 0.5) continue;
+      p.position[i] = c_new + R * (p.position[i] - c_old);
+      p.orientation[i] = (dq * p.orientation[i]).normalized();
+      p.velocity[i] = m.velocity + m.angular_velocity.cross(p.position[i] - c_new);
+      p.omega[i] = m.angular_velocity;
+    }
+  }
+}
+
 void Simulation::zero_forces() {
   auto& p = s_.particles;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
@@ -269,9 +303,11 @@ void Simulation::pair_forces(double dt) {
 void Simulation::bond_forces(double dt, Step step) {
   if (!bond_law_) return;
   s_.bonds.prepare(s_.particles.size());
-  const std::vector<std::size_t> broke = bond_law_->pass(s_.particles, s_.bonds, dt);
+  const std::vector<BondFailure> broke = bond_law_->pass(s_.particles, s_.bonds, dt);
   s_.bonds.gather(s_.particles.force, s_.particles.torque);
-  for (const std::size_t r : broke) break_bond(s_, r, step);
+  // The time at the end of the step being computed (the set-up pass computes step s_.step).
+  const double t = s_.time + static_cast<double>(step - s_.step) * dt;
+  for (const BondFailure& f : broke) break_bond(s_, f.row, step, t, f.mode);
 }
 
 void Simulation::wall_forces(double dt) {
@@ -427,14 +463,20 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   }
   // Prescribed-velocity sets: not integrated, moved with their velocity (see verlet_first_half).
   prescribed_ = cfg.prescribed_sets;
-  for (const auto& [name, v] : cfg.prescribed_sets) {
+  std::vector<std::uint8_t> claimed(p.size(), 0);
+  for (const auto& [name, m] : cfg.prescribed_sets) {
     if (!s_.particles.fields.has("set/" + name))
       throw SetupError("stage '" + cfg.name + "': particle set '" + name + "' is not defined");
     const auto& f = s_.particles.fields.data("set/" + name);
     for (std::size_t i = 0; i < p.size(); ++i)
       if (f[i] > 0.5) {
-        p.fixed[i] = 1;
-        if (!resume) { p.velocity[i] = v; p.omega[i].setZero(); }
+        if (claimed[i]++) throw SetupError("stage '" + cfg.name + "': particle id " + std::to_string(p.id[i]) +
+                                         " belongs to two prescribed sets (" + name + " and another)");
+        p.fixed[i] = m.rotates() ? 2 : 1;
+        if (!resume) {
+          p.velocity[i] = m.velocity + m.angular_velocity.cross(p.position[i] - m.center);
+          p.omega[i] = m.angular_velocity;
+        }
       }
   }
   if (!resume) {
@@ -605,7 +647,10 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     const double t_new = static_cast<double>(k + 1) * dt_used;  // stage time at the end of the step
     for (const PlanItem& it : plan_.items) {
       switch (it.kind) {
-        case PlanItem::Kind::IntegrateFirstHalf: verlet_first_half(p, dt_used); break;
+        case PlanItem::Kind::IntegrateFirstHalf:
+          verlet_first_half(p, dt_used);
+          rotate_prescribed(dt_used, t_new);
+          break;
         case PlanItem::Kind::Walls:
           for (auto& w : s_.walls) advance_wall(w, t_new, dt_used, t_area, time_scale_);
           break;

@@ -31,6 +31,22 @@ struct StopCondition {
   double value = 0.0;
 };
 
+/// Rigid motion of a prescribed particle set during a stage (LAMMPS `fix move rotate` + `linear`):
+/// the set translates at `velocity` and turns at `angular_velocity` about the point `center`
+/// (which moves with the set). Members are moved, not integrated; each step turns them by the
+/// exact rotation of angle |w| dt, so the radius about the axis does not drift.
+struct PrescribedMotion {
+  Vec3 velocity = Vec3::Zero();          ///< [m/s] (zero with no rotation = clamped)
+  Vec3 angular_velocity = Vec3::Zero();  ///< [rad/s]
+  Vec3 center = Vec3::Zero();            ///< [m] at the stage start: rotation centre and torque reference
+  PrescribedMotion() = default;
+  PrescribedMotion(const Vec3& v) : velocity(v) {}  // NOLINT(google-explicit-constructor): a velocity alone
+  bool rotates() const { return angular_velocity.squaredNorm() > 0.0; }
+};
+
+/// Time-series columns of a prescribed set (count, force, torque about its centre, turned angle).
+std::vector<std::string> prescribed_set_columns(const std::string& name);
+
 struct StageConfig {
   std::string name = "stage";
   double dt = 0.0;                 ///< [s] fixed step; 0 = dt_fraction * stable step at stage start
@@ -59,9 +75,10 @@ struct StageConfig {
   Step checkpoint_every = 0;
   Step log_every = 0;              ///< progress callback cadence; 0 = auto
   std::map<std::string, WallMotion> motions;  ///< motions of named walls during this stage
-  /// Particle sets (field "set/<name>") held at a prescribed velocity [m/s] during the stage
-  /// (zero = frozen); their total contact force is in the time series (set_<name>_fx/fy/fz).
-  std::map<std::string, Vec3> prescribed_sets;
+  /// Particle sets (field "set/<name>") moved rigidly during the stage (PrescribedMotion; zero =
+  /// clamped); their total force and torque about their centre are in the time series
+  /// (prescribed_set_columns).
+  std::map<std::string, PrescribedMotion> prescribed_sets;
 };
 
 /// A module's step at the stage start: its own stable step and the step it runs with (both in
@@ -167,11 +184,15 @@ class Simulation {
   double skin_ = 0.0;
   double time_scale_ = 1.0;
   std::function<bool(const double*)> alive_rule_;  ///< persistent pairs of the contact law
-  std::map<std::string, Vec3> prescribed_;
+  std::map<std::string, PrescribedMotion> prescribed_;
+  /// Turn the members of rotating prescribed sets by their step rotation (after the drift).
+  void rotate_prescribed(double dt, double t_stage_new);
 };
 
 /// Built-in monitors available in every stage.
 std::vector<std::string> builtin_columns(const State& s);
-std::vector<double> builtin_values(const State& s);
+/// Values of builtin_columns; with `bonds` (the scenario's bond law) also the bonds' elastic energy
+/// and largest failure stress (NaN without it).
+std::vector<double> builtin_values(const State& s, const BondModel* bonds = nullptr);
 
 }  // namespace sparkdem

@@ -7,6 +7,7 @@
 #include "physics/register_all.hpp"
 
 #include "physics/body/gravity.hpp"
+#include "physics/bonds/cohesive_beam.hpp"
 #include "physics/bonds/spring_bond.hpp"
 #include "physics/contact/hertz_mindlin.hpp"
 #include "physics/control/temperature_controller.hpp"
@@ -26,8 +27,11 @@ void register_all(Registry& r) {
   r.contact_law<LinearSpringDashpot>();
   r.contact_law<LammpsHertzTsuji>();
   r.bond_law<SpringBond>();
+  r.bond_law<CohesiveBeam>();
   r.module<Gravity>();
   r.module<ViscousDamping>();
+  r.module<LocalDamping>();
+  r.module<AddForce>();
   r.module<ElectricalNetwork>();
   r.module<TemperatureHistory>();
   r.module<HeatConduction>();

@@ -10,7 +10,13 @@
 ///   explicit Law(const Params&);
 ///   BondForces operator()(const BondGeometry&, const BondMotion&, double dt, double* state) const;
 ///   BondStiffness stiffness(const BondGeometry&) const;   // for the stable step
+/// and optionally (detected with `requires`):
+///   double energy(const BondGeometry&, const double* state) const;          // elastic energy [J]
+///   double failure_stress(const BondGeometry&, const double* state) const;  // criterion value [Pa]
+///   static std::vector<std::string> failure_modes();  // names of BondForces::mode 1, 2, ...
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
@@ -39,6 +45,13 @@ struct BondForces {
   Vec3 torque_i = Vec3::Zero();  ///< [N m]
   Vec3 torque_j = Vec3::Zero();  ///< [N m]
   bool broken = false;           ///< the bond failed in this step (forces of this step still apply)
+  std::uint8_t mode = 0;         ///< failure mode when broken (1-based index into the law's failure_modes())
+};
+
+/// A bond that broke in a force pass: its row and failure mode.
+struct BondFailure {
+  std::size_t row = 0;
+  std::uint8_t mode = 0;
 };
 
 /// Stiffnesses of one bond for the stable-step bound.
@@ -56,7 +69,13 @@ class BondModel {
   virtual std::vector<std::string> state_columns() const = 0;
   /// Fill the per-row forces of intact bonds; returns the rows that broke in this pass
   /// (in row order), which the caller marks broken and hands to the contact table.
-  virtual std::vector<std::size_t> pass(const ParticleStore& p, BondTable& b, double dt) const = 0;
+  virtual std::vector<BondFailure> pass(const ParticleStore& p, BondTable& b, double dt) const = 0;
+  /// Names of the failure modes (BondFailure::mode 1, 2, ...); empty if the law has none.
+  virtual std::vector<std::string> failure_modes() const = 0;
+  /// Elastic energy stored in the intact bonds [J] (0 if the law does not define it).
+  virtual double elastic_energy(const ParticleStore& p, const BondTable& b) const = 0;
+  /// Largest failure-criterion stress over the intact bonds [Pa] (NaN if the law has none).
+  virtual double max_failure_stress(const ParticleStore& p, const BondTable& b) const = 0;
   /// Add each intact bond's contribution to the per-particle Gershgorin rows of the
   /// mass-weighted stiffness matrix [1/s^2] (see ContactModel::stable_dt):
   ///   translation: (k_a + k_s) (1/m_i + 1/sqrt(m_i m_j))
@@ -92,7 +111,7 @@ class BondModelT final : public BondModel {
   std::string name() const override { return std::string(Law::kName); }
   std::vector<std::string> state_columns() const override { return Law::state_columns(); }
 
-  std::vector<std::size_t> pass(const ParticleStore& p, BondTable& b, double dt) const override {
+  std::vector<BondFailure> pass(const ParticleStore& p, BondTable& b, double dt) const override {
     const std::int64_t rows = static_cast<std::int64_t>(b.size());
     auto& F = b.force();
     auto& Ti = b.torque_i();
@@ -108,12 +127,37 @@ class BondModelT final : public BondModel {
       F[r] = f.force;
       Ti[r] = f.torque_i;
       Tj[r] = f.torque_j;
-      broke[r] = f.broken ? 1 : 0;
+      broke[r] = f.broken ? std::max<std::uint8_t>(f.mode, 1) : 0;
     }
-    std::vector<std::size_t> out;
+    std::vector<BondFailure> out;
     for (std::size_t r = 0; r < b.size(); ++r)
-      if (broke[r]) out.push_back(r);
+      if (broke[r]) out.push_back({r, broke[r]});
     return out;
+  }
+
+  std::vector<std::string> failure_modes() const override {
+    if constexpr (requires { Law::failure_modes(); }) return Law::failure_modes();
+    else return {};
+  }
+  double elastic_energy(const ParticleStore& p, const BondTable& b) const override {
+    if constexpr (requires(const Law& l, const BondGeometry& g, const double* st) { l.energy(g, st); }) {
+      double u = 0.0;
+      for (std::size_t r = 0; r < b.size(); ++r)
+        if (!b.broken(r)) u += law_.energy(detail::bond_geometry(p, b, r), b.state(r));
+      return u;
+    } else {
+      return 0.0;
+    }
+  }
+  double max_failure_stress(const ParticleStore& p, const BondTable& b) const override {
+    if constexpr (requires(const Law& l, const BondGeometry& g, const double* st) { l.failure_stress(g, st); }) {
+      double m = 0.0;
+      for (std::size_t r = 0; r < b.size(); ++r)
+        if (!b.broken(r)) m = std::max(m, law_.failure_stress(detail::bond_geometry(p, b, r), b.state(r)));
+      return m;
+    } else {
+      return std::numeric_limits<double>::quiet_NaN();
+    }
   }
 
   void add_stiffness_rows(const ParticleStore& p, const BondTable& b, std::vector<double>& rows) const override {

@@ -14,7 +14,7 @@ inline void verlet_first_half(ParticleStore& p, double dt) {
 #pragma omp parallel for schedule(static)
   for (std::int64_t i = 0; i < n; ++i) {
     if (p.fixed[i]) {  // prescribed velocity (zero = frozen): moved, not integrated
-      p.position[i] += dt * p.velocity[i];
+      if (p.fixed[i] == 1) p.position[i] += dt * p.velocity[i];  // 2: a rotating set, moved by the simulation
       continue;
     }
     p.velocity[i] += 0.5 * dt / p.mass[i] * p.force[i];

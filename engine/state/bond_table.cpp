@@ -37,6 +37,7 @@ std::size_t BondTable::add(Index a, Index b, const std::vector<Id>& ids, const s
   ref_.push_back(make_bond_reference(x[a], x[b], q[a], q[b]));
   broken_.push_back(0);
   broken_step_.push_back(-1);
+  record_.push_back({});
   const std::size_t r = size() - 1;
   if (!handed.names.empty()) copy_named_state(r, handed.names, handed.values.data());
   ++version_;
@@ -44,10 +45,11 @@ std::size_t BondTable::add(Index a, Index b, const std::vector<Id>& ids, const s
   return r;
 }
 
-void BondTable::mark_broken(std::size_t r, Step step) {
+void BondTable::mark_broken(std::size_t r, Step step, const BondBreakRecord& record) {
   if (broken_[r]) return;
   broken_[r] = 1;
   broken_step_[r] = step;
+  record_[r] = record;
   if (r < force_.size()) { force_[r].setZero(); torque_i_[r].setZero(); torque_j_[r].setZero(); }
   ++version_;
 }
@@ -73,10 +75,10 @@ std::size_t BondTable::erase_particles(const std::unordered_set<Id>& gone) {
   for (std::size_t r = 0; r < n; ++r) {
     keep[r] = !(gone.count(id_i_[r]) || gone.count(id_j_[r]));
     if (!keep[r]) continue;
-    ref_[q] = ref_[r]; broken_[q] = broken_[r]; broken_step_[q] = broken_step_[r];
+    ref_[q] = ref_[r]; broken_[q] = broken_[r]; broken_step_[q] = broken_step_[r]; record_[q] = record_[r];
     ++q;
   }
-  ref_.resize(q); broken_.resize(q); broken_step_.resize(q);
+  ref_.resize(q); broken_.resize(q); broken_step_.resize(q); record_.resize(q);
   keep_rows(keep);
   if (q != n) { ++version_; dirty_ = true; }
   return n - q;
@@ -101,6 +103,15 @@ void BondTable::visit(Archive& ar, const std::string& prefix) {
   std::vector<std::int64_t> br(broken_.begin(), broken_.end());
   ar.visit(prefix + "/broken", br);
   ar.visit(prefix + "/broken_step", broken_step_);
+  std::vector<double> rec;
+  std::vector<std::int64_t> modes;
+  if (!ar.reading())
+    for (const auto& b : record_) {
+      rec.insert(rec.end(), {b.time, b.position[0], b.position[1], b.position[2]});
+      modes.push_back(b.mode);
+    }
+  ar.visit(prefix + "/break_record", rec, 4);
+  ar.visit(prefix + "/break_mode", modes);
   std::int64_t rule = contact_rule == ContactRule::Add ? 1 : 0;
   ar.visit(prefix + "/contact_rule_add", rule);
   if (ar.reading()) {
@@ -115,6 +126,11 @@ void BondTable::visit(Archive& ar, const std::string& prefix) {
       ref_[r].perp_i = Vec3(p[7], p[8], p[9]);
       ref_[r].perp_j = Vec3(p[10], p[11], p[12]);
     }
+    if (rec.size() != 4 * size() || modes.size() != size())
+      throw SetupError("checkpoint bond break records are inconsistent: " + std::to_string(size()) + " rows");
+    record_.assign(size(), {});
+    for (std::size_t r = 0; r < size(); ++r)
+      record_[r] = {rec[4 * r], Vec3(rec[4 * r + 1], rec[4 * r + 2], rec[4 * r + 3]), modes[r]};
     broken_.assign(br.begin(), br.end());
     contact_rule = rule ? ContactRule::Add : ContactRule::Exclude;
     ++version_;

@@ -6,6 +6,7 @@
 /// no load and no current; it stays in the table (for the log and the counts) and no longer keeps
 /// the pair out of the contact table.
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <unordered_set>
 #include <vector>
@@ -27,6 +28,13 @@ struct BondReference {
 /// Reference of a bond between particles at xi, xj with orientations qi, qj (body -> world).
 BondReference make_bond_reference(const Vec3& xi, const Vec3& xj, const Quat& qi, const Quat& qj);
 
+/// The log entry of a broken bond.
+struct BondBreakRecord {
+  double time = std::numeric_limits<double>::quiet_NaN();  ///< [s] at the end of the breaking step
+  Vec3 position = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  ///< midpoint of the centres [m]
+  std::int64_t mode = 0;  ///< failure mode (1-based index into the bond law's failure_modes(); 0 unknown)
+};
+
 class BondTable : public PairRows {
  public:
   /// Add an intact bond between local particles a and b (any order); the reference geometry is
@@ -38,8 +46,11 @@ class BondTable : public PairRows {
   const BondReference& reference(std::size_t r) const { return ref_[r]; }
   bool broken(std::size_t r) const { return broken_[r] != 0; }
   Step broken_step(std::size_t r) const { return broken_step_[r]; }
-  /// Flag row r broken at `step` (idempotent). The caller hands its state to the contact table.
-  void mark_broken(std::size_t r, Step step);
+  /// Where and how row r broke (NaN time and position, mode 0 if not recorded).
+  const BondBreakRecord& break_record(std::size_t r) const { return record_[r]; }
+  /// Flag row r broken at `step` (idempotent), with the time, the bond's midpoint and the law's
+  /// failure mode. The caller hands its state to the contact table.
+  void mark_broken(std::size_t r, Step step, const BondBreakRecord& record = {});
   std::size_t intact_count() const;
   std::size_t broken_count() const { return size() - intact_count(); }
 
@@ -70,6 +81,7 @@ class BondTable : public PairRows {
   std::vector<BondReference> ref_;
   std::vector<std::uint8_t> broken_;
   std::vector<Step> broken_step_;
+  std::vector<BondBreakRecord> record_;
   std::uint64_t version_ = 0;
   mutable std::uint64_t keys_version_ = ~std::uint64_t{0};
   mutable std::unordered_set<std::uint64_t> keys_;

@@ -39,9 +39,10 @@ std::size_t bond_within_gap(State& s, double gap_tolerance) {
   return made;
 }
 
-void break_bond(State& s, std::size_t r, Step step) {
+void break_bond(State& s, std::size_t r, Step step, double time, std::int64_t mode) {
   if (s.bonds.broken(r)) return;
-  s.bonds.mark_broken(r, step);
+  const auto& x = s.particles.position;
+  s.bonds.mark_broken(r, step, {time, 0.5 * (x[s.bonds.i(r)] + x[s.bonds.j(r)]), mode});
   s.contacts.hand_over(s.bonds.key(r), s.bonds.handed_state(r));
   s.marks["neighbors_stale"] = 1.0;
 }

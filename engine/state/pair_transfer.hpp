@@ -1,4 +1,5 @@
 #pragma once
+#include <limits>
 /// Turning a contact into a bond and a bond back into a contact, with the pair's state handed
 /// over: columns of the same name are carried (e.g. "neck_radius"), others start at zero. These
 /// are the only two functions that move a pair between the tables; both mark the neighbour
@@ -22,7 +23,9 @@ std::size_t bond_particles(State& s, Index a, Index b);
 /// the deterministic order of the neighbour search. Returns the number of new bonds.
 std::size_t bond_within_gap(State& s, double gap_tolerance);
 
-/// Mark bond row r broken at `step` and hand its state to the contact table.
-void break_bond(State& s, std::size_t r, Step step);
+/// Mark bond row r broken at `step` (ending at `time` [s]; mode from the bond law, 0 unknown),
+/// log its midpoint, and hand its state to the contact table.
+void break_bond(State& s, std::size_t r, Step step, double time = std::numeric_limits<double>::quiet_NaN(),
+                std::int64_t mode = 0);
 
 }  // namespace sparkdem

@@ -465,7 +465,7 @@ std::vector<std::string> stage_columns(const StageDef& st, const std::set<std::s
   }
   std::vector<std::string> cols = builtin_columns(scratch);
   for (const auto& [name, v] : st.cfg.prescribed_sets)
-    for (const char* x : {"_count", "_fx", "_fy", "_fz"}) cols.push_back("set_" + name + x);
+    for (const auto& c : prescribed_set_columns(name)) cols.push_back(c);
   if (st.generator)
     for (const auto& m : st.generator->monitors())
       for (const auto& c : m->columns(scratch)) cols.push_back(c);
@@ -732,17 +732,32 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
     r["delete_sets"] = js["delete_sets"];
   }
   if (js.contains("prescribe")) {
-    if (!js["prescribe"].is_object()) errors.push_back({path + "/prescribe", "expected an object {set name: [vx, vy, vz]}"});
+    if (!js["prescribe"].is_object()) errors.push_back({path + "/prescribe", "expected an object {set name: [vx, vy, vz] or {velocity, angular_velocity, center}}"});
     else
       for (auto it = js["prescribe"].begin(); it != js["prescribe"].end(); ++it) {
         const std::string at = path + "/prescribe/" + it.key();
         const auto& v = it.value();
-        if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number()) {
-          errors.push_back({at, "expected a velocity [vx, vy, vz] in m/s, found " + describe(v)});
-          continue;
+        auto vec3 = [&](const json& x, const std::string& where, const char* what, Vec3& out) {
+          if (!x.is_array() || x.size() != 3 || !x[0].is_number() || !x[1].is_number() || !x[2].is_number()) {
+            errors.push_back({where, std::string("expected ") + what + ", found " + describe(x)});
+            return;
+          }
+          out = Vec3(x[0].get<double>(), x[1].get<double>(), x[2].get<double>());
+        };
+        PrescribedMotion m;
+        if (v.is_object()) {
+          for (auto k = v.begin(); k != v.end(); ++k)
+            if (k.key() != "velocity" && k.key() != "angular_velocity" && k.key() != "center")
+              errors.push_back({at + "/" + k.key(), "unknown key; expected velocity, angular_velocity or center"});
+          if (v.contains("velocity")) vec3(v["velocity"], at + "/velocity", "a velocity [vx, vy, vz] in m/s", m.velocity);
+          if (v.contains("angular_velocity"))
+            vec3(v["angular_velocity"], at + "/angular_velocity", "an angular velocity [wx, wy, wz] in rad/s", m.angular_velocity);
+          if (v.contains("center")) vec3(v["center"], at + "/center", "a point [x, y, z] in m", m.center);
+        } else {
+          vec3(v, at, "a velocity [vx, vy, vz] in m/s or {velocity, angular_velocity, center}", m.velocity);
         }
         use_set(it.key(), at);
-        c.prescribed_sets[it.key()] = Vec3(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+        c.prescribed_sets[it.key()] = m;
       }
     r["prescribe"] = js["prescribe"];
   }
@@ -1337,7 +1352,9 @@ json schema_json(const Registry& reg) {
   j["stage"]["sets"] = "array of particle-set names evaluated at the stage start";
   j["stage"]["delete_sets"] = "array of particle-set names: their members at the stage start (after the generator) are deleted, "
                               "with their contacts and bonds; summary.json reports the counts (deleted_particles)";
-  j["stage"]["prescribe"] = "object {set name: [vx, vy, vz] m/s}: the set moves at this velocity (zero = frozen)";
+  j["stage"]["prescribe"] = "object {set name: [vx, vy, vz] m/s | {\"velocity\": m/s, \"angular_velocity\": rad/s, \"center\": m}}: "
+                            "the set moves rigidly (zero = clamped), turning about `center` (moving with it); columns "
+                            "set_<name>_count/fx/fy/fz, torque about the centre tx/ty/tz [N m] and the turned angle [rad]";
   j["stage"]["until"] = "object {quantity: {\"above\"|\"below\": value}}; quantities are time-series columns";
   j["stage"]["snapshots"] = spec_to_json(snapshot_spec().spec());
   j["stage"]["compact"] = spec_to_json(physics::compact_spec().spec());

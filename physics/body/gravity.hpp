@@ -5,6 +5,10 @@
 /// | parameter    | unit  | meaning                         |
 /// |--------------|-------|---------------------------------|
 /// | acceleration | m/s^2 | gravitational acceleration g    |
+#include <cmath>
+#include <string>
+
+#include "engine/core/error.hpp"
 #include "engine/model/module.hpp"
 #include "engine/model/param_spec.hpp"
 #include "engine/state/state.hpp"
@@ -59,6 +63,76 @@ class ViscousDamping final : public Module {
       p.force[i] -= p_.rate * p.mass[i] * p.velocity[i];
       p.torque[i] -= p_.rate * p.inertia[i] * p.omega[i];
     }
+  }
+
+ private:
+  Params p_;
+};
+
+/// # local_damping — Cundall's local non-viscous damping (PFC, YADE `NewtonIntegrator.damping`)
+///   F_i,k <- F_i,k - alpha |F_i,k| sign(v_i,k),  T_i,k <- T_i,k - alpha |T_i,k| sign(w_i,k)  (k = x, y, z)
+/// Source: P.A. Cundall, "Distinct element models of rock and soil structure" (1987); YADE docs.
+/// Removes a fraction alpha of the work of the unbalanced force in every half oscillation; it damps
+/// only accelerating motion, so a quasi-static state (zero net force) is not biased. A numerical
+/// aid for quasi-static stages, off unless listed. It acts on the net force: list it after every
+/// other force module of the stage (force modules run in the listed order, after contacts and bonds).
+class LocalDamping final : public Module {
+ public:
+  struct Params {
+    double coefficient = 0.7;  ///< alpha [1]
+  };
+  static ParamSpec<Params> spec() {
+    ParamSpec<Params> s("local_damping", "module", "Cundall local damping F -= alpha |F| sign(v) per component (list it last)");
+    s.add("coefficient", &Params::coefficient).unit("1").range(0.0, 1.0).doc("alpha, fraction of the unbalanced force removed");
+    return s;
+  }
+  explicit LocalDamping(const Params& p) : p_(p) {}
+  std::string name() const override { return "local_damping"; }
+  void declare(Declarations& d) const override { d.writes = {"force", "torque"}; d.reads = {"velocity", "omega"}; }
+  void advance(State& s, const StepInfo&) override {
+    auto& p = s.particles;
+    const std::int64_t n = static_cast<std::int64_t>(p.size());
+    auto sign = [](double x) { return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0; };
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) {
+        p.force[i][k] -= p_.coefficient * std::abs(p.force[i][k]) * sign(p.velocity[i][k]);
+        p.torque[i][k] -= p_.coefficient * std::abs(p.torque[i][k]) * sign(p.omega[i][k]);
+      }
+  }
+
+ private:
+  Params p_;
+};
+
+/// # add_force — a constant external force and torque on every member of a particle set
+/// (LAMMPS `fix addforce` on a group): F_i += force, T_i += torque for i in the set.
+class AddForce final : public Module {
+ public:
+  struct Params {
+    std::string set;
+    Vec3 force = Vec3::Zero();   ///< [N] per member
+    Vec3 torque = Vec3::Zero();  ///< [N m] per member
+  };
+  static ParamSpec<Params> spec() {
+    ParamSpec<Params> s("add_force", "module", "constant force and torque on each member of a particle set");
+    s.add("set", &Params::set).required().doc("particle set (listed in the stage's \"sets\")");
+    s.add_vec3("force", &Params::force).unit("N").doc("force on each member");
+    s.add_vec3("torque", &Params::torque).unit("N m").doc("torque on each member");
+    return s;
+  }
+  explicit AddForce(const Params& p) : p_(p) {}
+  std::string name() const override { return "add_force"; }
+  void declare(Declarations& d) const override { d.writes = {"force", "torque"}; }
+  void bind(State& s) override {
+    if (!s.particles.fields.has("set/" + p_.set))
+      throw SetupError("add_force: particle set '" + p_.set + "' is not defined (list it in the stage's \"sets\")");
+  }
+  void advance(State& s, const StepInfo&) override {
+    auto& p = s.particles;
+    const auto& f = p.fields.data("set/" + p_.set);
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (f[i] > 0.5) { p.force[i] += p_.force; p.torque[i] += p_.torque; }
   }
 
  private:

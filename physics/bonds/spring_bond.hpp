@@ -65,8 +65,17 @@ struct SpringBond {
     f.force = -p_.normal_stiffness * stretch * g.n + ft;
     f.torque_i = -half * g.n.cross(ft);
     f.torque_j = f.torque_i;
-    f.broken = stretch > p_.tensile_strain * g.length0 || ft.norm() > p_.shear_force_limit;
+    const bool axial = stretch > p_.tensile_strain * g.length0;
+    f.broken = axial || ft.norm() > p_.shear_force_limit;
+    f.mode = f.broken ? (axial ? 1 : 2) : 0;
     return f;
+  }
+  static std::vector<std::string> failure_modes() { return {"axial", "shear"}; }
+  /// Elastic energy k_n (d - L0)^2 / 2 + k_t |s|^2 / 2 [J].
+  double energy(const BondGeometry& g, const double* s) const {
+    const double stretch = g.distance - g.length0;
+    return 0.5 * p_.normal_stiffness * stretch * stretch +
+           0.5 * p_.shear_stiffness * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
   }
   BondStiffness stiffness(const BondGeometry&) const { return {p_.normal_stiffness, p_.shear_stiffness, 0.0, 0.0}; }
 

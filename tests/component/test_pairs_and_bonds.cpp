@@ -216,8 +216,8 @@ TEST_CASE("bond and contact forces add up under the 'add' rule and exclude each 
       Simulation sim(s, law, &bond_law);
       test::NullObserver obs;
       StageConfig c = test::stage(1e-6, 10, 0.3 * kR);
-      c.prescribed_sets["left"] = Vec3::Zero();
-      c.prescribed_sets["right"] = Vec3::Zero();
+      c.prescribed_sets["left"] = PrescribedMotion{};
+      c.prescribed_sets["right"] = PrescribedMotion{};
       sim.run_stage(c, obs);
       // At rest at the bonding length: the bond force is zero, the contact force k * 0.1 R.
       const double expected = add ? kK * 0.1 * kR : 0.0;
@@ -237,8 +237,8 @@ TEST_CASE("a contact turned into a bond and back hands its state over both ways"
   sim.add_module(&bonder);
   test::NullObserver obs;
   StageConfig c = test::stage(1e-6, 30, 0.3 * kR);
-  c.prescribed_sets["left"] = Vec3::Zero();
-  c.prescribed_sets["right"] = Vec3::Zero();
+  c.prescribed_sets["left"] = PrescribedMotion{};
+  c.prescribed_sets["right"] = PrescribedMotion{};
   sim.run_stage(c, obs);
   // Passes: 1 at set-up + 30 steps = 31 evaluations of the pair, by one law or the other.
   // Contact calls 1..5 (set-up + steps 1-4) -> bonded at the end of step 4 with calls = 5;
@@ -283,8 +283,8 @@ TEST_CASE("an event clock fires when a bond breaks", "[bonds][scheduler][contrac
   sim.add_module(&w);
   test::NullObserver obs;
   StageConfig c = test::stage(1e-6, 20, 0.3 * kR);
-  c.prescribed_sets["left"] = Vec3::Zero();
-  c.prescribed_sets["right"] = Vec3::Zero();
+  c.prescribed_sets["left"] = PrescribedMotion{};
+  c.prescribed_sets["right"] = PrescribedMotion{};
   sim.run_stage(c, obs);
   CHECK(s.bonds.broken_step(0) == 8);
   CHECK(w.steps == std::vector<Step>{0, 8});

@@ -38,7 +38,7 @@ TEST_CASE("a pressure-controlled punch settles on its target force", "[walls]") 
   const auto law = frozen_sphere_under_punch(s, 2.1e-3);
   Simulation sim(s, law);
   StageConfig cfg = test::stage(1e-6, 40000, 1e-4);
-  cfg.prescribed_sets["all"] = Vec3::Zero();
+  cfg.prescribed_sets["all"] = PrescribedMotion{};
   WallMotion m;
   m.kind = WallMotion::Kind::Pressure;
   m.pressure_time = {0.0, 1.0};
@@ -103,7 +103,7 @@ TEST_CASE("a pressure ramp in physical time reaches its target at time_scale x t
   Simulation sim(s, law);
   StageConfig cfg = test::stage(1e-6, 60000, 1e-4);
   cfg.time_scale = 1000.0;
-  cfg.prescribed_sets["all"] = Vec3::Zero();
+  cfg.prescribed_sets["all"] = PrescribedMotion{};
   WallMotion m;
   m.kind = WallMotion::Kind::Pressure;
   m.pressure_time = {0.0, 50.0};
