@@ -121,6 +121,8 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("current", &P::current).unit("A").nonnegative().doc("> 0: inject this current at `high` (one equipotential electrode) instead of holding the voltage; `low` stays at 0 V");
   s.add("length", &P::length).unit("m").nonnegative().doc("L of kappa_eff = I L / (dV A); 0: distance between the electrodes' particle centroids");
   s.add("area", &P::area).unit("m^2").nonnegative().doc("A of kappa_eff; 0: cross-section of the first cylinder wall (else kappa_eff is not reported)");
+  s.add("branches", &P::branches).choices({"all", "bonds"})
+      .doc("all: contacts, necks and intact bonds conduct; bonds: only intact bonds (cohesive-beam solids, seed 001)");
   s.add("solver", &P::solver).choices({"direct", "cg_ic", "cg_jacobi", "amg", "pseudo_transient"})
       .doc("sparse Cholesky; CG with incomplete-Cholesky / Jacobi preconditioner; hypre BoomerAMG-PCG (all iterative ones warm-started); seed 000's pseudo-transient iteration");
   s.add("tolerance", &P::tolerance).unit("1").positive().doc("CG / AMG relative residual");
@@ -234,6 +236,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   GraphOptions go;
   go.walls = is_wall_electrode(p_.high) || is_wall_electrode(p_.low);
   go.near_gap = branch_model_near_gap(branch_);
+  go.contacts = p_.branches != "bonds";
   const InteractionGraph g = build_interaction_graph(s, go);
   std::vector<double> G, share;
   try {

@@ -45,6 +45,7 @@
 /// | parameter          | unit  | meaning                                                        |
 /// |--------------------|-------|----------------------------------------------------------------|
 /// | model              | -     | holm, sintered_neck, transmission_surface, touching, tunnelling |
+/// | branches           | -     | all (contacts, necks, intact bonds) or bonds (intact bonds only: a broken bond stops conducting even where its faces touch) |
 /// | conductivity       | S/m   | bulk conductivity kappa at reference_temperature              |
 /// | temperature        | K     | evaluation temperature (default 293.15 K: samples are measured cold) |
 /// | temperature_field  | -     | true: kappa(T) per branch at its particles' mean `temperature` field |
@@ -75,6 +76,7 @@ class ElectricalNetwork final : public Module {
   struct Params {
     std::string model = "holm";
     std::string topology = "particle_centred";
+    std::string branches = "all";
     bool chord_scaling = true;
     double conductivity = 1e6;
     double temperature = 293.15;
