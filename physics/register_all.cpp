@@ -15,6 +15,7 @@
 #include "physics/contact/hooke.hpp"
 #include "physics/contact/lammps_granular.hpp"
 #include "physics/electrical/electrical_network.hpp"
+#include "physics/mechanics/torsion_test.hpp"
 #include "physics/packing/generators.hpp"
 #include "physics/thermal/heat_conduction.hpp"
 #include "physics/thermal/temperature_history.hpp"
@@ -36,6 +37,7 @@ void register_all(Registry& r) {
   r.module<TemperatureHistory>();
   r.module<HeatConduction>();
   r.module<TemperatureController>();
+  r.module<TorsionTest>();
   r.generator<LatticeGenerator>();
   r.generator<DepositGenerator>();
   r.generator<FillGenerator>();

@@ -231,6 +231,31 @@ class OutputObserver final : public Observer {
 
 }  // namespace
 
+json write_broken_bonds(const State& s, const BondModel& law, const std::filesystem::path& outdir) {
+  const std::vector<std::string> modes = law.failure_modes();
+  auto mode_name = [&](std::int64_t m) {
+    return m >= 1 && static_cast<std::size_t>(m) <= modes.size() ? modes[static_cast<std::size_t>(m - 1)] : std::string("unknown");
+  };
+  std::vector<std::size_t> rows;
+  for (std::size_t r = 0; r < s.bonds.size(); ++r)
+    if (s.bonds.broken(r)) rows.push_back(r);
+  std::stable_sort(rows.begin(), rows.end(), [&](std::size_t a, std::size_t b) { return s.bonds.broken_step(a) < s.bonds.broken_step(b); });
+  std::string out = "step,time,id_i,id_j,x,y,z,mode\n";
+  json counts = json::object();
+  char buf[256];
+  for (const std::size_t r : rows) {
+    const BondBreakRecord& b = s.bonds.break_record(r);
+    const std::string m = mode_name(b.mode);
+    std::snprintf(buf, sizeof buf, "%lld,%.12g,%lld,%lld,%.12g,%.12g,%.12g,", static_cast<long long>(s.bonds.broken_step(r)), b.time,
+                  static_cast<long long>(s.bonds.id_i()[r]), static_cast<long long>(s.bonds.id_j()[r]), b.position[0], b.position[1],
+                  b.position[2]);
+    out += buf + m + "\n";
+    counts[m] = counts.value(m, 0) + 1;
+  }
+  write_file_atomic(outdir / "broken_bonds.csv", out);
+  return counts;
+}
+
 void write_json_atomic(const std::filesystem::path& file, const json& j) { write_file_atomic(file, j.dump(2) + "\n"); }
 
 namespace {
@@ -421,7 +446,10 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         for (const auto& [m, t] : r.module_seconds) js["module_wall_time_s"][m] = t;
         for (const auto& [m, n] : r.max_substeps)
           if (n > 1) js["max_substeps"][m] = n;
-        if (sc.bond_law) js["bonds"] = {{"intact", s.bonds.intact_count()}, {"broken", s.bonds.broken_count()}};
+        if (sc.bond_law) {
+          js["bonds"] = {{"intact", s.bonds.intact_count()}, {"broken", s.bonds.broken_count()}};
+          if (s.bonds.broken_count() > 0) js["bonds"]["broken_by_mode"] = write_broken_bonds(s, *sc.bond_law, opt.outdir);
+        }
         js["wall_time_s"] = r.wall_seconds;
         js["dt_s"] = r.dt;
         js["stable_dt_at_start_s"] = finite_or_null(r.stable_dt_at_start);

@@ -49,6 +49,11 @@ json run_scenario(Scenario& sc, const RunOptions& opt);
 /// inside that stage.
 std::pair<std::int64_t, bool> read_checkpoint(const std::filesystem::path& file, State& s);
 
+/// Write OUTDIR/broken_bonds.csv atomically: every broken bond of the state in the order they
+/// broke (step, time [s], the two ids, the midpoint x, y, z [m] at the break, the law's failure
+/// mode); returns the count per mode.
+json write_broken_bonds(const State& s, const BondModel& law, const std::filesystem::path& outdir);
+
 /// Write `json` to `file` atomically and durably (tmp, fsync, rename, directory fsync).
 void write_json_atomic(const std::filesystem::path& file, const json& j);
 

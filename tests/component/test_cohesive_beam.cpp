@@ -22,6 +22,7 @@
 #include "physics/body/gravity.hpp"
 #include "physics/bonds/cohesive_beam.hpp"
 #include "physics/contact/hertz_mindlin.hpp"
+#include "physics/mechanics/torsion_test.hpp"
 #include "tests/support/scene.hpp"
 #include "tests/support/tolerance.hpp"
 
@@ -241,4 +242,65 @@ TEST_CASE("a cantilever of bonded elements under a tip load settles at P L^3 / (
   }
   INFO("tip deflection " << -tip_y << " m, Euler-Bernoulli " << expected << " m, max speed " << speed);
   CHECK(test::relative_error(-tip_y, expected) < 1e-3);
+}
+
+TEST_CASE("torsion_test on a twisted chain of beams: twist = w t, torque = G I0 theta / L of the beams in series",
+          "[beam][bonds][torsion]") {
+  // A line of elements along the z axis: the bottom one clamped, the top one turned about the
+  // axis at w. The beams twist in series (no bending: the axis does not move), so at rest the
+  // torque is G_mu I0 theta / ((N - 1) L0) exactly; torsion_test's elastic reference with
+  // G = G_mu, r = r_mu and L = the end-set distance must give a torque ratio of 1.
+  constexpr int kN = 6;
+  State s;
+  for (int k = 0; k < kN; ++k) test::add_sphere(s, Vec3(0, 0, 2 * kR * k), kR, kRho);
+  REQUIRE(bond_within_gap(s, 1e-3 * kR) == kN - 1);
+  SetSelector bottom, top;
+  bottom.kind = top.kind = SetSelector::Kind::Ids;
+  bottom.ids = {s.particles.id[0]};
+  top.ids = {s.particles.id[kN - 1]};
+  assign_set(s, "bottom", bottom);
+  assign_set(s, "top", top);
+
+  physics::HertzMindlin::Params hp;
+  ContactModelT<physics::HertzMindlin> contact(hp);
+  BondModelT<CohesiveBeam> bonds(beam_params());
+  Simulation sim(s, contact, &bonds);
+  physics::LocalDamping damping({0.7});
+  physics::TorsionTest::Params tp;
+  tp.clamped = "bottom";
+  tp.twisted = "top";
+  tp.radius = rmu;
+  tp.shear_modulus = G;
+  tp.yield_shear_stress = 1e9;
+  tp.resistance_signal = "";
+  physics::TorsionTest torsion(tp);
+  sim.add_module(&damping);
+  sim.add_module(&torsion);
+  const double w = 10.0;  // [rad/s]
+  StageConfig turn = test::stage(0.0, 2000);
+  turn.dt_fraction = 0.5;
+  turn.prescribed_sets["bottom"] = PrescribedMotion{};
+  PrescribedMotion m;
+  m.angular_velocity = Vec3(0, 0, w);
+  turn.prescribed_sets["top"] = m;
+  test::NullObserver obs;
+  const StageResult r1 = sim.run_stage(turn, obs);
+  // Then hold the twist and let the chain settle.
+  StageConfig hold = test::stage(r1.dt, 200000);
+  hold.prescribed_sets["bottom"] = PrescribedMotion{};
+  hold.prescribed_sets["top"] = PrescribedMotion{};
+  sim.run_stage(hold, obs);
+  std::vector<std::string> cols;
+  std::vector<double> vals;
+  sim.sample(cols, vals);
+  auto col = [&](const std::string& n) { return vals[static_cast<std::size_t>(std::find(cols.begin(), cols.end(), n) - cols.begin())]; };
+  const double theta = w * r1.simulated_time;
+  CHECK(test::relative_error(col("torsion_twist"), theta) < 1e-10);
+  const double expected = G * I0 * theta / ((kN - 1) * L0);
+  INFO("torque " << col("torsion_torque") << " N m, twisted end " << col("torsion_torque_twisted_end") << ", closed form " << expected);
+  CHECK(test::relative_error(col("torsion_torque"), expected) < 1e-6);
+  CHECK(test::relative_error(col("torsion_torque_twisted_end"), expected) < 1e-6);
+  CHECK(std::abs(col("torsion_torque_ratio") - 1.0) < 1e-6);
+  // the top element stays on the axis and was turned rigidly: its position did not drift
+  CHECK((s.particles.position[kN - 1] - Vec3(0, 0, 2 * kR * (kN - 1))).norm() < 1e-12 * kR);
 }

@@ -1,0 +1,78 @@
+#pragma once
+/// # torsion_test — measurements of a pin twisted between a clamped and a turned end set
+///
+/// Seed 001 §4 (../shared/physics/cohesive-joule-torsion.md §8 and §11): one end set of a
+/// cylindrical pin is clamped, the other turned about the pin axis (stage key `prescribe` with
+/// an `angular_velocity`); this module turns the state into the figures of Fig. 16.
+///
+///   twist        theta = rotation of a reference member of the turned set about the axis since
+///                the module first ran (2 atan2(q_rel.v . a, q_rel.w), q_rel = q q0^-1)
+///   torque       T = sum over the clamped set of ((x_i - c) x F_i + T_i) . a  (reaction on the
+///                clamp, c = axis_point, a = unit axis); the turned end's -sum is reported beside
+///                it (their difference is the inertia of the pin: quasi-static check)
+///   shear stress tau_max = 2 T / (pi r^3)  (elastic surface shear of a solid circular section)
+///   elastic      T_el = G J theta / L, J = pi r^4 / 2, L = `length` or, when 0, the axial
+///                distance between the centroids of the two end sets at the first call
+///   resistance   R / R0 with R = signal "electrical_resistance" (electrical_network) and R0
+///                its first value; +inf when no path spans the electrodes (the pin separated)
+///   onsets       the twist of the first broken bond, the first twist where R / R0 - 1 exceeds
+///                `resistance_threshold`, the first twist where R is infinite (NaN until then)
+///   reports      R / R0 when the twist first reaches each of `report_twists`
+/// Every quantity kept between calls (reference orientation, R0, onsets, reports) lives in
+/// State::marks under "torsion/", so it is checkpointed and carries over from stage to stage
+/// (an elastic stage and a cracking stage of the same pin measure one twist).
+///
+/// | parameter            | unit | meaning                                                      |
+/// |----------------------|------|--------------------------------------------------------------|
+/// | clamped, twisted     | -    | particle sets of the two ends                                |
+/// | axis_point, axis     | m, - | the pin axis                                                 |
+/// | radius               | m    | pin radius r (stress and J)                                  |
+/// | length               | m    | L of the elastic reference (0: distance of the end centroids)|
+/// | shear_modulus        | Pa   | G of the elastic reference                                   |
+/// | yield_shear_stress   | Pa   | tau_y (column torsion_shear_ratio = tau_max / tau_y)         |
+/// | resistance_signal    | -    | signal holding R ("" : no resistance columns' input, R/R0 NaN) |
+/// | resistance_threshold | 1    | onset of the resistance rise: R / R0 - 1 above this          |
+/// | report_twists        | rad  | twists at which R / R0 is recorded                           |
+#include <string>
+#include <vector>
+
+#include "engine/model/module.hpp"
+#include "engine/model/param_spec.hpp"
+
+namespace sparkdem::physics {
+
+class TorsionTest final : public Module {
+ public:
+  struct Params {
+    std::string clamped = "bottom";
+    std::string twisted = "top";
+    Vec3 axis_point = Vec3::Zero();
+    Vec3 axis = Vec3::UnitZ();
+    double radius = 0.0;
+    double length = 0.0;
+    double shear_modulus = 0.0;
+    double yield_shear_stress = 0.0;
+    std::string resistance_signal = "electrical_resistance";
+    double resistance_threshold = 0.01;
+    std::vector<double> report_twists;
+  };
+  static ParamSpec<Params> spec();
+  explicit TorsionTest(const Params& p);
+
+  std::string name() const override { return "torsion_test"; }
+  Phase phase() const override { return Phase::Coupling; }
+  void declare(Declarations& d) const override;
+  void bind(State& s) override;
+  void advance(State& s, const StepInfo& info) override;
+  std::vector<std::string> columns() const override;
+  std::vector<double> column_values(const State& s) const override;
+
+  /// Column name of the R / R0 report at twist `theta` [rad].
+  static std::string report_column(double theta);
+
+ private:
+  Params p_;
+  Vec3 a_;  ///< unit axis
+};
+
+}  // namespace sparkdem::physics
