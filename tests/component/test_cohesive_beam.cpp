@@ -304,3 +304,57 @@ TEST_CASE("torsion_test on a twisted chain of beams: twist = w t, torque = G I0 
   // the top element stays on the axis and was turned rigidly: its position did not drift
   CHECK((s.particles.position[kN - 1] - Vec3(0, 0, 2 * kR * (kN - 1))).norm() < 1e-12 * kR);
 }
+
+TEST_CASE("cohesive beam stable step: below the stability limit measured by bisection, and not far below",
+          "[beam][bonds][stability]") {
+  // Two free elements joined by a beam, every mode excited (random velocities and spins); a
+  // step is stable when the energy stays bounded over 20,000 steps. The 12-dof eigenproblem of
+  // this pair gives 2 / omega_max = 1.23 x our Gershgorin estimate (numpy, see bond_model.hpp).
+  auto energy_growth = [](double dt) {
+    State s = bonded_pair();
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> n(0.0, 1.0);
+    for (std::size_t k = 0; k < 2; ++k) {
+      s.particles.velocity[k] = 1e-3 * Vec3(n(rng), n(rng), n(rng));
+      s.particles.omega[k] = 1e-3 / kR * Vec3(n(rng), n(rng), n(rng));
+    }
+    physics::HertzMindlin::Params hp;
+    ContactModelT<physics::HertzMindlin> contact(hp);
+    BondModelT<CohesiveBeam> bonds(beam_params());
+    Simulation sim(s, contact, &bonds);
+    auto ke = [&]() {
+      double e = 0.0;
+      for (std::size_t k = 0; k < 2; ++k)
+        e += 0.5 * s.particles.mass[k] * s.particles.velocity[k].squaredNorm() + 0.5 * s.particles.inertia[k] * s.particles.omega[k].squaredNorm();
+      return e;
+    };
+    const double e0 = ke();
+    StageConfig c = test::stage(dt, 20000);
+    c.allow_unstable_dt = true;
+    c.blowup_speed = 1e30;
+    test::NullObserver obs;
+    try {
+      sim.run_stage(c, obs);
+    } catch (const std::exception&) {
+      return std::numeric_limits<double>::infinity();
+    }
+    const double e = ke() + bonds.elastic_energy(s.particles, s.bonds);
+    return std::isfinite(e) ? e / e0 : std::numeric_limits<double>::infinity();
+  };
+  State s = bonded_pair();
+  physics::HertzMindlin::Params hp;
+  ContactModelT<physics::HertzMindlin> contact(hp);
+  BondModelT<CohesiveBeam> bonds(beam_params());
+  const double estimate = Simulation(s, contact, &bonds).mechanical_stable_dt();
+  double lo = 0.5 * estimate, hi = 3.0 * estimate;  // stable, unstable
+  REQUIRE(energy_growth(lo) < 2.0);
+  REQUIRE(energy_growth(hi) > 100.0);
+  for (int it = 0; it < 30; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (energy_growth(mid) < 10.0 ? lo : hi) = mid;
+  }
+  INFO("estimate " << estimate << " s, measured limit " << lo << " s, ratio " << estimate / lo);
+  CHECK(estimate < lo);
+  CHECK(estimate > 0.7 * lo);
+  CHECK(energy_growth(0.9 * estimate) < 1.5);  // bounded energy at 0.9 of the estimate
+}
