@@ -105,7 +105,12 @@ void TorsionTest::advance(State& s, const StepInfo&) {
   auto first = [&](const std::string& k, bool cond) {
     if (cond && !m.count(kKey + k)) m[kKey + k] = theta;
   };
-  first("onset_break", static_cast<double>(s.bonds.broken_count()) > m[kKey + "broken0"]);
+  const bool intact = !(static_cast<double>(s.bonds.broken_count()) > m[kKey + "broken0"]);
+  if (intact && std::isfinite(theta) && std::isfinite(v[1])) {  // least-squares T = k theta before the first break
+    m[kKey + "fit_tt"] += theta * theta;
+    m[kKey + "fit_tT"] += theta * v[1];
+  }
+  first("onset_break", !intact);
   first("onset_resistance", ratio - 1.0 > p_.resistance_threshold);
   first("separation", std::isinf(ratio));
   for (double t : p_.report_twists) {
@@ -118,7 +123,7 @@ std::vector<std::string> TorsionTest::columns() const {
   std::vector<std::string> c = {"torsion_twist", "torsion_torque", "torsion_torque_twisted_end", "torsion_shear_stress",
                                 "torsion_shear_ratio", "torsion_elastic_torque", "torsion_torque_ratio",
                                 "torsion_resistance_ratio", "torsion_break_onset_twist", "torsion_resistance_onset_twist",
-                                "torsion_separation_twist"};
+                                "torsion_separation_twist", "torsion_stiffness_ratio"};
   for (double t : p_.report_twists) c.push_back(report_column(t));
   return c;
 }
@@ -166,7 +171,9 @@ std::vector<double> TorsionTest::column_values(const State& s) const {
   v[8] = mark(s, "onset_break");
   v[9] = mark(s, "onset_resistance");
   v[10] = mark(s, "separation");
-  for (std::size_t k = 0; k < p_.report_twists.size(); ++k) v[11 + k] = mark(s, "report/" + format_number(p_.report_twists[k]));
+  const double fit_tt = mark(s, "fit_tt"), fit_tT = mark(s, "fit_tT");
+  v[11] = fit_tt > 0.0 ? fit_tT / fit_tt / (p_.shear_modulus * J / L) : kNaN;
+  for (std::size_t k = 0; k < p_.report_twists.size(); ++k) v[12 + k] = mark(s, "report/" + format_number(p_.report_twists[k]));
   return v;
 }
 

@@ -18,6 +18,9 @@
 ///   onsets       the twist of the first broken bond, the first twist where R / R0 - 1 exceeds
 ///                `resistance_threshold`, the first twist where R is infinite (NaN until then)
 ///   reports      R / R0 when the twist first reaches each of `report_twists`
+///   stiffness    torsion_stiffness_ratio = k / (G J / L), k the least-squares slope of T against
+///                theta through the origin over every call before the first break (averages out
+///                the torsional oscillations a twist started at full rate leaves behind)
 /// Every quantity kept between calls (reference orientation, R0, onsets, reports) lives in
 /// State::marks under "torsion/", so it is checkpointed and carries over from stage to stage
 /// (an elastic stage and a cracking stage of the same pin measure one twist).
