@@ -124,6 +124,8 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
       {"coupled Joule press: temperature_controller, electrical_network on a voltage signal with kappa(T), implicit heat_conduction with losses and expansion",
        load_data("joule_press_small.json"), 1, 1777},
       {"explicit heat_conduction on adaptive substeps, electrical every 7 steps", explicit_heat, 1, 1777},
+      {"bonded tension test: cohesive_beam, prescribed sets, tension_test reference field, local_damping",
+       with_steps(load_data("tension_small.json"), 1, 600), 1, 233},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.label) {
