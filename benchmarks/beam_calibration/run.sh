@@ -22,8 +22,11 @@
 #                       if it holds a calibration)
 # The rows also carry the relax packing's own figures (interior coordination and density: the
 # container walls leave a looser layer, so at a fixed overall density 0.63 the interior of a
-# small sample is denser), which explain most of the N-dependence measured.
+# small sample is denser); they drift with N alongside E_M, a likely cause of the N-dependence
+# measured (not isolated by a separate experiment).
 # Outputs: OUTDIR/results.csv, OUTDIR/results.json (default OUTDIR: this directory).
+# Committed: results.csv/json (seed 1, with the calibration, calibration.json) and
+# results_seed2.csv/json (--seed 2 --skip-calibration --outdir ...: the packing scatter).
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"

@@ -226,7 +226,7 @@ json calibrate_beams(const CalibrationSpec& spec, const Registry& reg, const Cal
   report["tolerance"] = spec.tolerance;
   report["failure"] = failure;
   report["iterations"] = json::array();
-  std::vector<double> rs, fs_, gs;  // radius ratios, nu_M - target, E_M / E_mu
+  std::vector<double> rs, f_nu, gs;  // radius ratios, nu_M - target, E_M / E_mu
   double r = spec.initial_radius_ratio, E = spec.initial_young_modulus;
   bool converged = false;
   double stress = 0.0, crit = 0.0, E_M = 0.0, nu_M = 0.0;
@@ -273,9 +273,9 @@ json calibrate_beams(const CalibrationSpec& spec, const Registry& reg, const Cal
       break;
     }
     rs.push_back(r);
-    fs_.push_back(nu_M - spec.target_poisson_ratio);
+    f_nu.push_back(nu_M - spec.target_poisson_ratio);
     gs.push_back(E_M / E);
-    const double r_next = next_radius_ratio(rs, fs_);
+    const double r_next = next_radius_ratio(rs, f_nu);
     E = next_young_modulus(rs, gs, r_next, spec.target_young_modulus);
     r = r_next;
   }
