@@ -1,4 +1,4 @@
-/// sparkdem command line: run | check | schema | --version.
+/// sparkdem command line: run | check | schema | calibrate | --version.
 /// The only place that prints errors and chooses exit codes:
 ///   0 success, 2 invalid scenario or input, 3 physics failure (blow-up, unmet required stop),
 ///   4 set-up failure (including a missing, truncated or corrupt checkpoint or snapshot),
@@ -14,6 +14,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/interrupt.hpp"
 #include "engine/state/particle_set.hpp"
+#include "io/scenario/calibrate_beams.hpp"
 #include "io/scenario/json_binder.hpp"
 #include "io/scenario/pipeline.hpp"
 #include "io/scenario/scenario.hpp"
@@ -102,6 +103,11 @@ int main(int argc, char** argv) {
   auto* check = app.add_subcommand("check", "validate a scenario and print it resolved");
   check->add_option("scene", scene, "scenario JSON file")->required();
   auto* schema = app.add_subcommand("schema", "print every stage, law, module and generator with its parameters");
+  auto* calibrate = app.add_subcommand("calibrate", "calibrate cohesive_beam parameters on a tension test (see io/scenario/calibrate_beams.hpp)");
+  calibrate->add_option("calibration", scene, "calibration JSON file")->required();
+  calibrate->add_option("-o,--output", outdir, "output directory (one run per iteration, calibration.json)");
+  calibrate->add_option("--threads", threads, "OpenMP threads (0 = default)");
+  calibrate->add_flag("--quiet", quiet, "no progress output");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -118,6 +124,26 @@ int main(int argc, char** argv) {
     }
     const std::filesystem::path file(scene);
     const io::json j = io::read_json_file(file);
+    if (calibrate->parsed()) {
+      std::signal(SIGINT, on_signal);
+      std::signal(SIGTERM, on_signal);
+      const io::CalibrationSpec spec = io::parse_calibration(j, file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
+      io::CalibrationOptions copt;
+      copt.outdir = outdir;
+      copt.threads = threads;
+      if (!quiet)
+        copt.on_iteration = [](const io::json& it) {
+          std::cerr << "iteration " << it["iteration"] << ": radius_ratio " << it["radius_ratio"] << ", E_mu "
+                    << it["young_modulus_Pa"] << " Pa -> E_M " << it["measured_young_modulus_Pa"] << " Pa, nu_M "
+                    << it["measured_poisson_ratio"] << " (errors " << it["error_young_modulus"] << ", "
+                    << it["error_poisson_ratio"] << "), " << it["wall_time_s"] << " s\n";
+        };
+      const io::json rep = io::calibrate_beams(spec, reg, copt);
+      if (!quiet)
+        std::cerr << "calibrated: " << rep["result"]["params"].dump() << " written to " << spec.write.string() << "; report "
+                  << (std::filesystem::path(outdir) / "calibration.json").string() << "\n";
+      return 0;
+    }
     io::Scenario sc = io::load_scenario(j, reg, file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
     if (check->parsed()) {
       std::cout << check_report(sc).dump(2) << "\n";

@@ -76,6 +76,8 @@ class ViscousDamping final : public Module {
 /// only accelerating motion, so a quasi-static state (zero net force) is not biased. A numerical
 /// aid for quasi-static stages, off unless listed. It acts on the net force: list it after every
 /// other force module of the stage (force modules run in the listed order, after contacts and bonds).
+/// Prescribed and frozen particles (fixed != 0) are skipped: their force is a reported reaction
+/// (set_<name>_fz, _tz, tension_test), which a damping term of up to alpha |F| would falsify.
 class LocalDamping final : public Module {
  public:
   struct Params {
@@ -94,11 +96,15 @@ class LocalDamping final : public Module {
     const std::int64_t n = static_cast<std::int64_t>(p.size());
     auto sign = [](double x) { return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0; };
 #pragma omp parallel for schedule(static)
-    for (std::int64_t i = 0; i < n; ++i)
+    for (std::int64_t i = 0; i < n; ++i) {
+      // A prescribed (or frozen) particle is not integrated: its force is the reaction of the
+      // rest of the system (set_<name>_f*, tension_test), which damping must not alter.
+      if (p.fixed[i]) continue;
       for (int k = 0; k < 3; ++k) {
         p.force[i][k] -= p_.coefficient * std::abs(p.force[i][k]) * sign(p.velocity[i][k]);
         p.torque[i][k] -= p_.coefficient * std::abs(p.torque[i][k]) * sign(p.omega[i][k]);
       }
+    }
   }
 
  private:

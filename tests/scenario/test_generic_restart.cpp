@@ -126,6 +126,8 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
       {"explicit heat_conduction on adaptive substeps, electrical every 7 steps", explicit_heat, 1, 1777},
       {"cohesive-beam pin twisted through bond failure: rotating prescribed set, local_damping, electrical_network on the intact bonds, torsion_test",
        with_steps(load_data("torsion_small.json"), 1, 600), 1, 263},
+      {"bonded tension test: cohesive_beam, prescribed sets, tension_test reference field, local_damping",
+       with_steps(load_data("tension_small.json"), 1, 600), 1, 233},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.label) {
