@@ -15,11 +15,8 @@
 #include "physics/contact/hooke.hpp"
 #include "physics/contact/lammps_granular.hpp"
 #include "physics/electrical/electrical_network.hpp"
-<<<<<<< HEAD
 #include "physics/mechanics/torsion_test.hpp"
-=======
 #include "physics/mechanics/tension_test.hpp"
->>>>>>> calib
 #include "physics/packing/generators.hpp"
 #include "physics/thermal/heat_conduction.hpp"
 #include "physics/thermal/temperature_history.hpp"
