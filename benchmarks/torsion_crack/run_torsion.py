@@ -28,8 +28,22 @@ REPO = os.path.dirname(os.path.dirname(HERE))
 PREDICTED_ONSET = 400e6 * 5e-3 / (48.062e9 * 1e-3)  # tau_y L / (G r) [rad]
 
 
+def expand_includes(x, base):
+    """Inline every {"$include": file, ...} object (paths relative to `base`), as the loader does."""
+    if isinstance(x, dict):
+        if "$include" in x:
+            inc = os.path.join(base, x["$include"])
+            merged = expand_includes(json.load(open(inc)), os.path.dirname(inc))
+            merged.update({k: expand_includes(v, base) for k, v in x.items() if k != "$include"})
+            return merged
+        return {k: expand_includes(v, base) for k, v in x.items()}
+    if isinstance(x, list):
+        return [expand_includes(v, base) for v in x]
+    return x
+
+
 def scene_for(config, n, seed):
-    j = json.load(open(config))
+    j = expand_includes(json.load(open(config)), os.path.dirname(os.path.abspath(config)))
     n0 = j["stages"][0]["generator"]["particles"]
     scale = (n0 / n) ** (1.0 / 3.0)
     j["stages"][0]["generator"]["particles"] = n
@@ -79,8 +93,7 @@ def main():
             os.makedirs(run_dir, exist_ok=True)
             scene = scene_for(a.config, n, seed)
             scene_file = os.path.join(run_dir, "scenario.json")
-            # the config's $include paths are relative to configs/: resolve them there
-            scene_text = json.dumps(scene, indent=1).replace('"$include": "materials/', '"$include": "%s/materials/' % os.path.dirname(a.config))
+            scene_text = json.dumps(scene, indent=1)
             summary = os.path.join(run_dir, "out", "summary.json")
             fresh = not (a.reuse and os.path.exists(summary) and open(scene_file).read() == scene_text) if os.path.exists(scene_file) else True
             if fresh:
