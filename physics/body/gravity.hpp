@@ -41,6 +41,7 @@ class Gravity final : public Module {
 
 /// # viscous_damping — background drag F_i = -c m_i v_i, T_i = -c I_i w_i
 /// A numerical aid for quasi-static packing and relaxation stages (reported, off by default).
+/// Prescribed particles (fixed != 0) are skipped, so their force stays the reaction of the sample.
 class ViscousDamping final : public Module {
  public:
   struct Params {
@@ -60,6 +61,7 @@ class ViscousDamping final : public Module {
     const std::int64_t n = static_cast<std::int64_t>(p.size());
 #pragma omp parallel for schedule(static)
     for (std::int64_t i = 0; i < n; ++i) {
+      if (p.fixed[i]) continue;  // prescribed: its force is a reported reaction, not integrated
       p.force[i] -= p_.rate * p.mass[i] * p.velocity[i];
       p.torque[i] -= p_.rate * p.inertia[i] * p.omega[i];
     }

@@ -100,3 +100,62 @@ TEST_CASE("small cohesive-beam pin twisted to separation: twist, onset, log and 
   CHECK(st["final"]["torsion_resistance_ratio"].is_null());  // +inf is written as null
   CHECK(st["final"]["torsion_separation_twist"].get<double>() > st["final"]["torsion_break_onset_twist"].get<double>());
 }
+
+TEST_CASE("pin torsion (configs/torsion_crack.json at N = 1000): elastic torque, onset near tau_y L / (G r), resistance rise",
+          "[torsion][beam][electrical][scenario][validation]") {
+  // The shipped scenario with only the element count reduced (5000 -> 1000) and the two lengths
+  // that follow the element size scaled with it (bond gap tolerance, end-set thickness), as
+  // benchmarks/torsion_crack/run_torsion.py does. Beams: the committed calibration
+  // (configs/materials/cast_iron_beams.json, made on a tension sample at the N = 5000 element
+  // size). Measured (benchmarks/torsion_crack/results.md): stiffness ratio 1.134 / 0.993 / 0.913
+  // and first-break twist +1.2 / -4.0 / -13.0 % at N = 1000 / 2500 / 5000 - the elastic
+  // response drifts with the element size because the packing protocol does (see README). The
+  // bands here are regression guards around the N = 1000 figures, not the issue's 3 % / 5 %:
+  // stiffness within 20 % of G J / L, first break within 15 % of 0.0416 rad, the pin still
+  // conducting like an intact one at 0.05 rad (R/R0 < 1.1) and more than 1.5 R0 at 0.07 rad
+  // (seed 001: more than doubled), quasi-static before the first break (kinetic < 5 % of elastic).
+  Registry reg;
+  physics::register_all(reg);
+  const fs::path configs = fs::path(SPARKDEM_SOURCE_DIR) / "configs";
+  json scene = json::parse(std::ifstream(configs / "torsion_crack.json"));
+  const double scale = std::cbrt(5000.0 / 1000.0);
+  scene["stages"][0]["generator"]["particles"] = 1000;
+  scene["stages"][1]["create_bonds"]["gap_tolerance"] = scene["stages"][1]["create_bonds"]["gap_tolerance"].get<double>() * scale;
+  for (auto& s : scene["particle_sets"]) s["thickness"] = s["thickness"].get<double>() * scale;
+  io::Scenario sc = io::load_scenario(scene, reg, configs);
+  test::ScratchDir tmp("sparkdem_torsion_1000");
+  io::RunOptions opt;
+  opt.outdir = tmp.path / "out";
+  opt.quiet = true;
+  opt.threads = 1;
+  const json summary = io::run_scenario(sc, opt);
+  REQUIRE(summary["status"] == "completed");
+  const json& f = summary["stages"][1]["final"];
+  const double predicted = 400e6 * 5e-3 / (48.062e9 * 1e-3);
+  INFO("stiffness ratio " << f["torsion_stiffness_ratio"] << ", first break " << f["torsion_break_onset_twist"] << " rad, R/R0 at 0.05 "
+                          << f["torsion_resistance_ratio_at_0.05"] << ", at 0.07 " << f["torsion_resistance_ratio_at_0.07"]);
+  CHECK(std::abs(f["torsion_stiffness_ratio"].get<double>() - 1.0) < 0.20);
+  CHECK(std::abs(f["torsion_break_onset_twist"].get<double>() / predicted - 1.0) < 0.15);
+  CHECK(f["torsion_resistance_ratio_at_0.05"].get<double>() < 1.1);
+  const json& r07 = f["torsion_resistance_ratio_at_0.07"];
+  CHECK((r07.is_null() || r07.get<double>() > 1.5));  // null: +inf, separated
+  // Quasi-static before the first break: kinetic against elastic energy on every row past 0.005 rad.
+  const auto ts = read_csv(opt.outdir / "timeseries.csv");
+  std::size_t c_ke = 0, c_ue = 0, c_br = 0, c_tw = 0;
+  for (std::size_t k = 0; k < ts[0].size(); ++k) {
+    if (ts[0][k] == "kinetic_energy") c_ke = k;
+    if (ts[0][k] == "bonds_elastic_energy") c_ue = k;
+    if (ts[0][k] == "bonds_broken") c_br = k;
+    if (ts[0][k] == "torsion_twist") c_tw = k;
+  }
+  double worst = 0.0;
+  for (std::size_t r = 1; r < ts.size(); ++r) {
+    if (ts[r][c_br].empty() || ts[r][c_tw].empty() || ts[r][c_tw] == "nan") continue;
+    if (std::stod(ts[r][c_br]) > 0.0) break;
+    if (std::stod(ts[r][c_tw]) > 0.005) worst = std::max(worst, std::stod(ts[r][c_ke]) / std::stod(ts[r][c_ue]));
+  }
+  CHECK(worst < 0.05);
+  // Every figure of the scenario's checks is in the summary with its error and the stage's run time.
+  REQUIRE(summary.contains("checks"));
+  CHECK(summary["checks"].size() == 4);
+}
