@@ -38,24 +38,30 @@ std::vector<std::vector<std::string>> read_csv(const fs::path& f) {
   }
   return rows;
 }
+
+/// Load `scene` (relative paths against `base`), run it into a scratch directory with one thread
+/// and return the summary; `out` receives the output directory.
+json run_scene(const json& scene, const fs::path& base, const test::ScratchDir& tmp, fs::path& out) {
+  Registry reg;
+  physics::register_all(reg);
+  io::Scenario sc = io::load_scenario(scene, reg, base);
+  io::RunOptions opt;
+  opt.outdir = out = tmp.path / "out";
+  opt.quiet = true;
+  opt.threads = 1;
+  return io::run_scenario(sc, opt);
+}
 }  // namespace
 
 TEST_CASE("small cohesive-beam pin twisted to separation: twist, onset, log and resistance are consistent",
           "[torsion][beam][electrical][scenario]") {
-  Registry reg;
-  physics::register_all(reg);
-  const json scene = test::load_data("torsion_small.json");
-  io::Scenario sc = io::load_scenario(scene, reg, fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data");
   test::ScratchDir tmp("sparkdem_torsion_small");
-  io::RunOptions opt;
-  opt.outdir = tmp.path / "out";
-  opt.quiet = true;
-  opt.threads = 1;
-  const json summary = io::run_scenario(sc, opt);
+  fs::path out;
+  const json summary = run_scene(test::load_data("torsion_small.json"), fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data", tmp, out);
   REQUIRE(summary["status"] == "completed");
   const double w = 1000.0, pin_r = 4e-4, pin_l = 1.6e-3;
 
-  const auto ts = read_csv(opt.outdir / "timeseries.csv");
+  const auto ts = read_csv(out / "timeseries.csv");
   const auto& head = ts.at(0);
   auto idx = [&](const std::string& n) {
     for (std::size_t k = 0; k < head.size(); ++k)
@@ -83,7 +89,7 @@ TEST_CASE("small cohesive-beam pin twisted to separation: twist, onset, log and 
   const json& st = summary["stages"][1];
   const double broken = st["final"]["bonds_broken"].get<double>();
   REQUIRE(broken > 0);
-  const auto log = read_csv(opt.outdir / "broken_bonds.csv");
+  const auto log = read_csv(out / "broken_bonds.csv");
   REQUIRE(log.size() == static_cast<std::size_t>(broken) + 1);
   double by_mode = 0.0;
   for (const auto& [m, n] : st["bonds"]["broken_by_mode"].items()) by_mode += n.get<double>();
@@ -114,21 +120,15 @@ TEST_CASE("pin torsion (configs/torsion_crack.json at N = 1000): elastic torque,
   // stiffness within 20 % of G J / L, first break within 15 % of 0.0416 rad, the pin still
   // conducting like an intact one at 0.05 rad (R/R0 < 1.1) and more than 1.5 R0 at 0.07 rad
   // (seed 001: more than doubled), quasi-static before the first break (kinetic < 5 % of elastic).
-  Registry reg;
-  physics::register_all(reg);
   const fs::path configs = fs::path(SPARKDEM_SOURCE_DIR) / "configs";
   json scene = json::parse(std::ifstream(configs / "torsion_crack.json"));
   const double scale = std::cbrt(5000.0 / 1000.0);
   scene["stages"][0]["generator"]["particles"] = 1000;
   scene["stages"][1]["create_bonds"]["gap_tolerance"] = scene["stages"][1]["create_bonds"]["gap_tolerance"].get<double>() * scale;
   for (auto& s : scene["particle_sets"]) s["thickness"] = s["thickness"].get<double>() * scale;
-  io::Scenario sc = io::load_scenario(scene, reg, configs);
   test::ScratchDir tmp("sparkdem_torsion_1000");
-  io::RunOptions opt;
-  opt.outdir = tmp.path / "out";
-  opt.quiet = true;
-  opt.threads = 1;
-  const json summary = io::run_scenario(sc, opt);
+  fs::path out;
+  const json summary = run_scene(scene, configs, tmp, out);
   REQUIRE(summary["status"] == "completed");
   const json& f = summary["stages"][1]["final"];
   const double predicted = 400e6 * 5e-3 / (48.062e9 * 1e-3);
@@ -140,7 +140,7 @@ TEST_CASE("pin torsion (configs/torsion_crack.json at N = 1000): elastic torque,
   const json& r07 = f["torsion_resistance_ratio_at_0.07"];
   CHECK((r07.is_null() || r07.get<double>() > 1.5));  // null: +inf, separated
   // Quasi-static before the first break: kinetic against elastic energy on every row past 0.005 rad.
-  const auto ts = read_csv(opt.outdir / "timeseries.csv");
+  const auto ts = read_csv(out / "timeseries.csv");
   std::size_t c_ke = 0, c_ue = 0, c_br = 0, c_tw = 0;
   for (std::size_t k = 0; k < ts[0].size(); ++k) {
     if (ts[0][k] == "kinetic_energy") c_ke = k;
