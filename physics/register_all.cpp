@@ -9,6 +9,7 @@
 #include "physics/body/gravity.hpp"
 #include "physics/bonds/cohesive_beam.hpp"
 #include "physics/bonds/spring_bond.hpp"
+#include "physics/bonds/virial_failure.hpp"
 #include "physics/contact/hertz_mindlin.hpp"
 #include "physics/control/temperature_controller.hpp"
 #include "physics/contact/sintering.hpp"
@@ -34,6 +35,7 @@ void register_all(Registry& r) {
   r.module<ViscousDamping>();
   r.module<LocalDamping>();
   r.module<AddForce>();
+  r.module<BondVirialFailure>();
   r.module<TensionTest>();
   r.module<ElectricalNetwork>();
   r.module<TemperatureHistory>();

@@ -28,11 +28,14 @@ struct BondReference {
 /// Reference of a bond between particles at xi, xj with orientations qi, qj (body -> world).
 BondReference make_bond_reference(const Vec3& xi, const Vec3& xj, const Quat& qi, const Quat& qj);
 
+/// Failure mode of a bond broken by the bond_virial_failure module (not by its law).
+inline constexpr std::int64_t kBreakModeHydrostatic = -1;
+
 /// The log entry of a broken bond.
 struct BondBreakRecord {
   double time = std::numeric_limits<double>::quiet_NaN();  ///< [s] at the end of the breaking step
   Vec3 position = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  ///< midpoint of the centres [m]
-  std::int64_t mode = 0;  ///< failure mode (1-based index into the bond law's failure_modes(); 0 unknown)
+  std::int64_t mode = 0;  ///< failure mode (1-based index into the bond law's failure_modes(); 0 unknown; kBreakModeHydrostatic)
 };
 
 class BondTable : public PairRows {

@@ -21,6 +21,7 @@
 #include "engine/state/particle_set.hpp"
 #include "physics/body/gravity.hpp"
 #include "physics/bonds/cohesive_beam.hpp"
+#include "physics/bonds/virial_failure.hpp"
 #include "physics/contact/hertz_mindlin.hpp"
 #include "physics/mechanics/torsion_test.hpp"
 #include "tests/support/scene.hpp"
@@ -357,4 +358,39 @@ TEST_CASE("cohesive beam stable step: below the stability limit measured by bise
   CHECK(estimate < lo);
   CHECK(estimate > 0.7 * lo);
   CHECK(energy_growth(0.9 * estimate) < 1.5);  // bounded energy at 0.9 of the estimate
+}
+
+TEST_CASE("bond_virial_failure: the Love-Weber hydrostatic stress of a stretched cubic lattice, and breaking at it",
+          "[beam][bonds][failure]") {
+  // A simple cubic lattice (spacing 2r) of bonded elements stretched by e along x only: every x
+  // bond carries F = E S e (axial), the others nothing. An interior element has two x bonds with
+  // lever L0 / 2 = r, so sigma_xx = 2 r F / V and sigma_h = sigma_xx / 3 (V = sphere / f_v).
+  State s;
+  const double e = 1e-4;
+  for (int x = 0; x < 3; ++x)
+    for (int y = 0; y < 3; ++y)
+      for (int z = 0; z < 3; ++z) test::add_sphere(s, Vec3(2 * kR * x, 2 * kR * y, 2 * kR * z), kR, kRho);
+  REQUIRE(bond_within_gap(s, 1e-3 * kR) == 54);
+  for (auto& x : s.particles.position) x.x() *= 1.0 + e;
+  s.bonds_active = true;
+  BondModelT<CohesiveBeam> bonds(beam_params());
+  s.bonds.prepare(s.particles.size());
+  bonds.pass(s.particles, s.bonds, 0.0);
+  const double fv = 0.6, F = kE * S * e, V = 4.0 / 3.0 * kPi * kR * kR * kR / fv;
+  const std::vector<double> h = physics::bond_hydrostatic_stress(s.particles, s.bonds, fv);
+  const Index centre = 13;  // (1, 1, 1)
+  REQUIRE((s.particles.position[centre] - Vec3(2 * kR * (1 + e), 2 * kR, 2 * kR)).norm() < 1e-15);
+  const double expected = 2.0 * kR * (1 + e) * F / V / 3.0;
+  CHECK(test::relative_error(h[centre], expected) < 1e-10);
+  // A threshold just below the centre's stress breaks exactly the bonds whose two ends average
+  // above it, and logs them as hydrostatic.
+  physics::BondVirialFailure mod({0.5 * (h[centre] + h[4]) * (1 - 1e-9), fv});
+  mod.advance(s, StepInfo{1, 1e-6, 1e-6, 0});
+  std::size_t expected_breaks = 0;
+  for (std::size_t r = 0; r < s.bonds.size(); ++r)
+    if (0.5 * (h[s.bonds.i(r)] + h[s.bonds.j(r)]) >= 0.5 * (h[centre] + h[4]) * (1 - 1e-9)) ++expected_breaks;
+  CHECK(expected_breaks > 0);
+  CHECK(s.bonds.broken_count() == expected_breaks);
+  for (std::size_t r = 0; r < s.bonds.size(); ++r)
+    if (s.bonds.broken(r)) CHECK(s.bonds.break_record(r).mode == kBreakModeHydrostatic);
 }
