@@ -126,6 +126,8 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
       {"explicit heat_conduction on adaptive substeps, electrical every 7 steps", explicit_heat, 1, 1777},
       {"cohesive-beam pin twisted through bond failure: rotating prescribed set, local_damping, electrical_network on the intact bonds, torsion_test",
        with_steps(load_data("torsion_small.json"), 1, 600), 1, 263},
+      {"cpc_fillers configuration, then Hertz settling with electrical_network and contact_percolation on every-N clocks",
+       load_data("cpc_small.json"), 1, 113},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.label) {
