@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Percolation of seed-002 filler configurations (cpc_fillers + contact_percolation).
 
-  plot_cpc.py config --out configs/cpc_percolation.json [--box 40] [--lambda 0] [--seeds 12]
+  plot_cpc.py config --out configs/cpc_percolation.json [--box 70] [--lambda 0] [--seeds 10]
                      [--phis 0.15,0.17,...] [--name cpc_percolation]
       writes a scenario: one cpc_fillers stage per volume fraction, each a seeds sweep
       (ensemble) evaluated by electrical_network (touching, unit conductances) and
@@ -57,7 +57,7 @@ def make_config(a):
         "name": a.name,
         "description": ("Seed 002 (Barbieri et al.) percolation of rigid monodisperse fillers: cpc_fillers configurations "
                         "(contact algorithm gamma = 0.4, largest relative overlap <= 1e-3, open box; aggregation lambda = %g R) "
-                        "in a cube of L = %g R, %d configurations (seeds) per volume fraction; electrodes = spheres reaching "
+                        "in a cube of L = %g R (lambda = 70 R = 35 D reproduces the paper's segregated phi_c ~ 4 %%), %d configurations (seeds) per volume fraction; electrodes = spheres reaching "
                         "the faces x = 0 and x = L; touching = gap <= 0.1 %% of D; unit conductances; rho = R_eq L. "
                         "Analyse with tools/plot_cpc.py analyse OUT. Written by tools/plot_cpc.py config."
                         % (a.lam, a.box, a.seeds)),
@@ -68,9 +68,19 @@ def make_config(a):
         "particle_sets": {"x_lo": {"type": "touching_wall", "wall": "xlo", "tolerance": 0.0},
                           "x_hi": {"type": "touching_wall", "wall": "xhi", "tolerance": 0.0}},
         "stages": stages}
+    # Compact layout: one line per key of the top level and of each stage.
+    lines = ["{"]
+    top = [(k, v) for k, v in cfg.items() if k != "stages"]
+    for k, v in top:
+        lines.append("  %s: %s," % (json.dumps(k), json.dumps(v)))
+    lines.append('  "stages": [')
+    for n, st in enumerate(cfg["stages"]):
+        body = ",\n     ".join("%s: %s" % (json.dumps(k), json.dumps(v)) for k, v in st.items())
+        lines.append("    {" + body + "}" + ("," if n + 1 < len(cfg["stages"]) else ""))
+    lines.append("  ]")
+    lines.append("}")
     with open(a.out, "w") as f:
-        json.dump(cfg, f, indent=1)
-        f.write("\n")
+        f.write("\n".join(lines) + "\n")
 
 
 def num(x):
@@ -270,10 +280,10 @@ def main():
     c = sub.add_parser("config")
     c.add_argument("--out", required=True)
     c.add_argument("--name", default="cpc_percolation")
-    c.add_argument("--box", type=float, default=40.0, help="L in units of R")
+    c.add_argument("--box", type=float, default=70.0, help="L in units of R")
     c.add_argument("--lam", "--lambda", dest="lam", type=float, default=0.0)
-    c.add_argument("--seeds", type=int, default=12)
-    c.add_argument("--phis", default="0.17,0.19,0.21,0.22,0.23,0.24,0.25,0.26,0.28,0.30,0.33,0.36")
+    c.add_argument("--seeds", type=int, default=10)
+    c.add_argument("--phis", default="0.16,0.18,0.20,0.21,0.22,0.23,0.24,0.25,0.26,0.28,0.31,0.35")
     n = sub.add_parser("analyse")
     n.add_argument("outs", nargs="+")
     n.add_argument("--prefix", required=True)
