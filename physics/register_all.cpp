@@ -15,9 +15,11 @@
 #include "physics/contact/sintering.hpp"
 #include "physics/contact/hooke.hpp"
 #include "physics/contact/lammps_granular.hpp"
+#include "physics/electrical/contact_percolation.hpp"
 #include "physics/electrical/electrical_network.hpp"
 #include "physics/mechanics/torsion_test.hpp"
 #include "physics/mechanics/tension_test.hpp"
+#include "physics/packing/cpc_fillers.hpp"
 #include "physics/packing/generators.hpp"
 #include "physics/thermal/heat_conduction.hpp"
 #include "physics/thermal/temperature_history.hpp"
@@ -42,10 +44,12 @@ void register_all(Registry& r) {
   r.module<HeatConduction>();
   r.module<TemperatureController>();
   r.module<TorsionTest>();
+  r.module<ContactPercolation>();
   r.generator<LatticeGenerator>();
   r.generator<DepositGenerator>();
   r.generator<FillGenerator>();
   r.generator<RelaxGenerator>();
+  r.generator<CpcFillersGenerator>();
 }
 
 }  // namespace sparkdem::physics

@@ -20,6 +20,9 @@ class Generator {
   virtual std::string name() const = 0;
   /// Insert particles and container walls into the state (deterministic from state.rng).
   virtual void generate(State& s) = 0;
+  /// True if the stage loop runs after generation (deposit and fill settle; cpc_fillers runs a
+  /// frozen evaluation of its network modules); false: the stage ends at generation.
+  virtual bool steps() const { return false; }
   /// Adjust the stage that settles the packing (motions, stop conditions); default: none.
   virtual void configure_stage(StageConfig& cfg) const { (void)cfg; }
   /// Modules the settling stage needs (e.g. gravity); owned by the caller.

@@ -178,7 +178,7 @@ ParamSpec<StageParams::Output> output_spec() {
 }
 ParamSpec<StageParams> stage_spec(const Registry& reg) {
   ParamSpec<StageParams> s("stage", "stage",
-                           "one stage: a generator (type = lattice|deposit|fill|relax, parameters in `generator`) or "
+                           "one stage: a generator (type = lattice|deposit|fill|relax|cpc_fillers, parameters in `generator`) or "
                            "`dynamics`; plus modules, wall motions, stop condition and output");
   std::vector<std::string> types = {"dynamics"};
   for (const auto& [k, v] : reg.generators()) types.push_back(k);
@@ -579,7 +579,7 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
           }
         }
       }
-      st.dynamics = st.type == "deposit" || st.type == "fill";
+      st.dynamics = st.generator ? st.generator->steps() : (st.type == "deposit" || st.type == "fill" || st.type == "cpc_fillers");
       ctx.has_particles = true;
     }
   } else if (js.contains("generator")) {
@@ -657,6 +657,7 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
   }
   if (st.type == "deposit") { ctx.wall_names.insert("die"); ctx.wall_names.insert("bottom"); }
   if (st.type == "fill" || st.type == "relax") for (const char* n : {"die", "bottom", "top", "xlo", "xhi", "ylo", "yhi"}) ctx.wall_names.insert(n);
+  if (st.type == "cpc_fillers") for (const char* n : {"bottom", "top", "xlo", "xhi", "ylo", "yhi"}) ctx.wall_names.insert(n);
   if (js.contains("remove_walls")) {
     if (!js["remove_walls"].is_array()) errors.push_back({path + "/remove_walls", "expected an array of wall names"});
     else

@@ -22,7 +22,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 bool is_wall_electrode(const std::string& e) { return e.rfind("wall:", 0) == 0; }
 
 /// Nodes of one electrode: the particles of a set, or a wall node.
-std::vector<Index> electrode_nodes(const State& s, const InteractionGraph& g, const std::string& e) {
+std::vector<Index> electrode_nodes(const State& s, const InteractionGraph& g, const std::string& e, bool allow_empty = false) {
   std::vector<Index> out;
   if (is_wall_electrode(e)) {
     const std::string w = e.substr(5);
@@ -36,7 +36,7 @@ std::vector<Index> electrode_nodes(const State& s, const InteractionGraph& g, co
   const auto& f = s.particles.fields.data("set/" + e);
   for (std::size_t i = 0; i < f.size(); ++i)
     if (f[i] > 0.5) out.push_back(static_cast<Index>(i));
-  if (out.empty()) throw SetupError("electrical_network: electrode set '" + e + "' holds no particle");
+  if (out.empty() && !allow_empty) throw SetupError("electrical_network: electrode set '" + e + "' holds no particle (empty_electrode: \"open\" reads it as an open circuit)");
   return out;
 }
 
@@ -117,6 +117,8 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
       .doc("take the voltage from this signal at every solve (written by a controller, e.g. temperature_controller); \"\" = `voltage`");
   s.add("high", &P::high).doc("electrode held at `voltage`: a particle-set name or \"wall:<name>\"");
   s.add("low", &P::low).doc("electrode held at 0 V: a particle-set name or \"wall:<name>\"");
+  s.add("empty_electrode", &P::empty_electrode).choices({"error", "open"})
+      .doc("an electrode set that holds no particle: a set-up error, or an open circuit (R = +inf; percolation ensembles)");
   s.add("voltage", &P::voltage).unit("V").positive().doc("potential difference between the electrodes");
   s.add("current", &P::current).unit("A").nonnegative().doc("> 0: inject this current at `high` (one equipotential electrode) instead of holding the voltage; `low` stays at 0 V");
   s.add("length", &P::length).unit("m").nonnegative().doc("L of kappa_eff = I L / (dV A); 0: distance between the electrodes' particle centroids");
@@ -244,7 +246,26 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   } catch (const ConfigError& e) {
     throw PhysicsError(info.step, {}, "electrical conductance", e.what());
   }
-  const std::vector<Index> high = electrode_nodes(s, g, p_.high), low = electrode_nodes(s, g, p_.low);
+  const bool allow_empty = p_.empty_electrode == "open";
+  const std::vector<Index> high = electrode_nodes(s, g, p_.high, allow_empty), low = electrode_nodes(s, g, p_.low, allow_empty);
+  if (high.empty() || low.empty()) {
+    // empty_electrode = "open": no particle reaches an electrode (e.g. an aggregate that does not
+    // reach a face of the cpc_fillers box): no current can flow; open-circuit results.
+    std::fill(s.particles.fields.data("electric_potential").begin(), s.particles.fields.data("electric_potential").end(), kNaN);
+    std::fill(s.particles.fields.data("joule_power").begin(), s.particles.fields.data("joule_power").end(), 0.0);
+    edges_ = EdgeOutput{};
+    const double solves = r_.solves;
+    r_ = Result{};
+    r_.resistance = kInf;
+    r_.voltage = p_.voltage;
+    r_.length = p_.length > 0.0 ? p_.length : kNaN;
+    r_.conductivity_eff = kNaN;
+    r_.floating = static_cast<double>(s.particles.size());
+    r_.solves = solves + 1.0;
+    r_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    s.marks["signal/electrical_resistance"] = -1.0;
+    return;
+  }
   for (Index v : high)
     if (std::find(low.begin(), low.end(), v) != low.end())
       throw SetupError("electrical_network: a particle belongs to both electrodes '" + p_.high + "' and '" + p_.low + "'");

@@ -54,6 +54,7 @@
 /// | resistivity_coefficient | 1/K | beta of kappa(T) = kappa / (1 + beta (T - T_ref)) (0: constant) |
 /// | conductivity_table_temperature, _values | K, S/m | tabulated kappa(T) instead (piecewise linear) |
 /// | high, low          | -     | electrodes: a particle-set name, or "wall:<name>"              |
+/// | empty_electrode    | -     | error (default): an electrode set with no particle is a SetupError; open: an open circuit (R = +inf) |
 /// | voltage            | V     | potential of `high` (low = 0)                                  |
 /// | voltage_signal     | -     | take the voltage from State signal "signal/<name>" at each solve (a controller's output) |
 /// | current            | A     | > 0: inject this current at `high` instead (electrode equipotential) |
@@ -89,6 +90,7 @@ class ElectricalNetwork final : public Module {
     std::vector<double> conductivity_table_values;       // S/m
     std::string high = "top";
     std::string low = "bottom";
+    std::string empty_electrode = "error";
     double voltage = 1.0;
     std::string voltage_signal;
     double current = 0.0;

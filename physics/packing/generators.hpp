@@ -65,6 +65,7 @@ class DepositGenerator final : public Generator {
   explicit DepositGenerator(const Params& p) : p_(p) {}
   std::string name() const override { return "deposit"; }
   void generate(State& s) override;
+  bool steps() const override { return true; }
   void configure_stage(StageConfig& cfg) const override;
   std::vector<std::unique_ptr<Module>> modules() const override;
   std::vector<std::unique_ptr<Monitor>> monitors() const override;
@@ -100,6 +101,7 @@ class FillGenerator final : public Generator {
   explicit FillGenerator(const Params& p) : p_(p) {}
   std::string name() const override { return "fill"; }
   void generate(State& s) override;
+  bool steps() const override { return true; }
   void configure_stage(StageConfig& cfg) const override;
   std::vector<std::unique_ptr<Module>> modules() const override;
   std::vector<std::unique_ptr<Monitor>> monitors() const override;

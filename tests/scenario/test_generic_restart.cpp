@@ -128,6 +128,8 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
        with_steps(load_data("torsion_small.json"), 1, 600), 1, 263},
       {"bonded tension test: cohesive_beam, prescribed sets, tension_test reference field, local_damping",
        with_steps(load_data("tension_small.json"), 1, 600), 1, 233},
+      {"cpc_fillers configuration, then Hertz settling with electrical_network and contact_percolation on every-N clocks",
+       load_data("cpc_small.json"), 1, 113},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.label) {
