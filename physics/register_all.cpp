@@ -17,6 +17,7 @@
 #include "physics/contact/lammps_granular.hpp"
 #include "physics/electrical/contact_percolation.hpp"
 #include "physics/electrical/electrical_network.hpp"
+#include "physics/electrical/ptc_strain.hpp"
 #include "physics/mechanics/torsion_test.hpp"
 #include "physics/mechanics/tension_test.hpp"
 #include "physics/packing/cpc_fillers.hpp"
@@ -45,6 +46,7 @@ void register_all(Registry& r) {
   r.module<TemperatureController>();
   r.module<TorsionTest>();
   r.module<ContactPercolation>();
+  r.module<PtcStrain>();
   r.generator<LatticeGenerator>();
   r.generator<DepositGenerator>();
   r.generator<FillGenerator>();

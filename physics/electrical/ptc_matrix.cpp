@@ -1,0 +1,183 @@
+#include "physics/electrical/ptc_matrix.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include "engine/core/error.hpp"
+#include "engine/neighbor/neighbor_search.hpp"
+#include "physics/electrical/contact_percolation.hpp"
+
+namespace sparkdem::physics::ptc {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}
+
+SpringNetwork build_network(const std::vector<Vec3>& x, const std::vector<double>& r, const MatrixParams& p) {
+  if (x.size() != r.size()) throw SetupError("ptc_matrix: positions and radii differ in length");
+  if (!(p.min_gap > 0.0)) throw SetupError("ptc_matrix: min_gap h_min must be > 0 [m]");
+  if (!(p.cutoff_gap >= p.touch_tolerance))
+    throw SetupError("ptc_matrix: cutoff_gap h_max must be >= touch_tolerance (touching pairs need springs)");
+  if (!(p.matrix_modulus > 0.0) || !(p.bond_area > 0.0)) throw SetupError("ptc_matrix: matrix_modulus and bond_area must be > 0");
+  SpringNetwork net;
+  if (x.empty()) return net;
+  // find_pairs returns d < r_i + r_j + skin: a skin slightly above h_max keeps gap == h_max.
+  auto pairs = find_pairs(x, r, p.cutoff_gap * (1.0 + 1e-12) + 1e-300);
+  for (auto& pr : pairs)
+    if (pr[0] > pr[1]) std::swap(pr[0], pr[1]);
+  std::sort(pairs.begin(), pairs.end());
+  for (const auto& pr : pairs) {
+    const Vec3 d = x[pr[1]] - x[pr[0]];
+    const double dist = d.norm();
+    if (!(dist > 0.0))
+      throw SetupError("ptc_matrix: fillers " + std::to_string(pr[0]) + " and " + std::to_string(pr[1]) + " have coincident centres");
+    const double h = dist - r[pr[0]] - r[pr[1]];
+    if (h > p.cutoff_gap) continue;
+    net.a.push_back(pr[0]);
+    net.b.push_back(pr[1]);
+    net.gap.push_back(h);
+    net.normal.push_back(d / dist);
+    net.stiffness.push_back(p.matrix_modulus * p.bond_area / std::max(h, p.min_gap));
+    net.eigen_gap.push_back(h > p.touch_tolerance ? h : 0.0);
+  }
+  return net;
+}
+
+UnitSolution solve_unit(std::size_t n, const SpringNetwork& net, const MatrixParams& p, std::span<const Index> fixed) {
+  UnitSolution out;
+  out.displacement.assign(n, Vec3::Zero());
+  out.opening.assign(net.size(), 0.0);
+  if (n == 0) return out;
+  if (!(p.regularisation >= 0.0)) throw SetupError("ptc_matrix: regularisation must be >= 0");
+  std::vector<char> held(n, 0);
+  for (Index v : fixed) {
+    if (v < 0 || static_cast<std::size_t>(v) >= n) throw SetupError("ptc_matrix: fixed filler index out of range");
+    held[v] = 1;
+  }
+  // Free DOF numbering: 3 per free filler.
+  std::vector<std::int64_t> dof(n, -1);
+  std::int64_t m = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!held[i]) { dof[i] = m; m += 3; }
+  if (m == 0) return out;
+  double kmean = 0.0;
+  for (double k : net.stiffness) kmean += k;
+  kmean = net.size() ? kmean / static_cast<double>(net.size()) : 1.0;
+  const double ground = p.regularisation * kmean;
+
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(36 * net.size() + static_cast<std::size_t>(m));
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(m);
+  for (std::size_t e = 0; e < net.size(); ++e) {
+    const Vec3& nn = net.normal[e];
+    const double k = net.stiffness[e];
+    const Index ends[2] = {net.a[e], net.b[e]};
+    const double sign[2] = {-1.0, 1.0};  // B u = n . (u_b - u_a)
+    for (int s = 0; s < 2; ++s) {
+      const std::int64_t ds = dof[ends[s]];
+      if (ds < 0) continue;
+      for (int c = 0; c < 3; ++c) f[ds + c] += k * net.eigen_gap[e] * sign[s] * nn[c];
+      for (int q = 0; q < 2; ++q) {
+        const std::int64_t dq = dof[ends[q]];
+        if (dq < 0) continue;
+        for (int c = 0; c < 3; ++c)
+          for (int d = 0; d < 3; ++d) t.emplace_back(ds + c, dq + d, k * sign[s] * sign[q] * nn[c] * nn[d]);
+      }
+    }
+  }
+  for (std::int64_t i = 0; i < m; ++i) t.emplace_back(i, i, ground);
+  Eigen::SparseMatrix<double> K(m, m);
+  K.setFromTriplets(t.begin(), t.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt;
+  ldlt.compute(K);
+  if (ldlt.info() != Eigen::Success)
+    throw SetupError("ptc_matrix: the spring-network matrix could not be factorised (singular: raise regularisation, or hold fillers)");
+  const Eigen::VectorXd u = ldlt.solve(f);
+  const double fn = f.norm();
+  out.residual = fn > 0.0 ? (K * u - f).norm() / fn : 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (dof[i] >= 0) out.displacement[i] = Vec3(u[dof[i]], u[dof[i] + 1], u[dof[i] + 2]);
+  for (std::size_t e = 0; e < net.size(); ++e)
+    out.opening[e] = net.normal[e].dot(out.displacement[net.b[e]] - out.displacement[net.a[e]]);
+  return out;
+}
+
+Contacts touching_contacts(const SpringNetwork& net, const UnitSolution& sol, double touch_tolerance) {
+  Contacts c;
+  for (std::size_t e = 0; e < net.size(); ++e)
+    if (net.gap[e] <= touch_tolerance) {
+      c.a.push_back(net.a[e]);
+      c.b.push_back(net.b[e]);
+      c.gap.push_back(net.gap[e]);
+      c.opening.push_back(sol.opening[e]);
+    }
+  return c;
+}
+
+std::vector<double> break_strains(const Contacts& c, double break_gap) {
+  std::vector<double> out(c.size(), kInf);
+  for (std::size_t e = 0; e < c.size(); ++e)
+    if (c.opening[e] > 0.0) out[e] = (std::max(break_gap, c.gap[e]) - c.gap[e]) / c.opening[e];
+  return out;
+}
+
+StrainPoint evaluate(std::size_t n, const Contacts& c, std::span<const double> eps_break, double eps0,
+                     double unit_conductance, std::span<const Index> high, std::span<const Index> low,
+                     LaplacianSolver& solver) {
+  if (eps_break.size() != c.size()) throw SetupError("ptc_matrix: one break strain per contact expected");
+  StrainPoint sp;
+  sp.eps0 = eps0;
+  std::vector<Index> a, b;
+  for (std::size_t e = 0; e < c.size(); ++e)
+    if (eps0 <= eps_break[e]) { a.push_back(c.a[e]); b.push_back(c.b[e]); }
+  const percolation::Metrics m = percolation::metrics(n, a, b, high, low);
+  sp.spanning = m.spanning;
+  sp.conducting = m.touching_pairs;
+  sp.coordination = m.coordination;
+  sp.resistance = kInf;
+  if (m.spanning) {
+    const std::vector<double> rk = percolation::cluster_resistances(n, a, b, unit_conductance, high, low, solver);
+    double inv = 0.0;
+    for (double r : rk) inv += r > 0.0 ? 1.0 / r : kInf;
+    sp.resistance = inv > 0.0 ? 1.0 / inv : kInf;
+  }
+  return sp;
+}
+
+double switching_strain(std::size_t n, const Contacts& c, std::span<const double> eps_break, std::span<const Index> high,
+                        std::span<const Index> low) {
+  if (eps_break.size() != c.size()) throw SetupError("ptc_matrix: one break strain per contact expected");
+  if (n == 0 || high.empty() || low.empty()) return 0.0;
+  std::vector<Index> parent(n);
+  std::iota(parent.begin(), parent.end(), Index{0});
+  std::vector<char> hi(n, 0), lo(n, 0);
+  for (Index v : high) hi[v] = 1;
+  for (Index v : low) lo[v] = 1;
+  for (std::size_t v = 0; v < n; ++v)
+    if (hi[v] && lo[v]) return kInf;  // a filler on both faces spans without contacts
+  auto find = [&](Index v) {
+    while (parent[v] != v) { parent[v] = parent[parent[v]]; v = parent[v]; }
+    return v;
+  };
+  std::vector<std::size_t> order(c.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return eps_break[x] > eps_break[y]; });
+  for (std::size_t e : order) {
+    Index ra = find(c.a[e]), rb = find(c.b[e]);
+    if (ra == rb) continue;
+    if (rb < ra) std::swap(ra, rb);
+    parent[rb] = ra;
+    hi[ra] = hi[ra] || hi[rb];
+    lo[ra] = lo[ra] || lo[rb];
+    if (hi[ra] && lo[ra]) return eps_break[e];
+  }
+  return 0.0;
+}
+
+}  // namespace sparkdem::physics::ptc

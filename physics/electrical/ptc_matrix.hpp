@@ -1,0 +1,132 @@
+#pragma once
+/// # ptc_matrix — thermoelastic bonded-network matrix for rigid fillers (seed 002, minimum model)
+///
+/// Source: Barbieri et al., "Pyroresistive response of percolating conductive polymer
+/// composites", §II.3 and SM S4 (thermal eigenstrain eps_TH = eps0 (1,1,1,0,0,0) in the polymer,
+/// rigid non-expanding spheres); /work/shared/physics/cpc-and-networks.md §1.2 (linearity),
+/// §1.3 (connection rule), §1.6 (the table "The thermoelastic part: options": the recommended
+/// minimum, rigid spheres + the matrix as a bonded network). This file is that minimum model,
+/// not the paper's RKPM continuum.
+///
+/// MODEL. Fillers i (centre x_i [m], radius R_i [m]) are rigid and carry only a translation
+/// u_i [m] (no rotations, as in S15). Every pair with polymer gap
+///     h_ij = |x_j - x_i| - R_i - R_j <= h_max                              (cut-off, [m])
+/// is joined by an axial spring along n_ij = (x_j - x_i)/|x_j - x_i| of stiffness
+///     k_ij = E_m A / max(h_ij, h_min)                                      [N/m]
+/// (a polymer column of cross-section A [m^2] and length max(h, h_min): a thin polymer layer is
+/// stiff, h_min caps the stiffness of touching and overlapping pairs) and eigen-elongation
+///     e_ij = eps0 h*_ij,  h*_ij = h_ij if h_ij > touch_tolerance, else 0  [m]
+/// (only the polymer expands; the gap of a touching pair holds no polymer, so no eigenstrain).
+/// Energy W(u) = 1/2 sum_ij k_ij (n_ij . (u_j - u_i) - e_ij)^2 (linearised kinematics: small
+/// eps0). Stationarity gives the sparse symmetric positive semi-definite system
+///     K u = eps0 f,  K = sum_ij k_ij B_ij^T B_ij,  f = sum_ij k_ij h*_ij B_ij^T,
+/// B_ij u = n_ij . (u_j - u_i). The problem is linear in eps0, so ONE solve for eps0 = 1 gives
+/// u_hat and the unit opening of every pair, delta_ij = n_ij . (u_hat_j - u_hat_i) [m per unit
+/// eps0]; at strain eps0 the gap is h_ij + eps0 delta_ij.
+///
+/// Since every k_ij is proportional to E_m A, u_hat does NOT depend on E_m or A: only the ratios
+/// of the gaps, h_min and h_max matter (E_m, A set the stored energy only).
+///
+/// NO POISSON RATIO. Axial (central-force) springs carry no shear or bending, so the matrix has
+/// no independent Poisson ratio: nu is whatever the geometry of the network gives (for an affine
+/// central-force network the Cauchy relation gives nu = 1/4). The paper does not give nu either
+/// (note §1.2); the continuum model of the issue defaults to 0.35. Tuning nu needs shear springs
+/// or beams (not done here).
+///
+/// RIGID-BODY AND FLOPPY MODES. Free expansion (the note's natural choice, §1.2): no filler is
+/// held unless `fixed` lists some (u = 0 there; used by the closed-form chain tests). K is
+/// singular on rigid-body modes, on isolated fillers and, for a sparse axial network, on floppy
+/// modes. The right-hand side f lies in the range of B^T, orthogonal to the null space of K
+/// (every null vector z has B z = 0), and every reported opening is B u, blind to null vectors.
+/// A ground spring delta x mean(k) on every free degree of freedom (`regularisation` = delta,
+/// default 1e-9) makes the matrix SPD; it removes the null-space part of u (which carries no
+/// opening) and perturbs the openings by a relative O(delta mean(k) / lambda_min+(K)).
+/// Solver: Eigen SimplicialLDLT (AMD ordering), exact up to rounding.
+///
+/// CONNECTION RULE (note §1.3, §4 "break criterion"; the paper does not state it). The initial
+/// contact set is the pairs with h_ij <= touch_tolerance (the paper's 0.1 % of D; the same
+/// set as contact_percolation). Contacts never form under strain (compressed pairs only overlap
+/// more; the note notes new connections could form: ignored). A contact conducts at eps0 while
+///     h_ij + eps0 delta_ij <= max(break_gap, h_ij),
+/// i.e. it opens when its gap exceeds break_gap (default 0: the note's inference "the gap becomes
+/// positive", i.e. when the opening exceeds the residual overlap); a contact that starts with a
+/// positive gap inside the tolerance opens at the first positive opening. Its break strain is
+///     eps_b = (max(break_gap, h_ij) - h_ij) / delta_ij  (delta_ij > 0),  +inf otherwise,
+/// and it conducts for eps0 < eps_b (at eps0 = eps_b the gap equals the threshold: still
+/// conducting, strict inequality below is for eps0 > eps_b).
+/// Electrics: unit conductance per conducting contact, the whole network in one system with all
+/// electrode fillers of a face at one potential (parallel spanning clusters: 1/R = sum 1/R_k),
+/// rho = R_eq L. Z = 2 (conducting contacts) / N.
+#include <span>
+#include <vector>
+
+#include "engine/core/types.hpp"
+#include "engine/graph/laplacian.hpp"
+
+namespace sparkdem::physics::ptc {
+
+struct MatrixParams {
+  double matrix_modulus = 1.0;    ///< E_m [Pa]
+  double bond_area = 1.0;         ///< A [m^2]
+  double min_gap = 1e-2;          ///< h_min [m], > 0
+  double cutoff_gap = 1.0;        ///< h_max [m]: springs between pairs with gap <= this
+  double touch_tolerance = 2e-3;  ///< [m] touching: gap <= this (no eigenstrain; contact set)
+  double regularisation = 1e-9;   ///< delta [1]: ground spring delta mean(k) on free DOFs
+};
+
+/// The spring network: pairs (a[e] < b[e]) with gap [m], unit normal a -> b and stiffness [N/m].
+struct SpringNetwork {
+  std::vector<Index> a, b;
+  std::vector<double> gap;        ///< h_ij [m]
+  std::vector<Vec3> normal;       ///< n_ij (from a to b)
+  std::vector<double> stiffness;  ///< k_ij [N/m]
+  std::vector<double> eigen_gap;  ///< h*_ij [m]: eigen-elongation per unit eps0
+  std::size_t size() const { return a.size(); }
+};
+
+/// Every pair of fillers with gap <= p.cutoff_gap (and >= -(R_i + R_j): coincident centres are
+/// a SetupError), sorted by (a, b).
+SpringNetwork build_network(const std::vector<Vec3>& x, const std::vector<double>& r, const MatrixParams& p);
+
+struct UnitSolution {
+  std::vector<Vec3> displacement;  ///< u_hat_i [m per unit eps0]
+  std::vector<double> opening;     ///< delta_e = n_e . (u_hat_b - u_hat_a) per spring [m per unit eps0]
+  double residual = 0.0;           ///< ||K u - f|| / ||f|| of the regularised system [1] (0 if f = 0)
+};
+/// One sparse solve for eps0 = 1 on nodes 0..n-1; fillers in `fixed` are held at u = 0.
+UnitSolution solve_unit(std::size_t n, const SpringNetwork& net, const MatrixParams& p, std::span<const Index> fixed = {});
+
+/// The touching contacts (the initial contact set) with their initial gap and unit opening.
+struct Contacts {
+  std::vector<Index> a, b;
+  std::vector<double> gap;      ///< h_ij at eps0 = 0 [m] (<= touch_tolerance)
+  std::vector<double> opening;  ///< delta_ij [m per unit eps0]
+  std::size_t size() const { return a.size(); }
+};
+/// Springs of net with gap <= touch_tolerance, with the openings of sol.
+Contacts touching_contacts(const SpringNetwork& net, const UnitSolution& sol, double touch_tolerance);
+
+/// Break strain of every contact (header rule): eps_b [1], +inf if it never opens.
+std::vector<double> break_strains(const Contacts& c, double break_gap);
+
+struct StrainPoint {
+  double eps0 = 0.0;
+  bool spanning = false;
+  std::size_t conducting = 0;  ///< conducting contacts
+  double coordination = 0.0;   ///< Z = 2 conducting / n [1]
+  double resistance = 0.0;     ///< R_eq [Ohm] with unit_conductance per contact; +inf if not spanning
+};
+/// Connectivity and resistance at strain eps0 (one Kirchhoff solve if spanning).
+StrainPoint evaluate(std::size_t n, const Contacts& c, std::span<const double> eps_break, double eps0,
+                     double unit_conductance, std::span<const Index> high, std::span<const Index> low,
+                     LaplacianSolver& solver);
+
+/// The exact switching strain: the largest break strain eps* such that the contacts with
+/// eps_b > eps* no longer span (the network spans for eps0 < eps*, i.e. at eps0 <= eps* under
+/// the rule; fails just above). Computed by adding contacts in decreasing eps_b (union-find)
+/// until the electrodes connect. 0 if the initial network does not span; +inf if the network
+/// still spans with only never-opening contacts.
+double switching_strain(std::size_t n, const Contacts& c, std::span<const double> eps_break, std::span<const Index> high,
+                        std::span<const Index> low);
+
+}  // namespace sparkdem::physics::ptc

@@ -1,0 +1,77 @@
+#pragma once
+/// # ptc_strain — contact network of rigid fillers under a thermal eigenstrain of the matrix
+///
+/// Source: Barbieri et al. (seed 002) §II.3-4, SM S3-S4; /work/shared/physics/cpc-and-networks.md
+/// §1.2-1.6. The model, its equations and the connection rule are in ptc_matrix.hpp (the note's
+/// recommended minimum: rigid non-expanding fillers, the polymer as axial springs with
+/// eigen-elongation eps0 h_ij between fillers within a gap cut-off, free expansion).
+///
+/// Use after a cpc_fillers stage (frozen mechanics: `"stop": {"steps": 0}`). On its event clock
+/// (the stage's initial state, then after a move of 0.05 R_min or a broken bond) the module
+///  1. builds the spring network (pairs with gap <= cutoff_gap) and solves ONCE for eps0 = 1;
+///  2. takes the touching contacts (gap <= touch_tolerance, the contact_percolation set) and
+///     their unit openings; break strains by the rule of ptc_matrix.hpp (break_gap);
+///  3. for every eps0 in eps0_values: spanning, Z and rho = R_eq L (unit conductances, one
+///     Kirchhoff solve each, all spanning clusters in parallel);
+///  4. the exact switching strain (largest eps0 at which the network still spans).
+/// Columns (prefix ptc_strain_):
+///   springs, contacts             number of springs / of touching contacts
+///   switching_strain              exact switching strain [1] (0: no spanning at eps0 = 0)
+///   switching_strain_listed       first listed eps0 without spanning [1] (+inf if all span)
+///   opening_mean, opening_median  contact opening at eps0 = opening_strain, in units of the
+///                                 pair's contact distance R_i + R_j (= D), [1]; with the
+///                                 closed-form linearity, eps0 x delta / D
+///   opening_negative_fraction     fraction of contacts that close (delta < 0) [1]
+///   solve_residual                ||K u - f|| / ||f|| of the unit solve [1]
+///   spanning_<e>, coordination_<e>, resistivity_<e>   per listed eps0 (<e> = eps0 in percent
+///                                 with 'p' for the point, e.g. 3p15pct); rho [Ohm m], +inf
+///                                 when not spanning.
+#include <string>
+#include <vector>
+
+#include "engine/graph/laplacian.hpp"
+#include "engine/model/module.hpp"
+#include "engine/model/param_spec.hpp"
+
+namespace sparkdem::physics {
+
+class PtcStrain final : public Module {
+ public:
+  struct Params {
+    std::string high = "x_lo";
+    std::string low = "x_hi";
+    double touch_tolerance = 2e-3;  ///< [m]
+    double break_gap = 2e-3;        ///< [m] a contact opens when its gap exceeds this (default = touch_tolerance)
+    double cutoff_gap = 1.0;        ///< [m] h_max
+    double min_gap = 1e-2;          ///< [m] h_min
+    double matrix_modulus = 1.0;    ///< [Pa] E_m (openings do not depend on it)
+    double bond_area = 1.0;         ///< [m^2] A (openings do not depend on it)
+    double regularisation = 1e-9;   ///< [1]
+    double unit_conductance = 1.0;  ///< [S]
+    double length = 0.0;            ///< [m] 0: cpc_fillers box edge
+    double opening_strain = 0.01;   ///< [1] eps0 of the opening statistics
+    std::vector<double> eps0_values = {0.0, 0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.05};
+  };
+  static ParamSpec<Params> spec();
+  explicit PtcStrain(const Params& p);
+
+  std::string name() const override { return "ptc_strain"; }
+  Phase phase() const override { return Phase::Coupling; }
+  void declare(Declarations& d) const override;
+  void bind(State& s) override;
+  Clock clock() const override { return clock_; }
+  void advance(State& s, const StepInfo& info) override;
+  std::vector<std::string> columns() const override;
+  std::vector<double> column_values(const State& s) const override;
+  void visit(Archive& ar, const std::string& prefix) override;
+
+ private:
+  Params p_;
+  Clock clock_;
+  double length_ = 0.0;
+  LaplacianSolver solver_;
+  std::vector<std::string> suffix_;  ///< per eps0
+  std::vector<double> held_;         ///< the column values of the last evaluation (resistivity via length_)
+};
+
+}  // namespace sparkdem::physics
