@@ -25,7 +25,14 @@
 ///   solve_residual                ||K u - f|| / ||f|| of the unit solve [1]
 ///   spanning_<e>, coordination_<e>, resistivity_<e>   per listed eps0 (<e> = eps0 in percent
 ///                                 with 'p' for the point, e.g. 3p15pct); rho [Ohm m], +inf
-///                                 when not spanning.
+///                                 when not spanning. Sweep CSVs write non-finite values as
+///                                 nan: there nan resistivity = not spanning, nan
+///                                 switching_strain_listed = spans at every listed eps0.
+/// Parameter choices (configs/cpc_ptc_strain.json): h_max = 1 R (centre distance <= 3 R: about 6
+/// neighbours per filler at phi = 25 %, near the isostatic 6 of axial springs in 3-D: floppy
+/// modes exist and the regularisation handles them), h_min = 0.1 R. h_min sets the stiffness of the springs
+/// of touching pairs relative to the expanding gaps, hence how far contacts open: it controls
+/// the switching strain (see the config description); E_m and A cancel.
 #include <string>
 #include <vector>
 
