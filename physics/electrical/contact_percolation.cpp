@@ -111,21 +111,27 @@ ParamSpec<ContactPercolation::Params> ContactPercolation::spec() {
 
 void ContactPercolation::declare(Declarations& d) const { d.reads_previous = {"position", "radius"}; }
 
-void ContactPercolation::bind(State& s) {
+Clock percolation::geometry_event_clock(const State& s) {
   double rmin = kInf;
   for (double r : s.particles.radius) rmin = std::min(rmin, r);
-  clock_ = Clock{};
-  clock_.kind = Clock::Kind::OnEvent;
-  clock_.trigger.bond_broke = true;
-  clock_.trigger.moved_beyond = std::isfinite(rmin) ? 0.05 * rmin : 1.0;
-  if (p_.length > 0.0) {
-    length_ = p_.length;
-  } else {
-    const auto it = s.marks.find("cpc_fillers/box_length");
-    if (it == s.marks.end())
-      throw SetupError("contact_percolation: `length` is 0 and no cpc_fillers stage recorded a box length; give length [m]");
-    length_ = it->second;
-  }
+  Clock c;
+  c.kind = Clock::Kind::OnEvent;
+  c.trigger.bond_broke = true;
+  c.trigger.moved_beyond = std::isfinite(rmin) ? 0.05 * rmin : 1.0;
+  return c;
+}
+
+double percolation::box_length(const State& s, double given, const std::string& module) {
+  if (given > 0.0) return given;
+  const auto it = s.marks.find("cpc_fillers/box_length");
+  if (it == s.marks.end())
+    throw SetupError(module + ": `length` is 0 and no cpc_fillers stage recorded a box length; give length [m]");
+  return it->second;
+}
+
+void ContactPercolation::bind(State& s) {
+  clock_ = percolation::geometry_event_clock(s);
+  length_ = percolation::box_length(s, p_.length, "contact_percolation");
 }
 
 void ContactPercolation::advance(State& s, const StepInfo&) {

@@ -63,6 +63,13 @@ Metrics metrics(std::size_t n, std::span<const Index> a, std::span<const Index> 
 std::vector<double> cluster_resistances(std::size_t n, std::span<const Index> a, std::span<const Index> b, double g_unit,
                                         std::span<const Index> high, std::span<const Index> low, LaplacianSolver& solver);
 
+/// Default clock of the filler-network modules (contact_percolation, ptc_strain): on an event,
+/// when a particle moved more than 0.05 smallest radii or a bond broke (and on the initial state).
+Clock geometry_event_clock(const State& s);
+/// L [m] of rho = R_eq L: `given` if > 0, else the box edge recorded by a cpc_fillers stage
+/// (SetupError naming `module` when there is none).
+double box_length(const State& s, double given, const std::string& module);
+
 }  // namespace percolation
 
 class ContactPercolation final : public Module {

@@ -1,4 +1,5 @@
 #include "physics/electrical/ptc_strain.hpp"
+#include "physics/electrical/contact_percolation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -71,20 +72,8 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
 void PtcStrain::declare(Declarations& d) const { d.reads_previous = {"position", "radius"}; }
 
 void PtcStrain::bind(State& s) {
-  double rmin = kInf;
-  for (double r : s.particles.radius) rmin = std::min(rmin, r);
-  clock_ = Clock{};
-  clock_.kind = Clock::Kind::OnEvent;
-  clock_.trigger.bond_broke = true;
-  clock_.trigger.moved_beyond = std::isfinite(rmin) ? 0.05 * rmin : 1.0;
-  if (p_.length > 0.0) {
-    length_ = p_.length;
-  } else {
-    const auto it = s.marks.find("cpc_fillers/box_length");
-    if (it == s.marks.end())
-      throw SetupError("ptc_strain: `length` is 0 and no cpc_fillers stage recorded a box length; give length [m]");
-    length_ = it->second;
-  }
+  clock_ = percolation::geometry_event_clock(s);
+  length_ = percolation::box_length(s, p_.length, "ptc_strain");
 }
 
 void PtcStrain::advance(State& s, const StepInfo&) {
