@@ -422,33 +422,6 @@ void Simulation::run_module(const PlanItem& it, Step step, double t_stage, doubl
   }
 }
 
-void Simulation::check_finite(double dt, double blowup_speed) const {
-  const auto& p = s_.particles;
-  // Fast parallel screen; the detailed (serial) pass runs only when something is wrong.
-  const std::int64_t n = static_cast<std::int64_t>(p.size());
-  int suspicious = 0;
-#pragma omp parallel for schedule(static) reduction(max : suspicious)
-  for (std::int64_t i = 0; i < n; ++i) {
-    const double vmax = blowup_speed > 0.0 ? blowup_speed : p.radius[i] / dt;
-    const bool ok = p.position[i].allFinite() && p.velocity[i].allFinite() && p.omega[i].allFinite() &&
-                    p.velocity[i].squaredNorm() <= vmax * vmax;
-    if (!ok) suspicious = 1;
-  }
-  if (!suspicious) return;
-  std::vector<Id> bad;
-  std::string what;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    const bool finite = p.position[i].allFinite() && p.velocity[i].allFinite() && p.omega[i].allFinite();
-    const double vmax = blowup_speed > 0.0 ? blowup_speed : p.radius[i] / dt;
-    if (!finite) { bad.push_back(p.id[i]); what = "non-finite position or velocity"; }
-    else if (p.velocity[i].norm() > vmax) {
-      bad.push_back(p.id[i]);
-      if (what.empty()) what = "speed " + std::to_string(p.velocity[i].norm()) + " m/s exceeds the blow-up limit " + std::to_string(vmax) + " m/s (a particle moving more than its radius per step)";
-    }
-  }
-  if (!bad.empty()) throw PhysicsError(s_.step, bad, "velocity", what);
-}
-
 StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool resume) {
   using clock = std::chrono::steady_clock;
   const auto t_start = clock::now();
@@ -622,6 +595,26 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     obs.watch(s_, cols, vals);
     if (cfg.frame_every > 0) obs.frame(s_);
   }
+  // The run watchdog: the state of the stage start must pass it (a scene it refuses stops before
+  // step 0), and that state is the first healthy copy.
+  WatchdogConfig wd = cfg.watchdog;
+  if (!(wd.max_speed > 0.0)) wd.max_speed = cfg.blowup_speed;
+  if (wd.check_every < 1) throw SetupError("stage '" + cfg.name + "': watchdog.check_every must be at least 1");
+  WatchdogContext wctx;
+  wctx.dt = dt_used;
+  wctx.stable_dt = res.stable_dt_at_start;
+  wctx.allow_unstable_dt = cfg.allow_unstable_dt;
+  wctx.law_overlap_bound = law_.overlap_ratio_bound();
+  wctx.stage = cfg.name;
+  if (!resume) watchdog_reset(s_);
+  try {
+    watchdog_check(s_, wd, wctx, !resume);
+  } catch (const PhysicsError& e) {
+    throw PhysicsError(e.step(), e.ids(), e.quantity(),
+                       "stage '" + cfg.name + "' refused before its first step: its initial state fails the " + e.reason(),
+                       e.detail());
+  }
+  if (wd.snapshot_every_checks > 0) obs.healthy(s_);
 
   auto halt_walls = [&]() {
     bool sampled = false;
@@ -668,7 +661,8 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     s_.physical_time = s_.stage_phys_t0 + time_scale_ * t_new;
     // ---- bookkeeping ----
     const Step kk = k + 1;
-    if (kk % 10 == 0) check_finite(dt_used, cfg.blowup_speed);
+    const bool checked = kk % wd.check_every == 0;
+    if (checked) watchdog_check(s_, wd, wctx, true);
     if (cfg.stability_check_every > 0 && kk % cfg.stability_check_every == 0 && !cfg.allow_unstable_dt) {
       const double st = cfg.mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
       if (dt_used > st)
@@ -684,13 +678,15 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     }
     if (cfg.frame_every > 0 && kk % cfg.frame_every == 0) obs.frame(s_);
     if (cfg.checkpoint_every > 0 && s_.step % cfg.checkpoint_every == 0) obs.checkpoint(s_);
+    if (checked && wd.snapshot_every_checks > 0 && (kk / wd.check_every) % wd.snapshot_every_checks == 0) obs.healthy(s_);
     if (kk % log_every == 0) obs.progress(s_, kk, t_new, dt_used);
     if (interrupt_flag().load()) {
       obs.checkpoint(s_);
       throw Interrupted("interrupted at step " + std::to_string(s_.step) + "; checkpoint written");
     }
   }
-  check_finite(dt_used, cfg.blowup_speed);
+  watchdog_check(s_, wd, wctx, false);
+  watchdog_reset(s_);  // the energy samples live only inside the stage (final states carry none)
   obs.frame(s_);
   if (!reached && !cfg.until.empty()) reached = until_holds();
   res.until_reached = cfg.until.empty() || reached;

@@ -13,6 +13,7 @@
 #include "engine/model/module.hpp"
 #include "engine/schedule/scheduler.hpp"
 #include "engine/state/state.hpp"
+#include "engine/watchdog.hpp"
 
 namespace sparkdem {
 
@@ -68,7 +69,8 @@ struct StageConfig {
   double mass_floor_radius = 0.0;
   double time_scale = 1.0;         ///< physical seconds per mechanical second (TimeDomain::Physical modules)
   Step stability_check_every = 1000;
-  double blowup_speed = 0.0;       ///< [m/s] a speed above this is a blow-up; 0 = radius/dt rule
+  double blowup_speed = 0.0;       ///< [m/s] a speed above this is a blow-up; 0 = radius/dt rule (= watchdog.max_speed when that is 0)
+  WatchdogConfig watchdog;         ///< the run watchdog's checks (engine/watchdog.hpp)
   Step sort_every_rebuilds = 50;   ///< spatial sort of the particles for cache locality
   Step frame_every = 0;            ///< 0 = only the final frame
   Step timeseries_every = 100;
@@ -104,6 +106,11 @@ class Observer {
   virtual void steps_planned(double dt_mechanical, double stable_mechanical, const std::vector<ModuleStep>& modules) {
     (void)dt_mechanical; (void)stable_mechanical; (void)modules;
   }
+  /// The state passed the run watchdog (engine/watchdog.hpp): at the stage start (before step 0,
+  /// also on resume) and every watchdog.snapshot_every_checks checks, at the point of the step
+  /// where checkpoints are taken. The I/O layer keeps a copy, written as a checkpoint if the run
+  /// later fails; the state must not be modified (non-const only to be written through an Archive).
+  virtual void healthy(State&) {}
   /// Stage steps between extra watch() calls (0: none beyond the time-series rows).
   virtual Step watch_every() const { return 0; }
   /// The monitor values together with the state they were sampled from: at the stage start
@@ -168,7 +175,6 @@ class Simulation {
   void bond_forces(double dt, Step step);
   void wall_forces(double dt);   ///< wall pass; stores the wall loads
   void update_neighbors(double skin, Step sort_every);
-  void check_finite(double dt, double blowup_speed) const;
   /// Run one plan item of kind Module at the end of mechanical step `step` (global index of the
   /// step being completed), `t_stage` = stage time at its end, on the item's clock.
   void run_module(const PlanItem& it, Step step, double t_stage, double dt_m);

@@ -71,7 +71,17 @@ class ContactModel {
   /// Gershgorin rows, e.g. from bonds (BondModel::add_stiffness_rows).
   virtual double stable_dt(const ParticleStore& p, const ContactTable& table, const std::vector<Wall>& walls,
                            const std::vector<double>* extra_rows = nullptr) const = 0;
+  /// The run watchdog's default bound on overlap / smaller radius (pairs) and overlap / radius
+  /// (walls): kDefaultOverlapRatioBound, or the law's own `overlap_ratio_bound()` when it has one
+  /// (a law whose healthy runs reach larger overlaps, e.g. sintering densification).
+  virtual double overlap_ratio_bound() const;
 };
+
+/// Elastic contact laws (Hooke, Hertz) are models of small overlaps; at half the smaller radius
+/// their force has long stopped meaning anything, and no healthy granular run gets near it (the
+/// shipped scenes stay below 0.05; see README "Run watchdog").
+inline constexpr double kDefaultOverlapRatioBound = 0.5;
+inline double ContactModel::overlap_ratio_bound() const { return kDefaultOverlapRatioBound; }
 
 /// True if Law declares kThermal (reads temperature and the time scale).
 template <class Law>
@@ -99,6 +109,10 @@ class ContactModelT final : public ContactModel {
   const Law& law() const { return law_; }
   std::string name() const override { return std::string(Law::kName); }
   std::vector<std::string> state_columns() const override { return Law::state_columns(); }
+  double overlap_ratio_bound() const override {
+    if constexpr (requires(const Law& l) { l.overlap_ratio_bound(); }) return law_.overlap_ratio_bound();
+    else return kDefaultOverlapRatioBound;
+  }
   std::function<bool(const double*)> alive_rule() const override {
     if constexpr (is_persistent<Law>()) return [this](const double* st) { return law_.alive(st); };
     else return {};

@@ -11,12 +11,20 @@
 
 namespace sparkdem {
 
+/// What the run watchdog (engine/watchdog.hpp) requires of a field's values.
+enum class FieldCheck {
+  None,         ///< not checked
+  Finite,       ///< a NaN or an infinity stops the run
+  NotInfinite,  ///< an infinity stops the run; NaN is a legitimate "undefined" (e.g. a floating potential)
+};
+
 struct FieldInfo {
   std::string name;
   int components = 1;      ///< values per row
   std::string unit;        ///< SI unit
   double init = 0.0;       ///< initial value of every component
   bool output = true;      ///< written to result frames
+  FieldCheck check = FieldCheck::None;  ///< watchdog check (not stored in checkpoints: modules re-declare it)
 };
 
 class FieldRegistry {
@@ -27,6 +35,9 @@ class FieldRegistry {
     if (it != fields_.end()) {
       if (it->second.info.components != info.components)
         throw SetupError("field '" + info.name + "' declared twice with different component counts");
+      // The strictest watchdog check of all declarations holds (a field restored from a
+      // checkpoint has none until its module declares it again).
+      if (info.check == FieldCheck::Finite || it->second.info.check == FieldCheck::None) it->second.info.check = info.check;
       return;
     }
     Entry e{info, std::vector<double>(rows * info.components, info.init)};

@@ -12,6 +12,7 @@
 #include <map>
 
 #include "engine/core/error.hpp"
+#include "engine/core/memory_archive.hpp"
 #include "engine/state/delete_particles.hpp"
 #include "engine/state/pair_transfer.hpp"
 #include "io/files/durable_file.hpp"
@@ -125,14 +126,41 @@ class OutputObserver final : public Observer {
     log_.line("checkpoint written: " + (checkpoint_file_.empty() ? std::string("checkpoint.h5") : file.string()) + " (step " + std::to_string(s.step) + ", stage '" + stage_ + "')");
     publish();
   }
+  /// The watchdog passed: keep an in-memory copy of what a checkpoint of this state would hold.
+  void healthy(State& s) override {
+    healthy_.begin();
+    write_state(healthy_, s, true);
+    healthy_.end();
+    healthy_step_ = s.step;
+  }
+  /// After a failure: writes the last healthy copy as the sealed checkpoint
+  /// OUTDIR/checkpoint_before_failure.h5 (loadable with --restart); returns its path, or an empty
+  /// path when there is no copy of the failing stage.
+  std::filesystem::path write_last_healthy() {
+    if (healthy_.empty()) return {};
+    const std::filesystem::path file = outdir_ / "checkpoint_before_failure.h5";
+    Hdf5Archive ar = Hdf5Archive::for_writing(file);
+    healthy_.replay(ar);
+    ar.commit();
+    log_.line("checkpoint before failure written: checkpoint_before_failure.h5 (step " + std::to_string(healthy_step_) +
+              ", stage '" + stage_ + "')");
+    return file;
+  }
+  Step healthy_step() const { return healthy_step_; }
   /// The state after a stage: final_state.h5, then the index files.
   void final_state(State& s) {
+    healthy_.clear();  // a later failure is not this stage's
     write_checkpoint(outdir_ / "final_state.h5", s, false);
     log_.line("final state written: final_state.h5 (step " + std::to_string(s.step) + ", after stage '" + stage_ + "')");
     publish();
   }
   void write_checkpoint(const std::filesystem::path& file, State& s, bool in_stage) {
     Hdf5Archive ar = Hdf5Archive::for_writing(file);
+    write_state(ar, s, in_stage);
+    ar.commit();
+  }
+  /// Everything a checkpoint holds: the state, the modules' states, the pipeline record.
+  void write_state(Archive& ar, State& s, bool in_stage) {
     s.visit(ar);
     std::int64_t flag = in_stage ? 1 : 0;
     ar.visit("pipeline/in_stage", flag);
@@ -141,7 +169,6 @@ class OutputObserver final : public Observer {
       std::string r = record_().dump();
       ar.visit("pipeline/record", r);
     }
-    ar.commit();
   }
   void progress(const State& s, Step k, double t, double dt) override {
     if (quiet_) return;
@@ -227,6 +254,8 @@ class OutputObserver final : public Observer {
   Step k0_ = 0;
   std::filesystem::path checkpoint_file_;
   std::function<json()> record_;
+  MemoryArchive healthy_;  ///< the last state that passed the watchdog (see healthy())
+  Step healthy_step_ = -1;
 };
 
 }  // namespace
@@ -361,6 +390,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   double particle_steps = 0.0;
   std::string status = "completed";
   std::string error;
+  std::optional<PhysicsError> failure;
   try {
     for (std::size_t k = first; k < sc.stages.size(); ++k) {
       StageDef& st = sc.stages[k];
@@ -494,7 +524,20 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
     error = e.what();
   } catch (const PhysicsError& e) {
     status = "failed";
-    error = e.what();
+    // The last state that passed the watchdog, as a checkpoint (a failure to write it must not
+    // hide the physics error).
+    PhysicsErrorDetail d = e.detail();
+    try {
+      const std::filesystem::path f = obs.write_last_healthy();
+      if (!f.empty()) {
+        d.checkpoint = f.string();
+        d.checkpoint_step = obs.healthy_step();
+      }
+    } catch (const std::exception& w) {
+      note(log, std::string("checkpoint before failure not written: ") + w.what());
+    }
+    failure.emplace(e.step(), e.ids(), e.quantity(), e.reason(), d);
+    error = failure->what();
   }
   obs.end_stage_line();
   // Validation figures: the last stage of each check's name that ran in this process.
@@ -523,6 +566,15 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   const double wall = std::chrono::duration<double>(steady::now() - t0).count();
   summary["status"] = status;
   if (!error.empty()) summary["error"] = error;
+  if (failure) {
+    const PhysicsErrorDetail& d = failure->detail();
+    json f = {{"step", failure->step()}, {"quantity", failure->quantity()}, {"reason", failure->reason()},
+              {"particles", failure->ids().size()}, {"time_s", finite_or_null(d.time)}, {"value", finite_or_null(d.value)},
+              {"bound", finite_or_null(d.bound)}, {"hint", d.hint}};
+    f["ids"] = std::vector<Id>(failure->ids().begin(), failure->ids().begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(failure->ids().size(), 100)));
+    if (!d.checkpoint.empty()) f["checkpoint_before_failure"] = {{"file", "checkpoint_before_failure.h5"}, {"step", d.checkpoint_step}};
+    summary["failure"] = f;
+  }
   summary["wall_time_s"] = wall;
   summary["steps"] = total_steps;
   summary["mechanical_time_s"] = s.time;
@@ -532,7 +584,9 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   obs.finalize();
   write_json_atomic(opt.outdir / "summary.json", summary);
   if (status == "interrupted") throw Interrupted(error);
-  if (status == "failed") throw PhysicsError(s.step, {}, "run", error + " (outputs up to the failure were written)");
+  if (status == "failed")
+    throw PhysicsError(failure->step(), failure->ids(), failure->quantity(),
+                       failure->reason() + " (outputs up to the failure were written)", failure->detail());
   log.line("run completed: " + std::to_string(total_steps) + " steps, " + short_number(wall) + " s wall");
   return summary;
 }

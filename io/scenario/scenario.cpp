@@ -158,7 +158,40 @@ struct StageParams {
     std::int64_t timeseries_every = 100;
     std::int64_t checkpoint_every = 0;
   } output;
+  struct Watchdog {
+    std::int64_t check_every = 10;
+    double max_overlap_ratio = 0.0;
+    double max_speed = 0.0;
+    double energy_growth_factor = 1e4;
+    std::int64_t energy_window = 5;
+    double energy_floor_fraction = 0.01;
+    std::int64_t snapshot_every_checks = 10;
+  } watchdog;
 };
+ParamSpec<StageParams::Watchdog> watchdog_spec() {
+  using P = StageParams::Watchdog;
+  ParamSpec<P> s("watchdog", "object",
+                 "run watchdog (engine/watchdog.hpp): checks that stop a run going wrong (exit code 3) with the step, "
+                 "time, particle ids, quantity, value and bound, and write the last state that passed them as "
+                 "OUTDIR/checkpoint_before_failure.h5 (loadable with --restart); the defaults never fire on a healthy run");
+  s.add("check_every", &P::check_every).min(1).doc("steps between checks (also checked before step 0 and at the stage end)");
+  s.add("max_overlap_ratio", &P::max_overlap_ratio).unit("1").nonnegative()
+      .doc("largest overlap / smaller radius of a pair (overlap / radius at a wall); 0: the contact law's bound "
+           "(0.5 for elastic laws, max(1, creep_overlap_limit) + 0.5 for sintering)");
+  s.add("max_speed", &P::max_speed).unit("m/s").nonnegative()
+      .doc("a particle speed above this is a blow-up (0: blowup_speed, or else each particle's radius per step, r/dt)");
+  s.add("energy_growth_factor", &P::energy_growth_factor).unit("1").nonnegative()
+      .doc("stop when the kinetic energy per unit mass grew by more than this factor over energy_window checks, at "
+           "every check, while its rms speed exceeds energy_floor_fraction of the blow-up speed (a numerical "
+           "instability; 0: off)");
+  s.add("energy_window", &P::energy_window).min(1).doc("checks over which the kinetic-energy growth is measured");
+  s.add("energy_floor_fraction", &P::energy_floor_fraction).unit("1").nonnegative()
+      .doc("rms speed sqrt(2 KE / M) below this fraction of the blow-up speed (max_speed or min radius / dt) never counts as growth");
+  s.add("snapshot_every_checks", &P::snapshot_every_checks).min(0)
+      .doc("checks between in-memory copies of the last healthy state (one more at the stage start; memory: about one "
+           "checkpoint; 0: none, and no checkpoint_before_failure.h5)");
+  return s;
+}
 ParamSpec<StageParams::Stop> stop_spec() {
   using P = StageParams::Stop;
   ParamSpec<P> s("stop", "object", "stop condition");
@@ -193,12 +226,13 @@ ParamSpec<StageParams> stage_spec(const Registry& reg) {
   s.add("mass_floor_radius", &StageParams::mass_floor_radius).unit("m").nonnegative().doc("particles smaller than this radius take the mass (and inertia) of a sphere of this radius during the stage, on top of mass_scaling: density scaling of the fines for quasi-static stages (0 = off)");
   s.add("time_scale", &StageParams::time_scale).unit("1").positive().doc("physical seconds per mechanical second: modules in physical time (thermal, sintering kinetics) advance time_scale x dt per step; both clocks are reported");
   s.add("skin", &StageParams::skin).unit("m").nonnegative().doc("Verlet skin (0: 0.3 x smallest radius)");
-  s.add("blowup_speed", &StageParams::blowup_speed).unit("m/s").nonnegative().doc("speed that counts as a blow-up (0: radius per step)");
+  s.add("blowup_speed", &StageParams::blowup_speed).unit("m/s").nonnegative().doc("speed that counts as a blow-up (0: radius per step); watchdog.max_speed, when set, takes precedence");
   s.add("sort_every_rebuilds", &StageParams::sort_every_rebuilds).min(0).doc("spatial sort period in neighbour rebuilds (0: never)");
   s.add("stability_check_every", &StageParams::stability_check_every).min(0).doc("steps between stable-step checks (0: start only)");
   s.add("from_snapshot", &StageParams::from_snapshot).doc("start from the state stored in this checkpoint file");
   s.add_group("stop", &StageParams::stop, stop_spec());
   s.add_group("output", &StageParams::output, output_spec());
+  s.add_group("watchdog", &StageParams::watchdog, watchdog_spec());
   return s;
 }
 
@@ -503,6 +537,13 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
   c.time_scale = p.time_scale;
   c.skin = p.skin;
   c.blowup_speed = p.blowup_speed;
+  c.watchdog.check_every = p.watchdog.check_every;
+  c.watchdog.max_overlap_ratio = p.watchdog.max_overlap_ratio;
+  c.watchdog.max_speed = p.watchdog.max_speed;
+  c.watchdog.energy_growth_factor = p.watchdog.energy_growth_factor;
+  c.watchdog.energy_window = p.watchdog.energy_window;
+  c.watchdog.energy_floor_fraction = p.watchdog.energy_floor_fraction;
+  c.watchdog.snapshot_every_checks = p.watchdog.snapshot_every_checks;
   c.sort_every_rebuilds = p.sort_every_rebuilds;
   c.stability_check_every = p.stability_check_every;
   c.duration = p.stop.time;

@@ -73,6 +73,7 @@ class SnapshotObserver final : public Observer {
   void frame(const State& s) override { inner_.frame(s); }
   void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) override { inner_.timeseries(cols, vals); }
   void checkpoint(State& s) override { inner_.checkpoint(s); }
+  void healthy(State& s) override { inner_.healthy(s); }
   void progress(const State& s, Step k, double t, double dt) override { inner_.progress(s, k, t, dt); }
   void steps_planned(double dt, double stable, const std::vector<ModuleStep>& m) override { inner_.steps_planned(dt, stable, m); }
   Step watch_every() const override;

@@ -210,6 +210,11 @@ struct Sintering {
         cold_contact_(p.cold_necks == "contact"), creep_(p.after_equilibrium == "creep") {}
 
   bool alive(const double* st) const { return st[kNeck] > 0.0; }
+  /// The run watchdog's default bound on overlap / smaller radius (engine/watchdog.hpp):
+  /// densification legitimately drives a pair's centres together up to creep_overlap_limit x r_min
+  /// (default 1: the smaller centre on the other's surface) plus the elastic approach; 0.5 r_min
+  /// beyond that the spheres have passed through each other, which no sintering stage does.
+  double overlap_ratio_bound() const { return std::max(1.0, p_.creep_overlap_limit) + 0.5; }
 
   /// Neck radius of the geometry [m] (0 for h <= 0), before the pair's history is applied.
   double geometric_neck(double r_i, double r_j, double h) const {

@@ -187,8 +187,8 @@ ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
 }
 
 void ElectricalNetwork::declare(Declarations& d) const {
-  d.particle_fields.push_back({"electric_potential", 1, "V", 0.0, true});
-  d.particle_fields.push_back({"joule_power", 1, "W", 0.0, true});
+  d.particle_fields.push_back({"electric_potential", 1, "V", 0.0, true, FieldCheck::NotInfinite});  // NaN: floating
+  d.particle_fields.push_back({"joule_power", 1, "W", 0.0, true, FieldCheck::Finite});
   // Geometry and temperature as they were at the end of the previous step (or as earlier modules
   // of this step left them): a feedback loop with heat_conduction, which reads this step's
   // joule_power and writes the temperature and the expanded radii, is not an ordering cycle.

@@ -136,7 +136,7 @@ HeatConduction::HeatConduction(const Params& p) : p_(p) {
 }
 
 void HeatConduction::declare(Declarations& d) const {
-  d.particle_fields.push_back({"temperature", 1, "K", 0.0, true});
+  d.particle_fields.push_back({"temperature", 1, "K", 0.0, true, FieldCheck::Finite});
   d.particle_fields.push_back({"heat_capacity", 1, "J/K", 0.0, false});
   d.particle_fields.push_back({"temperature_initial", 1, "K", 0.0, false});
   d.particle_fields.push_back({"temperature_carry", 1, "K", 0.0, false});

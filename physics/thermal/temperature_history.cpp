@@ -64,7 +64,7 @@ TemperatureHistory::TemperatureHistory(const Params& p) : p_(p) {
 }
 
 void TemperatureHistory::declare(Declarations& d) const {
-  d.particle_fields.push_back({"temperature", 1, "K", 0.0, true});
+  d.particle_fields.push_back({"temperature", 1, "K", 0.0, true, FieldCheck::Finite});
   d.writes = {"temperature"};
   if (p_.expansion_coefficient != 0.0) thermal::declare_expansion(d);
 }
