@@ -600,6 +600,14 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   WatchdogConfig wd = cfg.watchdog;
   if (!(wd.max_speed > 0.0)) wd.max_speed = cfg.blowup_speed;
   if (wd.check_every < 1) throw SetupError("stage '" + cfg.name + "': watchdog.check_every must be at least 1");
+  if (!cfg.mechanics || cfg.max_steps == 0 || !(cfg.duration > 0.0)) {
+    // A frozen stage, or one that takes no step (a one-off evaluation of its modules), moves
+    // nothing: its geometry is given (e.g. an overlapping packing built for a network test), so
+    // only the non-finite check runs.
+    wd.max_speed = std::numeric_limits<double>::infinity();
+    wd.max_overlap_ratio = std::numeric_limits<double>::infinity();
+    wd.energy_growth_factor = 0.0;
+  }
   WatchdogContext wctx;
   wctx.dt = dt_used;
   wctx.stable_dt = res.stable_dt_at_start;
@@ -608,7 +616,8 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   wctx.stage = cfg.name;
   if (!resume) watchdog_reset(s_);
   try {
-    watchdog_check(s_, wd, wctx, !resume);
+    // (On resume at a check step the energy samples restart there: they are not in checkpoints.)
+    watchdog_check(s_, wd, wctx, !resume || (s_.step - s_.stage_step0) % wd.check_every == 0);
   } catch (const PhysicsError& e) {
     throw PhysicsError(e.step(), e.ids(), e.quantity(),
                        "stage '" + cfg.name + "' refused before its first step: its initial state fails the " + e.reason(),

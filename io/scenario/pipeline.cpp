@@ -161,7 +161,25 @@ class OutputObserver final : public Observer {
   }
   /// Everything a checkpoint holds: the state, the modules' states, the pipeline record.
   void write_state(Archive& ar, State& s, bool in_stage) {
-    s.visit(ar);
+    // The watchdog's kinetic-energy samples (marks "watchdog/...", engine/watchdog.hpp) stay out
+    // of every file, so the state files of a run are those of a run without the watchdog; a
+    // restart samples afresh.
+    std::map<std::string, double> held;
+    for (auto it = s.marks.begin(); it != s.marks.end();) {
+      if (it->first.rfind("watchdog/", 0) == 0) {
+        held.insert(*it);
+        it = s.marks.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    try {
+      s.visit(ar);
+    } catch (...) {
+      s.marks.insert(held.begin(), held.end());
+      throw;
+    }
+    s.marks.insert(held.begin(), held.end());
     std::int64_t flag = in_stage ? 1 : 0;
     ar.visit("pipeline/in_stage", flag);
     for (Module* m : modules_) m->visit(ar, "modules/" + m->name());
