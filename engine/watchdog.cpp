@@ -134,7 +134,8 @@ void check_speed(const State& s, const WatchdogConfig& c, const WatchdogContext&
        w.speed, w.bound, step_advice(ctx) + "; if such speeds are physical, raise watchdog.max_speed [m/s]");
 }
 
-/// Check 3: overlap / smaller radius of pairs, overlap / radius against walls.
+/// Check 3: overlap / smaller radius of particle pairs. (Walls are not checked: generators such as
+/// cpc_fillers place particles across a face, their centres beyond it, on purpose.)
 void check_overlap(const State& s, const WatchdogConfig& c, const WatchdogContext& ctx) {
   const double bound = c.max_overlap_ratio > 0.0 ? c.max_overlap_ratio : ctx.law_overlap_bound;
   if (!std::isfinite(bound)) return;
@@ -146,42 +147,21 @@ void check_overlap(const State& s, const WatchdogConfig& c, const WatchdogContex
 #pragma omp parallel for schedule(static) reduction(max : bad)
   for (std::int64_t r = 0; r < rows; ++r)
     if (ov[r] > bound * std::min(p.radius[t.i(r)], p.radius[t.j(r)])) bad = 1;
-  const bool walls_known = s.wall_candidates.size() == s.walls.size();
-  if (walls_known)
-    for (std::size_t k = 0; k < s.walls.size() && !bad; ++k)
-      for (const Index i : s.wall_candidates[k]) {
-        if (static_cast<std::size_t>(i) >= p.size()) continue;
-        Vec3 nrm;
-        double d;
-        s.walls[k].distance(p.position[i], nrm, d);
-        if (p.radius[i] - d > bound * p.radius[i]) { bad = 1; break; }
-      }
   if (!bad) return;
-  struct Hit { double ratio; Id a, b; std::string wall; };
+  struct Hit { double ratio; Id a, b; };
   std::vector<Hit> hits;
   for (std::size_t r = 0; r < t.size(); ++r) {
     const double ratio = ov[r] / std::min(p.radius[t.i(r)], p.radius[t.j(r)]);
-    if (ratio > bound) hits.push_back({ratio, t.id_i()[r], t.id_j()[r], ""});
+    if (ratio > bound) hits.push_back({ratio, t.id_i()[r], t.id_j()[r]});
   }
-  if (walls_known)
-    for (std::size_t k = 0; k < s.walls.size(); ++k)
-      for (const Index i : s.wall_candidates[k]) {
-        if (static_cast<std::size_t>(i) >= p.size()) continue;
-        Vec3 nrm;
-        double d;
-        s.walls[k].distance(p.position[i], nrm, d);
-        const double ratio = (p.radius[i] - d) / p.radius[i];
-        if (ratio > bound) hits.push_back({ratio, p.id[i], -1, s.walls[k].name});
-      }
   std::stable_sort(hits.begin(), hits.end(), [](const Hit& a, const Hit& b) { return a.ratio > b.ratio; });
   std::vector<Id> ids;
   for (const Hit& h : hits) {
     ids.push_back(h.a);
-    if (h.wall.empty()) ids.push_back(h.b);
+    ids.push_back(h.b);
   }
   const Hit& w = hits.front();
-  const std::string who = w.wall.empty() ? "particles " + std::to_string(w.a) + " and " + std::to_string(w.b)
-                                         : "particle " + std::to_string(w.a) + " and wall '" + w.wall + "'";
+  const std::string who = "particles " + std::to_string(w.a) + " and " + std::to_string(w.b);
   const std::string rule = c.max_overlap_ratio > 0.0 ? "watchdog.max_overlap_ratio" : "the contact law's bound";
   fail(s, ids, "overlap",
        "overlap of " + who + " is " + num(w.ratio) + " of the smaller radius, above " + num(bound) + " (" + rule + "); " +

@@ -176,7 +176,7 @@ ParamSpec<StageParams::Watchdog> watchdog_spec() {
                  "OUTDIR/checkpoint_before_failure.h5 (loadable with --restart); the defaults never fire on a healthy run");
   s.add("check_every", &P::check_every).min(1).doc("steps between checks (also checked before step 0 and at the stage end)");
   s.add("max_overlap_ratio", &P::max_overlap_ratio).unit("1").nonnegative()
-      .doc("largest overlap / smaller radius of a pair (overlap / radius at a wall); 0: the contact law's bound "
+      .doc("largest overlap / smaller radius of a particle pair (walls are not checked); 0: the contact law's bound "
            "(0.5 for elastic laws, max(1, creep_overlap_limit) + 0.5 for sintering)");
   s.add("max_speed", &P::max_speed).unit("m/s").nonnegative()
       .doc("a particle speed above this is a blow-up (0: blowup_speed, or else each particle's radius per step, r/dt)");
