@@ -6,7 +6,9 @@
 /// passed it in memory (Observer::healthy) and writes it as OUTDIR/checkpoint_before_failure.h5
 /// when the run fails.
 ///
-/// Checks, in this order (the first that fails is reported):
+/// Checks, in this order (the first that fails is reported; a frozen stage, mechanics off, runs
+/// check 1 only, Simulation::run_stage: its geometry is given, e.g. an overlapping packing built
+/// for a network test):
 ///  1. non-finite values: position, velocity, omega, force, torque of every particle, and every
 ///     per-particle field whose module declares it checked (FieldInfo::check): temperature and
 ///     joule_power must be finite, electric_potential must not be infinite (NaN marks a floating
@@ -15,11 +17,11 @@
 ///  2. speed: |v_i| > max_speed, or with max_speed = 0 > r_i / dt (a particle moving more than its
 ///     radius in one step; the rule of the former check_finite). quantity() = "velocity", ids
 ///     fastest first.
-///  3. overlap: overlap / min(r_i, r_j) of a pair, or overlap / r_i against a wall, above
-///     max_overlap_ratio (0: the contact law's bound, ContactModel::overlap_ratio_bound(): 0.5 for
-///     elastic laws, max(1, creep_overlap_limit) + 0.5 for sintering). quantity() = "overlap",
-///     ids = the two particles of each offending pair (the particle alone for a wall), worst
-///     first.
+///  3. overlap: overlap / min(r_i, r_j) of a particle pair above max_overlap_ratio (0: the contact
+///     law's bound, ContactModel::overlap_ratio_bound(): 0.5 for elastic laws,
+///     max(1, creep_overlap_limit) + 0.5 for sintering). Walls are not checked (cpc_fillers places
+///     particles across the box faces on purpose). quantity() = "overlap", ids = the two
+///     particles of each offending pair, worst first.
 ///  4. kinetic-energy growth (numerical instability): with e = sum(m v^2 + I w^2) / (2 sum m)
 ///     [J/kg] sampled at every check, the run stops when, over the last energy_window checks,
 ///     e started positive, never decreased from one check to the next, and grew by more than
@@ -31,8 +33,11 @@
 ///     an impact or a relaxing overlap rises and falls within a contact time, a heated packing
 ///     pushing itself apart stays far below the floor. It catches a slowly growing instability
 ///     before any particle reaches the speed bound r/dt (check 2); a fast one reaches both within
-///     a check and check 2 reports it. The samples are kept in the state's marks (checkpointed: a
-///     restart fires at the same step) and dropped at the stage end. quantity() =
+///     a check and check 2 reports it. The samples are kept in the state's marks during the stage
+///     and dropped at its end; they are kept out of every file (io/scenario/pipeline.cpp), so
+///     state files are those of a run without the watchdog, and a restart samples afresh from its
+///     first check step: it reproduces an energy failure at the same step when the checkpoint is
+///     at least energy_window checks before it (checkpoint_before_failure.h5 usually is). quantity() =
 ///     "kinetic energy", ids = the 10 particles of largest kinetic energy; value = the growth
 ///     factor over the window, bound = energy_growth_factor.
 #include <string>
