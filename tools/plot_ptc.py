@@ -135,11 +135,11 @@ def cmd_strain(a):
             x = [r[0] * (100.0 if off == 0 else 1.0) for r in data]
             k = 1 + off
             ax[0][c].errorbar(x, [r[k + 2] for r in data], yerr=[r[k + 3] for r in data], marker="o", ms=3)
-            ax[0][c].set_ylabel("mean coordination Z (conducting contacts)")
+            ax[0][c].set_ylabel("mean coordination Z")
             ax[0][c].set_xlabel(xlab)
             ax[1][c].errorbar(x, [10 ** r[k + 7] if math.isfinite(r[k + 7]) else float("nan") for r in data], marker="s", ms=3)
             ax[1][c].set_yscale("log")
-            ax[1][c].set_ylabel("resistivity (geometric mean over spanning configs)")
+            ax[1][c].set_ylabel("rho (geometric mean, spanning configs)")
             ax[1][c].set_xlabel(xlab)
             if off == 0 and math.isfinite(es[0]):
                 ax[1][c].axvline(100 * es[0], color="r", ls="--", label="switching strain %.2f %%" % (100 * es[0]))
@@ -158,7 +158,7 @@ def cmd_openings(a):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    files = sorted(glob.glob(os.path.join(a.out, "**", "*.h5"), recursive=True))
+    files = sorted(glob.glob(os.path.join(a.out, "**", "frames", "*.h5"), recursive=True))
     rows = []
     for fn in files:
         with h5py.File(fn, "r") as f:
@@ -172,11 +172,11 @@ def cmd_openings(a):
                 parts = f[base + "particles"] if (base + "particles") in f else None
                 if parts is None:
                     continue
-                rid = dict(zip(parts["id"][()].tolist(), parts["radius"][()].tolist()))
+                rid = dict(zip(np.ravel(parts["id"][()]).tolist(), np.ravel(parts["radius"][()]).tolist()))
                 pairs = net["pairs"][()].reshape(-1, 2)
-                gap = net["gap"][()]
-                op = net["unit_opening"][()]
-                eb = net["break_strain"][()]
+                gap = np.ravel(net["gap"][()])
+                op = np.ravel(net["unit_opening"][()])
+                eb = np.ravel(net["break_strain"][()])
                 for k in range(len(gap)):
                     D = rid[int(pairs[k, 0])] + rid[int(pairs[k, 1])]
                     rows.append([frame, int(pairs[k, 0]), int(pairs[k, 1]), D, gap[k] / D, a.eps0 * op[k] / D, eb[k]])
@@ -188,10 +188,10 @@ def cmd_openings(a):
     ax.hist(s, bins=80, density=True)
     ax.set_xlabel("contact strain eps0 delta / D at eps0 = %g %% [%%]" % (100 * a.eps0))
     ax.set_ylabel("probability density [1/%]")
-    ax.set_title("%d touching contacts; median %.4f %%, %.1f %% negative" % (len(s), float(np.median(s)), 100.0 * float(np.mean(s < 0))))
+    ax.set_title("%d touching contacts; median %.2g %%, %.1f %% negative" % (len(s), float(np.median(s)), 100.0 * float(np.mean(s < 0))))
     atomic_png(fig, a.prefix + "_openings.png")
     plt.close(fig)
-    print("%d contacts: contact strain at eps0 = %g: mean %.4f %%, median %.4f %%, negative %.1f %%" %
+    print("%d contacts: contact strain at eps0 = %g: mean %.3g %%, median %.3g %%, negative %.1f %%" %
           (len(s), a.eps0, float(np.mean(s)), float(np.median(s)), 100.0 * float(np.mean(s < 0))))
 
 
