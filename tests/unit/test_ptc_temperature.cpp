@@ -115,7 +115,8 @@ TEST_CASE("ptc_temperature: invalid laws are rejected", "[ptc][cpc]") {
 // ptc_local_strain: the same matrix under one eps0 per spring, factorised once.
 //  (a) uniform eps0: displacements and openings are eps0 times ptc::solve_unit's (same matrix,
 //      right-hand side scaled): 1e-10 relative (the two solves differ only by rounding);
-//  (b) superposition: solve(e1) + solve(e2) = solve(e1 + e2) (linearity, 1e-10 of the norm);
+//  (b) superposition of the openings: solve(e1) + solve(e2) = solve(e1 + e2) (linearity, 1e-9 of
+//      the largest opening);
 //  (c) a free 1-D chain 0 -(h1)- 1 =touching= 2 -(h3)- 3 with per-spring strains e1, e3: it
 //      expands freely (statically determinate, no stress): spring openings e1 h1 and e3 h3, the
 //      contact opening 0 (1e-8 relative: ground-spring regularisation 1e-12).
@@ -155,12 +156,16 @@ TEST_CASE("ptc_local_strain: per-spring eigenstrains with one factorisation", "[
     ls.solve(e1, u1, o1);
     ls.solve(e2, u2, o2);
     ls.solve(e12, u12, o12);
+    // Openings (B u): the displacements themselves carry floppy-mode components fixed only by
+    // the 1e-9 ground springs (condition ~1e9), which the openings do not see.
     double err = 0.0, norm = 0.0;
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      err = std::max(err, (u1[i] + u2[i] - u12[i]).norm());
-      norm = std::max(norm, u12[i].norm());
+    for (std::size_t e = 0; e < net.size(); ++e) {
+      err = std::max(err, std::abs(o1[e] + o2[e] - o12[e]));
+      norm = std::max(norm, std::abs(o12[e]));
     }
-    CHECK(err < 1e-10 * norm);
+    INFO("superposition error " << err << " of max opening " << norm);
+    CHECK(norm > 0.0);
+    CHECK(err < 1e-9 * norm);
     CHECK_THROWS_AS(ls.solve(std::vector<double>(3, 0.0), u, open), SetupError);
   }
   SECTION("free chain with two strains") {
