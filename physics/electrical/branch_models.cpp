@@ -49,6 +49,10 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
       if (law_neck) a[e] = g.radius[e];
       else if (g.overlap[e] > 0.0 && std::isfinite(ra) && std::isfinite(rb))
         a[e] = m.neck == "cv" ? el::cv_neck_radius(ra, rb, g.overlap[e]) : el::coble_neck_radius(ra, rb, g.overlap[e]);
+      // A neck never exceeds the smaller particle (§7.9; the kernels leave the cap to the caller):
+      // the Coble neck of a deep overlap would (1.8 r_min at h = 0.9 r_min, size ratio 10), and
+      // without the grain-boundary-fraction correction nothing else caps it.
+      a[e] = std::min(a[e], std::min(ra, rb));
     }
     if (m.gbf_correction) {
       std::vector<double> node_r(g.nodes());
