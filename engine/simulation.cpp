@@ -487,6 +487,13 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     }
     s_.stage_skin = skin_;
   }
+  // Before step 0: overlaps of the starting packing (reported; refused or relaxed as configured)
+  // and pressure walls with nothing to push on (engine/start_checks.hpp).
+  InitialOverlapReport overlap0;
+  if (!resume) {
+    overlap0 = apply_initial_overlap_policy(s_, cfg.name, cfg.initial_overlap, cfg.initial_overlap_limit);
+    check_pressure_walls(s_, cfg.name, cfg.motions);
+  }
   if (!resume) {
     s_.verlet = VerletTracker{};
     update_neighbors(skin_, 0);
@@ -497,6 +504,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   StageResult res;
   stats_ = &res;
   res.name = cfg.name;
+  res.initial_overlap = overlap0;
   res.plan = plan_.names();
   res.particles = p.size();
   // On resume the stage's step comes from the checkpoint, so the continuation is exact.

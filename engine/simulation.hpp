@@ -12,6 +12,7 @@
 #include "engine/contact/contact_model.hpp"
 #include "engine/model/module.hpp"
 #include "engine/schedule/scheduler.hpp"
+#include "engine/start_checks.hpp"
 #include "engine/state/state.hpp"
 #include "engine/watchdog.hpp"
 
@@ -81,6 +82,10 @@ struct StageConfig {
   /// clamped); their total force and torque about their centre are in the time series
   /// (prescribed_set_columns).
   std::map<std::string, PrescribedMotion> prescribed_sets;
+  /// What to do with overlaps above initial_overlap_limit (delta / smaller radius) in the packing
+  /// the stage starts from: "allow", "refuse" or "relax" (engine/start_checks.hpp). Always reported.
+  std::string initial_overlap = "allow";
+  double initial_overlap_limit = 0.01;
 };
 
 /// A module's step at the stage start: its own stable step and the step it runs with (both in
@@ -139,6 +144,7 @@ struct StageResult {
   std::map<std::string, Step> max_substeps;    ///< largest per-step substep count (adaptive clocks)
   std::map<std::string, double> module_seconds;  ///< wall time inside each module's calls [s] (the rest is mechanics and I/O)
   std::vector<ModuleStep> module_steps;  ///< per module at the stage start
+  InitialOverlapReport initial_overlap;  ///< overlaps of the starting packing (not measured on resume)
 };
 
 class Simulation {

@@ -18,6 +18,7 @@
 #include "physics/electrical/contact_percolation.hpp"
 #include "physics/electrical/electrical_network.hpp"
 #include "physics/electrical/ptc_strain.hpp"
+#include "physics/electrical/ptc_self_heating.hpp"
 #include "physics/mechanics/torsion_test.hpp"
 #include "physics/mechanics/tension_test.hpp"
 #include "physics/packing/cpc_fillers.hpp"
@@ -47,6 +48,7 @@ void register_all(Registry& r) {
   r.module<TorsionTest>();
   r.module<ContactPercolation>();
   r.module<PtcStrain>();
+  r.module<PtcSelfHeating>();
   r.generator<LatticeGenerator>();
   r.generator<DepositGenerator>();
   r.generator<FillGenerator>();

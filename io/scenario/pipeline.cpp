@@ -508,6 +508,14 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         js["particle_steps_per_s"] = r.particle_steps_per_second;
         js["mass_scaling"] = st.cfg.mass_scaling;
         js["mass_floor_radius"] = st.cfg.mass_floor_radius;
+        if (!resuming) {
+          const auto& o = r.initial_overlap;
+          js["initial_overlap"] = {{"policy", o.policy}, {"limit", o.limit}, {"max_ratio", o.max_ratio},
+                                   {"pairs_over_limit", o.pairs_over_limit}, {"walls_over_limit", o.walls_over_limit},
+                                   {"worst_ids", {o.worst_i, o.worst_j}}, {"worst_wall", o.worst_wall},
+                                   {"relax_sweeps", o.sweeps}, {"max_ratio_after", o.max_ratio_after},
+                                   {"particles_moved", o.moved}, {"max_displacement_m", o.max_displacement}};
+        }
         js["step_plan"] = r.plan;
         js["mechanics"] = st.cfg.mechanics ? "on" : "frozen";
         for (const auto& m : r.module_steps)

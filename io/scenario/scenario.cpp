@@ -145,6 +145,8 @@ struct StageParams {
   double blowup_speed = 0.0;
   std::int64_t sort_every_rebuilds = 50;
   std::int64_t stability_check_every = 1000;
+  std::string initial_overlap = "allow";
+  double initial_overlap_limit = 0.01;
   std::string from_snapshot;
   // stop.*
   struct Stop {
@@ -229,6 +231,10 @@ ParamSpec<StageParams> stage_spec(const Registry& reg) {
   s.add("blowup_speed", &StageParams::blowup_speed).unit("m/s").nonnegative().doc("speed that counts as a blow-up (0: radius per step); watchdog.max_speed, when set, takes precedence");
   s.add("sort_every_rebuilds", &StageParams::sort_every_rebuilds).min(0).doc("spatial sort period in neighbour rebuilds (0: never)");
   s.add("stability_check_every", &StageParams::stability_check_every).min(0).doc("steps between stable-step checks (0: start only)");
+  s.add("initial_overlap", &StageParams::initial_overlap).choices({"allow", "refuse", "relax"})
+      .doc("overlaps of the starting packing above initial_overlap_limit (always reported in summary.json): run as is (allow), refuse before step 0 naming the worst pair (refuse), or move the particles apart first (relax)");
+  s.add("initial_overlap_limit", &StageParams::initial_overlap_limit).unit("1").positive()
+      .doc("largest accepted initial overlap / smaller radius (pairs) or / radius (walls)");
   s.add("from_snapshot", &StageParams::from_snapshot).doc("start from the state stored in this checkpoint file");
   s.add_group("stop", &StageParams::stop, stop_spec());
   s.add_group("output", &StageParams::output, output_spec());
@@ -546,6 +552,8 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
   c.watchdog.snapshot_every_checks = p.watchdog.snapshot_every_checks;
   c.sort_every_rebuilds = p.sort_every_rebuilds;
   c.stability_check_every = p.stability_check_every;
+  c.initial_overlap = p.initial_overlap;
+  c.initial_overlap_limit = p.initial_overlap_limit;
   c.duration = p.stop.time;
   c.max_steps = p.stop.steps;
   c.check_every = p.stop.check_every;

@@ -127,11 +127,15 @@ struct MaxwellFactors {
 };
 inline MaxwellFactors maxwell_factors(double k, double eta, double dt) {
   if (!(eta < std::numeric_limits<double>::infinity())) return {1.0, 1.0};
+  if (!(eta > 0.0)) return {0.0, 0.0};  // x = +inf (k > 0) or an instantly relaxing element
   const double x = k * dt / eta;
   return {std::exp(-x), x > 1e-8 ? -std::expm1(-x) / x : 1.0 - 0.5 * x};
 }
+/// eta = 0 (a dashpot of a neck of zero radius, eta ~ a^4): the limit x -> inf, F' = 0 and the
+/// dashpot takes the whole motion plus the released spring, du = v dt + F/k (k = 0: v dt).
 inline MaxwellStep maxwell_step(double force, double k, double eta, double v, double dt) {
   if (!(eta < std::numeric_limits<double>::infinity())) return {force + k * v * dt, 0.0};
+  if (!(eta > 0.0)) return {0.0, v * dt + (k > 0.0 ? force / k : 0.0)};
   const MaxwellFactors m = maxwell_factors(k, eta, dt);
   return {force * m.decay + k * v * dt * m.phi, dt * (v * (1.0 - m.phi) + m.phi * force / eta)};
 }

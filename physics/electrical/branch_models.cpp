@@ -49,6 +49,10 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
       if (law_neck) a[e] = g.radius[e];
       else if (g.overlap[e] > 0.0 && std::isfinite(ra) && std::isfinite(rb))
         a[e] = m.neck == "cv" ? el::cv_neck_radius(ra, rb, g.overlap[e]) : el::coble_neck_radius(ra, rb, g.overlap[e]);
+      // A neck never exceeds the smaller particle (§7.9; the kernels leave the cap to the caller):
+      // the Coble neck of a deep overlap would (1.8 r_min at h = 0.9 r_min, size ratio 10), and
+      // without the grain-boundary-fraction correction nothing else caps it.
+      a[e] = std::min(a[e], std::min(ra, rb));
     }
     if (m.gbf_correction) {
       std::vector<double> node_r(g.nodes());
@@ -80,10 +84,21 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
         G[e] = el::transmission_conductance(1.0 / k_edge[e], g.distance[e], S[g.a[e]], S[g.b[e]]);
   } else {  // touching, tunnelling: the whole resistance is at the contact
     share_a.assign(g.size(), kNaN);
+    const std::vector<double>* u = m.displacement_field.empty() ? nullptr : &p.fields.data(m.displacement_field);
     for (std::size_t e = 0; e < g.size(); ++e) {
-      if (g.overlap[e] >= -m.touch_tolerance) G[e] = el::touching_conductance(g.overlap[e], m.touch_tolerance, m.unit_conductance);
+      double overlap = g.overlap[e];
+      if (u && !g.is_wall_node(g.a[e]) && !g.is_wall_node(g.b[e])) {
+        const Vec3 d = p.position[g.b[e]] - p.position[g.a[e]];
+        const double dn = d.norm();
+        const std::size_t ia = static_cast<std::size_t>(g.a[e]), ib = static_cast<std::size_t>(g.b[e]);
+        const Vec3 du((*u)[3 * ib] - (*u)[3 * ia], (*u)[3 * ib + 1] - (*u)[3 * ia + 1], (*u)[3 * ib + 2] - (*u)[3 * ia + 2]);
+        if (dn > 0.0) overlap -= d.dot(du) / dn;
+      }
+      if (overlap >= -m.touch_tolerance) G[e] = el::touching_conductance(overlap, m.touch_tolerance, m.unit_conductance);
       else if (m.model == "tunnelling")
-        G[e] = el::tunnelling_conductance(-g.overlap[e], m.tunnel_g0, m.tunnel_length, m.tunnel_cutoff);
+        G[e] = el::tunnelling_conductance(-overlap, m.tunnel_g0, m.tunnel_length, m.tunnel_cutoff);
+      else if (m.open_conductance > 0.0)
+        G[e] = m.open_conductance;
     }
   }
   return G;

@@ -39,6 +39,13 @@ struct BranchModel {
   double tunnel_g0 = 1.0;              ///< [S]
   double tunnel_length = 1e-9;         ///< [m]
   double tunnel_cutoff = 0.0;          ///< [m]
+  /// touching/tunnelling: a per-particle displacement field [m] (3 components, e.g.
+  /// ptc_displacement of ptc_self_heating) added to the geometry, linearised: the gap of a
+  /// particle pair becomes gap + n . (u_b - u_a), n the unit vector from a to b ("" = none).
+  std::string displacement_field;
+  /// touching: conductance [S] of a pair of the graph that does not touch (after the
+  /// displacement), e.g. the polymer film of an opened filler contact (0: none).
+  double open_conductance = 0.0;
 };
 
 /// Conductance per graph edge; `share_a` receives the resistance share of side a per edge.

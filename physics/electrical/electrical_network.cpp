@@ -148,6 +148,10 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("tunnel_g0", &P::tunnel_g0).unit("S").positive().doc("tunnelling: prefactor g0");
   s.add("tunnel_length", &P::tunnel_length).unit("m").positive().doc("tunnelling: decay length xi");
   s.add("tunnel_cutoff", &P::tunnel_cutoff).unit("m").nonnegative().doc("tunnelling: largest gap that conducts");
+  s.add("displacement_field", &P::displacement_field)
+      .doc("touching, tunnelling: 3-component particle field of displacements [m] added (linearised) to the pair gaps, e.g. ptc_displacement of ptc_self_heating; \"\" = none");
+  s.add("open_conductance", &P::open_conductance).unit("S").nonnegative()
+      .doc("touching: conductance of a pair of the graph whose gap after the displacement exceeds touch_tolerance (an opened contact's polymer film); 0 = none");
   return s;
 }
 
@@ -170,7 +174,10 @@ ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
                       "kappa(T) at the evaluation temperature: " + why);
   }
   branch_ = BranchModel{p.model, p.contact_radius, p.neck, p.hemisphere, p.gb_epsilon, p.gb_thickness, p.gbf_correction,
-                        p.alpha_constant, p.touch_tolerance, p.unit_conductance, p.tunnel_g0, p.tunnel_length, p.tunnel_cutoff};
+                        p.alpha_constant, p.touch_tolerance, p.unit_conductance, p.tunnel_g0, p.tunnel_length, p.tunnel_cutoff,
+                        p.displacement_field, p.open_conductance};
+  if (!p.displacement_field.empty() && p.model != "touching" && p.model != "tunnelling")
+    throw ConfigError("/displacement_field", "a displacement field needs model touching or tunnelling, found '" + p.model + "'");
   LaplacianOptions o;
   o.method = p.solver == "cg_ic"              ? LaplacianMethod::CgIncompleteCholesky
              : p.solver == "cg_jacobi"        ? LaplacianMethod::CgDiagonal
@@ -194,6 +201,7 @@ void ElectricalNetwork::declare(Declarations& d) const {
   // joule_power and writes the temperature and the expanded radii, is not an ordering cycle.
   d.reads_previous = {"position", "radius"};
   if (p_.temperature_field) d.reads_previous.push_back("temperature");
+  if (!p_.displacement_field.empty()) d.reads.push_back(p_.displacement_field);
   d.writes = {"electric_potential", "joule_power", "signal/electrical_resistance"};
   if (!p_.voltage_signal.empty()) d.reads.push_back("signal/" + p_.voltage_signal);
 }
@@ -212,6 +220,7 @@ void ElectricalNetwork::bind(State& s) {
     default_clock_.trigger.field_change = p_.resolve_temperature_change;
   }
   default_clock_.trigger.max_interval = p_.resolve_every;
+  if (!p_.displacement_field.empty()) default_clock_ = Clock{};  // the displacements change every step: solve every step
   if (p_.model == "transmission_surface" && (is_wall_electrode(p_.high) || is_wall_electrode(p_.low)))
     throw SetupError("electrical_network: the transmission_surface model takes particle-set electrodes, not walls");
 }

@@ -60,6 +60,8 @@
 /// | current            | A     | > 0: inject this current at `high` instead (electrode equipotential) |
 /// | length, area       | m, m2 | L and A of Eq. 28 (0: distance of the electrodes' centroids; the die cross-section) |
 /// | solver, tolerance  | -, 1  | direct, cg_ic, cg_jacobi, amg, pseudo_transient; iterative relative residual |
+/// | displacement_field | -     | touching/tunnelling: a 3-component particle field u [m] (ptc_self_heating's ptc_displacement): pair gaps become gap + n . (u_b - u_a); clock every step by default |
+/// | open_conductance   | S     | touching: conductance of a pair of the graph (gap <= touch_tolerance) whose gap after the displacement exceeds the tolerance (0: none) |
 #include <string>
 #include <vector>
 
@@ -123,6 +125,8 @@ class ElectricalNetwork final : public Module {
     double tunnel_g0 = 1.0;
     double tunnel_length = 1e-9;
     double tunnel_cutoff = 0.0;
+    std::string displacement_field;  // touching, tunnelling: per-particle displacement added to the gaps
+    double open_conductance = 0.0;   // touching: conductance of a graph pair that does not touch [S]
   };
   static ParamSpec<Params> spec();
   explicit ElectricalNetwork(const Params& p);

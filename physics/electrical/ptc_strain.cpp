@@ -42,7 +42,22 @@ PtcStrain::PtcStrain(const Params& p) : p_(p) {
     if (!seen.insert(sfx).second) throw SetupError("ptc_strain: two eps0_values round to the same column " + sfx + " (0.01 % resolution)");
     suffix_.push_back(sfx);
   }
-  held_.assign(kFixed + 3 * suffix_.size(), kNaN);
+  law_ = ptc::ThermalStrainLaw{p_.expansion_coefficient,
+                              p_.expansion_coefficient_melt > 0.0 ? p_.expansion_coefficient_melt : p_.expansion_coefficient,
+                              p_.reference_temperature, p_.melting_temperature, p_.melting_strain, p_.melting_width};
+  if (!p_.temperatures.empty()) {
+    ptc::validate(law_);
+    for (double T : p_.temperatures) {
+      if (!(T > 0.0) || !std::isfinite(T)) throw SetupError("ptc_strain: temperatures must be finite and > 0 K");
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "T%.2fK", T);
+      std::string sfx(buf);
+      std::replace(sfx.begin(), sfx.end(), '.', 'p');
+      if (!seen.insert(sfx).second) throw SetupError("ptc_strain: two temperatures round to the same column " + sfx + " (0.01 K resolution)");
+      tsuffix_.push_back(sfx);
+    }
+  }
+  held_.assign(kFixed + 3 * suffix_.size() + (tsuffix_.empty() ? 0 : 1 + 4 * tsuffix_.size()), kNaN);
 }
 
 ParamSpec<PtcStrain::Params> PtcStrain::spec() {
@@ -66,6 +81,17 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
   s.add("length", &P::length).unit("m").nonnegative().doc("L of rho = R_eq L; 0: the box edge recorded by cpc_fillers");
   s.add("opening_strain", &P::opening_strain).nonnegative().doc("eps0 [1] of the opening statistics (paper: 1 %)");
   s.add("eps0_values", &P::eps0_values).doc("matrix eigenstrains eps0 [1] at which Z and rho are reported");
+  s.add("temperatures", &P::temperatures).unit("K")
+      .doc("temperatures at which eps0(T), Z and rho are reported, with the switching temperature (empty: no temperature columns)");
+  s.add("expansion_coefficient", &P::expansion_coefficient).unit("1/K").positive()
+      .doc("alpha_s: linear expansion coefficient of the matrix relative to the fillers (below the melting step)");
+  s.add("expansion_coefficient_melt", &P::expansion_coefficient_melt).unit("1/K").nonnegative()
+      .doc("alpha_l: the same above the melting step (0: alpha_s)");
+  s.add("reference_temperature", &P::reference_temperature).unit("K").positive().doc("T_ref: eps0(T_ref) = 0 (the stress-free state)");
+  s.add("melting_temperature", &P::melting_temperature).unit("K").nonnegative().doc("T_m: centre of the melting step (0: no melting step)");
+  s.add("melting_strain", &P::melting_strain).unit("1").nonnegative()
+      .doc("linear strain jump on melting (about Delta V / (3 V) of the host's volume change)");
+  s.add("melting_width", &P::melting_width).unit("K").nonnegative().doc("width of the smoothed melting step (0: sharp)");
   return s;
 }
 
@@ -124,6 +150,30 @@ void PtcStrain::advance(State& s, const StepInfo&) {
            c.size() ? static_cast<double>(closing) / static_cast<double>(c.size()) : kNaN};
   held_.push_back(sol.residual);
   held_.insert(held_.end(), per.begin(), per.end());
+  if (!tsuffix_.empty()) {
+    held_.push_back(std::isfinite(held_[2]) ? ptc::temperature_at_strain(law_, held_[2]) : kInf);
+    for (double T : p_.temperatures) {
+      const double e0 = ptc::thermal_strain(law_, T);
+      // eps0 < 0 (below T_ref): the break strains are for eps0 > 0; apply the rule of ptc_matrix.hpp
+      // directly (a contact conducts while gap + eps0 delta <= max(break_gap, gap): on cooling the
+      // contacts with delta < 0 open).
+      std::vector<double> ebT = eb;
+      if (e0 < 0.0)
+        for (std::size_t e = 0; e < c.size(); ++e)
+          ebT[e] = c.gap[e] + e0 * c.opening[e] <= std::max(p_.break_gap, c.gap[e]) ? kInf : -kInf;
+      const ptc::StrainPoint sp = ptc::evaluate(n, c, ebT, e0, p_.unit_conductance, high, low, solver_);
+      held_.insert(held_.end(), {e0, sp.spanning ? 1.0 : 0.0, sp.coordination, sp.resistance * length_});
+    }
+  }
+  // Per-contact results for the frames: ids, initial gap, unit opening, break strain.
+  contacts_ = EdgeOutput{"ptc_contacts", {}, {{"gap", "m", {}}, {"unit_opening", "m", {}}, {"break_strain", "1", {}}}};
+  for (std::size_t e = 0; e < c.size(); ++e) {
+    contacts_.pairs.push_back(s.particles.id[c.a[e]]);
+    contacts_.pairs.push_back(s.particles.id[c.b[e]]);
+    contacts_.fields[0].values.push_back(c.gap[e]);
+    contacts_.fields[1].values.push_back(c.opening[e]);
+    contacts_.fields[2].values.push_back(eb[e]);
+  }
 }
 
 std::vector<std::string> PtcStrain::columns() const {
@@ -132,6 +182,9 @@ std::vector<std::string> PtcStrain::columns() const {
                                 "ptc_strain_opening_negative_fraction", "ptc_strain_solve_residual"};
   for (const auto& sfx : suffix_)
     for (const char* q : {"spanning_", "coordination_", "resistivity_"}) c.push_back(std::string("ptc_strain_") + q + sfx);
+  if (!tsuffix_.empty()) c.push_back("ptc_strain_switching_temperature");
+  for (const auto& sfx : tsuffix_)
+    for (const char* q : {"eps0_", "spanning_", "coordination_", "resistivity_"}) c.push_back(std::string("ptc_strain_") + q + sfx);
   return c;
 }
 
@@ -147,6 +200,25 @@ void PtcStrain::visit(Archive& ar, const std::string& prefix) {
     held_ = held;
   }
   solver_.visit(ar, prefix + "/solver");
+  // The held per-contact results (written with every frame until the next evaluation).
+  std::vector<std::int64_t> pairs = contacts_.pairs;
+  std::vector<double> vals;
+  if (!ar.reading())
+    for (std::size_t k = 0; k < pairs.size() / 2; ++k)
+      for (const auto& f : contacts_.fields) vals.push_back(f.values[k]);
+  if (!ar.reading() || ar.has(prefix + "/contact_pairs")) {
+    ar.visit(prefix + "/contact_pairs", pairs, 2);
+    ar.visit(prefix + "/contact_values", vals, 3);
+  }
+  if (ar.reading()) {
+    contacts_ = EdgeOutput{};
+    if (!pairs.empty()) {
+      if (vals.size() != 3 * (pairs.size() / 2)) throw SetupError("checkpoint ptc_strain contact data is inconsistent");
+      contacts_ = EdgeOutput{"ptc_contacts", pairs, {{"gap", "m", {}}, {"unit_opening", "m", {}}, {"break_strain", "1", {}}}};
+      for (std::size_t k = 0; k < pairs.size() / 2; ++k)
+        for (int q = 0; q < 3; ++q) contacts_.fields[q].values.push_back(vals[3 * k + q]);
+    }
+  }
 }
 
 }  // namespace sparkdem::physics

@@ -28,6 +28,18 @@
 ///                                 when not spanning. Sweep CSVs write non-finite values as
 ///                                 nan: there nan resistivity = not spanning, nan
 ///                                 switching_strain_listed = spans at every listed eps0.
+/// Temperature (optional; `temperatures` non-empty): eps0(T) from the matrix expansion law of
+/// physics/electrical/ptc_temperature.hpp (expansion_coefficient alpha_s, optional melting step
+/// at melting_temperature with strain jump melting_strain over melting_width and
+/// expansion_coefficient_melt above it). The response is linear in eps0, so rho(T) = rho(eps0(T))
+/// from the same single solve. Extra columns:
+///   switching_temperature         T(eps*) [K]: the temperature at which eps0(T) reaches the exact
+///                                 switching strain (inverse of eps0(T); inside a sharp jump: T_m);
+///                                 +inf if the network never switches
+///   eps0_<T>, spanning_<T>, coordination_<T>, resistivity_<T>   per listed T (<T> = T in K with
+///                                 2 decimals and 'p' for the point, e.g. T403p15K)
+/// Per-contact output (frames, /networks/ptc_contacts): every touching contact's ids, initial gap
+/// [m], unit opening delta [m per unit eps0] and break strain eps_b [1] (+inf: never opens).
 /// Parameter choices (configs/cpc_ptc_strain.json): h_max = 1 R (centre distance <= 3 R: about 6
 /// neighbours per filler at phi = 25 %, near the isostatic 6 of axial springs in 3-D: floppy
 /// modes exist and the regularisation handles them), h_min = 0.1 R. h_min sets the stiffness of the springs
@@ -39,6 +51,7 @@
 #include "engine/graph/laplacian.hpp"
 #include "engine/model/module.hpp"
 #include "engine/model/param_spec.hpp"
+#include "physics/electrical/ptc_temperature.hpp"
 
 namespace sparkdem::physics {
 
@@ -58,6 +71,14 @@ class PtcStrain final : public Module {
     double length = 0.0;            ///< [m] 0: cpc_fillers box edge
     double opening_strain = 0.01;   ///< [1] eps0 of the opening statistics
     std::vector<double> eps0_values = {0.0, 0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.05};
+    // temperature (ptc_temperature.hpp); empty temperatures: off
+    std::vector<double> temperatures;           ///< [K]
+    double expansion_coefficient = 2e-4;        ///< alpha_s [1/K] (matrix - filler mismatch)
+    double expansion_coefficient_melt = 0.0;    ///< alpha_l [1/K]; 0 = alpha_s
+    double reference_temperature = 293.15;      ///< [K] eps0 = 0
+    double melting_temperature = 0.0;           ///< T_m [K]; 0 = no melting step
+    double melting_strain = 0.0;                ///< Delta_m [1]
+    double melting_width = 0.0;                 ///< [K]
   };
   static ParamSpec<Params> spec();
   explicit PtcStrain(const Params& p);
@@ -71,6 +92,9 @@ class PtcStrain final : public Module {
   std::vector<std::string> columns() const override;
   std::vector<double> column_values(const State& s) const override;
   void visit(Archive& ar, const std::string& prefix) override;
+  std::vector<EdgeOutput> edge_outputs() const override {
+    return contacts_.name.empty() ? std::vector<EdgeOutput>{} : std::vector<EdgeOutput>{contacts_};
+  }
 
  private:
   Params p_;
@@ -79,6 +103,9 @@ class PtcStrain final : public Module {
   LaplacianSolver solver_;
   std::vector<std::string> suffix_;  ///< per eps0
   std::vector<double> held_;         ///< the column values of the last evaluation (resistivity via length_)
+  ptc::ThermalStrainLaw law_;         ///< eps0(T) (used when p_.temperatures is not empty)
+  std::vector<std::string> tsuffix_;  ///< per temperature
+  EdgeOutput contacts_;               ///< held per-contact results of the last evaluation
 };
 
 }  // namespace sparkdem::physics

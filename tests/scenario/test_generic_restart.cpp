@@ -130,6 +130,8 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
        with_steps(load_data("tension_small.json"), 1, 600), 1, 233},
       {"cpc_fillers configuration, then Hertz settling with electrical_network and contact_percolation on every-N clocks",
        load_data("cpc_small.json"), 1, 113},
+      {"self-heating PTC element: ptc_self_heating (factorised network, displacement field), electrical_network with displacement_field, implicit heat_conduction with losses",
+       with_steps(load_data("ptc_self_heating_small.json"), 1, 90), 1, 37},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.label) {

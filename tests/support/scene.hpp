@@ -36,8 +36,8 @@ inline void add_box(State& s, const Vec3& lo, const Vec3& hi) {
   for (int d = 0; d < 3; ++d) {
     Vec3 n = Vec3::Zero();
     n[d] = 1.0;
-    s.walls.push_back(plane_wall(std::string(axis[d], 1) + "_lo", lo, n));
-    s.walls.push_back(plane_wall(std::string(axis[d], 1) + "_hi", hi, -n));
+    s.walls.push_back(plane_wall(std::string(1, axis[d]) + "_lo", lo, n));
+    s.walls.push_back(plane_wall(std::string(1, axis[d]) + "_hi", hi, -n));
   }
 }
 
