@@ -10,6 +10,7 @@
 #include "engine/core/error.hpp"
 #include "engine/state/state.hpp"
 #include "physics/electrical/ptc_matrix.hpp"
+#include "physics/electrical/rkpm_matrix.hpp"
 
 namespace sparkdem::physics {
 
@@ -42,6 +43,13 @@ PtcStrain::PtcStrain(const Params& p) : p_(p) {
     if (!seen.insert(sfx).second) throw SetupError("ptc_strain: two eps0_values round to the same column " + sfx + " (0.01 % resolution)");
     suffix_.push_back(sfx);
   }
+  if (p_.matrix_model != "bonded" && p_.matrix_model != "rkpm")
+    throw SetupError("ptc_strain: matrix_model must be \"bonded\" or \"rkpm\", found \"" + p_.matrix_model + "\"");
+  const auto& he = p_.opening_histogram_edges;
+  if (he.size() == 1) throw SetupError("ptc_strain: opening_histogram_edges needs at least two edges (or none)");
+  for (std::size_t k = 1; k < he.size(); ++k)
+    if (!(he[k] > he[k - 1])) throw SetupError("ptc_strain: opening_histogram_edges must increase strictly");
+  if (p_.surface_points % 2 != 0) throw SetupError("ptc_strain: surface_points must be even (antipodal pairs)");
   law_ = ptc::ThermalStrainLaw{p_.expansion_coefficient,
                               p_.expansion_coefficient_melt > 0.0 ? p_.expansion_coefficient_melt : p_.expansion_coefficient,
                               p_.reference_temperature, p_.melting_temperature, p_.melting_strain, p_.melting_width};
@@ -57,7 +65,7 @@ PtcStrain::PtcStrain(const Params& p) : p_(p) {
       tsuffix_.push_back(sfx);
     }
   }
-  held_.assign(kFixed + 3 * suffix_.size() + (tsuffix_.empty() ? 0 : 1 + 4 * tsuffix_.size()), kNaN);
+  held_.assign(kFixed + 3 * suffix_.size() + histogram_columns() + (tsuffix_.empty() ? 0 : 1 + 4 * tsuffix_.size()), kNaN);
 }
 
 ParamSpec<PtcStrain::Params> PtcStrain::spec() {
@@ -92,6 +100,26 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
   s.add("melting_strain", &P::melting_strain).unit("1").nonnegative()
       .doc("linear strain jump on melting (about Delta V / (3 V) of the host's volume change)");
   s.add("melting_width", &P::melting_width).unit("K").nonnegative().doc("width of the smoothed melting step (0: sharp)");
+  s.add("opening_histogram_edges", &P::opening_histogram_edges)
+      .doc("bin edges [1] of the relative contact opening at opening_strain (columns opening_hist_<k>, _below, _above); "
+           "empty: no histogram");
+  s.add("matrix_model", &P::matrix_model).choices({"bonded", "rkpm"})
+      .doc("bonded: axial-spring network (ptc_matrix); rkpm: the paper's meshless continuum (rkpm_matrix)");
+  s.add("poisson_ratio", &P::poisson_ratio).range(-0.99, 0.499)
+      .doc("rkpm: matrix Poisson ratio (not given by the paper; 0.35 default, not tuned)");
+  s.add("node_spacing", &P::node_spacing).unit("m").positive()
+      .doc("rkpm: node spacing h (fitted to the box edge; paper 12,000 nodes in a 70 R box ~ 3 R)");
+  s.add("support_factor", &P::support_factor).min(1.0).doc("rkpm: support radius / node spacing (> 1)");
+  s.add("quadrature_order", &P::quadrature_order).range(1, 8).doc("rkpm: Gauss points per direction per background cell");
+  s.add("cell_subdivision", &P::cell_subdivision).range(1, 16).doc("rkpm: background quadrature cells per node spacing, per direction");
+  s.add("surface_points", &P::surface_points).range(2, 100000).doc("rkpm: penalty surface points per sphere (even)");
+  s.add("bond_penalty", &P::bond_penalty).unit("Pa/m").nonnegative()
+      .doc("rkpm: sphere-matrix penalty alpha (paper 100 E with lengths in its unit; R = 1 here)");
+  s.add("pin_penalty", &P::pin_penalty).positive().doc("rkpm: translation pin at the box centre, beta / (E h)");
+  s.add("cg_tolerance", &P::cg_tolerance).positive().doc("rkpm: relative residual of the conjugate-gradient solve");
+  s.add("cg_max_iterations", &P::cg_max_iterations).min(1).doc("rkpm: conjugate-gradient iteration limit");
+  s.add("linear_solver", &P::linear_solver).choices({"cg_ic", "cg", "ldlt", "auto"})
+      .doc("rkpm: CG with incomplete Cholesky (cg_ic), Jacobi CG (cg), sparse LDLT (ldlt), auto (LDLT when small)");
   return s;
 }
 
@@ -111,9 +139,52 @@ void PtcStrain::advance(State& s, const StepInfo&) {
   mp.touch_tolerance = p_.touch_tolerance;
   mp.regularisation = p_.regularisation;
   const std::size_t n = s.particles.size();
-  const ptc::SpringNetwork net = ptc::build_network(s.particles.position, s.particles.radius, mp);
-  const ptc::UnitSolution sol = ptc::solve_unit(n, net, mp);
-  const ptc::Contacts c = ptc::touching_contacts(net, sol, p_.touch_tolerance);
+  std::size_t matrix_size = 0;  // springs (bonded) or RKPM nodes
+  double residual = 0.0;
+  ptc::Contacts c;
+  if (p_.matrix_model == "bonded") {
+    const ptc::SpringNetwork net = ptc::build_network(s.particles.position, s.particles.radius, mp);
+    const ptc::UnitSolution sol = ptc::solve_unit(n, net, mp);
+    c = ptc::touching_contacts(net, sol, p_.touch_tolerance);
+    matrix_size = net.size();
+    residual = sol.residual;
+  } else {
+    rkpm::Params rp;
+    rp.youngs_modulus = p_.matrix_modulus;
+    rp.poisson_ratio = p_.poisson_ratio;
+    rp.node_spacing = p_.node_spacing;
+    rp.support_factor = p_.support_factor;
+    rp.quadrature_order = static_cast<int>(p_.quadrature_order);
+    rp.cell_subdivision = static_cast<int>(p_.cell_subdivision);
+    rp.surface_points = static_cast<int>(p_.surface_points);
+    rp.bond_penalty = p_.bond_penalty;
+    rp.pin_penalty = p_.pin_penalty;
+    rp.cg_tolerance = p_.cg_tolerance;
+    rp.cg_max_iterations = static_cast<int>(p_.cg_max_iterations);
+    rp.solver = p_.linear_solver;
+    // The polymer box: the smallest cube holding [0, L]^3 and every filler (the contact algorithm
+    // has no walls, so a filler may end partly or wholly outside [0, L]^3; it stays embedded).
+    Vec3 lo = Vec3::Zero(), hi = Vec3::Constant(length_);
+    for (std::size_t i = 0; i < n; ++i) {
+      lo = lo.cwiseMin(s.particles.position[i] - Vec3::Constant(s.particles.radius[i]));
+      hi = hi.cwiseMax(s.particles.position[i] + Vec3::Constant(s.particles.radius[i]));
+    }
+    rkpm::Domain dom;
+    dom.lo = lo;
+    dom.hi = lo + Vec3::Constant((hi - lo).maxCoeff());
+    const rkpm::Result r = rkpm::solve_unit(s.particles.position, s.particles.radius, dom, rp);
+    // The touching pairs (springs of a network cut at the touch tolerance) with the RKPM openings.
+    ptc::MatrixParams tp = mp;
+    tp.cutoff_gap = p_.touch_tolerance;
+    const ptc::SpringNetwork touching = ptc::build_network(s.particles.position, s.particles.radius, tp);
+    ptc::UnitSolution sol;
+    sol.displacement = r.sphere_displacement;
+    for (std::size_t e = 0; e < touching.size(); ++e)
+      sol.opening.push_back(touching.normal[e].dot(r.sphere_displacement[touching.b[e]] - r.sphere_displacement[touching.a[e]]));
+    c = ptc::touching_contacts(touching, sol, p_.touch_tolerance);
+    matrix_size = r.approximation.nodes();
+    residual = r.residual;
+  }
   const std::vector<double> eb = ptc::break_strains(c, p_.break_gap);
   const std::vector<Index> high = members(s, p_.high), low = members(s, p_.low);
 
@@ -141,15 +212,26 @@ void PtcStrain::advance(State& s, const StepInfo&) {
     if (!sp.spanning) listed = std::min(listed, e0);
     per.insert(per.end(), {sp.spanning ? 1.0 : 0.0, sp.coordination, sp.resistance * length_});
   }
-  held_ = {static_cast<double>(net.size()),
+  held_ = {static_cast<double>(matrix_size),
            static_cast<double>(c.size()),
            ptc::switching_strain(n, c, eb, high, low),
            listed,
            mean,
            median,
            c.size() ? static_cast<double>(closing) / static_cast<double>(c.size()) : kNaN};
-  held_.push_back(sol.residual);
+  held_.push_back(residual);
   held_.insert(held_.end(), per.begin(), per.end());
+  const auto& he = p_.opening_histogram_edges;
+  if (!he.empty()) {
+    std::vector<double> count(he.size() + 1, 0.0);  // bins, then below, above
+    for (double v : rel) {
+      if (v < he.front()) count[he.size() - 1] += 1.0;
+      else if (v >= he.back()) count[he.size()] += 1.0;
+      else count[static_cast<std::size_t>(std::upper_bound(he.begin(), he.end(), v) - he.begin()) - 1] += 1.0;
+    }
+    for (double& v : count) v = rel.empty() ? kNaN : v / static_cast<double>(rel.size());
+    held_.insert(held_.end(), count.begin(), count.end());
+  }
   if (!tsuffix_.empty()) {
     held_.push_back(std::isfinite(held_[2]) ? ptc::temperature_at_strain(law_, held_[2]) : kInf);
     for (double T : p_.temperatures) {
@@ -182,6 +264,16 @@ std::vector<std::string> PtcStrain::columns() const {
                                 "ptc_strain_opening_negative_fraction", "ptc_strain_solve_residual"};
   for (const auto& sfx : suffix_)
     for (const char* q : {"spanning_", "coordination_", "resistivity_"}) c.push_back(std::string("ptc_strain_") + q + sfx);
+  const std::size_t m = p_.opening_histogram_edges.size();
+  if (m >= 2) {
+    for (std::size_t k = 0; k + 1 < m; ++k) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "ptc_strain_opening_hist_%02zu", k);
+      c.emplace_back(buf);
+    }
+    c.emplace_back("ptc_strain_opening_hist_below");
+    c.emplace_back("ptc_strain_opening_hist_above");
+  }
   if (!tsuffix_.empty()) c.push_back("ptc_strain_switching_temperature");
   for (const auto& sfx : tsuffix_)
     for (const char* q : {"eps0_", "spanning_", "coordination_", "resistivity_"}) c.push_back(std::string("ptc_strain_") + q + sfx);

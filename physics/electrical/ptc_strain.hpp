@@ -6,6 +6,18 @@
 /// recommended minimum: rigid non-expanding fillers, the polymer as axial springs with
 /// eigen-elongation eps0 h_ij between fillers within a gap cut-off, free expansion).
 ///
+/// Two matrix models (`matrix_model`):
+///  - "bonded" (default): the bonded network of ptc_matrix.hpp (parameters cutoff_gap, min_gap,
+///    matrix_modulus, bond_area, regularisation);
+///  - "rkpm": the paper's continuum (rkpm_matrix.hpp): meshless RKPM matrix over the smallest
+///    cube holding the box [0, L]^3 (L = `length` or the cpc_fillers box edge) and every filler
+///    (the contact algorithm has no walls: fillers may poke out), spheres bonded by the surface penalty
+///    alpha = bond_penalty, free expansion (translation pinned at the box centre), one CG solve
+///    for eps0 = 1 (parameters matrix_modulus, poisson_ratio, node_spacing, support_factor,
+///    quadrature_order, cell_subdivision, surface_points, bond_penalty, pin_penalty,
+///    cg_tolerance, cg_max_iterations, linear_solver). Column `springs` then holds the RKPM node count.
+/// Both give the unit opening delta_ij = n_ij . (U_j - U_i) of every touching contact; the rest
+/// (break rule, Z, rho, switching strain, opening statistics) is common.
 /// Use after a cpc_fillers stage (frozen mechanics: `"stop": {"steps": 0}`). On its event clock
 /// (the stage's initial state, then after a move of 0.05 R_min or a broken bond) the module
 ///  1. builds the spring network (pairs with gap <= cutoff_gap) and solves ONCE for eps0 = 1;
@@ -23,6 +35,10 @@
 ///                                 closed-form linearity, eps0 x delta / D
 ///   opening_negative_fraction     fraction of contacts that close (delta < 0) [1]
 ///   solve_residual                ||K u - f|| / ||f|| of the unit solve [1]
+///   opening_hist_<k>              (only if opening_histogram_edges has m + 1 >= 2 edges) the
+///                                 fraction of contacts whose relative opening (as opening_mean)
+///                                 lies in [edge_k, edge_k+1), k = 0..m-1, then
+///                                 opening_hist_below / opening_hist_above (outside the edges)
 ///   spanning_<e>, coordination_<e>, resistivity_<e>   per listed eps0 (<e> = eps0 in percent
 ///                                 with 'p' for the point, e.g. 3p15pct); rho [Ohm m], +inf
 ///                                 when not spanning. Sweep CSVs write non-finite values as
@@ -45,6 +61,7 @@
 /// modes exist and the regularisation handles them), h_min = 0.1 R. h_min sets the stiffness of the springs
 /// of touching pairs relative to the expanding gaps, hence how far contacts open: it controls
 /// the switching strain (see the config description); E_m and A cancel.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -79,6 +96,19 @@ class PtcStrain final : public Module {
     double melting_temperature = 0.0;           ///< T_m [K]; 0 = no melting step
     double melting_strain = 0.0;                ///< Delta_m [1]
     double melting_width = 0.0;                 ///< [K]
+    std::vector<double> opening_histogram_edges;  ///< [1] relative-opening bin edges (empty: no histogram)
+    std::string matrix_model = "bonded";          ///< "bonded" | "rkpm"
+    double poisson_ratio = 0.35;                  ///< [1] rkpm matrix nu (paper: not given)
+    double node_spacing = 3.0;                    ///< [m] rkpm node spacing
+    double support_factor = 2.0;                  ///< [1] rkpm support radius / node spacing
+    std::int64_t quadrature_order = 2;            ///< Gauss points per direction per background cell
+    std::int64_t cell_subdivision = 2;            ///< background cells per node spacing, per direction
+    std::int64_t surface_points = 32;             ///< per sphere (even)
+    double bond_penalty = 100.0;                  ///< [Pa/m] alpha
+    double pin_penalty = 1.0;                     ///< [1] beta / (E h)
+    double cg_tolerance = 1e-10;                  ///< [1]
+    std::int64_t cg_max_iterations = 20000;
+    std::string linear_solver = "cg_ic";          ///< rkpm: "cg_ic" | "cg" | "ldlt" | "auto"
   };
   static ParamSpec<Params> spec();
   explicit PtcStrain(const Params& p);
@@ -106,6 +136,9 @@ class PtcStrain final : public Module {
   ptc::ThermalStrainLaw law_;         ///< eps0(T) (used when p_.temperatures is not empty)
   std::vector<std::string> tsuffix_;  ///< per temperature
   EdgeOutput contacts_;               ///< held per-contact results of the last evaluation
+  std::size_t histogram_columns() const {
+    return p_.opening_histogram_edges.size() >= 2 ? p_.opening_histogram_edges.size() + 1 : 0;
+  }
 };
 
 }  // namespace sparkdem::physics

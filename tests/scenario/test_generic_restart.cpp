@@ -111,6 +111,11 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
   explicit_heat["stages"][1]["modules"]["heat_conduction"]["model"] = "transmission_surface";
   explicit_heat["stages"][1]["modules"]["heat_conduction"]["touch_tolerance"] = 1e-5;
   explicit_heat["stages"][1]["modules"]["heat_conduction"]["density"] = 59.1;  // small capacities: several substeps per step
+  json cpc_rkpm = load_data("cpc_small.json");  // ptc_strain with the RKPM continuum matrix
+  for (auto& st : cpc_rkpm["stages"]) {
+    st["modules"]["ptc_strain"]["matrix_model"] = "rkpm";
+    st["modules"]["ptc_strain"]["node_spacing"] = 2.0;
+  }
   const Case cases[] = {
       {"lattice + bonded pull with event, adaptive and every-N mock modules, electrical network, time scaling", load_data("restart_contracts.json"), 1, 180},
       {"deposit generator (settling, die contraction)", with_steps(load_data("gen_deposit_small.json"), 0, 3000), 0, 1777},
@@ -132,6 +137,7 @@ TEST_CASE("generic restart: every stage type continues bit for bit from a mid-st
        load_data("cpc_small.json"), 1, 113},
       {"self-heating PTC element: ptc_self_heating (factorised network, displacement field), electrical_network with displacement_field, implicit heat_conduction with losses",
        with_steps(load_data("ptc_self_heating_small.json"), 1, 90), 1, 37},
+      {"cpc_fillers then Hertz settling with ptc_strain on the RKPM continuum matrix (recomputed on its clock)", cpc_rkpm, 1, 113},
   };
   for (const Case& c : cases) {
     DYNAMIC_SECTION(c.label) {

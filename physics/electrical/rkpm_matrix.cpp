@@ -1,0 +1,613 @@
+#include "physics/electrical/rkpm_matrix.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <Eigen/Dense>
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include "engine/core/error.hpp"
+
+namespace sparkdem::physics::rkpm {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+using Vec4 = Eigen::Vector4d;
+using Mat4 = Eigen::Matrix4d;
+
+/// Gauss-Legendre points and weights on [-1, 1] (Newton on the Legendre recurrence).
+void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
+  x.assign(n, 0.0);
+  w.assign(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    double z = std::cos(kPi * (i + 0.75) / (n + 0.5));
+    double dp = 1.0;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1.0, p1 = z;
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      if (n == 1) { p1 = z; p0 = 1.0; }
+      dp = n * (z * p1 - p0) / (z * z - 1.0);
+      const double dz = p1 / dp;
+      z -= dz;
+      if (std::abs(dz) < 1e-16) break;
+    }
+    x[i] = z;
+    w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+  }
+}
+
+/// Uniform cell grid of sphere centres: candidates for "x inside a sphere".
+class SphereGrid {
+ public:
+  SphereGrid(const std::vector<Vec3>& c, const std::vector<double>& r) : c_(c), r_(r) {
+    if (c.empty()) return;
+    rmax_ = *std::max_element(r.begin(), r.end());
+    lo_ = c[0];
+    Vec3 hi = c[0];
+    for (const Vec3& x : c) { lo_ = lo_.cwiseMin(x); hi = hi.cwiseMax(x); }
+    cell_ = std::max(2.0 * rmax_, 1e-300);
+    for (int d = 0; d < 3; ++d) {
+      n_[d] = static_cast<int>((hi[d] - lo_[d]) / cell_) + 1;
+      while (n_[d] > 256) { cell_ *= 2.0; n_[d] = static_cast<int>((hi[d] - lo_[d]) / cell_) + 1; }
+    }
+    for (int d = 0; d < 3; ++d) n_[d] = static_cast<int>((hi[d] - lo_[d]) / cell_) + 1;
+    start_.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
+    std::vector<std::size_t> key(c.size());
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      key[i] = index(cell_of(c[i], 0), cell_of(c[i], 1), cell_of(c[i], 2));
+      ++start_[key[i] + 1];
+    }
+    for (std::size_t k = 1; k < start_.size(); ++k) start_[k] += start_[k - 1];
+    item_.resize(c.size());
+    std::vector<std::size_t> fill(start_.begin(), start_.end() - 1);
+    for (std::size_t i = 0; i < c.size(); ++i) item_[fill[key[i]]++] = static_cast<std::int64_t>(i);
+  }
+  /// Index of a sphere (other than `skip`) with |x - c_I| < R_I (strict), or -1.
+  std::int64_t inside(const Vec3& x, std::int64_t skip = -1) const {
+    if (c_.empty()) return -1;
+    int lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::max(0, static_cast<int>(std::floor((x[d] - rmax_ - lo_[d]) / cell_)));
+      hi[d] = std::min(n_[d] - 1, static_cast<int>(std::floor((x[d] + rmax_ - lo_[d]) / cell_)));
+      if (lo[d] > hi[d]) return -1;
+    }
+    for (int i = lo[0]; i <= hi[0]; ++i)
+      for (int j = lo[1]; j <= hi[1]; ++j)
+        for (int k = lo[2]; k <= hi[2]; ++k) {
+          const std::size_t key = index(i, j, k);
+          for (std::size_t q = start_[key]; q < start_[key + 1]; ++q) {
+            const std::int64_t s = item_[q];
+            if (s != skip && (x - c_[s]).squaredNorm() < r_[s] * r_[s]) return s;
+          }
+        }
+    return -1;
+  }
+
+ private:
+  int cell_of(const Vec3& x, int d) const { return std::clamp(static_cast<int>((x[d] - lo_[d]) / cell_), 0, n_[d] - 1); }
+  std::size_t index(int i, int j, int k) const { return (static_cast<std::size_t>(i) * n_[1] + j) * n_[2] + k; }
+  const std::vector<Vec3>& c_;
+  const std::vector<double>& r_;
+  double rmax_ = 0.0, cell_ = 1.0;
+  Vec3 lo_ = Vec3::Zero();
+  int n_[3] = {1, 1, 1};
+  std::vector<std::size_t> start_;
+  std::vector<std::int64_t> item_;
+};
+
+/// Block-sparse (3x3 blocks) symmetric pattern over "super nodes" (RKPM nodes, then spheres),
+/// expanded to a scalar CSR matrix; blocks are added in place.
+class BlockMatrix {
+ public:
+  explicit BlockMatrix(std::vector<std::vector<std::int64_t>> cols) : cols_(std::move(cols)) {
+    const std::size_t nb = cols_.size();
+    std::size_t nnz = 0;
+    row_start_.resize(3 * nb + 1);
+    for (std::size_t I = 0; I < nb; ++I) {
+      std::sort(cols_[I].begin(), cols_[I].end());
+      cols_[I].erase(std::unique(cols_[I].begin(), cols_[I].end()), cols_[I].end());
+      for (int c = 0; c < 3; ++c) {
+        row_start_[3 * I + c] = nnz;
+        nnz += 3 * cols_[I].size();
+      }
+    }
+    row_start_[3 * nb] = nnz;
+    if (nnz > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+      throw SetupError("rkpm_matrix: the system has " + std::to_string(nnz) +
+                       " non-zeros (more than 2^31): raise node_spacing or lower support_factor");
+    value_.assign(nnz, 0.0);
+  }
+  std::size_t position(std::int64_t I, std::int64_t J) const {
+    const auto& c = cols_[I];
+    const auto it = std::lower_bound(c.begin(), c.end(), J);
+    if (it == c.end() || *it != J) throw SetupError("rkpm_matrix: internal error (block outside the sparsity pattern)");
+    return static_cast<std::size_t>(it - c.begin());
+  }
+  void add(std::int64_t I, std::int64_t J, const Eigen::Matrix3d& B) {
+    const std::size_t p = position(I, J);
+    for (int c = 0; c < 3; ++c)
+      for (int d = 0; d < 3; ++d) value_[row_start_[3 * I + c] + 3 * p + d] += B(c, d);
+  }
+  void add_scalar(std::int64_t I, std::int64_t J, double s) {  // s x I_3
+    const std::size_t p = position(I, J);
+    for (int c = 0; c < 3; ++c) value_[row_start_[3 * I + c] + 3 * p + c] += s;
+  }
+  void add_entry(std::int64_t I, std::int64_t J, int c, int d, double s) {
+    value_[row_start_[3 * I + c] + 3 * position(I, J) + d] += s;
+  }
+  Eigen::SparseMatrix<double, Eigen::RowMajor, int> matrix() const {
+    const auto n = static_cast<Eigen::Index>(3 * cols_.size());
+    Eigen::SparseMatrix<double, Eigen::RowMajor, int> A(n, n);
+    A.resizeNonZeros(static_cast<Eigen::Index>(value_.size()));
+    for (std::size_t r = 0; r <= 3 * cols_.size(); ++r) A.outerIndexPtr()[r] = static_cast<int>(row_start_[r]);
+    for (std::size_t I = 0; I < cols_.size(); ++I)
+      for (int c = 0; c < 3; ++c) {
+        std::size_t q = row_start_[3 * I + c];
+        for (std::int64_t J : cols_[I])
+          for (int d = 0; d < 3; ++d) {
+            A.innerIndexPtr()[q] = static_cast<int>(3 * J + d);
+            A.valuePtr()[q] = value_[q];
+            ++q;
+          }
+      }
+    return A;
+  }
+
+ private:
+  std::vector<std::vector<std::int64_t>> cols_;
+  std::vector<std::size_t> row_start_;
+  std::vector<double> value_;
+};
+
+double quartic(double xi) { return xi >= 1.0 ? 0.0 : 1.0 - xi * xi * (6.0 - 8.0 * xi + 3.0 * xi * xi); }
+
+}  // namespace
+
+// --- Approximation ------------------------------------------------------------------------
+
+Approximation::Approximation(const Vec3& lo, const std::array<int, 3>& cells, double h, double support_factor)
+    : lo_(lo), h_(h), rho_(support_factor * h) {
+  for (int d = 0; d < 3; ++d) n_[d] = cells[d] + 1;
+  std::vector<char> all(grid_nodes(), 1);
+  keep(all);
+}
+
+void Approximation::keep(const std::vector<char>& flag) {
+  if (flag.size() != grid_nodes()) throw SetupError("rkpm_matrix: internal error (node flag size)");
+  id_.assign(grid_nodes(), -1);
+  position_.clear();
+  for (std::size_t g = 0; g < grid_nodes(); ++g)
+    if (flag[g]) {
+      id_[g] = static_cast<std::int64_t>(position_.size());
+      position_.push_back(grid_position(static_cast<std::int64_t>(g)));
+    }
+}
+
+Vec3 Approximation::grid_position(std::int64_t g) const {
+  const std::int64_t k = g % n_[2], j = (g / n_[2]) % n_[1], i = g / (static_cast<std::int64_t>(n_[1]) * n_[2]);
+  return lo_ + h_ * Vec3(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
+}
+
+void Approximation::grid_nodes_near(const Vec3& x, double radius, std::vector<std::int64_t>& out) const {
+  out.clear();
+  int lo[3], hi[3];
+  for (int d = 0; d < 3; ++d) {
+    lo[d] = std::max(0, static_cast<int>(std::ceil((x[d] - radius - lo_[d]) / h_)));
+    hi[d] = std::min(n_[d] - 1, static_cast<int>(std::floor((x[d] + radius - lo_[d]) / h_)));
+  }
+  const double r2 = radius * radius;
+  for (int i = lo[0]; i <= hi[0]; ++i)
+    for (int j = lo[1]; j <= hi[1]; ++j)
+      for (int k = lo[2]; k <= hi[2]; ++k) {
+        const Vec3 xi = lo_ + h_ * Vec3(i, j, k);
+        if ((x - xi).squaredNorm() < r2) out.push_back((static_cast<std::int64_t>(i) * n_[1] + j) * n_[2] + k);
+      }
+}
+
+bool Approximation::shape(const Vec3& x, std::vector<std::int64_t>& ids, std::vector<double>& phi,
+                          std::vector<Vec3>* grad) const {
+  thread_local std::vector<std::int64_t> near;
+  thread_local std::vector<Vec4> pz;
+  thread_local std::vector<double> wv;
+  thread_local std::vector<Vec3> dw;
+  grid_nodes_near(x, rho_, near);
+  ids.clear();
+  phi.clear();
+  pz.clear();
+  wv.clear();
+  dw.clear();
+  Mat4 M = Mat4::Zero();
+  for (std::int64_t g : near) {
+    const std::int64_t id = id_[g];
+    if (id < 0) continue;
+    const Vec3 z = (x - position_[id]) / rho_;
+    const double xi = z.norm();
+    if (xi >= 1.0) continue;
+    const double w = quartic(xi);
+    if (!(w > 0.0)) continue;
+    const Vec4 p(1.0, z.x(), z.y(), z.z());
+    ids.push_back(id);
+    pz.push_back(p);
+    wv.push_back(w);
+    dw.push_back((-12.0 + 24.0 * xi - 12.0 * xi * xi) / rho_ * z);
+    M.noalias() += w * p * p.transpose();
+  }
+  if (ids.size() < 4) return false;
+  const Eigen::LDLT<Mat4> ldlt(M);
+  const Vec4 D = ldlt.vectorD();
+  if (ldlt.info() != Eigen::Success || !(D.minCoeff() > 1e-10 * D.maxCoeff())) return false;
+  const Vec4 b = ldlt.solve(Vec4(1.0, 0.0, 0.0, 0.0));
+  phi.resize(ids.size());
+  for (std::size_t a = 0; a < ids.size(); ++a) phi[a] = b.dot(pz[a]) * wv[a];
+  if (grad) {
+    Mat4 dM[3] = {Mat4::Zero(), Mat4::Zero(), Mat4::Zero()};
+    for (std::size_t a = 0; a < ids.size(); ++a)
+      for (int k = 0; k < 3; ++k) {
+        Vec4 dp = Vec4::Zero();
+        dp[k + 1] = 1.0 / rho_;
+        dM[k].noalias() += wv[a] * (dp * pz[a].transpose() + pz[a] * dp.transpose()) + dw[a][k] * pz[a] * pz[a].transpose();
+      }
+    Vec4 db[3];
+    for (int k = 0; k < 3; ++k) db[k] = -ldlt.solve(dM[k] * b);
+    grad->resize(ids.size());
+    for (std::size_t a = 0; a < ids.size(); ++a) {
+      const double bp = b.dot(pz[a]);
+      for (int k = 0; k < 3; ++k) (*grad)[a][k] = db[k].dot(pz[a]) * wv[a] + b[k + 1] / rho_ * wv[a] + bp * dw[a][k];
+    }
+  }
+  return true;
+}
+
+// --- Result -------------------------------------------------------------------------------
+
+Vec3 Result::displacement(const Vec3& x) const {
+  std::vector<std::int64_t> ids;
+  std::vector<double> phi;
+  if (!approximation.shape(x, ids, phi, nullptr)) throw SetupError("rkpm_matrix: point outside the node cover");
+  Vec3 u = Vec3::Zero();
+  for (std::size_t a = 0; a < ids.size(); ++a) u += phi[a] * node_coefficient[ids[a]];
+  return u;
+}
+
+Eigen::Matrix3d Result::displacement_gradient(const Vec3& x) const {
+  std::vector<std::int64_t> ids;
+  std::vector<double> phi;
+  std::vector<Vec3> g;
+  if (!approximation.shape(x, ids, phi, &g)) throw SetupError("rkpm_matrix: point outside the node cover");
+  Eigen::Matrix3d G = Eigen::Matrix3d::Zero();
+  for (std::size_t a = 0; a < ids.size(); ++a) G += node_coefficient[ids[a]] * g[a].transpose();
+  return G;
+}
+
+// --- helpers ------------------------------------------------------------------------------
+
+std::vector<Vec3> sphere_points(int n) {
+  if (n < 2 || n % 2 != 0) throw SetupError("rkpm_matrix: surface_points must be even and >= 2, found " + std::to_string(n));
+  const double golden = kPi * (3.0 - std::sqrt(5.0));
+  std::vector<Vec3> out;
+  out.reserve(n);
+  for (int k = 0; k < n / 2; ++k) {
+    const double z = 1.0 - (2.0 * k + 1.0) / n;  // upper half: z in (0, 1)
+    const double s = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double t = golden * k;
+    out.emplace_back(s * std::cos(t), s * std::sin(t), z);
+  }
+  for (int k = 0; k < n / 2; ++k) out.push_back(-out[k]);
+  return out;
+}
+
+std::array<double, 2> single_sphere_closed_form(double a, double b, double E, double nu, double alpha) {
+  const double mu = E / (2.0 * (1.0 + nu));
+  const double K = E / (3.0 * (1.0 - 2.0 * nu));
+  // sigma_rr(b) = 0:            3K (A - 1) = 4 mu B / b^3
+  // sigma_rr(a) = alpha u_r(a): 3K (A - 1) - 4 mu B / a^3 = alpha (A a + B / a^2)
+  const double ib3 = std::isfinite(b) ? 1.0 / (b * b * b) : 0.0;
+  const double B = alpha * a / (4.0 * mu * ib3 - 4.0 * mu / (a * a * a) - 4.0 * mu * alpha * a * ib3 / (3.0 * K) - alpha / (a * a));
+  const double A = 1.0 + 4.0 * mu * B * ib3 / (3.0 * K);
+  return {A, B};
+}
+
+// --- the solve ----------------------------------------------------------------------------
+
+Result solve_unit(const std::vector<Vec3>& centre, const std::vector<double>& radius, const Domain& domain, const Params& p) {
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  if (centre.size() != radius.size()) throw SetupError("rkpm_matrix: centres and radii differ in length");
+  if (!(p.youngs_modulus > 0.0)) throw SetupError("rkpm_matrix: youngs_modulus must be > 0");
+  if (!(p.poisson_ratio > -1.0 && p.poisson_ratio < 0.5)) throw SetupError("rkpm_matrix: poisson_ratio must be in (-1, 0.5)");
+  if (!(p.node_spacing > 0.0)) throw SetupError("rkpm_matrix: node_spacing must be > 0");
+  if (!(p.support_factor > 1.0)) throw SetupError("rkpm_matrix: support_factor must be > 1 (linear basis needs >= 4 nodes in reach)");
+  if (p.quadrature_order < 1 || p.quadrature_order > 8) throw SetupError("rkpm_matrix: quadrature_order must be in 1..8");
+  if (p.cell_subdivision < 1) throw SetupError("rkpm_matrix: cell_subdivision must be >= 1");
+  if (!(p.bond_penalty >= 0.0) || !(p.pin_penalty > 0.0)) throw SetupError("rkpm_matrix: bond_penalty >= 0 and pin_penalty > 0 expected");
+  if (p.solver != "cg" && p.solver != "cg_ic" && p.solver != "ldlt" && p.solver != "auto")
+    throw SetupError("rkpm_matrix: solver must be \"cg\", \"cg_ic\", \"ldlt\" or \"auto\", found \"" + p.solver + "\"");
+  for (double r : radius)
+    if (!(r > 0.0)) throw SetupError("rkpm_matrix: sphere radii must be > 0");
+  const std::vector<Vec3> unit_points = sphere_points(p.surface_points);
+
+  const double E = p.youngs_modulus, nu = p.poisson_ratio;
+  const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  const double mu = E / (2.0 * (1.0 + nu));
+  const double threeK = 3.0 * lambda + 2.0 * mu;
+  const bool ball = domain.ball_radius > 0.0;
+  const Vec3 c = 0.5 * (domain.lo + domain.hi);
+  Vec3 lo = domain.lo, hi = domain.hi;
+  if (ball) {
+    lo = c - Vec3::Constant(domain.ball_radius);
+    hi = c + Vec3::Constant(domain.ball_radius);
+  }
+  if (!((hi - lo).minCoeff() > 0.0)) throw SetupError("rkpm_matrix: empty domain");
+  // Node grid: h fits each edge; the domain must be a cube for one h (box edges may differ: use
+  // the per-direction cell count with a common h = the largest fitted spacing).
+  std::array<int, 3> cells{};
+  double h = 0.0;
+  for (int d = 0; d < 3; ++d) {
+    cells[d] = std::max(1, static_cast<int>(std::lround((hi[d] - lo[d]) / p.node_spacing)));
+    h = std::max(h, (hi[d] - lo[d]) / cells[d]);
+  }
+  for (int d = 0; d < 3; ++d) {
+    if (std::abs(cells[d] * h - (hi[d] - lo[d])) > 1e-9 * h)
+      throw SetupError("rkpm_matrix: the domain edges are not multiples of one node spacing (use a cube)");
+  }
+  Result res;
+  res.approximation = Approximation(lo, cells, h, p.support_factor);
+  Approximation& ap = res.approximation;
+  auto in_domain = [&](const Vec3& x) {
+    if (ball) return (x - c).norm() <= domain.ball_radius;
+    for (int d = 0; d < 3; ++d)
+      if (x[d] < lo[d] - 1e-12 * h || x[d] > hi[d] + 1e-12 * h) return false;
+    return true;
+  };
+  const SphereGrid spheres(centre, radius);
+
+  // 1. Volume quadrature points, grouped by background cell.
+  std::vector<double> gx, gw;
+  gauss_legendre(p.quadrature_order, gx, gw);
+  const int s = p.cell_subdivision;
+  const double hc = h / s;
+  const std::array<int, 3> nc = {cells[0] * s, cells[1] * s, cells[2] * s};
+  struct QPoint { Vec3 x; double w; };
+  std::vector<QPoint> qp;
+  std::vector<std::size_t> cell_start;
+  cell_start.reserve(static_cast<std::size_t>(nc[0]) * nc[1] * nc[2] + 1);
+  const double wcell = hc * hc * hc / 8.0;
+  for (int i = 0; i < nc[0]; ++i)
+    for (int j = 0; j < nc[1]; ++j)
+      for (int k = 0; k < nc[2]; ++k) {
+        cell_start.push_back(qp.size());
+        const Vec3 o = lo + hc * Vec3(i + 0.5, j + 0.5, k + 0.5);
+        for (int a = 0; a < p.quadrature_order; ++a)
+          for (int b = 0; b < p.quadrature_order; ++b)
+            for (int e = 0; e < p.quadrature_order; ++e) {
+              const Vec3 x = o + 0.5 * hc * Vec3(gx[a], gx[b], gx[e]);
+              if (!in_domain(x) || spheres.inside(x) >= 0) continue;
+              qp.push_back({x, wcell * gw[a] * gw[b] * gw[e]});
+            }
+      }
+  cell_start.push_back(qp.size());
+  // 2. Keep the nodes whose support holds a volume point.
+  {
+    std::vector<char> flag(ap.grid_nodes(), 0);
+    std::vector<std::int64_t> near;
+    for (const QPoint& q : qp) {
+      ap.grid_nodes_near(q.x, ap.support(), near);
+      for (std::int64_t g : near) flag[g] = 1;
+    }
+    ap.keep(flag);
+  }
+  const std::size_t nn = ap.nodes(), ns = centre.size();
+  if (nn == 0) throw SetupError("rkpm_matrix: no volume quadrature point in the domain");
+  res.volume_points = qp.size();
+
+  // 3. Sparsity pattern: nodes within 2 rho; sphere I with nodes within R_I + rho of its centre.
+  std::vector<std::vector<std::int64_t>> cols(nn + ns);
+  {
+    std::vector<std::int64_t> near;
+    for (std::size_t i = 0; i < nn; ++i) {
+      ap.grid_nodes_near(ap.positions()[i], 2.0 * ap.support(), near);
+      for (std::int64_t g : near)
+        if (ap.id(g) >= 0) cols[i].push_back(ap.id(g));
+    }
+    for (std::size_t I = 0; I < ns; ++I) {
+      const auto S = static_cast<std::int64_t>(nn + I);
+      cols[S].push_back(S);
+      ap.grid_nodes_near(centre[I], radius[I] + ap.support(), near);
+      for (std::int64_t g : near)
+        if (ap.id(g) >= 0) {
+          cols[S].push_back(ap.id(g));
+          cols[ap.id(g)].push_back(S);
+        }
+    }
+  }
+  BlockMatrix K(std::move(cols));
+  Eigen::VectorXd F = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * (nn + ns)));
+
+  // 4. Volume integrals, cell by cell (local dense accumulation, then scatter).
+  {
+    std::vector<std::int64_t> ids;
+    std::vector<double> phi;
+    std::vector<Vec3> grad;
+    std::vector<int> local(nn, -1);
+    std::vector<std::int64_t> lnodes;
+    std::vector<Eigen::Matrix3d> lk;
+    std::vector<char> touched;
+    for (std::size_t cell = 0; cell + 1 < cell_start.size(); ++cell) {
+      if (cell_start[cell] == cell_start[cell + 1]) continue;
+      lnodes.clear();
+      struct PointData { std::vector<int> l; std::vector<Vec3> g; double w; };
+      std::vector<PointData> pts;
+      for (std::size_t q = cell_start[cell]; q < cell_start[cell + 1]; ++q) {
+        if (!ap.shape(qp[q].x, ids, phi, &grad))
+          throw SetupError("rkpm_matrix: singular moment matrix at a volume point (raise support_factor)");
+        PointData pd;
+        pd.w = qp[q].w;
+        for (std::size_t a = 0; a < ids.size(); ++a) {
+          if (local[ids[a]] < 0) { local[ids[a]] = static_cast<int>(lnodes.size()); lnodes.push_back(ids[a]); }
+          pd.l.push_back(local[ids[a]]);
+          pd.g.push_back(grad[a]);
+          F.segment<3>(3 * ids[a]) += qp[q].w * threeK * grad[a];
+        }
+        res.quadrature_volume += qp[q].w;
+        pts.push_back(std::move(pd));
+      }
+      const std::size_t nl = lnodes.size();
+      lk.assign(nl * nl, Eigen::Matrix3d::Zero());
+      touched.assign(nl * nl, 0);
+      // Block (a, b) for local a <= b only; K_ba = K_ab^T.
+      for (const PointData& pd : pts)
+        for (std::size_t a = 0; a < pd.l.size(); ++a)
+          for (std::size_t b = 0; b < pd.l.size(); ++b) {
+            if (pd.l[a] > pd.l[b]) continue;
+            const Vec3 ga = pd.w * pd.g[a];
+            const Vec3& gb = pd.g[b];
+            const std::size_t key = static_cast<std::size_t>(pd.l[a]) * nl + pd.l[b];
+            Eigen::Matrix3d& blk = lk[key];
+            blk.noalias() += lambda * ga * gb.transpose() + mu * gb * ga.transpose();
+            blk.diagonal().array() += mu * ga.dot(gb);
+            touched[key] = 1;
+          }
+      for (std::size_t a = 0; a < nl; ++a)
+        for (std::size_t b = a; b < nl; ++b)
+          if (touched[a * nl + b]) {
+            K.add(lnodes[a], lnodes[b], lk[a * nl + b]);
+            if (b != a) K.add(lnodes[b], lnodes[a], lk[a * nl + b].transpose());
+          }
+      for (std::int64_t id : lnodes) local[id] = -1;
+    }
+  }
+
+  // 5. Sphere surface penalty: alpha int (u - U_I)^2.
+  {
+    std::vector<std::int64_t> ids;
+    std::vector<double> phi;
+    std::vector<int> local(nn, -1);
+    std::vector<std::int64_t> lnodes;
+    std::vector<double> lm, lv;
+    for (std::size_t I = 0; I < ns; ++I) {
+      const double w = 4.0 * kPi * radius[I] * radius[I] / static_cast<double>(unit_points.size());
+      lnodes.clear();
+      lm.clear();
+      double area = 0.0;
+      struct SP { std::vector<int> l; std::vector<double> f; };
+      std::vector<SP> sps;
+      for (const Vec3& e : unit_points) {
+        const Vec3 x = centre[I] + radius[I] * e;
+        if (!in_domain(x) || spheres.inside(x, static_cast<std::int64_t>(I)) >= 0) continue;
+        if (!ap.shape(x, ids, phi, nullptr))
+          throw SetupError("rkpm_matrix: singular moment matrix at a surface point of sphere " + std::to_string(I) +
+                           " (raise support_factor)");
+        SP sp;
+        for (std::size_t a = 0; a < ids.size(); ++a) {
+          if (local[ids[a]] < 0) { local[ids[a]] = static_cast<int>(lnodes.size()); lnodes.push_back(ids[a]); }
+          sp.l.push_back(local[ids[a]]);
+          sp.f.push_back(phi[a]);
+        }
+        area += w;
+        sps.push_back(std::move(sp));
+        ++res.surface_points;
+      }
+      if (!(area > 0.0))
+        throw SetupError("rkpm_matrix: sphere " + std::to_string(I) + " has no surface point in contact with the matrix");
+      const std::size_t nl = lnodes.size();
+      lm.assign(nl * nl, 0.0);
+      lv.assign(nl, 0.0);
+      for (const SP& sp : sps)
+        for (std::size_t a = 0; a < sp.l.size(); ++a) {
+          lv[sp.l[a]] += p.bond_penalty * w * sp.f[a];
+          for (std::size_t b = 0; b < sp.l.size(); ++b) lm[sp.l[a] * nl + sp.l[b]] += p.bond_penalty * w * sp.f[a] * sp.f[b];
+        }
+      const auto S = static_cast<std::int64_t>(nn + I);
+      for (std::size_t a = 0; a < nl; ++a) {
+        for (std::size_t b = 0; b < nl; ++b)
+          if (lm[a * nl + b] != 0.0) K.add_scalar(lnodes[a], lnodes[b], lm[a * nl + b]);
+        if (lv[a] != 0.0) {
+          K.add_scalar(lnodes[a], S, -lv[a]);
+          K.add_scalar(S, lnodes[a], -lv[a]);
+        }
+      }
+      K.add_scalar(S, S, p.bond_penalty * area);
+      for (std::int64_t id : lnodes) local[id] = -1;
+    }
+  }
+
+  // 6. Pins (statically determinate, no reaction under the self-equilibrated thermal load).
+  {
+    const double beta = p.pin_penalty * E * h;
+    std::vector<std::int64_t> ids;
+    std::vector<double> phi;
+    auto pin = [&](const Vec3& x, int comp_mask) {
+      if (!ap.shape(x, ids, phi, nullptr)) throw SetupError("rkpm_matrix: singular moment matrix at a pin point");
+      for (std::size_t a = 0; a < ids.size(); ++a)
+        for (std::size_t b = 0; b < ids.size(); ++b)
+          for (int comp = 0; comp < 3; ++comp)
+            if (comp_mask & (1 << comp)) K.add_entry(ids[a], ids[b], comp, comp, beta * phi[a] * phi[b]);
+    };
+    pin(c, 7);
+    if (ns == 0) {
+      const double arm = 0.25 * (hi - lo).minCoeff();
+      pin(c + Vec3(arm, 0, 0), 2 | 4);
+      pin(c + Vec3(0, arm, 0), 4);
+    }
+  }
+  const auto t1 = clock::now();
+  res.assembly_seconds = std::chrono::duration<double>(t1 - t0).count();
+
+  // 7. Solve.
+  const Eigen::SparseMatrix<double, Eigen::RowMajor, int> A = K.matrix();
+  res.unknowns = static_cast<std::size_t>(A.rows());
+  res.nonzeros = static_cast<std::size_t>(A.nonZeros());
+  const bool direct = p.solver == "ldlt" || (p.solver == "auto" && res.unknowns <= p.direct_limit);
+  Eigen::VectorXd x;
+  bool ok = true;
+  if (direct) {
+    const Eigen::SparseMatrix<double> Ac = A;  // column-major copy for the factorisation
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Ac);
+    ok = ldlt.info() == Eigen::Success;
+    if (ok) x = ldlt.solve(F);
+    res.iterations = 0;
+  } else if (p.solver == "cg_ic" || p.solver == "auto") {
+    const Eigen::SparseMatrix<double> Ac = A;
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::IncompleteCholesky<double>> cg;
+    cg.setTolerance(p.cg_tolerance);
+    cg.setMaxIterations(p.cg_max_iterations);
+    cg.compute(Ac);
+    x = cg.solve(F);
+    res.iterations = static_cast<int>(cg.iterations());
+    ok = cg.info() == Eigen::Success;
+  } else {
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double, Eigen::RowMajor, int>, Eigen::Lower | Eigen::Upper,
+                             Eigen::DiagonalPreconditioner<double>>
+        cg;
+    cg.setTolerance(p.cg_tolerance);
+    cg.setMaxIterations(p.cg_max_iterations);
+    cg.compute(A);
+    x = cg.solve(F);
+    res.iterations = static_cast<int>(cg.iterations());
+    ok = cg.info() == Eigen::Success;
+  }
+  const double fn = F.norm();
+  res.residual = ok && fn > 0.0 ? (A * x - F).norm() / fn : (ok ? 0.0 : std::numeric_limits<double>::infinity());
+  res.solve_seconds = std::chrono::duration<double>(clock::now() - t1).count();
+  if (!ok || !(res.residual <= 10.0 * p.cg_tolerance))
+    throw SetupError(std::string("rkpm_matrix: the ") + (direct ? "LDLT" : "conjugate-gradient") + " solve stopped at relative residual " +
+                     std::to_string(res.residual) + " after " + std::to_string(res.iterations) + " iterations (cg_tolerance " +
+                     std::to_string(p.cg_tolerance) + "): raise cg_max_iterations");
+  res.node_coefficient.resize(nn);
+  for (std::size_t i = 0; i < nn; ++i) res.node_coefficient[i] = x.segment<3>(3 * i);
+  res.sphere_displacement.resize(ns);
+  for (std::size_t I = 0; I < ns; ++I) res.sphere_displacement[I] = x.segment<3>(3 * (nn + I));
+  return res;
+}
+
+}  // namespace sparkdem::physics::rkpm
