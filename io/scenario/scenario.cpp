@@ -515,10 +515,13 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
   c.timeseries_every = p.output.timeseries_every;
   c.checkpoint_every = p.output.checkpoint_every;
   st.from_snapshot = p.from_snapshot.empty() ? "" : (ctx.base_dir / p.from_snapshot).string();
-  if (!st.from_snapshot.empty() && !std::filesystem::exists(st.from_snapshot))
+  // (error_code overloads: a name too long for the file system is "cannot read", not an exception)
+  std::error_code snapshot_ec;
+  const bool snapshot_exists = !st.from_snapshot.empty() && std::filesystem::exists(st.from_snapshot, snapshot_ec);
+  if (!st.from_snapshot.empty() && !snapshot_exists)
     errors.push_back({path + "/from_snapshot", "cannot read the snapshot file '" + st.from_snapshot + "'"});
   if (!st.from_snapshot.empty()) ctx.has_particles = true;
-  if (!st.from_snapshot.empty() && std::filesystem::exists(st.from_snapshot)) {
+  if (snapshot_exists) {
     // The stage starts with the snapshot's walls: their names (and shapes) are checked against it.
     try {
       State snap;

@@ -8,6 +8,7 @@
 /// truncated text, ConfigError, SetupError) within one second; any other exception is a bug.
 #include <catch2/catch.hpp>
 
+#include "support/child_process.hpp"
 #include "support/json_mutator.hpp"
 #include "support/mock_modules.hpp"
 #include "support/scratch.hpp"
@@ -112,5 +113,54 @@ TEST_CASE("the scenario loader survives 500 seeded mutations of every example sc
     // Most mutations must be caught: a loader that accepted everything would pass the loop above.
     CHECK(rejected > kMutations / 4);
     CHECK(accepted + rejected + unparsable == kMutations);
+  }
+}
+
+TEST_CASE("the scenario loader refuses special files and huge stage lists quickly (inputs that hung it under fuzzing)",
+          "[fuzz][scenario]") {
+  // Found by tools/fuzz.sh (loader campaign): "$include" or a size-distribution "csv" naming
+  // /dev/zero read for ever; 100000 stages took minutes to diagnose entry by entry; a
+  // from_snapshot name longer than the file system allows threw std::filesystem_error. Each input
+  // runs in a forked child with a 10 s limit, so a regression fails instead of hanging CI.
+  const fs::path data = fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data";
+  std::ifstream in(data / "gen_relax_cylinder_psd.json");
+  const json psd = json::parse(in);
+  std::vector<std::pair<std::string, json>> inputs;
+  json inc = psd;
+  inc["contact"]["$include"] = "/dev/zero";
+  inputs.emplace_back("$include of /dev/zero", inc);
+  json dir = psd;
+  dir["contact"]["$include"] = "/";
+  inputs.emplace_back("$include of a directory", dir);
+  json csv = psd;
+  csv["stages"][0]["generator"]["size_distribution"] = {{"type", "table"}, {"csv", "/dev/zero"}};
+  inputs.emplace_back("size distribution csv /dev/zero", csv);
+  json long_name = psd;
+  long_name["stages"][0]["from_snapshot"] = std::string(5000, 'n');  // was std::filesystem_error (name too long)
+  inputs.emplace_back("from_snapshot with a 5000-character name", long_name);
+  json many = psd;
+  many["stages"] = json::array();
+  for (int k = 0; k < 100000; ++k) many["stages"].push_back(1.0);
+  inputs.emplace_back("100000 stages", many);
+  for (const auto& [what, j] : inputs) {
+    INFO(what);
+    const sparkdem::test::ChildResult r = sparkdem::test::run_in_child(
+        [&] {
+          try {
+            (void)sparkdem::io::load_scenario(j, registry(), data);
+          } catch (const sparkdem::ConfigError& e) {
+            sparkdem::test::child_message(e.what());
+            return 2;
+          } catch (const std::exception& e) {
+            sparkdem::test::child_message(e.what());
+            return 5;
+          }
+          return 0;
+        },
+        10, std::size_t{3} << 30);
+    INFO(r.message.substr(0, 500));
+    CHECK(r.kind == sparkdem::test::ChildResult::Kind::Exited);
+    CHECK(r.exit_code == 2);
+    CHECK(r.seconds < 5.0);
   }
 }

@@ -118,15 +118,21 @@ inline CkptModel read_checkpoint_model(const std::filesystem::path& file) {
 }
 
 /// Writes a model as an HDF5 file with a 512-byte user block and seals it (valid checksum).
+/// Throws std::runtime_error when HDF5 refuses the model (e.g. a dataspace too large to describe);
+/// every HDF5 object is closed either way (a file left open would make every later write fail).
 inline void write_checkpoint_model(const CkptModel& m, const std::filesystem::path& file) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   const hid_t fcpl = H5Pcreate(H5P_FILE_CREATE);
   H5Pset_userblock(fcpl, io::kCheckpointHeaderBytes);
-  const hid_t f = H5Fcreate(file.c_str(), H5F_ACC_TRUNC, fcpl, H5P_DEFAULT);
+  const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);  // closing the file closes whatever is still open in it
+  const hid_t f = H5Fcreate(file.c_str(), H5F_ACC_TRUNC, fcpl, fapl);
   H5Pclose(fcpl);
+  H5Pclose(fapl);
   if (f < 0) ckpt_detail::fail("cannot create " + file.string());
   const hid_t lcpl = H5Pcreate(H5P_LINK_CREATE);
   H5Pset_create_intermediate_group(lcpl, 1);
+  std::string error;
   for (const auto& [name, it] : m) {
     hid_t type, space;
     const void* data = nullptr;
@@ -148,19 +154,21 @@ inline void write_checkpoint_model(const CkptModel& m, const std::filesystem::pa
         data = it.kind == CkptItem::Kind::Float ? static_cast<const void*>(it.f.data()) : static_cast<const void*>(it.i.data());
       }
     }
-    const hid_t d = H5Dcreate2(f, ("/" + name).c_str(), type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT);
-    if (d < 0) ckpt_detail::fail("cannot create dataset " + name);
-    if (data != nullptr) {
+    const hid_t d = space < 0 ? -1 : H5Dcreate2(f, ("/" + name).c_str(), type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT);
+    if (d < 0) error = "cannot create dataset " + name;
+    if (d >= 0 && data != nullptr) {
       const hid_t mem = it.kind == CkptItem::Kind::String ? type
                         : it.kind == CkptItem::Kind::Float ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
-      if (H5Dwrite(d, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) ckpt_detail::fail("cannot write dataset " + name);
+      if (H5Dwrite(d, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) error = "cannot write dataset " + name;
     }
-    H5Dclose(d);
-    H5Sclose(space);
+    if (d >= 0) H5Dclose(d);
+    if (space >= 0) H5Sclose(space);
     H5Tclose(type);
+    if (!error.empty()) break;
   }
   H5Pclose(lcpl);
-  if (H5Fclose(f) < 0) ckpt_detail::fail("cannot close " + file.string());
+  if (H5Fclose(f) < 0 && error.empty()) error = "cannot close " + file.string();
+  if (!error.empty()) ckpt_detail::fail(error);
   io::seal_checkpoint(file);
 }
 
