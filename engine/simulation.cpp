@@ -334,7 +334,11 @@ bool Simulation::event_due(const PlanItem& it, Step step) const {
   if (last == s_.marks.end()) return true;  // first step of the stage
   const Trigger& t = it.clock.trigger;
   if (t.max_interval > 0 && step - static_cast<Step>(last->second) >= t.max_interval) return true;
-  if (t.bond_broke && static_cast<double>(s_.bonds.broken_count()) > s_.marks.at(base + "broken")) return true;
+  if (t.bond_broke) {
+    // (Both marks are written together; a checkpoint that lost one runs the module again.)
+    const auto broken = s_.marks.find(base + "broken");
+    if (broken == s_.marks.end() || static_cast<double>(s_.bonds.broken_count()) > broken->second) return true;
+  }
   const auto& p = s_.particles;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
   if (std::isfinite(t.moved_beyond)) {
@@ -507,7 +511,18 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.initial_overlap = overlap0;
   res.plan = plan_.names();
   res.particles = p.size();
-  // On resume the stage's step comes from the checkpoint, so the continuation is exact.
+  // On resume the stage's step comes from the checkpoint, so the continuation is exact. The
+  // checkpoint's clocks must then be those the stepping loop below computes (time = stage_t0 +
+  // k dt, physical time = phys_t0 + scale k dt, bit for bit): a checkpoint that breaks them was
+  // not written by a run (and a wrong dt could make the stage run for ever).
+  if (resume) {
+    const double t_stage = static_cast<double>(s_.step - s_.stage_step0) * s_.stage_dt;
+    if (!(s_.stage_dt > 0.0) || s_.time != s_.stage_t0 + t_stage ||
+        s_.physical_time != s_.stage_phys_t0 + time_scale_ * t_stage)
+      throw SetupError("stage '" + cfg.name + "': the checkpoint's clocks are inconsistent (step " + std::to_string(s_.step) +
+                       ", stage start step " + std::to_string(s_.stage_step0) + ", dt " + fmt_g(s_.stage_dt) + " s, time " +
+                       fmt_g(s_.time) + " s, stage start time " + fmt_g(s_.stage_t0) + " s)");
+  }
   const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
   s_.stage_dt = dt_used;
   res.dt = dt_used;

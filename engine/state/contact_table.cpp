@@ -116,6 +116,7 @@ void ContactTable::visit(Archive& ar, const std::string& prefix) {
   }
   if (ar.reading()) {
     pending_.clear();
+    if (counts.size() != keys.size()) throw SetupError("checkpoint contact hand-over data is inconsistent");
     std::size_t pos = 0, v = 0;
     for (std::size_t q = 0; q < keys.size(); ++q) {
       HandedState st;

@@ -80,12 +80,20 @@ class FieldRegistry {
     if (ar.reading()) {
       std::size_t pos = 0;
       while (pos < list.size()) {
-        const std::size_t end = list.find('\n', pos);
+        std::size_t end = list.find('\n', pos);
+        if (end == std::string::npos) end = list.size();
         const std::string line = list.substr(pos, end - pos);
         pos = end + 1;
-        const auto a = line.find('|'), b = line.find('|', a + 1), c = line.find('|', b + 1);
-        FieldInfo info{line.substr(0, a), std::stoi(line.substr(a + 1, b - a - 1)), line.substr(b + 1, c - b - 1), 0.0,
-                       line.substr(c + 1) == "1"};
+        // name|components|unit|output, components a small positive integer
+        const auto a = line.find('|');
+        const auto b = a == std::string::npos ? a : line.find('|', a + 1);
+        const auto c = b == std::string::npos ? b : line.find('|', b + 1);
+        const std::string comps = c == std::string::npos ? std::string() : line.substr(a + 1, b - a - 1);
+        if (c == std::string::npos || a == 0 || comps.empty() || comps.size() > 4 ||
+            comps.find_first_not_of("0123456789") != std::string::npos || std::stoi(comps) < 1 || std::stoi(comps) > 1000)
+          throw SetupError("checkpoint field list '" + prefix + "/_list': malformed line '" + line.substr(0, 80) +
+                           "' (expected name|components|unit|output)");
+        FieldInfo info{line.substr(0, a), std::stoi(comps), line.substr(b + 1, c - b - 1), 0.0, line.substr(c + 1) == "1"};
         declare(info, 0);
       }
     }

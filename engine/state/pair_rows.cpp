@@ -98,6 +98,10 @@ void PairRows::visit_rows(Archive& ar, const std::string& prefix, const std::str
   }
   ar.visit(prefix + "/state", state_, std::max(1, state_width()));
   if (ar.reading()) {
+    if (b.size() != a.size() || i_.size() != a.size() || j_.size() != a.size())
+      throw SetupError("checkpoint " + what + " table is inconsistent: id_i, id_j, i, j have " + std::to_string(a.size()) +
+                       ", " + std::to_string(b.size()) + ", " + std::to_string(i_.size()) + ", " + std::to_string(j_.size()) +
+                       " rows");
     id_i_.assign(a.begin(), a.end());
     id_j_.assign(b.begin(), b.end());
     if (state_.size() != size() * state_names_.size())

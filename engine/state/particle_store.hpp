@@ -1,5 +1,6 @@
 #pragma once
 /// Particle store: fixed core SoA arrays plus a FieldRegistry for optional fields.
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -81,6 +82,37 @@ struct ParticleStore {
     next_id = nid;
     if (ar.reading()) fields.resize(size());
     fields.visit(ar, prefix + "/fields");
+    if (ar.reading()) check_restored();
+  }
+
+  /// After reading a checkpoint: every array has one row per particle, and the values a run
+  /// can never produce (non-finite kinematics, radius/mass/inertia not > 0, negative material
+  /// index) are rejected. Throws SetupError.
+  void check_restored() const {
+    const std::size_t n = id.size();
+    auto rows = [&](const char* what, std::size_t m) {
+      if (m != n)
+        throw SetupError(std::string("checkpoint particle array '") + what + "' has " + std::to_string(m) + " rows for " +
+                         std::to_string(n) + " particle ids");
+    };
+    rows("position", position.size()); rows("velocity", velocity.size()); rows("orientation", orientation.size());
+    rows("omega", omega.size()); rows("force", force.size()); rows("torque", torque.size()); rows("radius", radius.size());
+    rows("mass", mass.size()); rows("inertia", inertia.size()); rows("material", material.size()); rows("fixed", fixed.size());
+    for (const auto& name : fields.names()) {
+      const std::size_t c = static_cast<std::size_t>(fields.info(name).components);
+      if (fields.data(name).size() != n * c)
+        throw SetupError("checkpoint particle field '" + name + "' has " + std::to_string(fields.data(name).size()) +
+                         " values, expected " + std::to_string(n) + " x " + std::to_string(c));
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool finite = position[i].allFinite() && velocity[i].allFinite() && omega[i].allFinite() && force[i].allFinite() &&
+                          torque[i].allFinite() && orientation[i].coeffs().allFinite();
+      if (!finite || !(radius[i] > 0.0) || !std::isfinite(radius[i]) || !(mass[i] > 0.0) || !std::isfinite(mass[i]) ||
+          !(inertia[i] > 0.0) || !std::isfinite(inertia[i]) || material[i] < 0)
+        throw SetupError("checkpoint particle " + std::to_string(id[i]) + " (row " + std::to_string(i) +
+                         ") holds values no run produces (non-finite position, velocity, spin, force or orientation, "
+                         "radius, mass or inertia not > 0, or a negative material index)");
+    }
   }
 
  private:

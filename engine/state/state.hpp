@@ -1,5 +1,6 @@
 #pragma once
 /// Everything that flows from one stage to the next and goes into a checkpoint.
+#include <cmath>
 #include <map>
 #include <random>
 #include <sstream>
@@ -63,7 +64,11 @@ struct State {
     if (ar.reading()) {
       walls.clear();
       std::istringstream is(joined);
-      for (std::string n; std::getline(is, n);) walls.push_back(Wall{n, PlaneShape{}, {}, 0, 0, 0, Vec3::Zero(), 0});
+      for (std::string n; std::getline(is, n);) {
+        if (n.empty() || n.find('/') != std::string::npos || find_wall(n) != nullptr)
+          throw SetupError("checkpoint wall names are malformed: '" + n + "' is empty, holds a '/' or is repeated");
+        walls.push_back(Wall{n, PlaneShape{}, {}, 0, 0, 0, Vec3::Zero(), 0});
+      }
     }
     for (auto& w : walls) w.visit(ar, "state/walls/" + w.name);
     ar.visit("state/verlet/x0", verlet.x0());
@@ -74,7 +79,17 @@ struct State {
     ar.visit("state/wall_candidates_valid", have);
     if (ar.reading()) wall_candidates.assign(have ? walls.size() : 0, {});
     if (have)
-      for (std::size_t k = 0; k < walls.size(); ++k) ar.visit("state/wall_candidates/" + walls[k].name, wall_candidates[k]);
+      for (std::size_t k = 0; k < walls.size(); ++k) {
+        ar.visit("state/wall_candidates/" + walls[k].name, wall_candidates[k]);
+        if (ar.reading())
+          for (const Index i : wall_candidates[k])
+            if (i < 0 || static_cast<std::size_t>(i) >= particles.size())
+              throw SetupError("checkpoint wall candidates of '" + walls[k].name + "' name particle row " + std::to_string(i) +
+                               " of " + std::to_string(particles.size()));
+      }
+    if (ar.reading() && (verlet.r0().size() != verlet.x0().size() || (!verlet.x0().empty() && verlet.x0().size() != particles.size())))
+      throw SetupError("checkpoint Verlet reference has " + std::to_string(verlet.x0().size()) + " positions and " +
+                       std::to_string(verlet.r0().size()) + " radii for " + std::to_string(particles.size()) + " particles");
     ar.visit("state/step", step);
     ar.visit("state/time", time);
     ar.visit("state/stage_step0", stage_step0);
@@ -106,6 +121,14 @@ struct State {
     if (!ar.reading()) { std::ostringstream os; os << rng; rs = os.str(); }
     ar.visit("state/rng", rs);
     if (ar.reading()) { std::istringstream is(rs); is >> rng;
+      if (is.fail()) throw SetupError("checkpoint item 'state/rng' does not hold a random generator state");
+      if (step < 0 || stage_step0 < 0 || stage_step0 > step)
+        throw SetupError("checkpoint steps are inconsistent: step " + std::to_string(step) + ", stage started at step " +
+                         std::to_string(stage_step0));
+      if (!std::isfinite(time) || !std::isfinite(stage_t0) || !std::isfinite(stage_dt) || !(stage_dt >= 0.0) ||
+          !std::isfinite(stage_skin) || !(stage_skin >= 0.0) || !std::isfinite(physical_time) ||
+          !std::isfinite(stage_phys_t0) || !std::isfinite(stage_time_scale) || !(stage_time_scale > 0.0))
+        throw SetupError("checkpoint clock values are invalid (non-finite time, negative step or skin, or time scale not > 0)");
       contacts.remap_after_permutation(particles.id);
       bonds.remap_after_permutation(particles.id);
     }

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "engine/core/archive.hpp"
+#include "engine/core/error.hpp"
 #include "engine/core/types.hpp"
 
 namespace sparkdem {
@@ -88,15 +89,23 @@ struct Wall {
     }
     ar.visit(prefix + "/geometry", g, 7);
     if (ar.reading()) {
+      // A checkpoint is an input: check what it holds before using it.
+      if (g.size() != 7)
+        throw SetupError("checkpoint wall '" + name + "': geometry has " + std::to_string(g.size()) + " values, expected 7");
+      for (double x : g)
+        if (!std::isfinite(x)) throw SetupError("checkpoint wall '" + name + "': geometry holds a non-finite value");
       if (kind == "plane") shape = PlaneShape{Vec3(g[0], g[1], g[2]), Vec3(g[3], g[4], g[5])};
-      else shape = CylinderShape{Vec3(g[0], g[1], g[2]), Vec3(g[3], g[4], g[5]), g[6]};
+      else if (kind == "cylinder") shape = CylinderShape{Vec3(g[0], g[1], g[2]), Vec3(g[3], g[4], g[5]), g[6]};
+      else throw SetupError("checkpoint wall '" + name + "': unknown kind '" + kind + "' (expected plane or cylinder)");
     }
     ar.visit(prefix + "/u", u);
     ar.visit(prefix + "/u_dot", u_dot);
     ar.visit(prefix + "/u_start", u_start);
     std::vector<Vec3> f{force};
     ar.visit(prefix + "/force", f);
-    force = f.at(0);
+    if (f.size() != 1)
+      throw SetupError("checkpoint wall '" + name + "': force has " + std::to_string(f.size()) + " rows, expected 1");
+    force = f[0];
     ar.visit(prefix + "/normal_force", normal_force);
     ar.visit(prefix + "/halted", halted);
   }

@@ -3,6 +3,8 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <limits>
 #include <type_traits>
 #include <utility>
 
@@ -106,6 +108,21 @@ Handle scalar_space(const fs::path& file) {
   return own(H5Screate(H5S_SCALAR), H5Sclose, file, "cannot create a dataspace");
 }
 
+/// Before allocating for `n` values of a dataset: they must all be stored in the file. A dataset
+/// whose dataspace declares more values than its storage holds (never written, or a damaged
+/// or hostile file) is refused, so its size cannot trigger a huge allocation.
+void check_stored(hid_t object, const ObjectIo& io, std::uint64_t n, std::size_t value_size, hid_t type,
+                  const fs::path& file, const std::string& label) {
+  if (&io != &dataset_io || n == 0) return;
+  const std::size_t stored_size = H5Tget_size(type);
+  if (stored_size == 0) throw_error(file, "cannot get the value size of " + label);
+  const hsize_t stored = H5Dget_storage_size(object);
+  const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() / std::max(stored_size, value_size);
+  if (n > limit || stored < n * stored_size)
+    throw_error(file, label + " declares " + std::to_string(n) + " values but stores only " + std::to_string(stored) +
+                          " bytes (never written, or a damaged file)");
+}
+
 /// Reads every value of a dataset or attribute, checking its type class first.
 template <class T>
 std::vector<T> read_values(hid_t object, const ObjectIo& io, hid_t mem_type, const fs::path& file,
@@ -117,6 +134,7 @@ std::vector<T> read_values(hid_t object, const ObjectIo& io, hid_t mem_type, con
   Handle space = own(io.get_space(object), H5Sclose, file, "cannot get the dataspace of " + label);
   const hssize_t n = H5Sget_simple_extent_npoints(space.get());
   if (n < 0) throw_error(file, "cannot count the values of " + label);
+  check_stored(object, io, static_cast<std::uint64_t>(n), sizeof(T), type.get(), file, label);
   std::vector<T> values(static_cast<std::size_t>(n));
   if (n > 0) check(io.read(object, mem_type, values.data()), file, "cannot read " + label);
   return values;
@@ -133,6 +151,7 @@ std::string read_text(hid_t object, const ObjectIo& io, const fs::path& file, co
   if (H5Sget_simple_extent_npoints(space.get()) != 1) throw_error(file, label + " does not hold exactly one string");
   const std::size_t size = H5Tget_size(type.get());
   if (size == 0) throw_error(file, "cannot get the size of " + label);
+  check_stored(object, io, 1, size, type.get(), file, label);
   std::string s(size, '\0');
   // Reading with the stored type itself: no conversion, every byte comes back unchanged.
   check(io.read(object, type.get(), s.data()), file, "cannot read " + label);

@@ -308,9 +308,21 @@ void write_json_atomic(const std::filesystem::path& file, const json& j) { write
 
 namespace {
 
+/// Every particle's material index names one of the scenario's materials (checked once the
+/// materials are known: a checkpoint does not store them).
+void check_materials(const State& s, const std::filesystem::path& file) {
+  if (s.materials.empty()) return;
+  for (std::size_t i = 0; i < s.particles.size(); ++i)
+    if (static_cast<std::size_t>(s.particles.material[i]) >= s.materials.size())
+      throw SetupError("checkpoint '" + file.string() + "': particle " + std::to_string(s.particles.id[i]) + " has material " +
+                       std::to_string(s.particles.material[i]) + ", but the scenario has " + std::to_string(s.materials.size()) +
+                       " materials");
+}
+
 /// The state of an open checkpoint: its stage index and whether it was taken inside that stage.
 std::pair<std::int64_t, bool> read_state(Hdf5Archive& ar, State& s) {
   s.visit(ar);
+  check_materials(s, ar.path());
   std::int64_t flag = 0;
   if (ar.has("pipeline/in_stage")) ar.visit("pipeline/in_stage", flag);
   return {s.stage_index, flag != 0};
@@ -428,6 +440,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
           State snap;
           read_checkpoint(st.from_snapshot, snap);
           snap.materials = s.materials;
+          check_materials(snap, st.from_snapshot);
           snap.rng = s.rng;
           snap.step = s.step;
           snap.time = s.time;

@@ -2,6 +2,8 @@
 #include "io/scenario/pipeline.hpp"
 
 #include <algorithm>
+#include <cstdint>
+#include <filesystem>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -562,10 +564,13 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
   c.timeseries_every = p.output.timeseries_every;
   c.checkpoint_every = p.output.checkpoint_every;
   st.from_snapshot = p.from_snapshot.empty() ? "" : (ctx.base_dir / p.from_snapshot).string();
-  if (!st.from_snapshot.empty() && !std::filesystem::exists(st.from_snapshot))
+  // (error_code overloads: a name too long for the file system is "cannot read", not an exception)
+  std::error_code snapshot_ec;
+  const bool snapshot_exists = !st.from_snapshot.empty() && std::filesystem::exists(st.from_snapshot, snapshot_ec);
+  if (!st.from_snapshot.empty() && !snapshot_exists)
     errors.push_back({path + "/from_snapshot", "cannot read the snapshot file '" + st.from_snapshot + "'"});
   if (!st.from_snapshot.empty()) ctx.has_particles = true;
-  if (!st.from_snapshot.empty() && std::filesystem::exists(st.from_snapshot)) {
+  if (snapshot_exists) {
     // The stage starts with the snapshot's walls: their names (and shapes) are checked against it.
     try {
       State snap;
@@ -1173,6 +1178,14 @@ StageDef build_sweep_stage(StageContext& ctx, const json& js, const std::string&
 }  // namespace
 
 json read_json_file(const std::filesystem::path& file) {
+  // Only regular files: a device (/dev/zero), a FIFO or a directory would be read for ever or fail
+  // obscurely; a size limit keeps a mistaken include from exhausting memory.
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    throw ConfigError("", "cannot read the scenario file '" + file.string() + "': " +
+                              (std::filesystem::exists(file, ec) ? "not a regular file" : "no such file"));
+  if (std::filesystem::file_size(file, ec) > (std::uintmax_t{64} << 20))
+    throw ConfigError("", "the scenario file '" + file.string() + "' is larger than 64 MiB");
   std::ifstream in(file);
   if (!in) throw ConfigError("", "cannot read the scenario file '" + file.string() + "'");
   std::stringstream ss;
@@ -1332,8 +1345,13 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
   }
   // Stages
   sc.resolved["stages"] = json::array();
+  // (Stage and check counts are bounded: a scene has tens of stages, and a mistaken array of
+  // 100000 entries would take minutes to diagnose entry by entry.)
+  constexpr std::size_t kMaxStages = 1000;
   if (!j.contains("stages") || !j["stages"].is_array() || j["stages"].empty()) {
     errors.push_back({"/stages", "expected a non-empty array of stages, found " + (j.contains("stages") ? describe(j["stages"]) : std::string("nothing"))});
+  } else if (j["stages"].size() > kMaxStages) {
+    errors.push_back({"/stages", "expected at most " + std::to_string(kMaxStages) + " stages, found " + std::to_string(j["stages"].size())});
   } else {
     StageContext ctx;
     ctx.reg = std::shared_ptr<const Registry>(std::shared_ptr<const Registry>(), &reg);  // not owned
@@ -1374,6 +1392,8 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
   // Checks (validation figures in summary.json)
   if (j.contains("checks")) {
     if (!j["checks"].is_array()) errors.push_back({"/checks", "expected an array of checks, found " + describe(j["checks"])});
+    else if (j["checks"].size() > kMaxStages)
+      errors.push_back({"/checks", "expected at most " + std::to_string(kMaxStages) + " checks, found " + std::to_string(j["checks"].size())});
     else
       for (std::size_t k = 0; k < j["checks"].size(); ++k) {
         const std::string cp = "/checks/" + std::to_string(k);

@@ -1,6 +1,8 @@
 #include "physics/packing/packing_common.hpp"
 
 #include <algorithm>
+#include <cstdint>
+#include <filesystem>
 #include <cmath>
 #include <fstream>
 #include <numeric>
@@ -39,6 +41,12 @@ SizeDistribution make_distribution(const SizeDistributionParams& p) {
   if (p.type == "uniform") return make_uniform(p.d_min, p.d_max);
   std::vector<double> d = p.diameters, f = p.cumulative_fraction;
   if (!p.csv.empty()) {
+    // Only a regular file of sensible size (a device such as /dev/zero would be read for ever).
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(p.csv, ec))
+      throw ConfigError("/csv", "cannot read the file '" + p.csv + "': not a regular file (or missing)");
+    if (std::filesystem::file_size(p.csv, ec) > (std::uintmax_t{64} << 20))
+      throw ConfigError("/csv", "the file '" + p.csv + "' is larger than 64 MiB");
     std::ifstream in(p.csv);
     if (!in) throw ConfigError("/csv", "cannot read the file '" + p.csv + "'");
     d.clear();

@@ -1,6 +1,8 @@
 #include "physics/thermal/expansion.hpp"
 
+#include <cmath>
 #include <sstream>
+#include <string>
 
 #include "engine/core/error.hpp"
 
@@ -44,6 +46,13 @@ void apply(State& s, double alpha, double t0, TempOf temp) {
     p.radius[i] = expanded_radius(rr[i], alpha, temp(i), t0);
     p.inertia[i] = 0.4 * p.mass[i] * p.radius[i] * p.radius[i];
   }
+  // A non-finite or non-positive radius (from a non-finite temperature or reference radius)
+  // stops the run here, before the neighbour search meets it.
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (!(p.radius[i] > 0.0) || !std::isfinite(p.radius[i]))
+      throw PhysicsError(s.step, {p.id[i]}, "radius",
+                         "thermal expansion gives radius " + std::to_string(p.radius[i]) + " m from the reference radius " +
+                             std::to_string(rr[i]) + " m at temperature " + std::to_string(temp(static_cast<std::int64_t>(i))) + " K");
 }
 }  // namespace
 

@@ -8,6 +8,8 @@
 /// truncated text, ConfigError, SetupError) within one second; any other exception is a bug.
 #include <catch2/catch.hpp>
 
+#include "support/child_process.hpp"
+#include "support/json_mutator.hpp"
 #include "support/mock_modules.hpp"
 #include "support/scratch.hpp"
 
@@ -50,132 +52,7 @@ std::vector<fs::path> seed_files() {
   return files;
 }
 
-void collect(const json& j, const Ptr& p, std::vector<Ptr>& nodes, std::set<std::string>& keys) {
-  nodes.push_back(p);
-  if (j.is_object())
-    for (auto it = j.begin(); it != j.end(); ++it) {
-      keys.insert(it.key());
-      collect(it.value(), p / it.key(), nodes, keys);
-    }
-  else if (j.is_array())
-    for (std::size_t k = 0; k < j.size(); ++k) collect(j[k], p / k, nodes, keys);
-}
-
-class Mutator {
- public:
-  explicit Mutator(std::uint64_t seed) : rng_(seed) {}
-
-  /// One random mutation of `j` (in place); returns a description for failure reports.
-  std::string mutate(json& j) {
-    std::vector<Ptr> nodes;
-    std::set<std::string> keyset;
-    collect(j, Ptr(), nodes, keyset);
-    const std::vector<std::string> keys(keyset.begin(), keyset.end());
-    const Ptr at = nodes[pick(nodes.size())];
-    const std::string where = at.to_string().empty() ? "/" : at.to_string();
-    switch (pick(7)) {
-      case 0:  // delete
-        if (at.empty()) return "noop";
-        erase(j, at);
-        return "delete " + where;
-      case 1: {  // replace by an odd value
-        const json v = odd_value();
-        j[at] = v;
-        return "replace " + where + " by " + v.dump().substr(0, 60);
-      }
-      case 2: {  // duplicate array elements
-        json& node = j[at];
-        if (!node.is_array() || node.empty()) return "noop";
-        const json e = node[pick(node.size())];
-        const std::size_t copies = 1 + pick(3);
-        for (std::size_t c = 0; c < copies; ++c) node.push_back(e);
-        return "duplicate an element of " + where;
-      }
-      case 3: {  // rename a key (to a typo or to a key from elsewhere in the file)
-        if (at.empty() || !j[at.parent_pointer()].is_object()) return "noop";
-        const std::string old = at.back();
-        std::string now = pick(2) ? keys[pick(keys.size())] : old + "_";
-        if (pick(3) == 0 && old.size() > 1) now = old.substr(0, old.size() - 1);
-        json& parent = j[at.parent_pointer()];
-        json v = parent[old];
-        parent.erase(old);
-        parent[now] = v;
-        return "rename " + where + " to " + now;
-      }
-      case 4: {  // move a copy of another subtree here
-        const Ptr from = nodes[pick(nodes.size())];
-        const json v = j[from];
-        j[at] = v;
-        return "copy " + from.to_string() + " to " + where;
-      }
-      case 5: {  // scale / negate a number
-        json& node = j[at];
-        if (!node.is_number()) return "noop";
-        const double x = node.get<double>();
-        const double f = std::pow(10.0, static_cast<double>(static_cast<int>(pick(25)) - 12));
-        if (pick(4) == 0) node = -x;
-        else if (node.is_number_integer() && pick(2)) node = static_cast<std::int64_t>(std::clamp(x * static_cast<double>(pick(1000)), -9e18, 9e18));
-        else node = x * f;
-        return "scale " + where + " to " + node.dump();
-      }
-      default: {  // string value from the vocabulary of names
-        static const std::vector<std::string> words = {"lattice", "deposit", "fill", "relax", "dynamics", "table",
-                                                       "lognormal", "uniform", "cylinder", "plane", "box", "velocity",
-                                                       "pressure", "fixed", "volume", "hertz_mindlin", "gravity", "",
-                                                       "floor", "die", ".", "/", "missing.h5"};
-        const std::string w = words[pick(words.size())];
-        j[at] = w;
-        return "set " + where + " to \"" + w + "\"";
-      }
-    }
-  }
-
-  std::size_t pick(std::size_t n) { return static_cast<std::size_t>(rng_() % n); }
-
- private:
-  json odd_value() {
-    switch (pick(22)) {
-      case 0: return "x";
-      case 1: return "";
-      case 2: return true;
-      case 3: return nullptr;
-      case 4: return 0;
-      case 5: return -1;
-      case 6: return 1e308;
-      case 7: return -1e308;
-      case 8: return std::numeric_limits<double>::infinity();
-      case 9: return std::numeric_limits<double>::quiet_NaN();
-      case 10: return std::numeric_limits<std::int64_t>::max();
-      case 11: return std::numeric_limits<std::uint64_t>::max();
-      case 12: return std::numeric_limits<std::int64_t>::min();
-      case 13: return 4.9e-324;
-      case 14: return json::array();
-      case 15: return json::object();
-      case 16: return json::array({1, 2, 3});
-      case 17: return json::array({std::nan(""), 1e308, -1});
-      case 18: {  // deeply nested object (within or beyond the loader's depth limit of 32)
-        json v = 1;
-        const int depth = pick(2) ? 20 : 200;
-        for (int d = 0; d < depth; ++d) v = json{{"a", v}};
-        return v;
-      }
-      case 19: {  // deeply nested array
-        json v = json::array();
-        const int depth = pick(2) ? 20 : 200;
-        for (int d = 0; d < depth; ++d) v = json::array({v});
-        return v;
-      }
-      case 20: return std::string(10000, 'z');
-      default: return 0.5;
-    }
-  }
-  void erase(json& j, const Ptr& at) {
-    json& parent = j[at.parent_pointer()];
-    if (parent.is_object()) parent.erase(at.back());
-    else parent.erase(static_cast<std::size_t>(std::stoul(at.back())));
-  }
-  std::mt19937_64 rng_;
-};
+using Mutator = sparkdem::test::JsonMutator;
 
 }  // namespace
 
@@ -236,5 +113,54 @@ TEST_CASE("the scenario loader survives 500 seeded mutations of every example sc
     // Most mutations must be caught: a loader that accepted everything would pass the loop above.
     CHECK(rejected > kMutations / 4);
     CHECK(accepted + rejected + unparsable == kMutations);
+  }
+}
+
+TEST_CASE("the scenario loader refuses special files and huge stage lists quickly (inputs that hung it under fuzzing)",
+          "[fuzz][scenario]") {
+  // Found by tools/fuzz.sh (loader campaign): "$include" or a size-distribution "csv" naming
+  // /dev/zero read for ever; 100000 stages took minutes to diagnose entry by entry; a
+  // from_snapshot name longer than the file system allows threw std::filesystem_error. Each input
+  // runs in a forked child with a 10 s limit, so a regression fails instead of hanging CI.
+  const fs::path data = fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data";
+  std::ifstream in(data / "gen_relax_cylinder_psd.json");
+  const json psd = json::parse(in);
+  std::vector<std::pair<std::string, json>> inputs;
+  json inc = psd;
+  inc["contact"]["$include"] = "/dev/zero";
+  inputs.emplace_back("$include of /dev/zero", inc);
+  json dir = psd;
+  dir["contact"]["$include"] = "/";
+  inputs.emplace_back("$include of a directory", dir);
+  json csv = psd;
+  csv["stages"][0]["generator"]["size_distribution"] = {{"type", "table"}, {"csv", "/dev/zero"}};
+  inputs.emplace_back("size distribution csv /dev/zero", csv);
+  json long_name = psd;
+  long_name["stages"][0]["from_snapshot"] = std::string(5000, 'n');  // was std::filesystem_error (name too long)
+  inputs.emplace_back("from_snapshot with a 5000-character name", long_name);
+  json many = psd;
+  many["stages"] = json::array();
+  for (int k = 0; k < 100000; ++k) many["stages"].push_back(1.0);
+  inputs.emplace_back("100000 stages", many);
+  for (const auto& [what, j] : inputs) {
+    INFO(what);
+    const sparkdem::test::ChildResult r = sparkdem::test::run_in_child(
+        [&] {
+          try {
+            (void)sparkdem::io::load_scenario(j, registry(), data);
+          } catch (const sparkdem::ConfigError& e) {
+            sparkdem::test::child_message(e.what());
+            return 2;
+          } catch (const std::exception& e) {
+            sparkdem::test::child_message(e.what());
+            return 5;
+          }
+          return 0;
+        },
+        10, std::size_t{3} << 30);
+    INFO(r.message.substr(0, 500));
+    CHECK(r.kind == sparkdem::test::ChildResult::Kind::Exited);
+    CHECK(r.exit_code == 2);
+    CHECK(r.seconds < 5.0);
   }
 }
