@@ -964,6 +964,10 @@ struct EarlierStage {
   std::set<std::string> wall_names;   ///< its walls (those of its snapshots)
 };
 
+/// Largest number of items of one sweep: each item is a whole run that keeps its state, and 1e5
+/// items took over 10 s just to bind (found by the loader fuzzing).
+constexpr std::size_t kMaxSweepItems = 10000;
+
 /// Parses a stage's "sweep" (the stage JSON `js` has one) into `sw`.
 void parse_sweep(const json& js, const std::string& path, const std::vector<EarlierStage>& earlier,
                  SweepDef& sw, std::vector<Diagnostic>& errors, json& resolved) {
@@ -1019,6 +1023,9 @@ void parse_sweep(const json& js, const std::string& path, const std::vector<Earl
     if (!j.contains("values") || !j["values"].is_array() || j["values"].empty())
       errors.push_back({sp + "/values", "expected a non-empty array of values for " + p.parameter + ", found " +
                                             (j.contains("values") ? describe(j["values"]) : std::string("nothing"))});
+    else if (j["values"].size() > kMaxSweepItems)
+      errors.push_back({sp + "/values", "expected at most " + std::to_string(kMaxSweepItems) + " sweep values, found " +
+                                            std::to_string(j["values"].size()) + " (split the sweep into several scenarios)"});
     else
       for (const auto& v : j["values"]) sw.values.push_back(v);
     r["values"] = j.value("values", json::array());
@@ -1028,6 +1035,9 @@ void parse_sweep(const json& js, const std::string& path, const std::vector<Earl
     const json& x = j["seeds"];
     if (!x.is_array() || x.empty()) {
       errors.push_back({sp + "/seeds", "expected a non-empty array of seeds (non-negative integers), found " + describe(x)});
+    } else if (x.size() > kMaxSweepItems) {
+      errors.push_back({sp + "/seeds", "expected at most " + std::to_string(kMaxSweepItems) + " seeds, found " +
+                                           std::to_string(x.size()) + " (split the sweep into several scenarios)"});
     } else {
       for (std::size_t q = 0; q < x.size(); ++q) {
         const bool ok = x[q].is_number_unsigned() || (x[q].is_number_integer() && x[q].get<std::int64_t>() >= 0);

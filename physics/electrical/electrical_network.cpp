@@ -512,9 +512,15 @@ void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
     ar.visit(prefix + "/branch_pairs", pairs, 2);
     ar.visit(prefix + "/branch_values", branch, 3);
   }
+  // Whether the last solve produced branch output at all: a solve with no particle-centred branch
+  // still writes an empty /networks/electrical group, which a restarted run must reproduce
+  // (found by the SIGKILL test of the explicit heat scene). Older checkpoints: non-empty pairs.
+  bool has_output = !edges_.name.empty();
+  if (!ar.reading() || ar.has(prefix + "/branch_output")) ar.visit(prefix + "/branch_output", has_output);
+  else has_output = !pairs.empty();
   if (ar.reading()) {
     edges_ = EdgeOutput{};
-    if (!pairs.empty()) {
+    if (has_output) {
       if (branch.size() != 3 * (pairs.size() / 2)) throw SetupError("checkpoint electrical_network branch data is inconsistent");
       edges_ = EdgeOutput{"electrical", pairs, {{"current", "A", {}}, {"conductance", "S", {}}, {"power", "W", {}}}};
       for (std::size_t k = 0; k < pairs.size() / 2; ++k)

@@ -139,14 +139,10 @@ TEST_CASE("SIGKILL at 8 random moments, hot press: reported frames readable, las
 TEST_CASE("SIGKILL at 8 random moments, Joule press: reported frames readable, last checkpoint restarted bit-exactly", "[crash][scenario]") {
   crash_type(crash_scenes().at(3), 8, 5, 2);
 }
-// KNOWN BUG (found by this test, not fixed): after a restart from a checkpoint taken between two
-// electrical_network solves (the module runs on its own clock here: explicit heat_conduction on
-// adaptive substeps), the first frames the restarted run writes lack the held per-branch output
-// /networks/electrical/{pairs,current,conductance,power} that the uninterrupted run's frames of
-// the same step have (seen: checkpoint at step 246, frame at step 250, restart in place). The
-// branch output is in the checkpoint (modules/electrical_network/branch_pairs, branch_values);
-// it is lost between the restore and the next solve. Marked [!mayfail] until fixed.
-TEST_CASE("SIGKILL at 8 random moments, explicit heat conduction: reported frames readable, last checkpoint restarted bit-exactly", "[crash][scenario][!mayfail]") {
+// This test found a lost-output bug: after a restart from a checkpoint taken after a solve with no
+// particle-centred branch, the frames lacked the (empty) /networks/electrical group the
+// uninterrupted run writes. electrical_network now checkpoints `branch_output`.
+TEST_CASE("SIGKILL at 8 random moments, explicit heat conduction: reported frames readable, last checkpoint restarted bit-exactly", "[crash][scenario]") {
   crash_type(crash_scenes().at(4), 8, 5, 2);
 }
 TEST_CASE("SIGKILL at 8 random moments, cohesive beams in torsion: reported frames readable, last checkpoint restarted bit-exactly", "[crash][scenario]") {

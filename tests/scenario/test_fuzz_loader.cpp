@@ -120,7 +120,8 @@ TEST_CASE("the scenario loader refuses special files and huge stage lists quickl
           "[fuzz][scenario]") {
   // Found by tools/fuzz.sh (loader campaign): "$include" or a size-distribution "csv" naming
   // /dev/zero read for ever; 100000 stages took minutes to diagnose entry by entry; a
-  // from_snapshot name longer than the file system allows threw std::filesystem_error. Each input
+  // from_snapshot name longer than the file system allows threw std::filesystem_error; 100000
+  // sweep values took over 10 s to bind. Each input
   // runs in a forked child with a 10 s limit, so a regression fails instead of hanging CI.
   const fs::path data = fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data";
   std::ifstream in(data / "gen_relax_cylinder_psd.json");
@@ -142,6 +143,15 @@ TEST_CASE("the scenario loader refuses special files and huge stage lists quickl
   many["stages"] = json::array();
   for (int k = 0; k < 100000; ++k) many["stages"].push_back(1.0);
   inputs.emplace_back("100000 stages", many);
+  {  // tools/fuzz.sh loader case 65352: 100000 sweep values took over 10 s to bind
+    std::ifstream cin(fs::path(SPARKDEM_SOURCE_DIR) / "configs/conductivity_packing.json");
+    json sweep = json::parse(cin);
+    json& values = sweep["stages"][1]["sweep"]["values"];
+    REQUIRE(values.is_array());
+    values = json::array();
+    for (int k = 0; k < 100000; ++k) values.push_back("holm");
+    inputs.emplace_back("100000 sweep values", sweep);
+  }
   for (const auto& [what, j] : inputs) {
     INFO(what);
     const sparkdem::test::ChildResult r = sparkdem::test::run_in_child(
