@@ -76,6 +76,23 @@ inline std::vector<Index> select_particles(const State& s, const SetSelector& se
   return out;
 }
 
+/// The field "set/<name>" (1 = member) of a particle set the stage lists in "sets"; SetupError
+/// naming `module` when it does not.
+inline const std::vector<double>& set_field(const State& s, const std::string& name, const std::string& module) {
+  if (!s.particles.fields.has("set/" + name))
+    throw SetupError(module + ": '" + name + "' is not a particle set of this stage (list it in the stage's \"sets\")");
+  return s.particles.fields.data("set/" + name);
+}
+
+/// Indices of the members of a particle set the stage lists in "sets" (SetupError as set_field).
+inline std::vector<Index> set_members(const State& s, const std::string& name, const std::string& module) {
+  const auto& f = set_field(s, name, module);
+  std::vector<Index> out;
+  for (std::size_t i = 0; i < f.size(); ++i)
+    if (f[i] > 0.5) out.push_back(static_cast<Index>(i));
+  return out;
+}
+
 /// Evaluate the selector and store it as the field "set/<name>".
 inline std::size_t assign_set(State& s, const std::string& name, const SetSelector& sel) {
   s.particles.fields.declare({"set/" + name, 1, "1", 0.0, true}, s.particles.size());

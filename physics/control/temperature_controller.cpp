@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "engine/core/error.hpp"
+#include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
 #include "physics/thermal/temperature_history.hpp"
 
@@ -73,9 +74,7 @@ double TemperatureController::measured(const State& s) const {
 }
 
 void TemperatureController::bind(State& s) {
-  if (!s.particles.fields.has("set/" + p_.set))
-    throw SetupError("temperature_controller: '" + p_.set + "' is not a particle set of this stage (list it in the stage's \"sets\")");
-  const auto& f = s.particles.fields.data("set/" + p_.set);
+  const auto& f = set_field(s, p_.set, "temperature_controller");
   if (std::none_of(f.begin(), f.end(), [](double x) { return x > 0.5; }))
     throw SetupError("temperature_controller: the control set '" + p_.set + "' holds no particle");
   if (restored_) { restored_ = false; return; }

@@ -8,6 +8,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/graph/interaction_graph.hpp"
+#include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
 
 namespace sparkdem::physics {
@@ -16,15 +17,6 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-std::vector<Index> set_members(const State& s, const std::string& name) {
-  if (!s.particles.fields.has("set/" + name))
-    throw SetupError("contact_percolation: electrode '" + name + "' is not a particle set of this stage (\"sets\")");
-  const auto& f = s.particles.fields.data("set/" + name);
-  std::vector<Index> out;
-  for (std::size_t i = 0; i < f.size(); ++i)
-    if (f[i] > 0.5) out.push_back(static_cast<Index>(i));
-  return out;
-}
 }  // namespace
 
 namespace percolation {
@@ -146,7 +138,7 @@ void ContactPercolation::advance(State& s, const StepInfo&) {
       a.push_back(g.a[e]);
       b.push_back(g.b[e]);
     }
-  const std::vector<Index> high = set_members(s, p_.high), low = set_members(s, p_.low);
+  const std::vector<Index> high = set_members(s, p_.high, "contact_percolation"), low = set_members(s, p_.low, "contact_percolation");
   const percolation::Metrics m = percolation::metrics(s.particles.size(), a, b, high, low);
   double mean = kNaN, parallel = kNaN;
   if (p_.cluster_resistances) {

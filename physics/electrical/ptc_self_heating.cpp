@@ -5,22 +5,13 @@
 #include <limits>
 
 #include "engine/core/error.hpp"
+#include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
 
 namespace sparkdem::physics {
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::vector<Index> members(const State& s, const std::string& name) {
-  if (!s.particles.fields.has("set/" + name))
-    throw SetupError("ptc_self_heating: electrode '" + name + "' is not a particle set of this stage (\"sets\")");
-  const auto& f = s.particles.fields.data("set/" + name);
-  std::vector<Index> out;
-  for (std::size_t i = 0; i < f.size(); ++i)
-    if (f[i] > 0.5) out.push_back(static_cast<Index>(i));
-  return out;
-}
 }  // namespace
 
 ParamSpec<PtcSelfHeating::Params> PtcSelfHeating::spec() {
@@ -84,7 +75,7 @@ void PtcSelfHeating::build(const State& s) {
       c.gap.push_back(net_.gap[e]);
       c.opening.push_back(open[e]);
     }
-    switching_strain_ = ptc::switching_strain(P.size(), c, ptc::break_strains(c, p_.break_gap), members(s, p_.high), members(s, p_.low));
+    switching_strain_ = ptc::switching_strain(P.size(), c, ptc::break_strains(c, p_.break_gap), set_members(s, p_.high, "ptc_self_heating"), set_members(s, p_.low, "ptc_self_heating"));
   }
 }
 

@@ -1,5 +1,5 @@
-#include "physics/electrical/ptc_strain.hpp"
 #include "physics/electrical/contact_percolation.hpp"
+#include "physics/electrical/ptc_strain.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,6 +8,7 @@
 #include <set>
 
 #include "engine/core/error.hpp"
+#include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
 #include "physics/electrical/ptc_matrix.hpp"
 #include "physics/electrical/rkpm_matrix.hpp"
@@ -19,15 +20,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t kFixed = 8;  // columns before the per-eps0 block
 
-std::vector<Index> members(const State& s, const std::string& name) {
-  if (!s.particles.fields.has("set/" + name))
-    throw SetupError("ptc_strain: electrode '" + name + "' is not a particle set of this stage (\"sets\")");
-  const auto& f = s.particles.fields.data("set/" + name);
-  std::vector<Index> out;
-  for (std::size_t i = 0; i < f.size(); ++i)
-    if (f[i] > 0.5) out.push_back(static_cast<Index>(i));
-  return out;
-}
 }  // namespace
 
 PtcStrain::PtcStrain(const Params& p) : p_(p) {
@@ -186,7 +178,7 @@ void PtcStrain::advance(State& s, const StepInfo&) {
     residual = r.residual;
   }
   const std::vector<double> eb = ptc::break_strains(c, p_.break_gap);
-  const std::vector<Index> high = members(s, p_.high), low = members(s, p_.low);
+  const std::vector<Index> high = set_members(s, p_.high, "ptc_strain"), low = set_members(s, p_.low, "ptc_strain");
 
   std::vector<double> rel;
   std::size_t closing = 0;

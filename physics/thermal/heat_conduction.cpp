@@ -8,6 +8,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/format.hpp"
 #include "engine/graph/interaction_graph.hpp"
+#include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
 #include "physics/electrical/conductance_kernels.hpp"
 #include "physics/thermal/expansion.hpp"
@@ -30,11 +31,6 @@ std::vector<std::string> split_names(const std::string& s) {
   return out;
 }
 
-const std::vector<double>& set_field(const State& s, const std::string& name) {
-  if (!s.particles.fields.has("set/" + name))
-    throw SetupError("heat_conduction: '" + name + "' is not a particle set of this stage (list it in the stage's \"sets\")");
-  return s.particles.fields.data("set/" + name);
-}
 
 std::string num(double x) { return format_number(x); }
 }  // namespace
@@ -189,7 +185,7 @@ const HeatConduction::Network& HeatConduction::network(const State& s) const {
     std::vector<double> f(g.nodes(), 1.0);
     std::vector<char> seen(p.size(), 0);
     for (std::size_t k = 0; k < factor_names_.size(); ++k) {
-      const auto& m = set_field(s, factor_names_[k]);
+      const auto& m = set_field(s, factor_names_[k], "heat_conduction");
       for (std::size_t i = 0; i < p.size(); ++i) {
         if (!(m[i] > 0.5)) continue;
         if (seen[i]) throw SetupError("heat_conduction: particle id " + std::to_string(p.id[i]) + " belongs to two conductivity sets");
@@ -214,11 +210,11 @@ const HeatConduction::Network& HeatConduction::network(const State& s) const {
 void HeatConduction::bind(State& s) {
   net_.valid = false;
   auto& p = s.particles;
-  for (const auto& n : fixed_names_) (void)set_field(s, n);
-  for (const auto& n : flux_names_) (void)set_field(s, n);
-  for (const auto& n : factor_names_) (void)set_field(s, n);
-  for (const auto& n : report_names_) (void)set_field(s, n);
-  if (!p_.loss_set.empty() && p_.loss_set != "all") (void)set_field(s, p_.loss_set);
+  for (const auto& n : fixed_names_) (void)set_field(s, n, "heat_conduction");
+  for (const auto& n : flux_names_) (void)set_field(s, n, "heat_conduction");
+  for (const auto& n : factor_names_) (void)set_field(s, n, "heat_conduction");
+  for (const auto& n : report_names_) (void)set_field(s, n, "heat_conduction");
+  if (!p_.loss_set.empty() && p_.loss_set != "all") (void)set_field(s, p_.loss_set, "heat_conduction");
   if (restored_) {  // resumed mid-stage: temperatures, capacities and energies come from the checkpoint
     restored_ = false;
     return;
@@ -231,7 +227,7 @@ void HeatConduction::bind(State& s) {
       throw SetupError("heat_conduction: particle id " + std::to_string(p.id[i]) + " has temperature " + num(T[i]) +
                        " K; give initial_temperature or run after a stage that set the temperature");
   for (std::size_t k = 0; k < fixed_names_.size(); ++k) {
-    const auto& f = set_field(s, fixed_names_[k]);
+    const auto& f = set_field(s, fixed_names_[k], "heat_conduction");
     for (std::size_t i = 0; i < p.size(); ++i)
       if (f[i] > 0.5) T[i] = p_.fixed_temperatures[k];
   }
@@ -277,12 +273,12 @@ double HeatConduction::stable_dt(const State& s) const {
   const auto& T = p.fields.data("temperature");
   std::vector<char> fixed(p.size(), 0);
   for (const auto& name : fixed_names_) {
-    const auto& f = set_field(s, name);
+    const auto& f = set_field(s, name, "heat_conduction");
     for (std::size_t i = 0; i < p.size(); ++i)
       if (f[i] > 0.5) fixed[i] = 1;
   }
   const bool all_lose = p_.loss_set == "all";
-  const std::vector<double>* lose = (!p_.loss_set.empty() && !all_lose) ? &set_field(s, p_.loss_set) : nullptr;
+  const std::vector<double>* lose = (!p_.loss_set.empty() && !all_lose) ? &set_field(s, p_.loss_set, "heat_conduction") : nullptr;
   double dt = kInf;
   limiting_id_ = -1;
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -314,7 +310,7 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
   std::vector<double> fixed_value(np, kNaN), F(np, 0.0), area(np, 0.0);
   std::vector<DirichletGroup> groups(fixed_names_.size());
   for (std::size_t k = 0; k < fixed_names_.size(); ++k) {
-    const auto& f = set_field(s, fixed_names_[k]);
+    const auto& f = set_field(s, fixed_names_[k], "heat_conduction");
     groups[k].value = p_.fixed_temperatures[k];
     for (std::size_t i = 0; i < np; ++i) {
       if (!(f[i] > 0.5)) continue;
@@ -325,7 +321,7 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
     }
   }
   for (std::size_t k = 0; k < flux_names_.size(); ++k) {
-    const auto& f = set_field(s, flux_names_[k]);
+    const auto& f = set_field(s, flux_names_[k], "heat_conduction");
     double csum = 0.0;
     for (std::size_t i = 0; i < np; ++i)
       if (f[i] > 0.5 && std::isnan(fixed_value[i])) csum += C[i];
@@ -334,7 +330,7 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
         if (f[i] > 0.5 && std::isnan(fixed_value[i])) F[i] += p_.flux_powers[k] * C[i] / csum;
   }
   if (!p_.loss_set.empty()) {
-    const std::vector<double>* lose = p_.loss_set == "all" ? nullptr : &set_field(s, p_.loss_set);
+    const std::vector<double>* lose = p_.loss_set == "all" ? nullptr : &set_field(s, p_.loss_set, "heat_conduction");
     for (std::size_t i = 0; i < np; ++i)
       if ((!lose || (*lose)[i] > 0.5) && std::isnan(fixed_value[i]))
         area[i] = p_.loss_area_fraction * 4.0 * thermal::kPi * p.radius[i] * p.radius[i];
@@ -466,7 +462,7 @@ std::vector<double> HeatConduction::column_values(const State& s) const {
   std::vector<double> v = {ct / csum, tmin, tmax, e_.electrical, e_.joule, e_.flux, e_.lost, e_.fixed, stored, err,
                            stable_dt(s), csum, capacity_ratio_, std::sqrt(var / csum), isolated};
   for (const auto& name : report_names_) {  // capacity-weighted mean temperature of each reported set
-    const auto& f = set_field(s, name);
+    const auto& f = set_field(s, name, "heat_conduction");
     double cs = 0.0, cts = 0.0;
     for (std::size_t i = 0; i < p.size(); ++i)
       if (f[i] > 0.5) {
