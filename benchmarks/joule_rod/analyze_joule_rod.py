@@ -82,7 +82,12 @@ def run_name(config, n, seed, max_it, max_ov):
 
 
 def scenario(config, n, seed, max_it, max_ov):
-    c = load(config)
+    json.dump(make_scenario(load(config), n, seed, max_it, max_ov), sys.stdout, indent=1)
+    print()
+
+
+def make_scenario(c, n, seed, max_it, max_ov):
+    """The scenario of one run (a dict) from the config `c` (see the module's docstring)."""
     n = int(n)
     if seed:
         c["seed"] = int(seed)
@@ -112,8 +117,7 @@ def scenario(config, n, seed, max_it, max_ov):
     c["description"] = (c.get("description", "") + f" [benchmarks/joule_rod: N = {n}; reference {dt:.3f} K; "
                         "extra stages joule_sphere and joule_volume_fraction repeat the joule stage on the same packing "
                         "with only the heat capacity convention changed]")
-    json.dump(c, sys.stdout, indent=1)
-    print()
+    return c
 
 
 def meta(d):

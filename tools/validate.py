@@ -1,0 +1,701 @@
+#!/usr/bin/python3
+"""sparkdem's validation runner and ledger (benchmarks/validation/README.md).
+
+    tools/validate.py list                                    the cases, their tiers, sizes and seeds
+    tools/validate.py run --tier fast|full [--case GLOB ...] [--sizes N ...] [--seeds S ...]
+                          [--jobs J] [--workdir DIR] [--ledger FILE] [--sparkdem PATH] [--build DIR]
+                          [--reuse] [--no-record] [--strict]
+    tools/validate.py report [--ledger FILE]                  ledger.md and error_vs_time.png
+    tools/validate.py check-hashes [--ledger FILE]            fail when a recorded config changed
+    tools/validate.py check-docs FILE...                      fail when a quoted figure is not the ledger's
+    tools/validate.py derive-bands --case GLOB --seeds S ...  fast-tier bands from measured scatter
+
+The table of cases is benchmarks/validation/cases.py: each case names its configs, how a run's
+scenario is made from them (N and the packing seed patched), and the figures it yields with their
+references (fixed before the run), bands and sources. This file owns everything the cases share:
+patching and writing scenarios, running sparkdem (timed: wall and CPU), reusing finished runs,
+ensemble statistics, the ledger records, the staleness guard (config hashes) and the reports.
+
+Exit codes: 0 every figure of the run inside its band (or --no-strict); 1 a figure outside its band
+(with --strict, the default of the fast tier); 2 bad arguments or a failed run.
+"""
+import argparse
+import concurrent.futures as futures
+import fnmatch
+import hashlib
+import json
+import math
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import time
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+VALDIR = os.path.join(REPO, "benchmarks", "validation")
+LEDGER = os.path.join(VALDIR, "ledger.json")
+FAST_BANDS = os.path.join(VALDIR, "fast_bands.json")
+sys.path.insert(0, VALDIR)
+import cases as case_table  # noqa: E402  (benchmarks/validation/cases.py)
+
+
+# ---------------------------------------------------------------- configs and hashes
+
+def load_json(path):
+    with open(path) as f:
+        return json.load(f)
+
+
+def write_json_atomic(path, obj):
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(obj, f, indent=1, sort_keys=False)
+        f.write("\n")
+    os.replace(tmp, path)
+
+
+def included_files(path):
+    """`path` and every file it pulls in through "$include" (recursively), repository-relative."""
+    out, todo = [], [os.path.abspath(path)]
+    while todo:
+        p = todo.pop()
+        rel = os.path.relpath(p, REPO)
+        if rel in out:
+            continue
+        out.append(rel)
+
+        def walk(x, base=os.path.dirname(p)):
+            if isinstance(x, dict):
+                if isinstance(x.get("$include"), str):
+                    todo.append(os.path.normpath(os.path.join(base, x["$include"])))
+                for v in x.values():
+                    walk(v)
+            elif isinstance(x, list):
+                for v in x:
+                    walk(v)
+        if p.endswith(".json"):
+            walk(load_json(p))
+    return sorted(out)
+
+
+def file_hash(rel):
+    with open(os.path.join(REPO, rel), "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()[:16]
+
+
+def config_hashes(case):
+    files = set()
+    for c in case.configs:
+        files.update(included_files(os.path.join(REPO, c)))
+    return {f: file_hash(f) for f in sorted(files)}
+
+
+def flatten(x, prefix=""):
+    """{JSON pointer: leaf value} of a JSON document."""
+    if isinstance(x, dict):
+        out = {}
+        for k, v in x.items():
+            out.update(flatten(v, prefix + "/" + str(k)))
+        return out
+    if isinstance(x, list):
+        out = {}
+        for i, v in enumerate(x):
+            out.update(flatten(v, prefix + "/" + str(i)))
+        return out
+    return {prefix: x}
+
+
+def config_values(case):
+    """Every leaf of every config file the case uses, as {file#pointer: value}."""
+    vals = {}
+    for rel in config_hashes(case):
+        if rel.endswith(".json"):
+            for k, v in flatten(load_json(os.path.join(REPO, rel))).items():
+                if not (k.endswith("/description") or k.endswith("/source") or "/_comment" in k):
+                    vals[rel + "#" + k] = v
+    return vals
+
+
+def git_commit():
+    try:
+        c = subprocess.run(["git", "-C", REPO, "rev-parse", "--short=12", "HEAD"], capture_output=True, text=True,
+                           check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", REPO, "status", "--porcelain", "--untracked-files=no"], capture_output=True,
+                               text=True).stdout.strip()
+        return c + ("+dirty" if dirty else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+# ---------------------------------------------------------------- running sparkdem
+
+class Runner:
+    """Runs one scenario in its own directory: scenario.json, out/, sparkdem.log, meta.json (exit code,
+    wall and CPU seconds, load average). A finished run whose scenario and binary are unchanged is kept
+    with --reuse."""
+
+    def __init__(self, sparkdem, build, threads, reuse):
+        self.sparkdem, self.build, self.threads, self.reuse = sparkdem, build, threads, reuse
+        with open(sparkdem, "rb") as f:
+            self.binary_hash = hashlib.sha256(f.read()).hexdigest()[:16]
+        helptext = subprocess.run([sparkdem, "run", "--help"], capture_output=True, text=True).stdout
+        self.report_only = ["--report-only"] if "--report-only" in helptext else []
+        self.commit = git_commit()  # the code the runs use (taken before any of them starts)
+
+    def tool(self, rel):
+        p = os.path.join(self.build, rel)
+        if not os.access(p, os.X_OK):
+            raise RuntimeError(f"{p} not found: build it (cmake --build {self.build} --target {os.path.basename(rel)}_exe "
+                               f"or --target {os.path.basename(rel)})")
+        return p
+
+    def run(self, scene, rundir, name="scenario"):
+        """Runs sparkdem on `scene` (a dict) in rundir; returns the meta dict (rc, wall_s, cpu_s)."""
+        os.makedirs(rundir, exist_ok=True)
+        text = json.dumps(scene, indent=1)
+        spath, mpath = os.path.join(rundir, name + ".json"), os.path.join(rundir, name + ".meta.json")
+        out = os.path.join(rundir, "out" if name == "scenario" else name + "_out")
+        if self.reuse and os.path.exists(mpath) and os.path.exists(spath):
+            meta = load_json(mpath)
+            if open(spath).read() == text and meta.get("binary") == self.binary_hash and meta.get("rc") in (0, 5):
+                meta["reused"] = True
+                return meta
+        with open(spath, "w") as f:
+            f.write(text)
+        cmd = [self.sparkdem, "run", spath, "-o", out, "--threads", str(self.threads), "--quiet"] + self.report_only
+        return self.command(cmd, rundir, name, mpath)
+
+    def command(self, cmd, rundir, name, mpath=None):
+        env = dict(os.environ, OMP_NUM_THREADS=str(self.threads), OMP_WAIT_POLICY="PASSIVE")
+        load0 = os.getloadavg()[0]
+        t0, c0 = time.time(), resource.getrusage(resource.RUSAGE_CHILDREN)
+        with open(os.path.join(rundir, name + ".log"), "w") as log, open(os.path.join(rundir, name + ".err"), "w") as err:
+            rc = subprocess.call(cmd, stdout=log, stderr=err, env=env, cwd=rundir)
+        c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        meta = {"rc": rc, "wall_s": time.time() - t0,
+                "cpu_s": (c1.ru_utime - c0.ru_utime) + (c1.ru_stime - c0.ru_stime),
+                "load_start": load0, "load_end": os.getloadavg()[0], "binary": self.binary_hash,
+                "command": " ".join(cmd)}
+        write_json_atomic(mpath or os.path.join(rundir, name + ".meta.json"), meta)
+        return meta
+
+
+class RunContext:
+    """What a case's run function gets: its directory, N, seed and the runner."""
+
+    def __init__(self, runner, rundir, n, seed, tier):
+        self.runner, self.rundir, self.n, self.seed, self.tier = runner, rundir, n, seed, tier
+        self.wall_s = 0.0
+        self.cpu_s = 0.0
+        self.load = os.getloadavg()[0]  # load average when the run started (timings are noisy above the core count)
+
+    def config(self, rel):
+        """A config with its $include paths made absolute, so the copy runs from anywhere."""
+        path = os.path.join(REPO, rel)
+        c = load_json(path)
+        absolute_includes(c, os.path.dirname(path))
+        return c
+
+    def sparkdem(self, scene, name="scenario"):
+        meta = self.runner.run(scene, self.rundir, name)
+        self.wall_s += meta["wall_s"]
+        self.cpu_s += meta["cpu_s"]
+        if meta["rc"] not in (0, 5):  # 5: a banded check of the scene missed (the ledger judges)
+            raise RuntimeError(f"sparkdem exited with {meta['rc']}: see {os.path.join(self.rundir, name + '.err')}")
+        return os.path.join(self.rundir, "out" if name == "scenario" else name + "_out")
+
+    def command(self, cmd, name):
+        meta = self.runner.command(cmd, self.rundir, name)
+        self.wall_s += meta["wall_s"]
+        self.cpu_s += meta["cpu_s"]
+        if meta["rc"] != 0:
+            raise RuntimeError(f"{cmd[0]} exited with {meta['rc']}: see {os.path.join(self.rundir, name + '.err')}")
+        return os.path.join(self.rundir, name + ".log")  # its standard output
+
+
+def absolute_includes(node, base):
+    if isinstance(node, dict):
+        if isinstance(node.get("$include"), str):
+            node["$include"] = os.path.normpath(os.path.join(base, node["$include"]))
+        for v in node.values():
+            absolute_includes(v, base)
+    elif isinstance(node, list):
+        for v in node:
+            absolute_includes(v, base)
+
+
+def run_one(runner, case, tier, n, seed, workdir):
+    rundir = os.path.join(workdir, tier, case.id.replace("/", "_"), f"N{n}_seed{seed}")
+    ctx = RunContext(runner, rundir, n, seed, tier)
+    try:
+        figures = case.run(ctx)
+        err = None
+    except (Exception, SystemExit) as e:  # a failed run is reported in its record, never silently dropped
+        figures, err = {}, f"{type(e).__name__}: {e}"
+    return {"n": n, "seed": seed, "figures": figures, "error": err, "wall_s": ctx.wall_s, "cpu_s": ctx.cpu_s,
+            "load": ctx.load,
+            "rundir": os.path.relpath(rundir, REPO) if rundir.startswith(REPO) else rundir}
+
+
+# ---------------------------------------------------------------- records
+
+def ensemble(runs, fig):
+    """Statistics of figure `fig` over the runs that produced it."""
+    vals = [r["figures"][fig] for r in runs if fig in r["figures"]]
+    if not vals:
+        return None
+    meas = [v["measured"] for v in vals]
+    refs = [v["reference"] for v in vals]
+    errs = [(m - r) / abs(r) for m, r in zip(meas, refs)]
+    out = {"measured": statistics.fmean(meas), "reference": statistics.fmean(refs), "error": statistics.fmean(errs),
+           "count": len(vals), "per_seed": [{"seed": r["seed"], "measured": v["measured"], "reference": v["reference"],
+                                              "error": (v["measured"] - v["reference"]) / abs(v["reference"])}
+                                             for r, v in ((r, r["figures"][fig]) for r in runs if fig in r["figures"])]}
+    out["mean"] = out["error"]
+    out["std"] = statistics.stdev(errs) if len(errs) > 1 else None
+    for v in vals:
+        for k, x in v.get("extra", {}).items():
+            out.setdefault("extra", {}).setdefault(k, []).append(x)
+    return out
+
+
+def tuned_by_config_change(case, first_values):
+    """Config keys of the case changed since its first record: each is a tuning after seeing."""
+    now = config_values(case)
+    out = []
+    for k in sorted(set(now) | set(first_values)):
+        if now.get(k) != first_values.get(k):
+            out.append({"parameter": k, "why": f"changed after the case's first record: {first_values.get(k)!r} -> "
+                                               f"{now.get(k)!r} (automatic mark)"})
+    return out
+
+
+def make_record(case, fig, tier, n, runs, runner, first_values, fast_bands):
+    st = ensemble(runs, fig.key)
+    failed = [r for r in runs if r["error"]]
+    rec = {"case": fig.id, "source": fig.source, "reference_origin": fig.reference_origin,
+           "kind": "validation" if tier == "full" else "regression", "tier": tier, "N": n,
+           "seeds": [r["seed"] for r in runs], "calibrated_on": fig.calibrated_on,
+           "wall_s": round(sum(r["wall_s"] for r in runs), 2), "cpu_s": round(sum(r["cpu_s"] for r in runs), 2),
+           "threads": runner.threads, "commit": runner.commit, "date": time.strftime("%Y-%m-%d %H:%M:%S"),
+           "configs": config_hashes(case), "variants": fig.variants,
+           "tuned_after_seeing": list(fig.tuned) + tuned_by_config_change(case, first_values),
+           "runs": [{"seed": r["seed"], "rundir": r["rundir"], "wall_s": round(r["wall_s"], 2),
+                     "cpu_s": round(r["cpu_s"], 2), "load_average_start": round(r["load"], 2), "error": r["error"]}
+                    for r in runs]}
+    if failed:
+        rec["failed_runs"] = len(failed)
+    if st is None:
+        rec.update({"measured": None, "error": None, "pass": False, "band": fig.band})
+        return rec
+    rec.update({k: st[k] for k in ("measured", "reference", "error", "mean", "std", "count", "per_seed")})
+    if "extra" in st:
+        rec["extra"] = st["extra"]
+    if tier == "full":
+        rec["band"] = fig.band
+        rec["pass"] = (abs(st["error"]) <= fig.band and not rec["tuned_after_seeing"] and not failed
+                       and st["count"] >= fig.min_seeds)
+        if st["count"] < fig.min_seeds:
+            rec["note"] = f"{st['count']} packing(s): a packing decides this figure, >= {fig.min_seeds} needed for a pass"
+        rec["scatter_exceeds_band"] = st["std"] is not None and st["std"] > fig.band
+    else:
+        fb = fast_bands.get(f"{fig.id}@N{n}")
+        if fb is None and fig.min_seeds == 1:  # deterministic (no packing): the closed form's own band
+            fb = {"center": 0.0, "halfwidth": fig.band,
+                  "derivation": "the validation band: a deterministic case has no scatter to derive one from"}
+        if fb is None:
+            rec.update({"band": None, "pass": False, "note": "no fast band derived for this size "
+                        "(tools/validate.py derive-bands)"})
+        else:
+            lo, hi = fb["center"] - fb["halfwidth"], fb["center"] + fb["halfwidth"]
+            rec["band"] = {"error_range": [lo, hi], "derivation": fb["derivation"]}
+            rec["pass"] = lo <= st["error"] <= hi and not failed
+    return rec
+
+
+def first_values_of(ledger, case):
+    fv = ledger.setdefault("first_config_values", {})
+    if case.id not in fv:
+        fv[case.id] = config_values(case)
+    return fv[case.id]
+
+
+def store(ledger, rec):
+    """Replace the record of the same case, tier and N (the ledger keeps the latest)."""
+    recs = [r for r in ledger["records"]
+            if not (r["case"] == rec["case"] and r["tier"] == rec["tier"] and r["N"] == rec["N"])]
+    recs.append(rec)
+    recs.sort(key=lambda r: (r["case"], r["tier"], r["N"]))
+    ledger["records"] = recs
+
+
+def load_ledger(path):
+    if os.path.exists(path):
+        return load_json(path)
+    return {"schema": "benchmarks/validation/README.md", "records": [], "first_config_values": {}}
+
+
+# ---------------------------------------------------------------- commands
+
+def selected(patterns, tier=None):
+    out = []
+    for c in case_table.CASES:
+        if patterns and not any(fnmatch.fnmatch(c.id, p) or any(fnmatch.fnmatch(f.id, p) for f in c.figures)
+                                for p in patterns):
+            continue
+        if tier and tier not in c.tiers:
+            continue
+        out.append(c)
+    return out
+
+
+def cmd_list(a):
+    for c in case_table.CASES:
+        for t, spec in c.tiers.items():
+            print(f"{c.id:34s} {t:5s} N={spec['sizes']} seeds={spec['seeds']}  figures: "
+                  + ", ".join(f.id for f in c.figures))
+    return 0
+
+
+def cmd_run(a):
+    cases = selected(a.case, a.tier)
+    if not cases:
+        print(f"validate: no case of tier {a.tier} matches {a.case}", file=sys.stderr)
+        return 2
+    runner = Runner(a.sparkdem, a.build, a.threads, a.reuse)
+    jobs = []
+    for c in cases:
+        spec = c.tiers[a.tier]
+        for n in (a.sizes or spec["sizes"]):
+            for s in (a.seeds or spec["seeds"]):
+                jobs.append((c, n, s))
+    print(f"validate: tier {a.tier}, {len(jobs)} runs of {len(cases)} cases, {a.jobs} at a time, "
+          f"{a.threads} thread(s) each; load average {os.getloadavg()[0]:.2f}; workdir {a.workdir}", flush=True)
+    results = {}
+    with futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
+        fut = {pool.submit(run_one, runner, c, a.tier, n, s, a.workdir): (c, n, s) for c, n, s in jobs}
+        for f in futures.as_completed(fut):
+            c, n, s = fut[f]
+            r = f.result()
+            results.setdefault((c.id, n), []).append(r)
+            status = r["error"] or ", ".join(f"{k} {100 * (v['measured'] - v['reference']) / abs(v['reference']):+.2f} %"
+                                             for k, v in r["figures"].items())
+            print(f"  {c.id} N={n} seed={s}: {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU: {status}", flush=True)
+    ledger = load_ledger(a.ledger)
+    fast_bands = load_json(FAST_BANDS) if os.path.exists(FAST_BANDS) else {}
+    misses = 0
+    for c in cases:
+        first = first_values_of(ledger, c)
+        for n in (a.sizes or c.tiers[a.tier]["sizes"]):
+            runs = sorted(results.get((c.id, n), []), key=lambda r: r["seed"])
+            for fig in c.figures:
+                if fig.tiers and a.tier not in fig.tiers:
+                    continue
+                rec = make_record(c, fig, a.tier, n, runs, runner, first, fast_bands)
+                print("  " + summary_line(rec))
+                if not rec["pass"]:
+                    misses += 1
+                if not a.no_record:
+                    store(ledger, rec)
+    if not a.no_record:
+        write_json_atomic(a.ledger, ledger)
+        write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
+    if misses and a.strict:
+        print(f"validate: {misses} figure(s) outside their band", file=sys.stderr)
+        return 1
+    return 0
+
+
+def fmt_pct(x):
+    return "n/a" if x is None else f"{100 * x:+.2f} %"
+
+
+def band_text(rec):
+    b = rec.get("band")
+    if b is None:
+        return "none"
+    if isinstance(b, dict):
+        lo, hi = b["error_range"]
+        return f"[{100 * lo:+.2f}, {100 * hi:+.2f}] %"
+    return f"±{100 * b:g} %"
+
+
+def summary_line(rec):
+    std = f" ± {100 * rec['std']:.2f}" if rec.get("std") is not None else ""
+    verdict = "PASS" if rec["pass"] else ("TUNED" if rec.get("tuned_after_seeing") and rec["kind"] == "validation"
+                                          else "MISS")
+    return (f"{verdict:5s} {rec['case']} N={rec['N']} ({rec['kind']}): error {fmt_pct(rec.get('error'))}{std} "
+            f"over {rec.get('count', 0)} run(s), band {band_text(rec)}, {rec['wall_s']:.1f} s wall")
+
+
+def verdict(rec):
+    if rec["pass"]:
+        return "pass"
+    if rec.get("tuned_after_seeing") and rec["kind"] == "validation":
+        return "tuned"
+    if rec.get("measured") is None:
+        return "failed"
+    return "miss"
+
+
+def write_reports(ledger, outdir):
+    write_markdown(ledger, os.path.join(outdir, "ledger.md"))
+    try:
+        write_plot(ledger, os.path.join(outdir, "error_vs_time.png"))
+    except ImportError as e:
+        print(f"validate: error_vs_time.png not drawn ({e}); install python3-matplotlib", file=sys.stderr)
+
+
+def ledger_table(ledger, kind):
+    rows = [r for r in ledger["records"] if r["kind"] == kind]
+    lines = ["| case | N | seeds | reference | measured | error (mean ± std) | band | verdict | wall [s] | CPU [s] | commit |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        std = f" ± {100 * r['std']:.2f} %" if r.get("std") is not None else ""
+        ref = "n/a" if r.get("reference") is None else f"{r['reference']:.6g}"
+        meas = "n/a" if r.get("measured") is None else f"{r['measured']:.6g}"
+        flag = " (scatter > band)" if r.get("scatter_exceeds_band") else ""
+        lines.append(f"| {r['case']} | {r['N']} | {len(r['seeds'])} | {ref} | {meas} | {fmt_pct(r.get('error'))}{std}{flag} | "
+                     f"{band_text(r)} | {verdict(r)} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['commit']} |")
+    return "\n".join(lines)
+
+
+def ledger_counts(ledger):
+    recs = [r for r in ledger["records"] if r["kind"] == "validation"]
+    v = [verdict(r) for r in recs]
+    return {"validation_records": len(recs), "pass": v.count("pass"), "miss": v.count("miss"),
+            "tuned": v.count("tuned"), "failed": v.count("failed"),
+            "regression_records": sum(1 for r in ledger["records"] if r["kind"] == "regression")}
+
+
+def write_markdown(ledger, path):
+    c = ledger_counts(ledger)
+    parts = ["# Validation ledger", "",
+             "Generated by `tools/validate.py report` from `ledger.json`; do not edit by hand. Schema and rules: "
+             "README.md in this directory.", "",
+             f"Validation records (full tier): {c['validation_records']}: {c['pass']} pass, {c['miss']} miss, "
+             f"{c['tuned']} tuned after seeing (never a pass), {c['failed']} failed. Regression records (fast tier): "
+             f"{c['regression_records']}.", "",
+             "## Full tier (validations against a paper, a closed form or a reference tool)", "",
+             ledger_table(ledger, "validation"), "",
+             "## Fast tier (regression guards; bands from measured scatter, never a validation pass)", "",
+             ledger_table(ledger, "regression"), "", "## Sources, calibrations and marks", ""]
+    seen = set()
+    for r in ledger["records"]:
+        if r["case"] in seen:
+            continue
+        seen.add(r["case"])
+        parts.append(f"- **{r['case']}**: {r['source']}. Reference: {r['reference_origin']}. "
+                     f"Calibrated on: {r['calibrated_on'] or 'nothing'}.")
+        for t in r.get("tuned_after_seeing", []):
+            parts.append(f"  - tuned after seeing: `{t['parameter']}`: {t['why']}")
+        for v in r.get("variants", []):
+            parts.append(f"  - variant: {v}")
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(parts) + "\n")
+    os.replace(tmp, path)
+
+
+def write_plot(ledger, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    markers = {"seed000": "o", "seed001": "s", "seed002": "^", "closed": "D"}
+    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    done = set()
+    for r in ledger["records"]:
+        if r["kind"] != "validation" or r.get("error") is None or r["wall_s"] <= 0:
+            continue
+        paper = r["case"].split("/")[0]
+        label = paper if paper not in done else None
+        done.add(paper)
+        face = "none" if verdict(r) != "pass" else None
+        ax.scatter(r["wall_s"], max(abs(r["error"]), 1e-12) * 100, marker=markers.get(paper, "x"), s=45, label=label,
+                   facecolors=face, edgecolors="C%d" % list(markers).index(paper) if paper in markers else "k")
+        ax.annotate(f"{r['case'].split('/', 1)[1]} N={r['N']}", (r["wall_s"], max(abs(r["error"]), 1e-12) * 100),
+                    fontsize=6, xytext=(3, 2), textcoords="offset points")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("run time, all seeds [s wall]")
+    ax.set_ylabel("|error| of the ensemble mean [%]")
+    ax.set_title("sparkdem validation ledger: error against run time (open marker: not a pass)")
+    ax.grid(True, which="both", alpha=0.3)
+    if done:
+        ax.legend(title="source")
+    fig.tight_layout()
+    tmp = path + ".tmp.png"
+    fig.savefig(tmp, dpi=130)
+    os.replace(tmp, path)
+
+
+def cmd_report(a):
+    write_reports(load_ledger(a.ledger), os.path.dirname(os.path.abspath(a.ledger)))
+    print(json.dumps(ledger_counts(load_ledger(a.ledger))))
+    return 0
+
+
+def cmd_check_hashes(a):
+    ledger = load_ledger(a.ledger)
+    by_id = {f.id: c for c in case_table.CASES for f in c.figures}
+    bad = []
+    for r in ledger["records"]:
+        c = by_id.get(r["case"])
+        if c is None:
+            bad.append(f"{r['case']}: in the ledger but not in benchmarks/validation/cases.py")
+            continue
+        now = config_hashes(c)
+        for f, h in sorted(r["configs"].items()):
+            if now.get(f) != h:
+                bad.append(f"{r['case']} N={r['N']} ({r['tier']}): {f} changed since the record of {r['commit']} "
+                           f"({h} -> {now.get(f, 'missing')}); rerun: tools/validate.py run --tier {r['tier']} "
+                           f"--case {r['case']} --sizes {r['N']}")
+        for f in sorted(set(now) - set(r["configs"])):
+            bad.append(f"{r['case']} N={r['N']} ({r['tier']}): uses {f}, not in its record; rerun it")
+    for line in bad:
+        print(line, file=sys.stderr)
+    print(f"check-hashes: {len(ledger['records'])} records, {len(bad)} stale")
+    return 1 if bad else 0
+
+
+def cmd_derive_bands(a):
+    """Runs the fast tier of the cases at the given seeds and writes mean ± k std of each figure's
+    error to fast_bands.json (with the derivation), the regression band of the fast tier."""
+    runner = Runner(a.sparkdem, a.build, a.threads, a.reuse)
+    bands = load_json(FAST_BANDS) if os.path.exists(FAST_BANDS) else {}
+    for c in selected(a.case, "fast"):
+        for n in c.tiers["fast"]["sizes"]:
+            with futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
+                runs = list(pool.map(lambda s: run_one(runner, c, "fast", n, s, a.workdir), a.seeds))
+            for r in runs:
+                if r["error"]:
+                    print(f"  seed {r['seed']}: {r['error']}", file=sys.stderr)
+            for fig in c.figures:
+                st = ensemble(runs, fig.key)
+                if st is None or st["count"] < 3:
+                    print(f"  {fig.id} N={n}: fewer than 3 runs, no band", file=sys.stderr)
+                    continue
+                half = max(a.k * st["std"], a.floor)
+                bands[f"{fig.id}@N{n}"] = {
+                    "center": st["error"], "halfwidth": half,
+                    "derivation": f"mean ± max({a.k:g} std, {100 * a.floor:g} %) of the relative error over seeds "
+                                  f"{[r['seed'] for r in runs]} at N = {n} ({100 * st['error']:+.3f} ± "
+                                  f"{100 * st['std']:.3f} %), commit {git_commit()}, {time.strftime('%Y-%m-%d')}",
+                    "per_seed": [p["error"] for p in st["per_seed"]]}
+                print(f"  {fig.id} N={n}: {bands[f'{fig.id}@N{n}']['derivation']}")
+    write_json_atomic(FAST_BANDS, dict(sorted(bands.items())))
+    return 0
+
+
+def cmd_check_docs(a):
+    """Every figure quoted in FILE beside a ledger tag `[ledger: CASE N=n]` (or `[ledger: CASE N=n FIELD]`,
+    FIELD error (default), measured, reference, std, wall_s) must equal the ledger's, to the digits printed;
+    every generated block `<!-- ledger:table KIND -->...<!-- ledger:end -->` must equal the table."""
+    import re
+    ledger = load_ledger(a.ledger)
+    recs = {(r["case"], r["N"], r["tier"]): r for r in ledger["records"]}
+    bad, n_checked = [], 0
+    tag = re.compile(r"([+\-−]?[0-9][0-9.,]*(?:e[+\-]?[0-9]+)?)\s*(%|s|S/m|MS/m)?\s*\[ledger: ([^\]\s]+) N=([0-9]+)"
+                     r"(?: (fast|full))?(?: ([a-z_]+))?\]")
+    for path in a.files:
+        text = open(path).read()
+        for m in tag.finditer(text):
+            n_checked += 1
+            num, unit, case, n, tier, field = m.groups()
+            rec = recs.get((case, int(n), tier or "full"))
+            where = f"{path}:{text[:m.start()].count(chr(10)) + 1}"
+            if rec is None:
+                bad.append(f"{where}: {case} N={n} {tier or 'full'} is not in the ledger")
+                continue
+            field = field or "error"
+            val = rec.get(field)
+            if val is None:
+                bad.append(f"{where}: the ledger's {case} N={n} has no {field}")
+                continue
+            q = float(num.replace("−", "-").replace(",", ""))
+            if unit == "%":
+                val = 100 * val
+            elif unit == "MS/m":
+                val = val / 1e6
+            digits = len(num.split(".")[1]) if "." in num else 0
+            if abs(q - val) > 0.51 * 10 ** (-digits) + 1e-12:
+                bad.append(f"{where}: quotes {num}{unit or ''} for {case} N={n} {field}; the ledger holds {val:.6g}")
+        for m in re.finditer(r"<!-- ledger:table (validation|regression) -->\n(.*?)\n<!-- ledger:end -->", text, re.S):
+            n_checked += 1
+            if m.group(2).strip() != ledger_table(ledger, m.group(1)).strip():
+                bad.append(f"{path}: the generated {m.group(1)} table differs from the ledger "
+                           f"(regenerate: tools/validate.py update-docs {path})")
+    for line in bad:
+        print(line, file=sys.stderr)
+    print(f"check-docs: {n_checked} quoted figures and tables checked, {len(bad)} wrong")
+    return 1 if bad else 0
+
+
+def cmd_update_docs(a):
+    """Rewrites every generated ledger table of FILE from the ledger."""
+    import re
+    ledger = load_ledger(a.ledger)
+    for path in a.files:
+        text = open(path).read()
+        new = re.sub(r"(<!-- ledger:table (validation|regression) -->\n)(.*?)(\n<!-- ledger:end -->)",
+                     lambda m: m.group(1) + ledger_table(ledger, m.group(2)) + m.group(4), text, flags=re.S)
+        if new != text:
+            with open(path + ".tmp", "w") as f:
+                f.write(new)
+            os.replace(path + ".tmp", path)
+            print(f"update-docs: {path} rewritten")
+    return 0
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="cmd", required=True)
+
+    def common(p, runs=True):
+        p.add_argument("--ledger", default=LEDGER)
+        if runs:
+            p.add_argument("--case", nargs="*", default=[])
+            p.add_argument("--sparkdem", default=os.environ.get("SPARKDEM_BIN", os.path.join(REPO, "build", "sparkdem")))
+            p.add_argument("--build", default=os.path.join(REPO, "build"))
+            p.add_argument("--workdir", default=os.path.join(REPO, "build", "validation"))
+            p.add_argument("--threads", type=int, default=1)
+            p.add_argument("--jobs", type=int, default=1)
+            p.add_argument("--reuse", action="store_true")
+    p = sub.add_parser("list")
+    p.set_defaults(fn=cmd_list)
+    p = sub.add_parser("run")
+    common(p)
+    p.add_argument("--tier", choices=["fast", "full"], required=True)
+    p.add_argument("--sizes", nargs="*", type=int, default=[])
+    p.add_argument("--seeds", nargs="*", type=int, default=[])
+    p.add_argument("--no-record", action="store_true")
+    p.add_argument("--strict", action="store_true", help="exit 1 when a figure leaves its band")
+    p.set_defaults(fn=cmd_run)
+    p = sub.add_parser("report")
+    common(p, runs=False)
+    p.set_defaults(fn=cmd_report)
+    p = sub.add_parser("check-hashes")
+    common(p, runs=False)
+    p.set_defaults(fn=cmd_check_hashes)
+    for name, fn in (("check-docs", cmd_check_docs), ("update-docs", cmd_update_docs)):
+        p = sub.add_parser(name)
+        common(p, runs=False)
+        p.add_argument("files", nargs="+")
+        p.set_defaults(fn=fn)
+    p = sub.add_parser("derive-bands")
+    common(p)
+    p.add_argument("--seeds", nargs="+", type=int, required=True)
+    p.add_argument("--k", type=float, default=3.0)
+    p.add_argument("--floor", type=float, default=0.0, help="smallest half-width (relative) of a band")
+    p.set_defaults(fn=cmd_derive_bands)
+    a = ap.parse_args(argv)
+    try:
+        return a.fn(a)
+    except (RuntimeError, OSError, KeyError, ValueError) as e:
+        print(f"validate: {e}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
