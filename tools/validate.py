@@ -48,7 +48,7 @@ def load_json(path):
 
 
 def write_json_atomic(path, obj):
-    tmp = path + ".tmp"
+    tmp = f"{path}.{os.getpid()}.tmp"
     with open(tmp, "w") as f:
         json.dump(obj, f, indent=1, sort_keys=False)
         f.write("\n")
@@ -351,6 +351,9 @@ def selected(patterns, tier=None):
 
 
 def cmd_list(a):
+    if a.ids:  # one case id per line (tests/CMakeLists.txt makes one ctest per fast case)
+        print("\n".join(c.id for c in case_table.CASES if a.ids in c.tiers))
+        return 0
     for c in case_table.CASES:
         for t, spec in c.tiers.items():
             print(f"{c.id:34s} {t:5s} N={spec['sizes']} seeds={spec['seeds']}  figures: "
@@ -400,7 +403,8 @@ def cmd_run(a):
                     store(ledger, rec)
     if not a.no_record:
         write_json_atomic(a.ledger, ledger)
-        write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
+        if not a.no_report:
+            write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
     if misses and a.strict:
         print(f"validate: {misses} figure(s) outside their band", file=sys.stderr)
         return 1
@@ -492,7 +496,7 @@ def write_markdown(ledger, path):
             parts.append(f"  - tuned after seeing: `{t['parameter']}`: {t['why']}")
         for v in r.get("variants", []):
             parts.append(f"  - variant: {v}")
-    tmp = path + ".tmp"
+    tmp = f"{path}.{os.getpid()}.tmp"
     with open(tmp, "w") as f:
         f.write("\n".join(parts) + "\n")
     os.replace(tmp, path)
@@ -525,7 +529,7 @@ def write_plot(ledger, path):
     if done:
         ax.legend(title="source")
     fig.tight_layout()
-    tmp = path + ".tmp.png"
+    tmp = f"{path}.{os.getpid()}.tmp.png"
     fig.savefig(tmp, dpi=130)
     os.replace(tmp, path)
 
@@ -663,13 +667,15 @@ def main(argv=None):
             p.add_argument("--jobs", type=int, default=1)
             p.add_argument("--reuse", action="store_true")
     p = sub.add_parser("list")
+    p.add_argument("--ids", choices=["fast", "full"], help="print only the case ids of this tier")
     p.set_defaults(fn=cmd_list)
     p = sub.add_parser("run")
     common(p)
     p.add_argument("--tier", choices=["fast", "full"], required=True)
     p.add_argument("--sizes", nargs="*", type=int, default=[])
     p.add_argument("--seeds", nargs="*", type=int, default=[])
-    p.add_argument("--no-record", action="store_true")
+    p.add_argument("--no-record", action="store_true", help="write nothing to the ledger")
+    p.add_argument("--no-report", action="store_true", help="record, but do not redraw ledger.md and the plot")
     p.add_argument("--strict", action="store_true", help="exit 1 when a figure leaves its band")
     p.set_defaults(fn=cmd_run)
     p = sub.add_parser("report")

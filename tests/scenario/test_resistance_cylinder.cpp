@@ -24,7 +24,7 @@
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-TEST_CASE("seed 001 cylinder: R_DEM against rho_e l / A at N = 5000", "[electrical][slow]") {
+TEST_CASE("seed 001 cylinder at N = 5000: the fill reaches its target, Kirchhoff and power balance hold", "[electrical][slow]") {
   const fs::path src = fs::path(SPARKDEM_SOURCE_DIR) / "configs" / "resistance_cylinder.json";
   json scene = json::parse(std::ifstream(src));
   json& gen = scene["stages"][0]["generator"];
@@ -58,6 +58,6 @@ TEST_CASE("seed 001 cylinder: R_DEM against rho_e l / A at N = 5000", "[electric
   CHECK(fin["electrical_current_mismatch"].get<double>() < 1e-9);
   CHECK(fin["electrical_power_mismatch"].get<double>() < 1e-9);
   CHECK(fin["electrical_floating_nodes"].get<double>() <= 0.01 * 5000);
-  // Against the continuum.
-  CHECK(std::abs(error) <= 0.08);
+  // The figure against the continuum (R_th) is the validation ledger's, not this test's:
+  // tools/validate.py case seed001/cylinder (full tier N = 20,000, three packings; fast tier in CI).
 }
