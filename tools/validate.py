@@ -412,7 +412,11 @@ def cmd_run(a):
 
 
 def fmt_pct(x):
-    return "n/a" if x is None else f"{100 * x:+.2f} %"
+    if x is None:
+        return "n/a"
+    if x != 0 and abs(x) < 5e-5:
+        return f"{100 * x:+.1e} %"
+    return f"{100 * x:+.2f} %"
 
 
 def band_text(rec):
@@ -496,6 +500,17 @@ def write_markdown(ledger, path):
             parts.append(f"  - tuned after seeing: `{t['parameter']}`: {t['why']}")
         for v in r.get("variants", []):
             parts.append(f"  - variant: {v}")
+    extras = [r for r in ledger["records"] if r.get("extra")]
+    if extras:
+        parts += ["", "## Side figures and variants per record (mean over the runs)", "",
+                  "| case | tier | N | figure | mean | per run |", "|---|---|---|---|---|---|"]
+        for r in extras:
+            for k, xs in sorted(r["extra"].items()):
+                nums = [x for x in xs if isinstance(x, (int, float)) and x is not None]
+                if not nums:
+                    continue
+                parts.append(f"| {r['case']} | {r['tier']} | {r['N']} | {k} | {statistics.fmean(nums):.6g} | "
+                             + ", ".join(f"{x:.6g}" for x in nums) + " |")
     tmp = f"{path}.{os.getpid()}.tmp"
     with open(tmp, "w") as f:
         f.write("\n".join(parts) + "\n")

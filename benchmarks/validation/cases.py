@@ -342,6 +342,44 @@ CPC_SEG = Case(
                            "(issue 18, issue 22)"}])])
 
 
+# ---------------------------------------------------------------- seed 002: switching strain (bonded network)
+
+def run_switch_bonded(ctx):
+    import csv as _csv
+    c = ctx.config("configs/cpc_ptc_strain.json")
+    k = len(c["stages"][0]["sweep"]["seeds"])  # configurations per ensemble (the config's 4)
+    for st in c["stages"]:
+        st["sweep"]["seeds"] = list(range((ctx.seed - 1) * k + 1, ctx.seed * k + 1))
+    out = ctx.sparkdem(c)
+    res = {}
+    for st in c["stages"]:
+        lam = st["generator"].get("aggregation_lambda", 0)
+        rows = list(_csv.DictReader(open(os.path.join(out, f"sweep_{st['name']}.csv"))))
+        eps = [float(r["ptc_strain_switching_strain"]) for r in rows if r["status"] == "completed"]
+        if eps:
+            res["uniform" if lam == 0 else "segregated"] = fig(sum(eps) / len(eps), SWITCH[lam == 0],
+                                                               configurations=len(eps))
+    return res
+
+
+SWITCH = {True: 0.0315, False: 0.0285}
+SWITCH_SRC = "seed 002, switching strain of the composite at phi = 25 %, L = 70 R"
+SWITCH_TUNED = [{"parameter": "configs/cpc_ptc_strain.json#min_gap (h_min = 0.1 R)",
+                 "why": "the bonded network's switching strain is set by h_min (19 / 2.3 / 0.9 % at 0.01 / 0.1 / 0.5 R); "
+                        "0.1 R was kept after seeing those values (issue 18, issue 22)"}]
+SWITCH_BONDED = Case(
+    "seed002/switch_bonded", ["configs/cpc_ptc_strain.json"],
+    {"full": {"sizes": [0], "seeds": [1, 2, 3]}},
+    run_switch_bonded,
+    [Figure("seed002/switch_strain_bonded_uniform", "uniform", SWITCH_SRC + ", uniform, bonded-spring matrix "
+            "(the note's minimum model, not the paper's RKPM continuum)", "3.15 % (paper), band 10 % (VALIDATION.md)",
+            0.10, tuned=SWITCH_TUNED),
+     Figure("seed002/switch_strain_bonded_segregated", "segregated", SWITCH_SRC + ", segregated (lambda = 70 R), "
+            "bonded-spring matrix", "2.85 % (paper), band 10 % (VALIDATION.md)", 0.10,
+            tuned=SWITCH_TUNED + [{"parameter": "configs/cpc_ptc_strain.json#aggregation_lambda",
+                                   "why": "lambda = 35 read in diameters (70 R) after seeing phi_c (issue 18)"}])])
+
+
 # ---------------------------------------------------------------- closed forms
 
 def run_thermal_stiff(ctx):
@@ -362,4 +400,4 @@ THERMAL_STIFF = Case(
             "(C_L (500 + 3 x 300) + C_t 300) / (4 C_L + C_t) - 300 K", 1e-9, min_seeds=1)])
 
 
-CASES = [CYLINDER, JOULE_ROD, NOTCH, PLATE, TORSION, NIAL, NIAL_SMALL, CPC, CPC_SEG, THERMAL_STIFF]
+CASES = [CYLINDER, JOULE_ROD, NOTCH, PLATE, TORSION, NIAL, NIAL_SMALL, CPC, CPC_SEG, SWITCH_BONDED, THERMAL_STIFF]
