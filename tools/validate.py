@@ -640,7 +640,7 @@ def cmd_check_docs(a):
             digits = len(num.split(".")[1]) if "." in num else 0
             if abs(q - val) > 0.51 * 10 ** (-digits) + 1e-12:
                 bad.append(f"{where}: quotes {num}{unit or ''} for {case} N={n} {field}; the ledger holds {val:.6g}")
-        for m in re.finditer(r"<!-- ledger:table (validation|regression) -->\n(.*?)\n<!-- ledger:end -->", text, re.S):
+        for m in re.finditer(r"<!-- ledger:table (validation|regression) -->\n(.*?)<!-- ledger:end -->", text, re.S):
             n_checked += 1
             if m.group(2).strip() != ledger_table(ledger, m.group(1)).strip():
                 bad.append(f"{path}: the generated {m.group(1)} table differs from the ledger "
@@ -657,8 +657,8 @@ def cmd_update_docs(a):
     ledger = load_ledger(a.ledger)
     for path in a.files:
         text = open(path).read()
-        new = re.sub(r"(<!-- ledger:table (validation|regression) -->\n)(.*?)(\n<!-- ledger:end -->)",
-                     lambda m: m.group(1) + ledger_table(ledger, m.group(2)) + m.group(4), text, flags=re.S)
+        new = re.sub(r"(<!-- ledger:table (validation|regression) -->\n)(.*?)(<!-- ledger:end -->)",
+                     lambda m: m.group(1) + ledger_table(ledger, m.group(2)) + "\n" + m.group(4), text, flags=re.S)
         if new != text:
             with open(path + ".tmp", "w") as f:
                 f.write(new)
