@@ -518,28 +518,33 @@ def write_markdown(ledger, path):
 
 
 def write_plot(ledger, path):
+    """|error| of each full-tier record against its CPU time (all runs; CPU seconds rather than wall,
+    which a loaded machine inflates), log-log: one marker shape and colour per source, filled for a
+    pass, open otherwise; a grey bar marks the record's band."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    markers = {"seed000": "o", "seed001": "s", "seed002": "^", "closed": "D"}
-    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    style = {"seed000": ("o", "C0"), "seed001": ("s", "C1"), "seed002": ("^", "C2"), "closed": ("D", "C3")}
+    fig, ax = plt.subplots(figsize=(8, 6))
     done = set()
     for r in ledger["records"]:
-        if r["kind"] != "validation" or r.get("error") is None or r["wall_s"] <= 0:
+        if r["kind"] != "validation" or r.get("error") is None or r["cpu_s"] <= 0:
             continue
         paper = r["case"].split("/")[0]
-        label = paper if paper not in done else None
+        marker, colour = style.get(paper, ("x", "k"))
+        x, y = r["cpu_s"], max(abs(r["error"]), 1e-12) * 100
+        ax.scatter(x, y, marker=marker, s=50, label=None if paper in done else paper, edgecolors=colour,
+                   facecolors=colour if verdict(r) == "pass" else "none", linewidths=1.4, zorder=3)
         done.add(paper)
-        face = "none" if verdict(r) != "pass" else None
-        ax.scatter(r["wall_s"], max(abs(r["error"]), 1e-12) * 100, marker=markers.get(paper, "x"), s=45, label=label,
-                   facecolors=face, edgecolors="C%d" % list(markers).index(paper) if paper in markers else "k")
-        ax.annotate(f"{r['case'].split('/', 1)[1]} N={r['N']}", (r["wall_s"], max(abs(r["error"]), 1e-12) * 100),
-                    fontsize=6, xytext=(3, 2), textcoords="offset points")
+        if isinstance(r.get("band"), (int, float)):
+            ax.scatter(x, 100 * r["band"], marker="_", s=120, color="0.5", zorder=2)
+        ax.annotate(f"{r['case'].split('/', 1)[1]} N={r['N']}", (x, y), fontsize=6, xytext=(4, 3),
+                    textcoords="offset points")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("run time, all seeds [s wall]")
-    ax.set_ylabel("|error| of the ensemble mean [%]")
-    ax.set_title("sparkdem validation ledger: error against run time (open marker: not a pass)")
+    ax.set_xlabel("run time: CPU seconds, all seeds and reference tools of the record")
+    ax.set_ylabel("|error| of the ensemble mean [%]  (grey bar: the band)")
+    ax.set_title("sparkdem validation ledger, full tier (filled: pass, open: miss or tuned)")
     ax.grid(True, which="both", alpha=0.3)
     if done:
         ax.legend(title="source")
