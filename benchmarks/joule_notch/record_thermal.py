@@ -2,14 +2,25 @@
 """One JSON record of a notched-rod thermal run against its FV reference (standard library only).
 
     benchmarks/joule_notch/record_thermal.py THERMAL_RUNDIR COMPARE_JSON [META] > record.json
-    benchmarks/joule_notch/record_thermal.py tabulate LABEL=RECORD.json ... > thermal_results.md
+    benchmarks/joule_notch/record_thermal.py tabulate LABEL=RECORD.json ... > table.md
 
 THERMAL_RUNDIR: output of `sparkdem run` on the scenario of thermal_scenario.py (or on
 configs/joule_notch.json itself); COMPARE_JSON: the packing's compare_notch.py output (its FV
 reference and packing figures, fixed before the thermal run); META: optional GNU time file
-(time_wall_user_sys). Errors: 100 (DEM - FV) / FV of R_eq, of the slab-mean temperature rise
-(the checked figure) and, as a variant, of the absolute slab temperature in K; diagnostic: the
-slab rise per watt of total power (DEM power V^2/R_DEM against the FV's), which removes R_eq's error.
+(time_wall_user_sys) of the runs made before validate.py. Errors: 100 (DEM - FV) / FV of R_eq, of
+the slab-mean temperature rise (the checked figure) and, as a variant, of the absolute slab
+temperature in K; diagnostic: the slab rise per watt of total power (DEM power V^2/R_DEM against
+the FV's), which removes R_eq's error.
+
+The runs come from tools/validate.py (ledger case seed001/notch; the validation figures are the
+ledger's seed001/notch_resistance and seed001/notch_slab_rise, with the rise per watt as a side
+figure: benchmarks/validation/ledger.md). Each run directory,
+<workdir>/<tier>/seed001_notch/N<n>_seed<s>/ (<workdir> defaults to build/validation), holds
+pack.json, pack_out/ and pack.meta.json (the relax packing and the cut), fv_reference.log
+(compare_notch.py's JSON: COMPARE_JSON), thermal_scene.log (thermal_scenario.py's scenario),
+thermal.json, thermal_out/ (THERMAL_RUNDIR) and thermal.meta.json, and record.log (this script's
+record); every *.meta.json holds the exit code and the wall and CPU seconds of its step.
+`tabulate` lays such records side by side (a scratch table: the validation table is the ledger's).
 """
 import json
 import os

@@ -12,7 +12,8 @@ packing), written BEFORE the thermal run: the references come from it and nothin
 The scenario is configs/joule_notch.json's `joule` stage (frozen, 1 V, 10 ms, adiabatic,
 capacity "domain") started from PACK_RUNDIR/final_state.h5 (`from_snapshot`), with the
 `notch_slab` set and both checks (R_eq, slab-mean temperature rise) re-derived from COMPARE_JSON.
-Python standard library only.
+Python standard library only. tools/validate.py (ledger case seed001/notch) runs it between the
+packing and the thermal run of each run directory (see record_thermal.py for the layout).
 """
 import json
 import os

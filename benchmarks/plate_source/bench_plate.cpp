@@ -1,13 +1,17 @@
 /// Thick-plate validation of seed 001 (§3.2): the finite-difference reference and the DEM
-/// potentials at the control points. Called by run_plate.sh after the runs:
+/// potentials at the control points. The validation ledger's case seed001/plate
+/// (tools/validate.py; benchmarks/validation/) runs it on each run directory after the DEM run:
 ///
 ///   bench_plate [--csv results.csv] [--fd-csv fd_convergence.csv] [--fd-grids "120 240 480 960"]
-///               [--k 24] [--sensitivity] RUN_DIR...
+///               [--k 24] [--sensitivity] [RUN_DIR...]
 ///
-/// Each RUN_DIR holds scene.json (the scenario as run), out/ (its output directory),
-/// wall_time_s and cpu_time_s (the run's wall and CPU time in s, written by run_plate.sh; NaN in
-/// the table when absent). On a shared machine the CPU time is the figure to compare. The reference is the 2-D Laplace
-/// problem of the plate (tests/support/fd_laplace2d.hpp) solved on the listed grids (nx cells
+/// Each RUN_DIR holds scene.json (the scenario as run) and out/ (its output directory); validate.py's
+/// run directories (<workdir>/<tier>/seed001_plate/N<n>_seed<s>/) hold both, and their wall and CPU
+/// time in scenario.meta.json. The table's run_time_s and cpu_time_s columns read the files
+/// wall_time_s and cpu_time_s of the runs made before validate.py: NaN for validate.py's directories.
+/// Without RUN_DIR only the reference is computed (--fd-csv writes its grid convergence table,
+/// e.g. benchmarks/plate_source/fd_convergence.csv). The reference is the 2-D Laplace problem of
+/// the plate (tests/support/fd_laplace2d.hpp) solved on the listed grids (nx cells
 /// across 30 mm, each twice the previous), extrapolated by Richardson from the three finest.
 /// The DEM potential at a control point is the linear least-squares fit over the k particles
 /// nearest the control line (tests/support/plate_probe.hpp).

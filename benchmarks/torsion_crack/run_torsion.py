@@ -12,6 +12,15 @@ the onset twist (first broken bond) against the prediction tau_y L / (G r) = 0.0
 resistance-rise and separation twists, R/R0 at 0.05 / 0.06 / 0.07 rad, the elastic stiffness
 ratio k / (G J / L), the bonds made and broken, the largest kinetic / elastic energy ratio before
 the first break, and the wall and CPU time of the run (the relax packing is part of it).
+
+The validation figures (elastic stiffness, first-break twist, 1 % resistance-rise twist) are the
+ledger's cases seed001/torsion_stiffness, seed001/torsion_onset and seed001/torsion_onset_resistance
+(benchmarks/validation/ledger.md), run by tools/validate.py with scene_for() below: one directory
+per run, <workdir>/<tier>/seed001_torsion/N<n>_seed<s>/, holding scenario.json, out/ and
+scenario.meta.json (exit code, wall and CPU seconds). This script stays for the study's other
+columns (R/R0 along the twist, separation, larger N). The tables it wrote into this directory
+were superseded by the ledger and removed: pass a scratch --outdir (the default is still this
+directory).
 """
 import argparse
 import csv

@@ -211,7 +211,7 @@ def run_notch(ctx):
     f = c["stages"][0]["generator"]
     # The relax generator packs the same box to the same density (FIRE, max overlap 0.005 r): 78 s
     # against 1137 s for the shipped dynamic fill at N = 5166, with R_eq within 0.3 points of it
-    # (benchmarks/joule_notch/thermal_results.md, measured before this case existed).
+    # (benchmarks/joule_notch/thermal_results.md as of commit 81fc62f, measured before this case existed).
     c["stages"][0] = {"name": "cook", "type": "relax",
                       "generator": {"shape": "box", "lo": f["lo"], "hi": f["hi"], "particles": ctx.n,
                                     "spread": f["spread"], "target_density": f["target_density"], "density": 7900,

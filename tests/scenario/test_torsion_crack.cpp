@@ -113,9 +113,10 @@ TEST_CASE("pin torsion (configs/torsion_crack.json at N = 1000): elastic torque,
   // that follow the element size scaled with it (bond gap tolerance, end-set thickness), as
   // benchmarks/torsion_crack/run_torsion.py does. Beams: the committed calibration
   // (configs/materials/cast_iron_beams.json, made on a tension sample at the N = 5000 element
-  // size). Measured (benchmarks/torsion_crack/results.md): stiffness ratio 1.134 / 0.993 / 0.913
-  // and first-break twist +1.2 / -4.0 / -13.0 % at N = 1000 / 2500 / 5000 - the elastic
-  // response drifts with the element size because the packing protocol does (see README). The
+  // size). Measured before the validation ledger (benchmarks/torsion_crack/results.md as of commit
+  // 81fc62f; the validation figures are now the ledger's seed001/torsion_*): stiffness ratio
+  // 1.134 / 0.993 / 0.913 and first-break twist +1.2 / -4.0 / -13.0 % at N = 1000 / 2500 / 5000 -
+  // the elastic response drifts with the element size because the packing protocol does (see README). The
   // bands here are regression guards around the N = 1000 figures, not the issue's 3 % / 5 %:
   // stiffness within 20 % of G J / L, first break within 15 % of 0.0416 rad, the pin still
   // conducting like an intact one at 0.05 rad (R/R0 < 1.1) and more than 1.5 R0 at 0.07 rad

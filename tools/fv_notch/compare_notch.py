@@ -11,6 +11,10 @@ with r_mean of the frame (slab half-width 2 r_mean) and prints one JSON object:
   R_dem_ohm, R_fv_ohm (Richardson-extrapolated), error_pct = 100 (R_dem - R_fv) / R_fv,
   z_lo_m, z_hi_m, r_mean_m, particles, slab_particles (centres with |z - 3.5 mm| <= 2 r_mean),
   deleted, wall times, and the FV output under "fv".
+
+tools/validate.py (ledger case seed001/notch) runs it on each packing before its thermal run: RUNDIR
+is then <workdir>/<tier>/seed001_notch/N<n>_seed<s>/pack_out and the JSON is kept beside it as
+fv_reference.log (layout: benchmarks/joule_notch/record_thermal.py).
 """
 import argparse
 import glob
