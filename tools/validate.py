@@ -16,8 +16,8 @@ references (fixed before the run), bands and sources. This file owns everything 
 patching and writing scenarios, running sparkdem (timed: wall and CPU), reusing finished runs,
 ensemble statistics, the ledger records, the staleness guard (config hashes) and the reports.
 
-Exit codes: 0 every figure of the run inside its band (or --no-strict); 1 a figure outside its band
-(with --strict, the default of the fast tier); 2 bad arguments or a failed run.
+Exit codes: 0 done (without --strict, whatever the figures); 1 with --strict, a figure outside its band
+or a run that failed (the ctests of the fast tier pass --strict); 2 bad arguments or set-up errors.
 """
 import argparse
 import concurrent.futures as futures
