@@ -59,8 +59,13 @@ class OutputObserver final : public Observer {
     cfg_ = cfg;
     stage_start_ = steady::now();
     last_print_ = stage_start_;
+    last_frame_step_.reset();
   }
   void frame(const State& s) override {
+    // A stage reports its last step twice when it is also a frame_every step (the periodic frame
+    // and the closing frame), and a stage of no steps its start twice: the same state, written once.
+    if (last_frame_step_ == s.step) return;
+    last_frame_step_ = s.step;
     const auto& p = s.particles;
     std::vector<FrameField> f;
     auto vec3 = [&](const char* name, const std::vector<Vec3>& v, const char* unit) {
@@ -262,6 +267,7 @@ class OutputObserver final : public Observer {
   ResultsWriter writer_;
   bool quiet_, tty_ = false;
   std::string stage_;
+  std::optional<Step> last_frame_step_;  ///< step of the last frame written in the current stage
   std::vector<Module*> modules_;
   StageConfig cfg_;
   std::vector<std::string> columns_;
