@@ -67,7 +67,7 @@ PY
   echo "-- $d: thermal"
   echo "load_start $(cut -d' ' -f1-3 /proc/loadavg)" > "$d.thermal.meta"
   /usr/bin/time -f "time_wall_user_sys %e %U %S" -a -o "$d.thermal.meta" "$sparkdem" run "${d}_thermal.json" -o "${d}_thermal" \
-    --threads "$threads" --quiet > "$d.thermal.log" 2>&1 || { echo "   thermal failed (see $d.thermal.log)" >&2; continue; }
+    --threads "$threads" --quiet --report-only > "$d.thermal.log" 2>&1 || { echo "   thermal failed (see $d.thermal.log)" >&2; continue; }
   python3 "$here/record_thermal.py" "${d}_thermal" "${d}_compare.json" "$d.thermal.meta" > "${d}_record.json"
   grep -E '"(R_error_pct|rise_error_pct)"' "${d}_record.json" | sed 's/^/   /'
 done

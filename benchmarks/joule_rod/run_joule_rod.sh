@@ -102,11 +102,11 @@ if [[ $analyze_only -eq 0 ]]; then
     fi
     mv "$d/scenario.json.new" "$d/scenario.json"
     rm -rf "$d/out"
-    echo "-- $name: ${envs[*]} $sparkdem run $d/scenario.json -o $d/out --threads $threads --quiet"
+    echo "-- $name: ${envs[*]} $sparkdem run $d/scenario.json -o $d/out --threads $threads --quiet --report-only"
     echo "load_start $(cut -d' ' -f1-3 /proc/loadavg)" > "$d/bench_meta.txt"
     status=0
     env "${envs[@]}" /usr/bin/time -f "time_wall_user_sys %e %U %S" -a -o "$d/bench_meta.txt" \
-      "$sparkdem" run "$d/scenario.json" -o "$d/out" --threads "$threads" --quiet > "$d/sparkdem.log" 2>&1 || status=$?
+      "$sparkdem" run "$d/scenario.json" -o "$d/out" --threads "$threads" --quiet --report-only > "$d/sparkdem.log" 2>&1 || status=$?
     echo "exit $status" >> "$d/bench_meta.txt"
     echo "load_end $(cut -d' ' -f1-3 /proc/loadavg)" >> "$d/bench_meta.txt"
     if [[ $status -ne 0 ]]; then
