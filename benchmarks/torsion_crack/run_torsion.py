@@ -112,7 +112,7 @@ def main():
                 env = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
                 with open(os.path.join(run_dir, "sparkdem.log"), "w") as log:
                     rc = subprocess.call([a.sparkdem, "run", scene_file, "-o", os.path.join(run_dir, "out"), "--threads",
-                                          str(a.threads), "--quiet"], stdout=log, stderr=log, env=env)
+                                          str(a.threads), "--quiet", "--report-only"], stdout=log, stderr=log, env=env)
                 c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
                 meta = {"rc": rc, "wall_s": time.time() - t0, "cpu_s": (c1.ru_utime - c0.ru_utime) + (c1.ru_stime - c0.ru_stime),
                         "load_start": os.getloadavg()[0]}

@@ -1,8 +1,11 @@
 #include "io/hdf5/results_writer.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
+#include <algorithm>
 #include <cstring>
+#include <limits>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -160,7 +163,7 @@ std::string ResultsWriter::write_frame(std::int64_t step, double time, const std
   const std::string relative = frame_file(frames());
   const fs::path final_path = outdir_ / relative;
   TmpGuard tmp{tmp_name(final_path)};
-  FrameInfo info{relative, time, particles, {}};
+  FrameInfo info{relative, time, step, stage, particles, {}};
   {
     H5File file = H5File::create(tmp.file);
     file.set_attribute("/", "step", step);
@@ -255,6 +258,19 @@ bool ResultsWriter::finalize() {
   return write;
 }
 
+std::vector<double> ResultsWriter::listed_times(const std::vector<double>& times) {
+  std::vector<double> listed(times.size());
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    listed[k] = times[k];
+    if (k == 0) continue;
+    // (x + gap rounds to x itself only where the spacing of doubles exceeds the gap.)
+    const double least = std::max(listed[k - 1] + kXdmfTimeGap,
+                                  std::nextafter(listed[k - 1], std::numeric_limits<double>::infinity()));
+    if (!(times[k] >= least)) listed[k] = least;
+  }
+  return listed;
+}
+
 std::string ResultsWriter::xdmf_text() const {
   std::ostringstream out;
   const auto data_item = [&](const FrameInfo& frame, const std::string& field, int components) {
@@ -262,6 +278,9 @@ std::string ResultsWriter::xdmf_text() const {
         << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << xml_escaped(frame.file) << ":/particles/"
         << xml_escaped(field) << "</DataItem>\n";
   };
+  std::vector<double> times;
+  for (const FrameInfo& frame : frames_) times.push_back(frame.time);
+  const std::vector<double> listed = listed_times(times);
   out << "<?xml version=\"1.0\" ?>\n"
       << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
       << "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
@@ -270,7 +289,10 @@ std::string ResultsWriter::xdmf_text() const {
   for (std::size_t k = 0; k < frames_.size(); ++k) {
     const FrameInfo& frame = frames_[k];
     out << "      <Grid Name=\"frame_" << counter(static_cast<int>(k)) << "\" GridType=\"Uniform\">\n"
-        << "        <Time Value=\"" << number(frame.time) << "\"/>\n"
+        << "        <Time Value=\"" << number(listed[k]) << "\"/>\n"
+        << "        <Information Name=\"time\" Value=\"" << number(frame.time) << "\"/>\n"
+        << "        <Information Name=\"step\" Value=\"" << frame.step << "\"/>\n"
+        << "        <Information Name=\"stage\" Value=\"" << xml_escaped(frame.stage) << "\"/>\n"
         << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << frame.particles
         << "\" NodesPerElement=\"1\"/>\n"
         << "        <Geometry GeometryType=\"XYZ\">\n";

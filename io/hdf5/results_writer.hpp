@@ -9,7 +9,10 @@
 ///                            files (relative paths, resolved from the directory of results.h5,
 ///                            so move the output directory as a whole), plus /timeseries;
 ///  - results.xdmf            XDMF description of the particle frames for ParaView, pointing
-///                            straight into the frame files;
+///                            straight into the frame files: one temporal collection with one
+///                            grid per frame, at strictly increasing times (see listed_times());
+///                            each grid holds the frame's true time, step and stage as
+///                            Information elements (Name "time" [s], "step", "stage");
 ///  - timeseries.csv          the time series as text.
 /// The three index files are rewritten together by write_index() (each atomically: tmp, fsync,
 /// rename) and by finalize(); the pipeline calls write_index() after every checkpoint and at
@@ -81,12 +84,24 @@ class ResultsWriter {
   int frames() const { return static_cast<int>(frames_.size()); }
   /// Frame file of frame `index`, relative to the output directory ("frames/frame_000003.h5").
   static std::string frame_file(int index);
+  /// Least gap between two times of results.xdmf [s]: ParaView's XDMF reader (XDMFReader)
+  /// takes every grid within 2.2e-16 s (DBL_EPSILON, absolute) of the time it shows, and two
+  /// grids at one time become an empty multiblock.
+  static constexpr double kXdmfTimeGap = 1e-15;
+  /// The times results.xdmf lists for frames at `times` (in frame order): strictly increasing
+  /// with gaps of at least kXdmfTimeGap, so that every frame is one time step of its own. A time
+  /// at least kXdmfTimeGap above the previous listed time is listed as is; an earlier one - the
+  /// first frame of a stage at the step and time of the previous stage's last frame - is listed
+  /// kXdmfTimeGap after the previous listed time (1 ulp where that is more).
+  static std::vector<double> listed_times(const std::vector<double>& times);
 
  private:
   /// What the index files need to know about one frame.
   struct FrameInfo {
     std::string file;  ///< relative to the output directory
     double time;
+    std::int64_t step;
+    std::string stage;
     std::size_t particles;
     std::vector<std::pair<std::string, int>> fields;  ///< particle field name, components
   };

@@ -59,8 +59,13 @@ class OutputObserver final : public Observer {
     cfg_ = cfg;
     stage_start_ = steady::now();
     last_print_ = stage_start_;
+    last_frame_step_.reset();
   }
   void frame(const State& s) override {
+    // A stage reports its last step twice when it is also a frame_every step (the periodic frame
+    // and the closing frame), and a stage of no steps its start twice: the same state, written once.
+    if (last_frame_step_ == s.step) return;
+    last_frame_step_ = s.step;
     const auto& p = s.particles;
     std::vector<FrameField> f;
     auto vec3 = [&](const char* name, const std::vector<Vec3>& v, const char* unit) {
@@ -262,6 +267,7 @@ class OutputObserver final : public Observer {
   ResultsWriter writer_;
   bool quiet_, tty_ = false;
   std::string stage_;
+  std::optional<Step> last_frame_step_;  ///< step of the last frame written in the current stage
   std::vector<Module*> modules_;
   StageConfig cfg_;
   std::vector<std::string> columns_;
@@ -375,6 +381,61 @@ std::pair<std::int64_t, bool> read_checkpoint(const std::filesystem::path& file,
 }
 
 namespace {
+
+/// Percent text of a relative figure ("+1.25 %").
+std::string percent(double x, bool sign) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, sign ? "%+.4g %%" : "%.4g %%", 100.0 * x);
+  return buffer;
+}
+
+/// One check against the summary's stages (the last stage of its name that ran in this process):
+/// its entry of summary["checks"]; "failure" holds why a banded check failed.
+json evaluate_check(const CheckDef& c, const json& stages) {
+  json jc = {{"stage", c.stage}, {"column", c.column}, {"reference", c.reference}, {"offset", c.offset}, {"source", c.source}};
+  if (c.tolerance > 0.0) jc["tolerance"] = c.tolerance;
+  const json* stage = nullptr;
+  for (const auto& js : stages)
+    if (js.value("name", "") == c.stage) stage = &js;
+  if (!stage || !stage->contains("final") || !(*stage)["final"].contains(c.column) || (*stage)["final"][c.column].is_null()) {
+    jc["error"] = stage ? "the stage has no final value of this column" : "the stage did not run in this process";
+    if (c.tolerance > 0.0) jc["failure"] = "not evaluated: " + jc["error"].get<std::string>();
+    return jc;
+  }
+  const double v = (*stage)["final"][c.column].get<double>() - c.offset;
+  const double err = (v - c.reference) / std::abs(c.reference);
+  jc["value"] = v;
+  jc["error_rel"] = finite_or_null(err);
+  jc["stage_wall_time_s"] = stage->value("wall_time_s", 0.0);
+  if (c.tolerance > 0.0) {
+    const bool within = std::abs(err) <= c.tolerance;
+    jc["within_tolerance"] = within;
+    if (!within)
+      jc["failure"] = "value " + short_number(v) + " against reference " + short_number(c.reference) + ": relative error " +
+                      percent(err, true) + ", outside the band +-" + percent(c.tolerance, false) + " by " +
+                      percent(std::abs(err) - c.tolerance, false) + " of the reference (|value - reference| = " +
+                      short_number(std::abs(v - c.reference)) + ", the band allows " +
+                      short_number(c.tolerance * std::abs(c.reference)) + ")";
+  }
+  return jc;
+}
+
+/// summary["checks"] (every check) and summary["checks_failed"] (the names of the banded checks,
+/// tolerance > 0, that are outside their band or could not be evaluated), one log line each.
+void evaluate_checks(const std::vector<CheckDef>& checks, json& summary, RunLog& log) {
+  summary["checks_failed"] = json::array();
+  for (const auto& c : checks) {
+    const json jc = evaluate_check(c, summary["stages"]);
+    if (jc.contains("value"))
+      log.line("check '" + c.name + "': " + short_number(jc["value"].get<double>()) + " against " + short_number(c.reference) +
+               " (" + percent(jc["error_rel"].is_null() ? std::nan("") : jc["error_rel"].get<double>(), true) + ")");
+    if (jc.contains("failure")) {
+      log.line("check '" + c.name + "' failed: " + jc["failure"].get<std::string>());
+      summary["checks_failed"].push_back(c.name);
+    }
+    summary["checks"][c.name] = jc;
+  }
+}
 
 json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_point t0) {
   write_json_atomic(opt.outdir / "resolved.json", sc.resolved);
@@ -579,29 +640,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
     error = failure->what();
   }
   obs.end_stage_line();
-  // Validation figures: the last stage of each check's name that ran in this process.
-  for (const auto& c : sc.checks) {
-    json jc = {{"stage", c.stage}, {"column", c.column}, {"reference", c.reference}, {"offset", c.offset}, {"source", c.source}};
-    const json* stage = nullptr;
-    for (const auto& js : summary["stages"])
-      if (js.value("name", "") == c.stage) stage = &js;
-    if (!stage || !stage->contains("final") || !(*stage)["final"].contains(c.column) || (*stage)["final"][c.column].is_null()) {
-      jc["error"] = stage ? "the stage has no final value of this column" : "the stage did not run in this process";
-    } else {
-      const double v = (*stage)["final"][c.column].get<double>() - c.offset;
-      const double err = (v - c.reference) / std::abs(c.reference);
-      jc["value"] = v;
-      jc["error_rel"] = err;
-      jc["stage_wall_time_s"] = stage->value("wall_time_s", 0.0);
-      if (c.tolerance > 0.0) {
-        jc["tolerance"] = c.tolerance;
-        jc["within_tolerance"] = std::abs(err) <= c.tolerance;
-      }
-      log.line("check '" + c.name + "': " + short_number(v) + " against " + short_number(c.reference) + " (" +
-               short_number(100.0 * err) + " %)");
-    }
-    summary["checks"][c.name] = jc;
-  }
+  evaluate_checks(sc.checks, summary, log);
   const double wall = std::chrono::duration<double>(steady::now() - t0).count();
   summary["status"] = status;
   if (!error.empty()) summary["error"] = error;

@@ -15,6 +15,9 @@
 ///   final state written: final_state.h5 (step S, after stage 'NAME')
 ///   index written: results.h5, results.xdmf, timeseries.csv (F frames, R time-series rows)
 ///   run completed: S steps, W s wall  |  run interrupted: ...  |  run failed: ...
+/// A stage writes at most one frame per step (its closing frame is not written again when its
+/// last step was a frame_every step); the next stage's first frame may share the step and time of
+/// the previous stage's last one (results.xdmf lists it 1e-15 s later, see results_writer.hpp).
 /// A frame the log reports is readable; the index files (results.h5, results.xdmf,
 /// timeseries.csv) are rewritten after every checkpoint and final state and at the end (see
 /// io/hdf5/results_writer.hpp); checkpoint.h5 and final_state.h5 are sealed checkpoints

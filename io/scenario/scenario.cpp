@@ -1410,8 +1410,17 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
         json r;
         CheckDef c = build(check_spec(), j["checks"][k], cp, errors, r);
         if (c.reference == 0.0) errors.push_back({cp + "/reference", "expected a non-zero reference value, found 0"});
-        if (!std::any_of(sc.stages.begin(), sc.stages.end(), [&c](const StageDef& st) { return st.cfg.name == c.stage; }))
+        const StageDef* stage = nullptr;  // the last stage of that name (the one a check reads)
+        for (const StageDef& st : sc.stages)
+          if (st.cfg.name == c.stage) stage = &st;
+        if (!stage)
           errors.push_back({cp + "/stage", "expected the name of a stage of this scenario, found \"" + c.stage + "\""});
+        else if (c.tolerance > 0.0 && (stage->sweep || !stage->dynamics))
+          errors.push_back({cp + "/stage", "expected a stage that steps (a check with a tolerance band needs the stage's final "
+                                           "values), found \"" + c.stage + "\", " +
+                                               (stage->sweep ? "a sweep stage (its items' values are in its sweep table)"
+                                                             : "a generator stage without dynamics") +
+                                               "; use tolerance 0 (report only)"});
         sc.checks.push_back(c);
         sc.resolved["checks"].push_back(r);
       }

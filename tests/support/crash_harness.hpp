@@ -303,8 +303,8 @@ inline Reference reference_run(const fs::path& scene, const fs::path& dir, const
   REQUIRE(runs.size() == 1);
   REQUIRE(runs[0].completed);
   ref.log = runs[0];
-  // (stage, step) names a state; a stage's last step can be written twice (its frame_every
-  // frame and its closing frame), both of the same state.
+  // (stage, step) names a state and one frame (a stage's closing frame is not written again
+  // when its last step was a frame_every step).
   for (const ReportedFrame& f : runs[0].frames) ref.frames.emplace(FrameKey{f.stage, f.step}, f.file);
   ref.checkpoint_steps.insert(runs[0].checkpoints.begin(), runs[0].checkpoints.end());
   return ref;

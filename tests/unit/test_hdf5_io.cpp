@@ -637,3 +637,27 @@ TEST_CASE("HDF5 identifiers are all released, also on error paths", "[io][hdf5]"
   }
   CHECK(H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL) == 0);
 }
+
+TEST_CASE("results.xdmf times: strictly increasing, at least 1e-15 s apart, true times where they already are",
+          "[io][hdf5][results][xdmf]") {
+  const double gap = ResultsWriter::kXdmfTimeGap;
+  CHECK(gap > 4.0 * std::numeric_limits<double>::epsilon());  // ParaView merges grids within DBL_EPSILON s
+  const double big = 1e4, up = std::nextafter(big, 2 * big);  // at 1e4 s one ulp (1.8e-12 s) exceeds the gap
+  const std::vector<double> times{0.0, 0.0, 0.0, 2e-3, 2e-3, 2e-3 + 1e-16, 3e-3, big, big, up};
+  const std::vector<double> listed = ResultsWriter::listed_times(times);
+  REQUIRE(listed.size() == times.size());
+  // (Sums rounded to the double spacing: 4.3e-19 s at 2e-3 s; tolerance 1e-18 s.)
+  const auto near = [](double a, double b) { return std::abs(a - b) <= 1e-18; };
+  CHECK(listed[0] == 0.0);
+  CHECK(near(listed[1], gap));  // coincident: one gap after the previous listed time
+  CHECK(near(listed[2], 2 * gap));
+  CHECK(listed[3] == 2e-3);  // far enough: its true time
+  CHECK(near(listed[4], 2e-3 + gap));
+  CHECK(near(listed[5], 2e-3 + 2 * gap));  // 1e-16 s after a frame: pushed to a gap after the listed one
+  CHECK(listed[6] == 3e-3);
+  CHECK(listed[7] == big);
+  CHECK(listed[8] == up);                              // 1e4 + 1e-15 rounds to 1e4: one ulp instead
+  CHECK(listed[9] == std::nextafter(up, 2 * big));     // its true time `up` is taken: one ulp more
+  for (std::size_t k = 1; k < listed.size(); ++k) CHECK(listed[k] - listed[k - 1] >= gap - 1e-18);
+  CHECK(ResultsWriter::listed_times({}).empty());
+}
