@@ -330,6 +330,15 @@ def store(ledger, rec):
     ledger["records"] = recs
 
 
+def ledger_lock(path):
+    """An exclusive lock on PATH.lock held while a run reads, updates and writes the ledger."""
+    import fcntl
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    f = open(path + ".lock", "w")
+    fcntl.flock(f, fcntl.LOCK_EX)
+    return f
+
+
 def load_ledger(path):
     if os.path.exists(path):
         return load_json(path)
@@ -385,6 +394,7 @@ def cmd_run(a):
             status = r["error"] or ", ".join(f"{k} {100 * (v['measured'] - v['reference']) / abs(v['reference']):+.2f} %"
                                              for k, v in r["figures"].items())
             print(f"  {c.id} N={n} seed={s}: {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU: {status}", flush=True)
+    lock = ledger_lock(a.ledger) if not a.no_record else None  # other runs may record into the same ledger
     ledger = load_ledger(a.ledger)
     fast_bands = load_json(FAST_BANDS) if os.path.exists(FAST_BANDS) else {}
     misses = 0
@@ -405,6 +415,8 @@ def cmd_run(a):
         write_json_atomic(a.ledger, ledger)
         if not a.no_report:
             write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
+    if lock:
+        lock.close()
     if misses and a.strict:
         print(f"validate: {misses} figure(s) outside their band", file=sys.stderr)
         return 1
