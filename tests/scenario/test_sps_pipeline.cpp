@@ -54,7 +54,7 @@ void check_pipeline(const json& scene) {
   const json& press = summary["stages"][2];
   REQUIRE(press["name"] == "hot_press");
   const json& taken = press["snapshots"]["taken"];
-  REQUIRE(taken.size() >= 3);
+  REQUIRE(taken.size() >= 2);
   // Densification: the compact ends denser than at its first snapshot (crossed from above).
   CHECK(press["final"]["porosity_mass"].get<double>() < taken[0]["value"].get<double>());
   for (const auto& t : taken) CHECK(std::abs(t["value"].get<double>() - t["target"].get<double>()) < 0.01);
@@ -88,14 +88,18 @@ void check_pipeline(const json& scene) {
 }
 }  // namespace
 
-TEST_CASE("SPS pipeline (reduced) to porosity 0.164: packing, hot press, three porosity snapshots, calibrated conductivity sweep",
+TEST_CASE("SPS pipeline (reduced) to porosity 0.216: packing, hot press, two porosity snapshots, calibrated conductivity sweep",
           "[sps][scenario]") {
-  // The fast variant of the [slow] case below: the hot press stops below porosity 0.16, after the
-  // snapshots at 0.30, 0.216 and the calibration snapshot 0.164 (three quarters of its steps).
+  // The fast variant of the [slow] case below (65 % of its hot-press steps): the hot press stops
+  // below porosity 0.21, after the snapshots at 0.30 and 0.216, and the grain-boundary layer is
+  // calibrated on the 0.216 sample (seed 000 Table 1: 4.33e6 S/m) instead of 0.164.
   json scene = small_pipeline();
-  scene["stages"][2]["snapshots"]["at"] = json::array({0.3, 0.216, 0.164});
-  scene["stages"][2]["until"] = {{"porosity_mass", {{"below", 0.16}}}};
-  REQUIRE(scene["stages"][3]["sweep"]["calibrate"]["snapshot"] == 2);
+  scene["stages"][2]["snapshots"]["at"] = json::array({0.3, 0.216});
+  scene["stages"][2]["until"] = {{"porosity_mass", {{"below", 0.21}}}};
+  auto& cal = scene["stages"][3]["sweep"]["calibrate"];
+  REQUIRE(cal["snapshot"] == 2);
+  cal["snapshot"] = 1;
+  cal["target"] = 4.33e6;
   check_pipeline(scene);
 }
 
