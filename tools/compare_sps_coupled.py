@@ -12,7 +12,8 @@ Reads timeseries.csv, summary.json and the states (h5py; Debian python3-h5py) an
                    temperature spread inside the coupled compact, neck-radius distributions at the
                    end of the hot press, run time and its split between modules;
   comparison.md    the same as tables;
-  densification.png, necks.png (matplotlib, if installed).
+  densification.png, necks.png (matplotlib, if installed) and their data, densification.csv
+                   (run, cycle time [s], porosity_mass) and necks.csv (run, neck radius [m]).
 """
 import argparse
 import bisect
@@ -185,6 +186,14 @@ def main():
         md.append(f"| {k} | {r['wall_s']:.2f} | " + ", ".join(f"{m} {t:.2f}" for m, t in r["modules_s"].items()) +
                   f", mechanics+I/O {r['mechanics_and_io_s']:.2f} |")
     open(os.path.join(out, "comparison.md"), "w").write("\n".join(md) + "\n")
+    with open(os.path.join(out, "densification.csv"), "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["run", "cycle_time_s", "porosity_mass"])
+        w.writerows([["coupled", t, p] for t, p in cc] + [["prescribed", t, p] for t, p in cp])
+    with open(os.path.join(out, "necks.csv"), "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["run", "neck_radius_m"])
+        w.writerows([["coupled", x] for x in nc or []] + [["prescribed", x] for x in npr or []])
     try:
         import matplotlib  # noqa: PLC0415
         matplotlib.use("Agg")

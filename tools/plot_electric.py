@@ -6,7 +6,9 @@ per network family; prints the summary tables of benchmarks/README.md.
 
 Error = max(relative error of the effective conductance, max |V - V_ref| / dV). Markers: the
 method; colour intensity / labels: network size. Runs with zero error (the reference solve itself)
-are drawn at the floor 1e-17. Capped / failed runs have no error and are not drawn.
+are drawn at the floor 1e-17. Capped / failed runs have no error and are not drawn. The points
+drawn are also written beside the PNG as <png name>_points.csv (family, method, nodes, setting,
+wall time [s], error as drawn).
 Needs matplotlib (Debian: apt-get install python3-matplotlib) for the PNG only.
 """
 import argparse
@@ -72,6 +74,7 @@ def plot(rows, png, target):
     marker = dict(zip(methods, "*osD^"))
     colour = dict(zip(methods, ["k", "tab:blue", "tab:orange", "tab:green", "tab:red"]))
     sizes = sorted({r["nodes"] for r in rows})
+    drawn = []
     fig, axes = plt.subplots(1, len(fams), figsize=(5.2 * len(fams), 4.6), squeeze=False)
     for ax, fam in zip(axes[0], fams):
         for m in methods:
@@ -84,6 +87,7 @@ def plot(rows, png, target):
                 pts.sort(key=lambda r: r["wall_s"])
                 x = [r["wall_s"] for r in pts]
                 y = [max(r["err"], FLOOR) for r in pts]
+                drawn += [[fam, m, n, r["tolerance_or_beta"], r["wall_s"], e] for r, e in zip(pts, y)]
                 ax.loglog(x, y, marker=marker[m], color=colour[m], ls="-", lw=0.8, ms=5,
                           alpha=0.35 + 0.65 * (sizes.index(n) + 1) / len(sizes),
                           label=None if labelled else m)
@@ -99,6 +103,12 @@ def plot(rows, png, target):
     fig.tight_layout()
     fig.savefig(png, dpi=110)
     print(f"wrote {png}")
+    points = os.path.splitext(png)[0] + "_points.csv"
+    with open(points, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["family", "method", "nodes", "tolerance_or_beta", "wall_s", "error_drawn"])
+        w.writerows(drawn)
+    print(f"wrote {points}")
 
 
 def main():

@@ -13,8 +13,21 @@ files). Writes into OUT_DIR (default RUN_DIR):
                                 (10 bins on [0, 1], % of necks; seed 000 Fig. 6);
   densification.png             porosity against physical time and against temperature during
                                 the hot press, the snapshots marked;
+  calibration_map.png           kappa_eff of the calibration snapshot over (delta_gb, epsilon)
+                                (seed 000 Fig. 9), when the run calibrated gb_thickness;
   sps_table.csv                 per snapshot target: porosity taken, kappa_eff of each stage,
                                 measured kappa, relative error [%]; then each stage's wall time.
+Each PNG comes with the data drawn in it, as CSV of the same name beside it:
+  conductivity_vs_porosity.csv  series (stage, measured, bulk), snapshot, porosity, kappa_eff
+                                [S/m], the +-5 % band of the measured points;
+  neck_histograms.csv           snapshot, target and taken porosity, necks, bin edges of
+                                a / r_min, % of necks in the bin;
+  densification.csv             kind (row / snapshot), simulation time [s], physical time [s],
+                                temperature [K], porosity_mass, porosity (snapshot rows: the
+                                value taken, placed by interpolation in time as in the plot);
+  calibration_map.csv           kind (scan: the evaluated points at the run's epsilon; map: the
+                                drawn grid), delta_gb [m], epsilon, kappa_eff [S/m] (empty
+                                outside the scan).
 The table is also printed. Snapshots not reached (summary.json "not_reached") are reported and
 skipped. Conductivity stages: sweeps over the press stage's snapshots whose rows have
 electrical_conductivity_eff (all of them unless --stages is given); --gb-stage / --no-gb-stage name
@@ -115,6 +128,16 @@ def load_run(a):
             "kappa": {n: sweep_values(summary, n, KAPPA_COLUMN) for n in stages}}
 
 
+def write_csv(path, header, rows):
+    """The data behind a plot: `header`, then `rows` (None and NaN written as empty cells)."""
+    def cell(x):
+        return "" if x is None or (isinstance(x, float) and math.isnan(x)) else x
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(header)
+        w.writerows([cell(x) for x in r] for r in rows)
+
+
 def column(rows, name):
     return np.array([float(r[name]) if r[name] not in ("", None) else math.nan for r in rows])
 
@@ -127,16 +150,21 @@ def label(d, name):
     return name
 
 
-def plot_conductivity(d, plt, path):
+def plot_conductivity(d, plt, path, csv_path):
     fig, ax = plt.subplots(figsize=(6.4, 4.8))
     by_index = {s["index"]: s for s in d["snap"]["taken"]}
+    data = []
     for name, marker in zip(d["stages"], "os^Dv<>p*h"):
-        pts = sorted((by_index[k]["value"], v) for k, v in d["kappa"][name].items() if k in by_index and v is not None)
+        pts = sorted((by_index[k]["value"], v, k) for k, v in d["kappa"][name].items() if k in by_index and v is not None)
         if pts:
-            x, y = zip(*pts)
+            x, y, _ = zip(*pts)
             ax.plot(x, y, marker=marker, label=label(d, name))
+        data += [[name, k, x, y, None, None] for x, y, k in pts]
     p = np.array(sorted(MEASURED))
     k = np.array([MEASURED[x] for x in p])
+    data += [["measured (seed 000 Table 1)", None, x, y, y * (1 - BAND), y * (1 + BAND)] for x, y in zip(p, k)]
+    data.append(["bulk kappa_0", None, None, KAPPA_BULK, None, None])
+    write_csv(csv_path, ["series", "snapshot", "porosity", "kappa_eff_S_per_m", "band_low_S_per_m", "band_high_S_per_m"], data)
     ax.fill_between(p, k * (1 - BAND), k * (1 + BAND), color="0.8", label=f"measured ±{100 * BAND:g} %")
     ax.plot(p, k, "k*", ms=10, ls="none", label="measured NiAl (seed 000 Table 1)")
     ax.axhline(KAPPA_BULK, color="k", ls="--", lw=1, label=f"bulk κ0 = {KAPPA_BULK:.3g} S/m")
@@ -150,15 +178,20 @@ def plot_conductivity(d, plt, path):
     plt.close(fig)
 
 
-def plot_necks(d, run, plt, path):
+def plot_necks(d, run, plt, path, csv_path):
     taken = d["snap"]["taken"]
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
     width = 0.9 / NECK_BINS / len(taken)
     centres = (np.arange(NECK_BINS) + 0.5) / NECK_BINS
+    data = []
     for j, s in enumerate(taken):
         x = neck_ratios(os.path.join(run, s["file"]))
-        ax.bar(centres + (j - (len(taken) - 1) / 2) * width, 100 * neck_histogram(x), width,
+        percent = 100 * neck_histogram(x)
+        ax.bar(centres + (j - (len(taken) - 1) / 2) * width, percent, width,
                label=f"porosity {s['value']:.3f} ({x.size} necks)")
+        data += [[s["index"], s.get("target"), s["value"], x.size, b / NECK_BINS, (b + 1) / NECK_BINS, percent[b]] for b in range(NECK_BINS)]
+    write_csv(csv_path, ["snapshot", "target_porosity", "porosity", "necks", "a_over_rmin_low", "a_over_rmin_high", "percent_of_necks"],
+              data)
     ax.set_xticks(np.linspace(0, 1, NECK_BINS + 1))
     ax.set_xlim(0, 1)
     ax.set_xlabel("a / r_min (neck radius / smaller particle radius)")
@@ -170,7 +203,7 @@ def plot_necks(d, run, plt, path):
     plt.close(fig)
 
 
-def plot_densification(d, press, plt, path):
+def plot_densification(d, press, plt, path, csv_path):
     rows = d["rows"]
     t, T, sim_t = column(rows, "physical_time"), column(rows, "temperature"), column(rows, "time")
     series = [c for c in ("porosity_mass", "porosity") if c in rows[0]]
@@ -178,6 +211,12 @@ def plot_densification(d, press, plt, path):
     # Snapshots are taken between timeseries rows: place them by their simulation time.
     st_ = np.array([s["time"] for s in taken])
     sv = np.array([s["value"] for s in taken])
+    snap_col = d["snap"].get("column", "porosity_mass")
+    values = {c: column(rows, c) for c in series}
+    data = [["row", sim_t[k], t[k], T[k]] + [values[c][k] for c in series] for k in range(len(rows))]
+    for tk, v, pt, pT in zip(st_, sv, np.interp(st_, sim_t, t), np.interp(st_, sim_t, T)):
+        data.append(["snapshot", tk, pt, pT] + [v if c == snap_col else None for c in series])
+    write_csv(csv_path, ["kind", "time_s", "physical_time_s", "temperature_K"] + series, data)
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
     for ax, xs, xlabel in ((axes[0], t, "physical time [s]"), (axes[1], T, "temperature [K]")):
         for c in series:
@@ -200,7 +239,7 @@ def gb_epsilon(run, stage):
     return float(st["modules"]["electrical_network"]["gb_epsilon"])
 
 
-def plot_calibration(d, run, plt, path):
+def plot_calibration(d, run, plt, path, csv_path):
     """Seed 000 Fig. 9: kappa_eff of the calibration snapshot over (delta_gb, epsilon) (delta_gb from
     0.1 um to 0.3 um or 1.25x the calibrated value, epsilon 0.1-0.5). Only the ratio
     epsilon / delta_gb enters the layer conductance (Eq. 26), so the map is the scanned curve
@@ -218,6 +257,9 @@ def plot_calibration(d, run, plt, path):
     D, E = np.meshgrid(delta, eps)
     x = np.log(D * eps_run / E)
     K = np.exp(np.interp(x, lx, ly, left=np.nan, right=np.nan))
+    data = [["scan", p[0], eps_run, p[1]] for p in pts]
+    data += [["map", dg, e, k] for dg, e, k in zip(D.ravel(), E.ravel(), K.ravel())]
+    write_csv(csv_path, ["kind", "delta_gb_m", "epsilon", "kappa_eff_S_per_m"], data)
     fig, ax = plt.subplots(figsize=(6, 4.5))
     cs = ax.contourf(D * 1e6, E, K / 1e6, levels=20, cmap="viridis")
     fig.colorbar(cs, ax=ax, label="kappa_eff [1e6 S/m]")
@@ -271,7 +313,7 @@ def print_table(rows):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("run_dir", help="output directory of the pipeline run")
-    ap.add_argument("-o", "--outdir", help="where to write the PNGs and sps_table.csv (default: run_dir)")
+    ap.add_argument("-o", "--outdir", help="where to write the PNGs, their CSVs and sps_table.csv (default: run_dir)")
     ap.add_argument("--press-stage", default="hot_press", help="name of the hot-press stage (default hot_press)")
     ap.add_argument("--gb-stage", help="conductivity stage with the grain-boundary layer (default conductivity_gb)")
     ap.add_argument("--no-gb-stage", help="conductivity stage without the layer (default conductivity_no_gb)")
@@ -291,12 +333,14 @@ def main():
     import matplotlib.pyplot as plt
     paths = [os.path.join(out, f) for f in ("conductivity_vs_porosity.png", "neck_histograms.png", "densification.png",
                                              "sps_table.csv")]
-    plot_conductivity(d, plt, paths[0])
-    plot_necks(d, a.run_dir, plt, paths[1])
-    plot_densification(d, a.press_stage, plt, paths[2])
+    data = [os.path.splitext(p)[0] + ".csv" for p in paths[:3]]  # the data of each plot beside it
+    plot_conductivity(d, plt, paths[0], data[0])
+    plot_necks(d, a.run_dir, plt, paths[1], data[1])
+    plot_densification(d, a.press_stage, plt, paths[2], data[2])
+    paths += data
     cal_png = os.path.join(out, "calibration_map.png")
-    if plot_calibration(d, a.run_dir, plt, cal_png):
-        paths.append(cal_png)
+    if plot_calibration(d, a.run_dir, plt, cal_png, os.path.splitext(cal_png)[0] + ".csv"):
+        paths += [cal_png, os.path.splitext(cal_png)[0] + ".csv"]
         cal = calibration(d["summary"], d["gb"])
         print(f"calibration: {cal['parameter']} = {cal['value']:.6g} gives {cal['column']} = {cal['achieved']:.6g} "
               f"(target {cal['target']:.6g}; {len(cal['map'])} evaluated points, {cal['search_items']} search items)")

@@ -7,10 +7,12 @@ Reads RUN_DIR/timeseries.csv (columns of the torsion_test module and the built-i
 and RUN_DIR/broken_bonds.csv, and writes to OUT_DIR (default RUN_DIR):
   torsion.png        torque and the elastic line G J theta / L against twist (left axis), R/R0
                      (right axis, log) and the broken-bond count (bottom panel), the onsets marked
-  torsion_table.csv  per time-series row: twist, torque, tau_max/tau_y, R/R0, broken bonds,
-                     kinetic/elastic energy ratio
+  torsion_table.csv  the data of torsion.png, per time-series row: twist, torque, elastic torque,
+                     tau_max/tau_y, R/R0, broken bonds, kinetic/elastic energy ratio
+  torsion_onsets.csv the onset twists marked in torsion.png (first break, R rise, separation)
   torsion_breaks.png the broken bonds' midpoints (z against angle around the axis), coloured by
                      the twist at which they broke
+  torsion_breaks.csv its data: per broken bond, angle [rad], z [m], twist at break [rad]
 Only the Python standard library and matplotlib (python3-matplotlib) are needed.
 """
 import argparse
@@ -65,6 +67,11 @@ def main():
         for k in range(len(rows)):
             w.writerow([tw[k], T[k], Tel[k], shear[k], ratio[k], broken[k], ke[k] / ue[k] if ue[k] > 0 else math.nan])
 
+    with open(os.path.join(out, "torsion_onsets.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["onset", "twist_rad"])
+        w.writerows([["first_break", onset_break], ["resistance_rise", onset_r], ["separation", separation]])
+
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -95,9 +102,15 @@ def main():
         if b:
             t0 = num(rows[0]["time"])
             w_rate = (tw[-1] - tw[0]) / (num(rows[-1]["time"]) - t0) if len(rows) > 1 else math.nan
+            angle = [math.atan2(num(r["y"]), num(r["x"])) for r in b]
+            z = [num(r["z"]) for r in b]
+            twist = [w_rate * (num(r["time"]) - t0) for r in b]
+            with open(os.path.join(out, "torsion_breaks.csv"), "w", newline="") as f:
+                w = csv.writer(f)
+                w.writerow(["angle_rad", "z_m", "twist_at_break_rad"])
+                w.writerows(zip(angle, z, twist))
             fig, axc = plt.subplots(figsize=(7, 4))
-            sc = axc.scatter([math.atan2(num(r["y"]), num(r["x"])) for r in b], [num(r["z"]) * 1e3 for r in b],
-                             c=[w_rate * (num(r["time"]) - t0) for r in b], s=4, cmap="viridis")
+            sc = axc.scatter(angle, [x * 1e3 for x in z], c=twist, s=4, cmap="viridis")
             fig.colorbar(sc, label="twist at break [rad]")
             axc.set_xlabel("angle around the axis [rad]")
             axc.set_ylabel("z [mm]")

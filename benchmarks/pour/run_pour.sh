@@ -20,8 +20,10 @@
 #                    many times slower than 1 thread. The policy is recorded in the `variant` column.
 #   --lammps-matched-wall  diagnostic, not part of the benchmark: also run LAMMPS with the wall
 #                    modulus E of the three fix wall/gran replaced by E/(1+nu). LAMMPS 29Sep2021's
-#                    wall uses E* = E/(2(1-nu)) where its pairs (and sparkdem's walls) use
-#                    E/(2(1-nu^2)); this variant ("wall-matched") makes the wall E* equal.
+#                    wall uses E* = E/(2(1-nu)) (as sparkdem's lammps_hertz_tsuji does by default,
+#                    lammps2021_wall_modulus = true) where its pairs use E/(2(1-nu^2)); this variant
+#                    ("wall-matched") gives the wall the pair E*, as sparkdem with
+#                    lammps2021_wall_modulus = false and LAMMPS from 2023 have.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"

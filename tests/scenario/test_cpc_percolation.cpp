@@ -5,19 +5,27 @@
 // Invariants checked (exact or to solver precision):
 //  - N = round(phi L^3 / (4/3 pi R^3)), the reported phi is N 4/3 pi R^3 / L^3, the largest
 //    relative overlap is <= 1e-3;
-//  - the electrical_network's R_eq (one system, shared electrodes) equals the parallel
-//    combination of the per-cluster resistances of contact_percolation's own solve (1e-9);
-//    resistivity = R_eq L; finite R_eq if and only if spanning = 1; the paper's mean over
-//    spanning clusters is >= the parallel value (equal with one spanning cluster);
+//  - R_eq against an independent solve in this test: the network rebuilt from the frame's
+//    positions and radii (every pair with a surface gap <= touch_tolerance = 0.002 is one unit
+//    conductance, electrodes from the frame's set_x_lo / set_x_hi), the node equations of the
+//    nodes connected to an electrode solved with Eigen's dense LU, I = the current leaving the
+//    1 V electrode, R = 1 V / I: electrical_network's R_eq and contact_percolation's parallel
+//    value within 1e-9 (both solvers' precision); Kirchhoff: the current entering the 0 V
+//    electrode equals it (1e-9);
+//  - resistivity of the cube of edge L between two opposite faces: rho = R A / L with A = L^2,
+//    from the independent R (1e-9); finite R_eq if and only if spanning = 1; the paper's mean
+//    over spanning clusters is >= the parallel value (equal with one spanning cluster);
 //  - a seeds sweep reports per-seed spanning in {0, 1} and its mean is the spanning fraction.
 #include <catch2/catch.hpp>
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 
+#include "io/hdf5/h5file.hpp"
 #include "io/scenario/pipeline.hpp"
 #include "io/scenario/scenario.hpp"
 #include "physics/register_all.hpp"
@@ -45,6 +53,59 @@ json first_stage_only(json j) {
   j["stages"] = json::array({j["stages"][0]});
   return j;
 }
+
+/// Kirchhoff solve of the touching network of a frame, independent of the engine's graph and
+/// Laplacian code: unit conductance between every pair with surface gap <= `touch` [m]; 1 V on
+/// the set_x_lo particles, 0 V on set_x_hi. Returns the currents leaving the 1 V electrode and
+/// entering the 0 V one [A] (0 when no path joins them).
+std::pair<double, double> touching_network_currents(const fs::path& frame_file, double touch) {
+  const auto f = io::H5File::open_read(frame_file);
+  const auto x = f.read_doubles("/particles/position"), r = f.read_doubles("/particles/radius");
+  const auto hi = f.read_doubles("/particles/set_x_lo"), lo = f.read_doubles("/particles/set_x_hi");
+  const std::size_t n = r.size();
+  std::vector<std::pair<std::size_t, std::size_t>> edges;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) {
+      const double d = std::hypot(x[3 * i] - x[3 * j], x[3 * i + 1] - x[3 * j + 1], x[3 * i + 2] - x[3 * j + 2]);
+      if (d - r[i] - r[j] <= touch) edges.emplace_back(i, j);
+    }
+  // Nodes joined to an electrode through the network (the others float: no equation).
+  std::vector<std::vector<std::size_t>> adj(n);
+  for (const auto& [i, j] : edges) { adj[i].push_back(j); adj[j].push_back(i); }
+  std::vector<char> reached(n, 0);
+  std::vector<std::size_t> stack;
+  for (std::size_t i = 0; i < n; ++i)
+    if (hi[i] > 0.5 || lo[i] > 0.5) { reached[i] = 1; stack.push_back(i); }
+  while (!stack.empty()) {
+    const std::size_t i = stack.back();
+    stack.pop_back();
+    for (std::size_t j : adj[i])
+      if (!reached[j]) { reached[j] = 1; stack.push_back(j); }
+  }
+  std::vector<long> row(n, -1);  // unknown index of each free reached node
+  long m = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (reached[i] && !(hi[i] > 0.5) && !(lo[i] > 0.5)) row[i] = m++;
+  auto fixed = [&](std::size_t i) { return hi[i] > 0.5 ? 1.0 : 0.0; };
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(m, m);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(m);
+  for (const auto& [i, j] : edges)
+    for (const auto& [p, q] : {std::pair{i, j}, std::pair{j, i}}) {
+      if (row[p] < 0) continue;
+      A(row[p], row[p]) += 1.0;
+      if (row[q] >= 0) A(row[p], row[q]) -= 1.0;
+      else b(row[p]) += fixed(q);
+    }
+  const Eigen::VectorXd u = A.partialPivLu().solve(b);
+  auto volt = [&](std::size_t i) { return row[i] >= 0 ? u(row[i]) : fixed(i); };
+  double out_hi = 0.0, in_lo = 0.0;
+  for (const auto& [i, j] : edges)
+    for (const auto& [p, q] : {std::pair{i, j}, std::pair{j, i}}) {
+      if (hi[p] > 0.5 && !(hi[q] > 0.5)) out_hi += volt(p) - volt(q);
+      if (lo[p] > 0.5 && !(lo[q] > 0.5)) in_lo += volt(q) - volt(p);
+    }
+  return {out_hi, in_lo};
+}
 }  // namespace
 
 TEST_CASE("cpc_fillers + contact_percolation through the scenario", "[cpc][scenario]") {
@@ -55,7 +116,8 @@ TEST_CASE("cpc_fillers + contact_percolation through the scenario", "[cpc][scena
   for (const double lambda : {0.0, 6.0}) {
     json sc = scene;
     sc["stages"][0]["generator"]["aggregation_lambda"] = lambda;
-    const json s = run(sc, tmp.path / ("lambda" + std::to_string(static_cast<int>(lambda))));
+    const fs::path out = tmp.path / ("lambda" + std::to_string(static_cast<int>(lambda)));
+    const json s = run(sc, out);
     const json& st = s["stages"][0];
     const json& pk = st["packing"];
     CHECK(pk["particles"].get<double>() == n);
@@ -66,12 +128,17 @@ TEST_CASE("cpc_fillers + contact_percolation through the scenario", "[cpc][scena
     const double spanning = f["contact_percolation_spanning"].get<double>();
     CHECK((spanning == 0.0 || spanning == 1.0));
     CHECK(f["contact_percolation_coordination"].get<double>() > 0.5);
+    const auto [I_hi, I_lo] = touching_network_currents(out / "frames/frame_000000.h5", 0.002);
+    INFO("independent solve: I = " << I_hi << " A out of the 1 V electrode, " << I_lo << " A into the 0 V one");
+    CHECK(std::abs(I_lo - I_hi) <= 1e-12 + 1e-9 * std::abs(I_hi));  // Kirchhoff: what leaves one electrode enters the other
+    CHECK((I_hi > 1e-6) == (spanning == 1.0));  // a path of <= N unit conductances carries >= 1/N A; none: round-off
     if (spanning == 1.0) {
-      const double R = f["electrical_resistance"].get<double>();
-      CHECK(f["contact_percolation_resistance"].get<double>() == R);
+      const double R = 1.0 / I_hi;  // [Ohm] 1 V across unit conductances
+      CHECK(std::abs(f["electrical_resistance"].get<double>() / R - 1.0) < 1e-9);
+      CHECK(std::abs(f["contact_percolation_resistance"].get<double>() / R - 1.0) < 1e-9);
       CHECK(std::abs(f["contact_percolation_resistance_parallel"].get<double>() / R - 1.0) < 1e-9);
       CHECK(f["contact_percolation_resistance_cluster_mean"].get<double>() >= R * (1.0 - 1e-9));
-      CHECK(std::abs(f["contact_percolation_resistivity"].get<double>() / (R * L) - 1.0) < 1e-14);
+      CHECK(std::abs(f["contact_percolation_resistivity"].get<double>() / (R * (L * L) / L) - 1.0) < 1e-9);  // rho = R A / L
     } else {
       CHECK(f["electrical_resistance"].is_null());  // +inf is written as null
       CHECK(f["contact_percolation_conductivity"].get<double>() == 0.0);

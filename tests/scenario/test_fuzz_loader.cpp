@@ -54,66 +54,84 @@ std::vector<fs::path> seed_files() {
 
 using Mutator = sparkdem::test::JsonMutator;
 
-}  // namespace
-
-TEST_CASE("the scenario loader survives 500 seeded mutations of every example scene", "[fuzz][scenario]") {
-  const auto files = seed_files();
-  REQUIRE(files.size() >= 3);
-  // SPARKDEM_FUZZ_MUTATIONS / SPARKDEM_FUZZ_SEED override the count and seed for longer exploration.
+/// 500 seeded mutations of one seed file (SPARKDEM_FUZZ_MUTATIONS / SPARKDEM_FUZZ_SEED override
+/// the count and seed for longer exploration); the mutator's seed depends on the file name only.
+void fuzz_file(const fs::path& file) {
   const int kMutations = std::getenv("SPARKDEM_FUZZ_MUTATIONS") ? std::atoi(std::getenv("SPARKDEM_FUZZ_MUTATIONS")) : 500;
   const std::uint64_t seed = std::getenv("SPARKDEM_FUZZ_SEED") ? std::strtoull(std::getenv("SPARKDEM_FUZZ_SEED"), nullptr, 10) : 0x5eed0000u;
-  for (const auto& file : files) {
-    INFO("seed file " << file.filename().string());
-    std::ifstream in(file);
-    const std::string text((std::istreambuf_iterator<char>(in)), {});
-    const json original = json::parse(text);
-    // The unmutated scene loads (the mutations start from a valid scenario).
-    CHECK_NOTHROW(sparkdem::io::load_scenario(original, registry(), file.parent_path()));
+  INFO("seed file " << file.filename().string());
+  std::ifstream in(file);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  const json original = json::parse(text);
+  // The unmutated scene loads (the mutations start from a valid scenario).
+  CHECK_NOTHROW(sparkdem::io::load_scenario(original, registry(), file.parent_path()));
 
-    Mutator mut(seed + std::hash<std::string>{}(file.filename().string()) % 1000);
-    int accepted = 0, rejected = 0, unparsable = 0;
-    for (int k = 0; k < kMutations; ++k) {
-      json j = original;
-      std::string what;
-      bool parsed = true;
-      if (mut.pick(10) == 0) {  // truncate the text
-        const std::size_t cut = mut.pick(text.size());
-        what = "truncate at byte " + std::to_string(cut);
-        try {
-          j = json::parse(text.substr(0, cut));
-        } catch (const json::parse_error&) {
-          parsed = false;
-          ++unparsable;
-        }
-      } else {
-        const std::size_t n = 1 + mut.pick(3);
-        for (std::size_t q = 0; q < n; ++q) what += mut.mutate(j) + "; ";
-      }
-      if (!parsed) continue;
-      const auto t0 = std::chrono::steady_clock::now();
-      std::string failure;
+  Mutator mut(seed + std::hash<std::string>{}(file.filename().string()) % 1000);
+  int accepted = 0, rejected = 0, unparsable = 0;
+  for (int k = 0; k < kMutations; ++k) {
+    json j = original;
+    std::string what;
+    bool parsed = true;
+    if (mut.pick(10) == 0) {  // truncate the text
+      const std::size_t cut = mut.pick(text.size());
+      what = "truncate at byte " + std::to_string(cut);
       try {
-        (void)sparkdem::io::load_scenario(j, registry(), file.parent_path());
-        ++accepted;
-      } catch (const sparkdem::ConfigError&) {
-        ++rejected;
-      } catch (const sparkdem::SetupError&) {
-        ++rejected;
-      } catch (const std::exception& e) {
-        failure = std::string("untyped exception: ") + e.what();
+        j = json::parse(text.substr(0, cut));
+      } catch (const json::parse_error&) {
+        parsed = false;
+        ++unparsable;
       }
-      const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      if (secs > 1.0) failure += " took " + std::to_string(secs) + " s";
-
-      if (!failure.empty()) {
-        INFO("mutation " << k << ": " << what << "\n" << failure);
-        CHECK(failure.empty());
-      }
+    } else {
+      const std::size_t n = 1 + mut.pick(3);
+      for (std::size_t q = 0; q < n; ++q) what += mut.mutate(j) + "; ";
     }
-    // Most mutations must be caught: a loader that accepted everything would pass the loop above.
-    CHECK(rejected > kMutations / 4);
-    CHECK(accepted + rejected + unparsable == kMutations);
+    if (!parsed) continue;
+    const auto t0 = std::chrono::steady_clock::now();
+    std::string failure;
+    try {
+      (void)sparkdem::io::load_scenario(j, registry(), file.parent_path());
+      ++accepted;
+    } catch (const sparkdem::ConfigError&) {
+      ++rejected;
+    } catch (const sparkdem::SetupError&) {
+      ++rejected;
+    } catch (const std::exception& e) {
+      failure = std::string("untyped exception: ") + e.what();
+    }
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (secs > 1.0) failure += " took " + std::to_string(secs) + " s";
+
+    if (!failure.empty()) {
+      INFO("mutation " << k << ": " << what << "\n" << failure);
+      CHECK(failure.empty());
+    }
   }
+  // Most mutations must be caught: a loader that accepted everything would pass the loop above.
+  CHECK(rejected > kMutations / 4);
+  CHECK(accepted + rejected + unparsable == kMutations);
+}
+
+/// The seed files are spread over kShards test cases (every kShards-th file of the sorted list,
+/// each test case its own ctest entry: ~45 s in one piece under load); together they are all.
+constexpr std::size_t kShards = 3;
+void fuzz_shard(std::size_t shard) {
+  const auto files = seed_files();
+  REQUIRE(files.size() >= 3);
+  for (std::size_t k = shard; k < files.size(); k += kShards) fuzz_file(files[k]);
+}
+}  // namespace
+
+TEST_CASE("the scenario loader survives 500 seeded mutations of every example scene (shard 1 of 3: every third seed file)", "[fuzz][scenario]") {
+  fuzz_shard(0);
+}
+
+TEST_CASE("the scenario loader survives 500 seeded mutations of every example scene (shard 2 of 3: every third seed file)", "[fuzz][scenario]") {
+  fuzz_shard(1);
+}
+
+TEST_CASE("the scenario loader survives 500 seeded mutations of every example scene (shard 3 of 3: every third seed file)", "[fuzz][scenario]") {
+  static_assert(kShards == 3, "one test case per shard");
+  fuzz_shard(2);
 }
 
 TEST_CASE("the scenario loader refuses special files and huge stage lists quickly (inputs that hung it under fuzzing)",
