@@ -287,22 +287,17 @@ def make_record(case, fig, tier, n, runs, runner, first_values, fast_bands):
     if failed:
         rec["failed_runs"] = len(failed)
     if st is None:
-        rec.update({"measured": None, "error": None, "pass": False, "band": fig.band})
+        rec.update({"measured": None, "error": None, "pass": False, "band": fig.band_at(n)})
         return rec
     rec.update({k: st[k] for k in ("measured", "reference", "error", "mean", "std", "count", "per_seed")})
     if "extra" in st:
         rec["extra"] = st["extra"]
     if tier == "full":
-        rec["band"] = fig.band
-        rec["pass"] = (abs(st["error"]) <= fig.band and not rec["tuned_after_seeing"] and not failed
-                       and st["count"] >= fig.min_seeds)
-        if st["count"] < fig.min_seeds:
-            rec["note"] = f"{st['count']} packing(s): a packing decides this figure, >= {fig.min_seeds} needed for a pass"
-        rec["scatter_exceeds_band"] = st["std"] is not None and st["std"] > fig.band
+        judge_full(rec, fig)
     else:
         fb = fast_bands.get(f"{fig.id}@N{n}")
         if fb is None and fig.min_seeds == 1:  # deterministic (no packing): the closed form's own band
-            fb = {"center": 0.0, "halfwidth": fig.band,
+            fb = {"center": 0.0, "halfwidth": fig.band_at(n),
                   "derivation": "the validation band: a deterministic case has no scatter to derive one from"}
         if fb is None:
             rec.update({"band": None, "pass": False, "note": "no fast band derived for this size "
@@ -312,6 +307,39 @@ def make_record(case, fig, tier, n, runs, runner, first_values, fast_bands):
             rec["band"] = {"error_range": [lo, hi], "derivation": fb["derivation"]}
             rec["pass"] = lo <= st["error"] <= hi and not failed
     return rec
+
+
+def judge_full(rec, fig):
+    """Band and verdict of a full-tier record from its figure's definition in cases.py."""
+    band = fig.band_at(rec["N"])
+    rec["band"] = band
+    rec["pass"] = (abs(rec["error"]) <= band and not rec["tuned_after_seeing"] and not rec.get("failed_runs")
+                   and rec["count"] >= fig.min_seeds)
+    rec.pop("note", None)
+    if rec["count"] < fig.min_seeds:
+        rec["note"] = f"{rec['count']} packing(s): a packing decides this figure, >= {fig.min_seeds} needed for a pass"
+    rec["scatter_exceeds_band"] = rec["std"] is not None and rec["std"] > band
+
+
+def cmd_rejudge(a):
+    """Re-evaluates band and verdict of every full-tier record from cases.py without rerunning (for a
+    band encoded wrongly in cases.py: the correction is recorded in each record's `rejudged`)."""
+    lock = ledger_lock(a.ledger)
+    ledger = load_ledger(a.ledger)
+    figs = {f.id: f for c in case_table.CASES for f in c.figures}
+    for r in ledger["records"]:
+        f = figs.get(r["case"])
+        if r["tier"] != "full" or f is None or r.get("error") is None:
+            continue
+        old = (r["band"], r["pass"])
+        judge_full(r, f)
+        if (r["band"], r["pass"]) != old:
+            r["rejudged"] = f"band {old[0]} -> {r['band']}, pass {old[1]} -> {r['pass']} ({time.strftime('%Y-%m-%d')})"
+            print(f"{r['case']} N={r['N']}: {r['rejudged']}")
+    write_json_atomic(a.ledger, ledger)
+    write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
+    lock.close()
+    return 0
 
 
 def first_values_of(ledger, case):
@@ -713,6 +741,9 @@ def main(argv=None):
     p = sub.add_parser("report")
     common(p, runs=False)
     p.set_defaults(fn=cmd_report)
+    p = sub.add_parser("rejudge")
+    common(p, runs=False)
+    p.set_defaults(fn=cmd_rejudge)
     p = sub.add_parser("check-hashes")
     common(p, runs=False)
     p.set_defaults(fn=cmd_check_hashes)
