@@ -26,7 +26,6 @@ import hashlib
 import json
 import math
 import os
-import resource
 import statistics
 import subprocess
 import sys
@@ -169,12 +168,13 @@ class Runner:
     def command(self, cmd, rundir, name, mpath=None):
         env = dict(os.environ, OMP_NUM_THREADS=str(self.threads), OMP_WAIT_POLICY="PASSIVE")
         load0 = os.getloadavg()[0]
-        t0, c0 = time.time(), resource.getrusage(resource.RUSAGE_CHILDREN)
+        t0 = time.time()
         with open(os.path.join(rundir, name + ".log"), "w") as log, open(os.path.join(rundir, name + ".err"), "w") as err:
-            rc = subprocess.call(cmd, stdout=log, stderr=err, env=env, cwd=rundir)
-        c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        meta = {"rc": rc, "wall_s": time.time() - t0,
-                "cpu_s": (c1.ru_utime - c0.ru_utime) + (c1.ru_stime - c0.ru_stime),
+            proc = subprocess.Popen(cmd, stdout=log, stderr=err, env=env, cwd=rundir)
+            # wait4: this child's own CPU time (RUSAGE_CHILDREN would mix in the runs of other jobs)
+            _, status, usage = os.wait4(proc.pid, 0)
+            proc.returncode = rc = os.waitstatus_to_exitcode(status)
+        meta = {"rc": rc, "wall_s": time.time() - t0, "cpu_s": usage.ru_utime + usage.ru_stime,
                 "load_start": load0, "load_end": os.getloadavg()[0], "binary": self.binary_hash,
                 "command": " ".join(cmd)}
         write_json_atomic(mpath or os.path.join(rundir, name + ".meta.json"), meta)
@@ -465,7 +465,7 @@ def band_text(rec):
         return "none"
     if isinstance(b, dict):
         lo, hi = b["error_range"]
-        return f"[{100 * lo:+.2f}, {100 * hi:+.2f}] %"
+        return f"[{100 * lo:+.3g}, {100 * hi:+.3g}] %"
     return f"±{100 * b:g} %"
 
 
@@ -558,9 +558,9 @@ def write_markdown(ledger, path):
 
 
 def write_plot(ledger, path):
-    """|error| of each full-tier record against its CPU time (all runs; CPU seconds rather than wall,
-    which a loaded machine inflates), log-log: one marker shape and colour per source, filled for a
-    pass, open otherwise; a grey bar marks the record's band."""
+    """|error| of each full-tier record against its run time (wall seconds summed over its runs and
+    reference tools), log-log: one marker shape and colour per source, filled for a pass, open
+    otherwise; a grey bar marks the record's band."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -568,11 +568,11 @@ def write_plot(ledger, path):
     fig, ax = plt.subplots(figsize=(8, 6))
     done = set()
     for r in ledger["records"]:
-        if r["kind"] != "validation" or r.get("error") is None or r["cpu_s"] <= 0:
+        if r["kind"] != "validation" or r.get("error") is None or r["wall_s"] <= 0:
             continue
         paper = r["case"].split("/")[0]
         marker, colour = style.get(paper, ("x", "k"))
-        x, y = r["cpu_s"], max(abs(r["error"]), 1e-12) * 100
+        x, y = r["wall_s"], max(abs(r["error"]), 1e-12) * 100
         ax.scatter(x, y, marker=marker, s=50, label=None if paper in done else paper, edgecolors=colour,
                    facecolors=colour if verdict(r) == "pass" else "none", linewidths=1.4, zorder=3)
         done.add(paper)
@@ -582,7 +582,7 @@ def write_plot(ledger, path):
                     textcoords="offset points")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("run time: CPU seconds, all seeds and reference tools of the record")
+    ax.set_xlabel("run time: wall seconds, all seeds and reference tools of the record (one thread each)")
     ax.set_ylabel("|error| of the ensemble mean [%]  (grey bar: the band)")
     ax.set_title("sparkdem validation ledger, full tier (filled: pass, open: miss or tuned)")
     ax.grid(True, which="both", alpha=0.3)
