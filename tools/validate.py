@@ -26,6 +26,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -192,6 +193,7 @@ class RunContext:
 
     def config(self, rel):
         """A config with its $include paths made absolute, so the copy runs from anywhere."""
+        from sps_outputs import absolute_includes  # tools/sps_outputs.py (numpy: imported only when running)
         path = os.path.join(REPO, rel)
         c = load_json(path)
         absolute_includes(c, os.path.dirname(path))
@@ -214,17 +216,6 @@ class RunContext:
         return os.path.join(self.rundir, name + ".log")  # its standard output
 
 
-def absolute_includes(node, base):
-    if isinstance(node, dict):
-        if isinstance(node.get("$include"), str):
-            node["$include"] = os.path.normpath(os.path.join(base, node["$include"]))
-        for v in node.values():
-            absolute_includes(v, base)
-    elif isinstance(node, list):
-        for v in node:
-            absolute_includes(v, base)
-
-
 def run_one(runner, case, tier, n, seed, workdir):
     rundir = os.path.join(workdir, tier, case.id.replace("/", "_"), f"N{n}_seed{seed}")
     ctx = RunContext(runner, rundir, n, seed, tier)
@@ -242,20 +233,21 @@ def run_one(runner, case, tier, n, seed, workdir):
 
 def ensemble(runs, fig):
     """Statistics of figure `fig` over the runs that produced it."""
-    vals = [r["figures"][fig] for r in runs if fig in r["figures"]]
-    if not vals:
+    have = [r for r in runs if fig in r["figures"]]
+    if not have:
         return None
-    meas = [v["measured"] for v in vals]
-    refs = [v["reference"] for v in vals]
-    errs = [(m - r) / abs(r) for m, r in zip(meas, refs)]
-    out = {"measured": statistics.fmean(meas), "reference": statistics.fmean(refs), "error": statistics.fmean(errs),
-           "count": len(vals), "per_seed": [{"seed": r["seed"], "measured": v["measured"], "reference": v["reference"],
-                                              "error": (v["measured"] - v["reference"]) / abs(v["reference"])}
-                                             for r, v in ((r, r["figures"][fig]) for r in runs if fig in r["figures"])]}
+    per_seed = [{"seed": r["seed"], "measured": r["figures"][fig]["measured"],
+                 "reference": r["figures"][fig]["reference"]} for r in have]
+    for p in per_seed:
+        p["error"] = (p["measured"] - p["reference"]) / abs(p["reference"])
+    errs = [p["error"] for p in per_seed]
+    out = {"measured": statistics.fmean(p["measured"] for p in per_seed),
+           "reference": statistics.fmean(p["reference"] for p in per_seed),
+           "error": statistics.fmean(errs), "count": len(have), "per_seed": per_seed}
     out["mean"] = out["error"]
     out["std"] = statistics.stdev(errs) if len(errs) > 1 else None
-    for v in vals:
-        for k, x in v.get("extra", {}).items():
+    for r in have:
+        for k, x in r["figures"][fig].get("extra", {}).items():
             out.setdefault("extra", {}).setdefault(k, []).append(x)
     return out
 
@@ -656,11 +648,14 @@ def cmd_derive_bands(a):
     return 0
 
 
+# A generated table in a document: groups (opening marker, kind, table, closing marker).
+TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|regression) -->\n)(.*?)(<!-- ledger:end -->)", re.S)
+
+
 def cmd_check_docs(a):
     """Every figure quoted in FILE beside a ledger tag `[ledger: CASE N=n]` (or `[ledger: CASE N=n FIELD]`,
     FIELD error (default), measured, reference, std, wall_s) must equal the ledger's, to the digits printed;
     every generated block `<!-- ledger:table KIND -->...<!-- ledger:end -->` must equal the table."""
-    import re
     ledger = load_ledger(a.ledger)
     recs = {(r["case"], r["N"], r["tier"]): r for r in ledger["records"]}
     bad, n_checked = [], 0
@@ -689,10 +684,10 @@ def cmd_check_docs(a):
             digits = len(num.split(".")[1]) if "." in num else 0
             if abs(q - val) > 0.51 * 10 ** (-digits) + 1e-12:
                 bad.append(f"{where}: quotes {num}{unit or ''} for {case} N={n} {field}; the ledger holds {val:.6g}")
-        for m in re.finditer(r"<!-- ledger:table (validation|regression) -->\n(.*?)<!-- ledger:end -->", text, re.S):
+        for m in TABLE_BLOCK.finditer(text):
             n_checked += 1
-            if m.group(2).strip() != ledger_table(ledger, m.group(1)).strip():
-                bad.append(f"{path}: the generated {m.group(1)} table differs from the ledger "
+            if m.group(3).strip() != ledger_table(ledger, m.group(2)).strip():
+                bad.append(f"{path}: the generated {m.group(2)} table differs from the ledger "
                            f"(regenerate: tools/validate.py update-docs {path})")
     for line in bad:
         print(line, file=sys.stderr)
@@ -702,12 +697,10 @@ def cmd_check_docs(a):
 
 def cmd_update_docs(a):
     """Rewrites every generated ledger table of FILE from the ledger."""
-    import re
     ledger = load_ledger(a.ledger)
     for path in a.files:
         text = open(path).read()
-        new = re.sub(r"(<!-- ledger:table (validation|regression) -->\n)(.*?)(<!-- ledger:end -->)",
-                     lambda m: m.group(1) + ledger_table(ledger, m.group(2)) + "\n" + m.group(4), text, flags=re.S)
+        new = TABLE_BLOCK.sub(lambda m: m.group(1) + ledger_table(ledger, m.group(2)) + "\n" + m.group(4), text)
         if new != text:
             with open(path + ".tmp", "w") as f:
                 f.write(new)

@@ -1252,6 +1252,40 @@ void expand_includes(json& j, const std::filesystem::path& dir, const std::strin
   for (auto it = j.begin(); it != j.end();) it = it.key().starts_with('$') ? j.erase(it) : std::next(it);
 }
 
+// Stage and check counts are bounded: a scene has tens of stages, and a mistaken array of 100000
+// entries would take minutes to diagnose entry by entry.
+constexpr std::size_t kMaxStages = 1000;
+
+/// The top-level "checks" (validation figures in summary.json): each names a stage of `sc` (the last
+/// of that name is the one it reads); a banded check needs a stage that steps.
+static void load_checks(const json& j, Scenario& sc, std::vector<Diagnostic>& errors) {
+  if (j.contains("checks")) {
+    if (!j["checks"].is_array()) errors.push_back({"/checks", "expected an array of checks, found " + describe(j["checks"])});
+    else if (j["checks"].size() > kMaxStages)
+      errors.push_back({"/checks", "expected at most " + std::to_string(kMaxStages) + " checks, found " + std::to_string(j["checks"].size())});
+    else
+      for (std::size_t k = 0; k < j["checks"].size(); ++k) {
+        const std::string cp = "/checks/" + std::to_string(k);
+        json r;
+        CheckDef c = build(check_spec(), j["checks"][k], cp, errors, r);
+        if (c.reference == 0.0) errors.push_back({cp + "/reference", "expected a non-zero reference value, found 0"});
+        const StageDef* stage = nullptr;  // the last stage of that name (the one a check reads)
+        for (const StageDef& st : sc.stages)
+          if (st.cfg.name == c.stage) stage = &st;
+        if (!stage)
+          errors.push_back({cp + "/stage", "expected the name of a stage of this scenario, found \"" + c.stage + "\""});
+        else if (c.tolerance > 0.0 && (stage->sweep || !stage->dynamics))
+          errors.push_back({cp + "/stage", "expected a stage that steps (a check with a tolerance band needs the stage's final "
+                                           "values), found \"" + c.stage + "\", " +
+                                               (stage->sweep ? "a sweep stage (its items' values are in its sweep table)"
+                                                             : "a generator stage without dynamics") +
+                                               "; use tolerance 0 (report only)"});
+        sc.checks.push_back(c);
+        sc.resolved["checks"].push_back(r);
+      }
+  }
+}
+
 Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesystem::path& base_dir) {
   std::vector<Diagnostic> errors;
   Scenario sc;
@@ -1355,9 +1389,6 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
   }
   // Stages
   sc.resolved["stages"] = json::array();
-  // (Stage and check counts are bounded: a scene has tens of stages, and a mistaken array of
-  // 100000 entries would take minutes to diagnose entry by entry.)
-  constexpr std::size_t kMaxStages = 1000;
   if (!j.contains("stages") || !j["stages"].is_array() || j["stages"].empty()) {
     errors.push_back({"/stages", "expected a non-empty array of stages, found " + (j.contains("stages") ? describe(j["stages"]) : std::string("nothing"))});
   } else if (j["stages"].size() > kMaxStages) {
@@ -1399,32 +1430,7 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
         }
     }
   }
-  // Checks (validation figures in summary.json)
-  if (j.contains("checks")) {
-    if (!j["checks"].is_array()) errors.push_back({"/checks", "expected an array of checks, found " + describe(j["checks"])});
-    else if (j["checks"].size() > kMaxStages)
-      errors.push_back({"/checks", "expected at most " + std::to_string(kMaxStages) + " checks, found " + std::to_string(j["checks"].size())});
-    else
-      for (std::size_t k = 0; k < j["checks"].size(); ++k) {
-        const std::string cp = "/checks/" + std::to_string(k);
-        json r;
-        CheckDef c = build(check_spec(), j["checks"][k], cp, errors, r);
-        if (c.reference == 0.0) errors.push_back({cp + "/reference", "expected a non-zero reference value, found 0"});
-        const StageDef* stage = nullptr;  // the last stage of that name (the one a check reads)
-        for (const StageDef& st : sc.stages)
-          if (st.cfg.name == c.stage) stage = &st;
-        if (!stage)
-          errors.push_back({cp + "/stage", "expected the name of a stage of this scenario, found \"" + c.stage + "\""});
-        else if (c.tolerance > 0.0 && (stage->sweep || !stage->dynamics))
-          errors.push_back({cp + "/stage", "expected a stage that steps (a check with a tolerance band needs the stage's final "
-                                           "values), found \"" + c.stage + "\", " +
-                                               (stage->sweep ? "a sweep stage (its items' values are in its sweep table)"
-                                                             : "a generator stage without dynamics") +
-                                               "; use tolerance 0 (report only)"});
-        sc.checks.push_back(c);
-        sc.resolved["checks"].push_back(r);
-      }
-  }
+  load_checks(j, sc, errors);
   if (!errors.empty()) throw ConfigError(errors);
   return sc;
 }
