@@ -35,6 +35,8 @@ class Generator {
   virtual std::map<std::string, double> report(const State& s) const = 0;
   /// Coordination histogram (index = contacts) of the packing.
   virtual std::vector<int> coordination_histogram(const State& s) const { (void)s; return {}; }
+  /// Further named arrays of the packing (histograms, profiles) for summary.json.
+  virtual std::map<std::string, std::vector<double>> report_arrays(const State& s) const { (void)s; return {}; }
 };
 
 }  // namespace sparkdem

@@ -611,6 +611,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
       if (st.generator) {
         for (const auto& [key, v] : st.generator->report(s)) js["packing"][key] = finite_or_null(v);
         js["packing"]["coordination_histogram"] = st.generator->coordination_histogram(s);
+        for (const auto& [key, v] : st.generator->report_arrays(s)) js["packing"][key] = v;
       }
       summary["stages"].push_back(js);
       obs.final_state(s);

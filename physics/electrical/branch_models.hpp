@@ -58,4 +58,9 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
 /// tolerance, 0 otherwise).
 double branch_model_near_gap(const BranchModel& m);
 
+/// `touch_tolerance_relative` [1] > 0: sets m.touch_tolerance [m] to that fraction of the mean
+/// particle radius of `s` (the neighbour gap tolerance of seed 001's packings, stated relative to
+/// r_mean so that it means the same at every N); <= 0 leaves m.touch_tolerance as configured.
+void resolve_touch_tolerance(BranchModel& m, double touch_tolerance_relative, const State& s);
+
 }  // namespace sparkdem::physics

@@ -145,6 +145,8 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("alpha_constant", &P::alpha_constant).unit("1").nonnegative().doc("transmission_surface: hold alpha fixed and f(e) = 1 (0: the alpha(n), f(e) model)");
   s.add("unit_conductance", &P::unit_conductance).unit("S").positive().doc("touching / tunnelling: conductance of a touching pair");
   s.add("touch_tolerance", &P::touch_tolerance).unit("m").nonnegative().doc("touching, transmission_surface: pairs with a gap up to this count as touching branches");
+  s.add("touch_tolerance_relative", &P::touch_tolerance_relative).unit("1").nonnegative()
+      .doc("touching, transmission_surface: the gap tolerance as a fraction of the mean particle radius at the stage start (> 0 overrides touch_tolerance; kept in the checkpoint)");
   s.add("tunnel_g0", &P::tunnel_g0).unit("S").positive().doc("tunnelling: prefactor g0");
   s.add("tunnel_length", &P::tunnel_length).unit("m").positive().doc("tunnelling: decay length xi");
   s.add("tunnel_cutoff", &P::tunnel_cutoff).unit("m").nonnegative().doc("tunnelling: largest gap that conducts");
@@ -207,6 +209,8 @@ void ElectricalNetwork::declare(Declarations& d) const {
 }
 
 void ElectricalNetwork::bind(State& s) {
+  if (!tolerance_restored_) resolve_touch_tolerance(branch_, p_.touch_tolerance_relative, s);
+  tolerance_restored_ = false;
   double rmin = kInf;
   for (double r : s.particles.radius) rmin = std::min(rmin, r);
   default_clock_ = Clock{};
@@ -502,6 +506,11 @@ void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
     r_ = Result{held[0], held[1], held[2], held[3], held[4], held[5], held[6], held[7], held[8], 0.0, held[9], held[10], held[11], held[12]};
   }
   solver_.visit(ar, prefix + "/solver");
+  // The resolved gap tolerance (touch_tolerance_relative: from the radii at the stage start).
+  if (!ar.reading() || ar.has(prefix + "/touch_tolerance_m")) {
+    ar.visit(prefix + "/touch_tolerance_m", branch_.touch_tolerance);
+    tolerance_restored_ = ar.reading();
+  }
   // The held per-branch results (written with every frame until the next solve).
   std::vector<std::int64_t> pairs = edges_.pairs;
   std::vector<double> branch;

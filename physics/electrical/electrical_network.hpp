@@ -122,6 +122,7 @@ class ElectricalNetwork final : public Module {
     // touching, tunnelling
     double unit_conductance = 1.0;
     double touch_tolerance = 0.0;
+    double touch_tolerance_relative = 0.0;  // [1] of the mean radius; > 0 overrides touch_tolerance
     double tunnel_g0 = 1.0;
     double tunnel_length = 1e-9;
     double tunnel_cutoff = 0.0;
@@ -174,6 +175,7 @@ class ElectricalNetwork final : public Module {
   double kappa_ = 0.0;  ///< bulk conductivity at the evaluation temperature [S/m]
   electrical::ConductivityLaw law_;  ///< kappa(T)
   BranchModel branch_;
+  bool tolerance_restored_ = false;  // visit() read the resolved touch tolerance: bind() keeps it
   Clock default_clock_;
   LaplacianSolver solver_;
   Result r_;

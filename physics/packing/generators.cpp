@@ -240,6 +240,9 @@ ParamSpec<FillGenerator::Params> FillGenerator::spec() {
   s.add("ke_per_mass_below", &Params::ke_per_mass_below).unit("J/kg").positive().doc("settled threshold");
   s.add("max_overlap", &Params::max_overlap).unit("1").positive().doc("largest overlap / smaller radius allowed");
   s.add("material", &Params::material).nonnegative().doc("material index");
+  s.add("neighbour_gap_relative", &Params::neighbour_gap_relative).unit("1")
+      .doc("report seed 001's microstructure with neighbours at gaps <= this * r_mean: neighbour and eccentricity "
+           "histograms (Figs. 2, 4), eccentric shares, the wall density profile (< 0: off)");
   return s;
 }
 double FillGenerator::container_volume() const {
@@ -312,7 +315,7 @@ std::vector<std::unique_ptr<Monitor>> FillGenerator::monitors() const {
   return m;
 }
 std::map<std::string, double> FillGenerator::report(const State& s) const {
-  auto r = packing_report(s);
+  auto r = packing_report(s, p_.neighbour_gap_relative);
   r["mean_radius_formula"] = formula_mean_radius();
   if (s.particles.fields.has("radius_growth/scale") && s.particles.size())
     r["growth_scale"] = s.particles.fields.data("radius_growth/scale")[0];  // 1 = fully grown
@@ -401,6 +404,9 @@ ParamSpec<RelaxGenerator::Params> RelaxGenerator::spec() {
   s.add("density", &Params::density).unit("kg/m^3").positive()
       .doc("particle density for the masses of later stages (set it to the material's; `material` only labels the particles)");
   s.add("material", &Params::material).nonnegative().doc("material index");
+  s.add("neighbour_gap_relative", &Params::neighbour_gap_relative).unit("1")
+      .doc("report seed 001's microstructure with neighbours at gaps <= this * r_mean: neighbour and eccentricity "
+           "histograms (Figs. 2, 4), eccentric shares, the wall density profile (< 0: off)");
   return s;
 }
 
@@ -620,7 +626,7 @@ void RelaxGenerator::generate(State& s) {
   for (auto& vel : p.velocity) vel.setZero();
 }
 std::map<std::string, double> RelaxGenerator::report(const State& s) const {
-  auto r = packing_report(s);
+  auto r = packing_report(s, p_.neighbour_gap_relative);
   r.insert(result_.begin(), result_.end());
   if (!sampling_.empty()) {
     r.insert(sampling_.begin(), sampling_.end());

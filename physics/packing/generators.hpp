@@ -95,6 +95,7 @@ class FillGenerator final : public Generator {
     double damping_rate = 0.0;             ///< [1/s] background drag (0 = off)
     double ke_per_mass_below = 1e-10;      ///< [J/kg]
     double max_overlap = 0.01;             ///< [1]
+    double neighbour_gap_relative = -1.0;  ///< [1] of r_mean: report seed 001's microstructure (< 0: off)
     std::int64_t material = 0;
   };
   static ParamSpec<Params> spec();
@@ -108,6 +109,9 @@ class FillGenerator final : public Generator {
   double estimated_particles() const override { return static_cast<double>(p_.particles); }
   std::map<std::string, double> report(const State& s) const override;
   std::vector<int> coordination_histogram(const State& s) const override { return packing_histogram(s); }
+  std::map<std::string, std::vector<double>> report_arrays(const State& s) const override {
+    return packing_arrays(s, p_.neighbour_gap_relative);
+  }
   double formula_mean_radius() const;
   /// Density the packing must reach: target_density, or the one implied by a given mean_radius.
   double expected_density() const;
@@ -137,6 +141,7 @@ class RelaxGenerator final : public Generator {
     double max_step = 0.05;                ///< [1] largest displacement per iteration / radius
     double max_overlap = 0.0;              ///< [1] also stop when max overlap / smaller radius <= this (0 = off)
     double density = 1000.0;               ///< [kg/m^3] particle density for the masses (not read from materials)
+    double neighbour_gap_relative = -1.0;  ///< [1] of r_mean: report seed 001's microstructure (< 0: off)
     std::int64_t material = 0;
   };
   static ParamSpec<Params> spec();
@@ -147,6 +152,9 @@ class RelaxGenerator final : public Generator {
   double container_volume() const;
   std::map<std::string, double> report(const State& s) const override;
   std::vector<int> coordination_histogram(const State& s) const override { return packing_histogram(s); }
+  std::map<std::string, std::vector<double>> report_arrays(const State& s) const override {
+    return packing_arrays(s, p_.neighbour_gap_relative);
+  }
 
  private:
   /// Radii: uniform spread rescaled to exactly target_density (no distribution), else drawn.

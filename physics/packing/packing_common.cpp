@@ -11,6 +11,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/neighbor/neighbor_search.hpp"
+#include "physics/packing/microstructure.hpp"
 
 namespace sparkdem::physics {
 
@@ -215,7 +216,33 @@ std::vector<std::array<Index, 2>> current_pairs(const State& s) {
 }
 }  // namespace
 
-std::map<std::string, double> packing_report(const State& s) {
+namespace {
+double mean_radius(const State& s) {
+  double sum = 0.0;
+  for (double r : s.particles.radius) sum += r;
+  return sum / static_cast<double>(s.particles.size());
+}
+/// The wall profile of seed-001 packings: bins of half a mean diameter, the cylinder's end
+/// faces excluded over 4 mean diameters, the interior from 4 mean diameters.
+DensityProfile profile(const State& s) {
+  const double d = 2.0 * mean_radius(s);
+  return wall_density_profile(s.particles.position, s.particles.radius, container_region(s), 0.5 * d, 4.0 * d, 4.0 * d);
+}
+void add_microstructure(const State& s, double gap_relative, std::map<std::string, double>& r) {
+  const NeighbourStats n = neighbour_stats(s.particles.position, s.particles.radius, gap_relative, container_region(s));
+  r["neighbour_gap_relative"] = gap_relative;
+  r["neighbours_mean"] = n.mean;
+  r["eccentric_share"] = n.eccentric_share;
+  r["eccentric_share_interior"] = n.eccentric_share_interior;
+  r["interior_share"] = n.interior_share;
+  const DensityProfile p = profile(s);
+  r["density_profile_bin_width"] = p.bin_width;
+  r["density_profile_interior"] = p.interior;
+  r["density_profile_max_deviation_beyond_4d"] = p.max_deviation_beyond;
+}
+}  // namespace
+
+std::map<std::string, double> packing_report(const State& s, double neighbour_gap_relative) {
   const auto& p = s.particles;
   std::map<std::string, double> r;
   r["particles"] = static_cast<double>(p.size());
@@ -248,7 +275,16 @@ std::map<std::string, double> packing_report(const State& s) {
   double vsum = 0.0;
   for (double rad : p.radius) vsum += 4.0 / 3.0 * kPi * rad * rad * rad;
   r["solid_volume"] = vsum;
+  if (neighbour_gap_relative >= 0.0) add_microstructure(s, neighbour_gap_relative, r);
   return r;
+}
+
+
+std::map<std::string, std::vector<double>> packing_arrays(const State& s, double neighbour_gap_relative) {
+  if (neighbour_gap_relative < 0.0 || s.particles.size() == 0) return {};
+  const NeighbourStats n = neighbour_stats(s.particles.position, s.particles.radius, neighbour_gap_relative, container_region(s));
+  return {{"neighbour_histogram", n.histogram}, {"eccentricity_histogram", n.eccentricity_histogram},
+          {"density_profile", profile(s).density}};
 }
 
 std::vector<int> packing_histogram(const State& s) {

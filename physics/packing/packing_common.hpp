@@ -62,8 +62,15 @@ double bed_height(const State& s, const Vec3& floor_point, const Vec3& axis);
 /// N, density (overall and interior: one largest diameter away from every face), mean
 /// coordination (overall and interior), rattlers, largest overlap / smaller radius (pairs and
 /// walls).
-std::map<std::string, double> packing_report(const State& s);
+/// With neighbour_gap_relative >= 0 also seed 001's microstructure figures (microstructure.hpp):
+/// neighbours_mean, eccentric_share, eccentric_share_interior, interior_share at that gap
+/// tolerance [fraction of r_mean], and the wall profile's bin width (half a mean diameter),
+/// interior value (4 mean diameters from the wall) and largest deviation beyond it.
+std::map<std::string, double> packing_report(const State& s, double neighbour_gap_relative = -1.0);
 std::vector<int> packing_histogram(const State& s);
+/// neighbour_histogram, eccentricity_histogram (shares in bins of 0.1) and density_profile
+/// (bins of half a mean diameter from the wall) of packing_report's microstructure figures.
+std::map<std::string, std::vector<double>> packing_arrays(const State& s, double neighbour_gap_relative);
 
 /// Time-series columns packing_density, packing_density_interior, coordination_interior.
 class PackingMonitor final : public Monitor {

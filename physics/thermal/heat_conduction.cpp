@@ -81,6 +81,8 @@ ParamSpec<HeatConduction::Params> HeatConduction::spec() {
   s.add("gbf_correction", &P::gbf_correction).doc("sintered_neck: grain-boundary-fraction correction");
   s.add("alpha_constant", &P::alpha_constant).unit("1").nonnegative().doc("transmission_surface: fixed alpha (0: alpha(n), f(e))");
   s.add("touch_tolerance", &P::touch_tolerance).unit("m").nonnegative().doc("transmission_surface: gap up to which a pair conducts");
+  s.add("touch_tolerance_relative", &P::touch_tolerance_relative).unit("1").nonnegative()
+      .doc("touching, transmission_surface: the gap tolerance as a fraction of the mean particle radius at the stage start (> 0 overrides touch_tolerance; kept in the checkpoint)");
   return s;
 }
 
@@ -209,6 +211,7 @@ const HeatConduction::Network& HeatConduction::network(const State& s) const {
 
 void HeatConduction::bind(State& s) {
   net_.valid = false;
+  if (!restored_) resolve_touch_tolerance(branch_, p_.touch_tolerance_relative, s);
   auto& p = s.particles;
   for (const auto& n : fixed_names_) (void)set_field(s, n, "heat_conduction");
   for (const auto& n : flux_names_) (void)set_field(s, n, "heat_conduction");
@@ -484,6 +487,7 @@ void HeatConduction::visit(Archive& ar, const std::string& prefix) {
     restored_ = true;
     net_.valid = false;
   }
+  if (!ar.reading() || ar.has(prefix + "/touch_tolerance_m")) ar.visit(prefix + "/touch_tolerance_m", branch_.touch_tolerance);
   solver_.visit(ar, prefix + "/solver");
 }
 

@@ -110,6 +110,7 @@ class HeatConduction final : public Module {
     bool gbf_correction = true;
     double alpha_constant = 0.0;
     double touch_tolerance = 0.0;
+    double touch_tolerance_relative = 0.0;  // [1] of the mean radius; > 0 overrides touch_tolerance
   };
   static ParamSpec<Params> spec();
   explicit HeatConduction(const Params& p);
