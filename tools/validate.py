@@ -334,6 +334,30 @@ def cmd_rejudge(a):
     return 0
 
 
+def cmd_rebase(a):
+    """Takes the current configs of the selected cases as their new first values (the reference of the
+    automatic tuned_after_seeing marks), for a model or protocol change decided from sources and from
+    figures other than the case's own (an issue's build step), before the case's runs on it. Recorded
+    in the ledger's `rebases` with the date, the commit, the keys that changed and why."""
+    if not a.why.strip():
+        raise SystemExit("rebase needs --why")
+    lock = ledger_lock(a.ledger)
+    ledger = load_ledger(a.ledger)
+    fv = ledger.setdefault("first_config_values", {})
+    for case in selected(a.case):
+        now = config_values(case)
+        old = fv.get(case.id, {})
+        changed = sorted(k for k in set(old) | set(now) if old.get(k) != now.get(k))
+        fv[case.id] = now
+        ledger.setdefault("rebases", []).append({"case": case.id, "date": time.strftime("%Y-%m-%d %H:%M:%S"),
+                                                 "commit": git_commit(), "why": a.why, "changed": changed})
+        print(f"{case.id}: rebased ({len(changed)} config keys changed since the first values)")
+    write_json_atomic(a.ledger, ledger)
+    write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
+    lock.close()
+    return 0
+
+
 def first_values_of(ledger, case):
     fv = ledger.setdefault("first_config_values", {})
     if case.id not in fv:
@@ -532,6 +556,10 @@ def write_markdown(ledger, path):
             parts.append(f"  - tuned after seeing: `{t['parameter']}`: {t['why']}")
         for v in r.get("variants", []):
             parts.append(f"  - variant: {v}")
+    if ledger.get("rebases"):
+        parts += ["", "## Rebases (new first config values after a documented model change)", ""]
+        for b in ledger["rebases"]:
+            parts.append(f"- **{b['case']}** ({b['date']}, {b['commit']}; {len(b['changed'])} config keys): {b['why']}")
     extras = [r for r in ledger["records"] if r.get("extra")]
     if extras:
         parts += ["", "## Side figures and variants per record (mean over the runs)", "",
@@ -741,6 +769,11 @@ def main(argv=None):
     p = sub.add_parser("rejudge")
     common(p, runs=False)
     p.set_defaults(fn=cmd_rejudge)
+    p = sub.add_parser("rebase", help="new first config values of cases after a documented model change")
+    common(p, runs=False)
+    p.add_argument("--case", nargs="+", required=True)
+    p.add_argument("--why", required=True)
+    p.set_defaults(fn=cmd_rebase)
     p = sub.add_parser("check-hashes")
     common(p, runs=False)
     p.set_defaults(fn=cmd_check_hashes)

@@ -91,13 +91,13 @@ def electrical_stage(summary):
 
 def fill_stage(summary):
     for st in summary.get("stages", []):
-        if st.get("type") == "fill":
+        if st.get("type") in ("fill", "relax"):  # the packing stage (relax since issue 19)
             return st
     return None
 
 
 def scenario_geometry(scenario):
-    fill = next(st for st in scenario["stages"] if st.get("type") == "fill")
+    fill = next(st for st in scenario["stages"] if st.get("type") in ("fill", "relax"))
     g = fill["generator"]
     if g.get("shape") != "cylinder":
         raise ValueError("the fill generator is not a cylinder")

@@ -18,6 +18,7 @@ rho (l_d - 2 r_mean) / (pi r_d^2). Geometry and rho: seed 001 (r_d = 1 mm, l_d =
 import argparse
 import glob
 import json
+import os
 import sys
 
 import h5py
@@ -50,7 +51,9 @@ def load(run):
     fin = [t for t in s["stages"] if "electrical_resistance" in t.get("final", {})][-1]["final"]
     resolved = json.load(open(run + "/out/resolved.json"))
     mods = [st["modules"]["electrical_network"] for st in resolved["stages"] if "electrical_network" in st.get("modules", {})]
-    out["R_engine"], out["tol_m"] = fin["electrical_resistance"], mods[-1]["touch_tolerance"]
+    rel = mods[-1].get("touch_tolerance_relative", 0.0)
+    out["R_engine"] = fin["electrical_resistance"]
+    out["tol_m"] = rel * out["radius"].mean() if rel > 0 else mods[-1]["touch_tolerance"]
     return out
 
 
@@ -124,10 +127,12 @@ def main():
             print(f"{run.split('/')[-1]:>14} {name:>28}  n {nmean:5.2f}  ecc {100 * row['eccentric_share']:5.1f} % "
                   f"(interior {100 * row['eccentric_share_interior']:5.1f} %)  R/R_th-1 {row['R_over_R_th_minus_1_pct']:+6.2f} %")
     if a.csv:
-        with open(a.csv, "w") as f:
-            f.write(",".join(rows[0]) + "\n")
-            for row in rows:
-                f.write(",".join(str(v) for v in row.values()) + "\n")
+        import csv
+        with open(a.csv + ".tmp", "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+        os.replace(a.csv + ".tmp", a.csv)
 
 
 if __name__ == "__main__":

@@ -39,12 +39,12 @@ std::map<std::string, fd::Richardson> fd_reference(int n0) {
   return out;
 }
 
-/// Run configs/plate_source.json with N particles and the fill stage's stop time changed; the
-/// DEM potential at each control point (k = 24 probe) and the summary.
-std::map<std::string, double> run_plate(std::int64_t particles, double fill_time, json& summary) {
+/// Run configs/plate_source.json (relax packing) with N particles; the DEM potential at each
+/// control point (k = 24 probe) and the summary.
+std::map<std::string, double> run_plate(std::int64_t particles, json& summary) {
   json scene = io::read_json_file(fs::path(SPARKDEM_SOURCE_DIR) / "configs/plate_source.json");
+  REQUIRE(scene["stages"][0]["type"] == "relax");
   scene["stages"][0]["generator"]["particles"] = particles;
-  scene["stages"][0]["stop"]["time"] = fill_time;
   test::ScratchDir tmp("sparkdem_plate");
   io::Scenario sc = io::load_scenario(scene, test::registry(), tmp.path);
   io::RunOptions opt;
@@ -79,9 +79,8 @@ TEST_CASE("plate FD reference: control-point values converge at second order", "
 }
 
 TEST_CASE("plate with a central source (N = 2000): discrete maximum principle, FD ordering of the control points", "[plate][scenario][electrical]") {
-  // A small, quickly packed plate: N = 2000 (mean radius ~0.5 mm, about 2.5 diameters through the
-  // depth) and a fill stopped at 0.03 s (growth 0.02 s + 0.01 s of settling) instead of 0.2 s. It
-  // checks the chain (fill, cylinder source set, transmission_surface network, probe) against two
+  // A small plate: N = 2000 (mean radius ~0.5 mm, about 2.5 diameters through the depth). It
+  // checks the chain (relax packing, cylinder source set, transmission_surface network, probe) against two
   // properties that hold for any resistor network with positive conductances between a 1 V source
   // and a grounded edge: every probed potential lies strictly between the electrodes' (discrete
   // maximum principle), and the control points keep the continuum's order P1 < P1c < P2 (the FD
@@ -89,7 +88,7 @@ TEST_CASE("plate with a central source (N = 2000): discrete maximum principle, F
   // The errors against the FD reference are the validation ledger's figures (tools/validate.py,
   // case seed001/plate: full tier N = 5000 x 3 packings; fast tier in CI with a derived band).
   json summary;
-  const auto phi = run_plate(2000, 0.03, summary);
+  const auto phi = run_plate(2000, summary);
   const auto ref = fd_reference(60);
   const json& st = summary["stages"][1];
   CHECK(st["particle_sets"]["source"].get<int>() > 30);
