@@ -30,6 +30,8 @@ BondReference make_bond_reference(const Vec3& xi, const Vec3& xj, const Quat& qi
 
 /// Failure mode of a bond broken by the bond_virial_failure module (not by its law).
 inline constexpr std::int64_t kBreakModeHydrostatic = -1;
+/// ... with its von Mises criterion.
+inline constexpr std::int64_t kBreakModeVirialVonMises = -2;
 
 /// The log entry of a broken bond.
 struct BondBreakRecord {

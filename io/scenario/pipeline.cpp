@@ -288,6 +288,7 @@ json write_broken_bonds(const State& s, const BondModel& law, const std::filesys
   const std::vector<std::string> modes = law.failure_modes();
   auto mode_name = [&](std::int64_t m) {
     if (m == kBreakModeHydrostatic) return std::string("hydrostatic");
+    if (m == kBreakModeVirialVonMises) return std::string("virial_von_mises");
     return m >= 1 && static_cast<std::size_t>(m) <= modes.size() ? modes[static_cast<std::size_t>(m - 1)] : std::string("unknown");
   };
   std::vector<std::size_t> rows;

@@ -394,3 +394,49 @@ TEST_CASE("bond_virial_failure: the Love-Weber hydrostatic stress of a stretched
   for (std::size_t r = 0; r < s.bonds.size(); ++r)
     if (s.bonds.broken(r)) CHECK(s.bonds.break_record(r).mode == kBreakModeHydrostatic);
 }
+
+TEST_CASE("bond_virial_failure, von Mises: the virial tensor of a stretched cubic lattice, closed-form von Mises values",
+          "[beam][bonds][failure]") {
+  // Closed forms: uniaxial diag(s, 0, 0) -> s; pure shear (tau off-diagonal, symmetric) -> sqrt(3) tau;
+  // a hydrostatic tensor -> 0.
+  Eigen::Matrix3d u = Eigen::Matrix3d::Zero();
+  u(0, 0) = 7.0;
+  CHECK(physics::von_mises_stress(u) == Approx(7.0).epsilon(1e-14));
+  Eigen::Matrix3d t = Eigen::Matrix3d::Zero();
+  t(0, 1) = t(1, 0) = 2.0;
+  CHECK(physics::von_mises_stress(t) == Approx(2.0 * std::sqrt(3.0)).epsilon(1e-14));
+  CHECK(physics::von_mises_stress(5.0 * Eigen::Matrix3d::Identity()) < 1e-14);
+  // The stretched lattice of the hydrostatic test: the centre's tensor is sigma_xx = 2 r F / V only,
+  // its trace / 3 is bond_hydrostatic_stress, and its von Mises stress is sigma_xx (uniaxial).
+  State s;
+  const double e = 1e-4;
+  for (int x = 0; x < 3; ++x)
+    for (int y = 0; y < 3; ++y)
+      for (int z = 0; z < 3; ++z) test::add_sphere(s, Vec3(2 * kR * x, 2 * kR * y, 2 * kR * z), kR, kRho);
+  REQUIRE(bond_within_gap(s, 1e-3 * kR) == 54);
+  for (auto& x : s.particles.position) x.x() *= 1.0 + e;
+  s.bonds_active = true;
+  BondModelT<CohesiveBeam> bonds(beam_params());
+  s.bonds.prepare(s.particles.size());
+  bonds.pass(s.particles, s.bonds, 0.0);
+  const double fv = 0.6, F = kE * S * e, V = 4.0 / 3.0 * kPi * kR * kR * kR / fv;
+  const auto sig = physics::bond_virial_stress(s.particles, s.bonds, fv);
+  const auto h = physics::bond_hydrostatic_stress(s.particles, s.bonds, fv);
+  const Index centre = 13;
+  const double sxx = 2.0 * kR * (1 + e) * F / V;
+  CHECK(test::relative_error(sig[centre](0, 0), sxx) < 1e-10);
+  CHECK(std::abs(sig[centre](1, 1)) + std::abs(sig[centre](2, 2)) + std::abs(sig[centre](0, 1)) < 1e-12 * sxx);
+  for (std::size_t i = 0; i < s.particles.size(); ++i) CHECK(std::abs(sig[i].trace() / 3.0 - h[i]) <= 1e-12 * sxx);
+  CHECK(test::relative_error(physics::von_mises_stress(sig[centre]), sxx) < 1e-10);
+  // The module breaks exactly the bonds whose criterion reaches the threshold, logged as von Mises.
+  const auto c = physics::bond_virial_criterion(s.particles, s.bonds, fv, true);
+  const double thr = *std::max_element(c.begin(), c.end()) * (1 - 1e-9);
+  std::size_t expected = 0;
+  for (double x : c) expected += x >= thr;
+  physics::BondVirialFailure mod({thr, fv, "von_mises"});
+  mod.advance(s, StepInfo{1, 1e-6, 1e-6, 0});
+  CHECK(expected > 0);
+  CHECK(s.bonds.broken_count() == expected);
+  for (std::size_t r = 0; r < s.bonds.size(); ++r)
+    if (s.bonds.broken(r)) CHECK(s.bonds.break_record(r).mode == kBreakModeVirialVonMises);
+}
