@@ -7,8 +7,8 @@
 #      configs/materials/cast_iron_beams.json is the same command's output).
 #   2. The same tension test with those parameters (strength 1e30 so the criterion stress is
 #      measured, nothing breaks) at every N of --sizes, same geometry and clamped-layer
-#      thickness, packing seed --seed; bonding gap 0.0128 x mean radius, the mean radius
-#      scaled as N^(-1/3) from the calibration's (77.3 um at N = 4000).
+#      thickness, packing seed --seed; packing protocol and bonding (touching pairs) as the
+#      scene's (seed 001's protocol since issue 20: relax to the overall 0.63, force tolerance 1e-3).
 #   Per run: E_M, nu_M (stage `hold`, equilibrium), their errors against the targets, the ratio
 #   bonds_max_failure_stress / tension_stress and the macroscopic stress at which the first bond
 #   would break with the calibrated strength, sigma_break = sigma_mu_f / ratio (linear elastic
@@ -87,8 +87,6 @@ p = json.load(open(params))
 s["seed"] = seed
 s["bonds"]["params"] = dict(p, strength=1e30)
 s["stages"][0]["generator"]["particles"] = n
-mean_radius = 77.35e-6 * (4000.0 / n) ** (1.0 / 3.0)   # relax packing at N = 4000: 77.35 um
-s["stages"][1]["create_bonds"]["gap_tolerance"] = 0.0128 * mean_radius
 json.dump(s, open(out, "w"), indent=1)
 PY
   start=$(date +%s.%N)

@@ -57,7 +57,7 @@ def twist_scene(n, seed, theta):
 
 def run_one(args, n, seed):
     d = os.path.join(args.workdir, f"twist_N{n}_seed{seed}")
-    if os.path.exists(os.path.join(d, "out", "final_state.h5")):
+    if finished(d):
         return d
     os.makedirs(d, exist_ok=True)
     with open(os.path.join(d, "scenario.json"), "w") as f:
@@ -72,6 +72,15 @@ def cmd_twist(args):
     with concurrent.futures.ThreadPoolExecutor(args.jobs) as ex:
         for d in ex.map(lambda p: run_one(args, *p), jobs):
             print("done", d, flush=True)
+
+
+def finished(run):
+    """A run whose summary.json says completed (a run in progress has the packing's checkpoint only)."""
+    try:
+        with open(os.path.join(run, "out", "summary.json")) as f:
+            return json.load(f).get("status") == "completed"
+    except (OSError, ValueError):
+        return False
 
 
 def criteria(tool, dirs):
@@ -89,7 +98,7 @@ def cmd_analyze(args):
     tension = criteria(args.bond_criteria, args.tension)
     cal = criteria(args.bond_criteria, [args.calibration])[0]
     twists = sorted(d for d in (os.path.join(args.workdir, x) for x in os.listdir(args.workdir))
-                    if os.path.basename(d).startswith("twist_N") and os.path.exists(os.path.join(d, "out", "final_state.h5")))
+                    if os.path.basename(d).startswith("twist_N") and finished(d))
     tw = criteria(args.bond_criteria, twists)
 
     def strength(row, k):
