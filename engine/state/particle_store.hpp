@@ -26,6 +26,12 @@ struct ParticleStore {
   FieldRegistry fields;            ///< optional per-particle fields
 
   std::size_t size() const { return id.size(); }
+  /// Mean radius [m] (0 for no particle).
+  double mean_radius() const {
+    double sum = 0.0;
+    for (double r : radius) sum += r;
+    return radius.empty() ? 0.0 : sum / static_cast<double>(radius.size());
+  }
   Id next_id = 0;
 
   /// Append one particle at rest; returns its local index.

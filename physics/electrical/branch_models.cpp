@@ -29,9 +29,7 @@ double branch_model_near_gap(const BranchModel& m) {
 
 void resolve_touch_tolerance(BranchModel& m, double touch_tolerance_relative, const State& s) {
   if (!(touch_tolerance_relative > 0.0) || s.particles.size() == 0) return;
-  double sum = 0.0;
-  for (double r : s.particles.radius) sum += r;
-  m.touch_tolerance = touch_tolerance_relative * sum / static_cast<double>(s.particles.size());
+  m.touch_tolerance = touch_tolerance_relative * s.particles.mean_radius();
 }
 
 std::vector<double> branch_conductances(const BranchModel& m, const State& s, const InteractionGraph& g,

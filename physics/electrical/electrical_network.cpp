@@ -246,6 +246,246 @@ std::vector<double> ElectricalNetwork::conductances(const State& s, const Intera
   return branch_conductances(branch_, s, g, k, share_a);
 }
 
+namespace {
+
+using Params = ElectricalNetwork::Params;
+using Result = ElectricalNetwork::Result;
+
+/// The network of one solve. Contact-centred: centre[v] is the node kept at the centre of an
+/// electrode particle v (-1 elsewhere) and star[v] its (contact node, access conductance) pairs.
+struct BuiltNet {
+  ResistorNet net;
+  std::vector<Index> centre;
+  std::vector<std::vector<std::pair<Index, double>>> star;
+};
+
+/// Particle of a graph node (the side a branch's dissipation heats); -1 for a wall node.
+Index particle_of(const InteractionGraph& g, Index v) { return g.is_wall_node(v) ? Index{-1} : v; }
+
+/// Particle-centred: a node per graph node, a resistor per branch. Joule split: each side is
+/// heated by the part of the branch resistance on its side (its half-particle and half of any
+/// contact layer; a one-resistance branch half-half).
+BuiltNet particle_centred_net(const InteractionGraph& g, const std::vector<double>& G, const std::vector<double>& share,
+                              const std::vector<Index>& high, const std::vector<Index>& low) {
+  BuiltNet b;
+  b.centre.assign(g.nodes(), -1);
+  b.net.nodes = g.nodes();
+  for (std::size_t e = 0; e < g.size(); ++e)
+    b.net.add(g.a[e], g.b[e], G[e], particle_of(g, g.a[e]), particle_of(g, g.b[e]), std::isfinite(share[e]) ? share[e] : 0.5);
+  b.net.high = high;
+  b.net.low = low;
+  return b;
+}
+
+/// Contact-centred: a node at each conducting contact; a particle's resistance between two of
+/// its contacts p, q is the star-mesh transform of its access resistances R_i(p) (the branch
+/// model's share of side i), g_pq = g_p g_q / sum_k g_k, times the path-length factor
+/// (|x_p - x_i| + |x_q - x_i|) / |x_p - x_q| >= 1 (chord_scaling): current turning near the
+/// edge of a particle takes the chord, not the way through the centre. Without the factor it
+/// is exactly the particle-centred network (star-mesh theorem); on a straight chain the
+/// factor is 1, so both topologies agree there. Electrode particles keep a centre node and
+/// their star.
+BuiltNet contact_centred_net(const State& s, const InteractionGraph& g, const std::vector<double>& G,
+                             const std::vector<double>& share, const std::vector<Index>& high, const std::vector<Index>& low,
+                             const Params& p) {
+  BuiltNet b;
+  ResistorNet& net = b.net;
+  b.centre.assign(g.nodes(), -1);
+  b.star.assign(g.nodes(), {});
+  for (std::size_t e = 0; e < g.size(); ++e) {
+    if (!(G[e] > 0.0)) continue;
+    if (!std::isfinite(share[e]))
+      throw SetupError("electrical_network: the contact_centred topology needs a model with resistance inside the particles (holm, sintered_neck, transmission_surface), not '" + p.model + "'");
+    const Index c = static_cast<Index>(net.nodes++);
+    const double Ra = share[e] / G[e], Rb = (1.0 - share[e]) / G[e];
+    b.star[g.a[e]].push_back({c, Ra > 0.0 ? 1.0 / Ra : kInf});
+    b.star[g.b[e]].push_back({c, Rb > 0.0 ? 1.0 / Rb : kInf});
+  }
+  std::vector<char> keeps(g.nodes(), 0);
+  for (Index v : high) keeps[v] = 1;
+  for (Index v : low) keeps[v] = 1;
+  for (std::size_t v = 0; v < g.nodes(); ++v) {
+    if (!keeps[v]) continue;
+    b.centre[v] = static_cast<Index>(net.nodes++);
+    const Index pv = particle_of(g, static_cast<Index>(v));
+    for (const auto& [c, gc] : b.star[v]) net.add(b.centre[v], c, gc, pv, pv);
+  }
+  for (Index v : high) net.high.push_back(b.centre[v]);
+  for (Index v : low) net.low.push_back(b.centre[v]);
+  // Contact positions per node (for the chord factor).
+  std::vector<Vec3> xc(net.nodes, Vec3::Zero());
+  for (std::size_t e = 0, c = 0; e < g.size(); ++e)
+    if (G[e] > 0.0) xc[c++] = contact_point(s, g, e, g.is_wall_node(g.a[e]) ? g.b[e] : g.a[e]);
+  for (std::size_t v = 0; v < s.particles.size(); ++v) {
+    if (keeps[v]) continue;
+    const auto& st = b.star[v];
+    double sum = 0.0;
+    for (const auto& [c, gc] : st) sum += gc;
+    const Vec3& xi = s.particles.position[v];
+    for (std::size_t x = 0; x < st.size(); ++x)
+      for (std::size_t y = x + 1; y < st.size(); ++y) {
+        double f = 1.0;
+        if (p.chord_scaling) {
+          const double arms = (xc[st[x].first] - xi).norm() + (xc[st[y].first] - xi).norm();
+          const double chord = (xc[st[x].first] - xc[st[y].first]).norm();
+          f = arms > 0.0 ? arms / std::max(chord, 1e-6 * arms) : 1.0;  // capped at 1e6
+        }
+        net.add(st[x].first, st[y].first, st[x].second * st[y].second / sum * f, static_cast<Index>(v), static_cast<Index>(v));
+      }
+  }
+  return b;
+}
+
+/// Applied voltage [V]: the parameter, or the controller's signal.
+double applied_voltage(const State& s, const Params& p, Step step) {
+  double applied = p.voltage;
+  if (!p.voltage_signal.empty()) {
+    const auto it = s.marks.find("signal/" + p.voltage_signal);
+    if (it != s.marks.end()) applied = it->second;
+    if (!(applied >= 0.0) || !std::isfinite(applied))
+      throw PhysicsError(step, {}, "voltage", "electrical_network: the voltage signal '" + p.voltage_signal + "' is " + std::to_string(applied));
+  }
+  return applied;
+}
+
+/// One solve of the network. Current-driven (p.current > 0): the high electrode is one
+/// equipotential node `super` fed with `current`, the low one grounded; edge_g are the solved
+/// conductances (0 inside the merged electrode). Otherwise both electrodes are held at their
+/// potentials; the network is linear, so a zero voltage is solved at 1 V and scaled by 0 (the
+/// resistance stays known: a controller needs it). unit_resistance = dV / I of the solve.
+struct NetSolution {
+  LaplacianResult res;
+  std::vector<double> edge_g;
+  Index super = 0;
+  double unit_resistance = kInf;
+};
+NetSolution solve_net(const State& s, const ResistorNet& net, const Params& p, double applied, Step step,
+                      LaplacianSolver& solver) {
+  NetSolution out;
+  const bool driven = p.current > 0.0;
+  const double solved_voltage = applied > 0.0 ? applied : 1.0;
+  out.super = net.high.front();
+  out.edge_g = net.g;
+  LaplacianProblem prob;
+  prob.nodes = net.nodes;
+  std::vector<Index> ma = net.a, mb = net.b;
+  std::vector<double> source;
+  if (driven) {
+    std::vector<char> in_high(net.nodes, 0);
+    for (Index v : net.high) in_high[v] = 1;
+    for (std::size_t e = 0; e < out.edge_g.size(); ++e) {
+      if (in_high[ma[e]]) ma[e] = out.super;
+      if (in_high[mb[e]]) mb[e] = out.super;
+      if (ma[e] == mb[e]) out.edge_g[e] = 0.0;  // inside the electrode: carries nothing
+    }
+    source.assign(net.nodes, 0.0);
+    source[out.super] = p.current;
+    prob.source = source;
+    prob.dirichlet = {DirichletGroup{net.low, 0.0}};
+  } else {
+    prob.dirichlet = {DirichletGroup{net.high, solved_voltage}, DirichletGroup{net.low, 0.0}};
+  }
+  prob.a = ma;
+  prob.b = mb;
+  prob.g = out.edge_g;
+  prob.step = step;
+  std::vector<double> cap;
+  if (p.solver == "pseudo_transient") {
+    if (p.topology != "particle_centred")
+      throw SetupError("electrical_network: the pseudo_transient solver needs the particle_centred topology (C_i = m_i c per particle)");
+    cap.assign(net.nodes, p.specific_capacity);  // wall nodes: 1 x c (they are electrodes, never free)
+    for (std::size_t i = 0; i < s.particles.size(); ++i) cap[i] = s.particles.mass[i] * p.specific_capacity;
+    prob.capacitance = cap;
+  }
+  out.res = solver.solve(prob);
+  LaplacianResult& res = out.res;
+  if (!driven && !res.dirichlet_flux.empty() && res.dirichlet_flux[0] > 0.0) out.unit_resistance = solved_voltage / res.dirichlet_flux[0];
+  if (!driven && applied != solved_voltage) {
+    const double f = applied / solved_voltage;
+    for (double& x : res.value) if (std::isfinite(x)) x *= f;
+    for (double& x : res.flux) x *= f;
+    for (double& x : res.dirichlet_flux) x *= f;
+  }
+  if (driven)
+    for (Index v : net.high) res.value[v] = res.value[out.super];  // the merged electrode nodes
+  return out;
+}
+
+/// Joule power per particle (q, zeroed first) from the branch currents, each branch's I^2 R split
+/// by its share; returns the total [W].
+double joule_power(const ResistorNet& net, const NetSolution& sol, std::vector<double>& q) {
+  std::fill(q.begin(), q.end(), 0.0);
+  double power = 0.0;
+  for (std::size_t e = 0; e < sol.edge_g.size(); ++e) {
+    if (!(sol.edge_g[e] > 0.0) || sol.res.flux[e] == 0.0) continue;
+    const double pe = sol.res.flux[e] * sol.res.flux[e] / sol.edge_g[e];  // I^2 R
+    power += pe;
+    if (net.heat_a[e] >= 0) q[net.heat_a[e]] += net.share[e] * pe;
+    if (net.heat_b[e] >= 0) q[net.heat_b[e]] += (1.0 - net.share[e]) * pe;
+  }
+  return power;
+}
+
+/// Particle potentials u (contact-centred: the centre potential of the equivalent star where a
+/// particle keeps no centre node); returns the count of floating (NaN) particles.
+std::size_t particle_potentials(const BuiltNet& b, bool particle_centred, const LaplacianResult& res, std::vector<double>& u) {
+  std::size_t floating = 0;
+  for (std::size_t i = 0; i < u.size(); ++i) {
+    if (particle_centred || b.centre[i] >= 0) {
+      u[i] = res.value[particle_centred ? i : static_cast<std::size_t>(b.centre[i])];
+    } else {
+      double num = 0.0, den = 0.0;
+      for (const auto& [c, gc] : b.star[i])
+        if (std::isfinite(res.value[c])) { num += gc * res.value[c]; den += gc; }
+      u[i] = den > 0.0 ? num / den : kNaN;
+    }
+    if (std::isnan(u[i])) ++floating;
+  }
+  return floating;
+}
+
+/// Per-branch results of the particle-centred network: ids of the two ends (a wall is
+/// -1 - wall index), current from the first to the second [A], conductance [S], power [W]
+/// (contact-centred: the fields, no branch).
+EdgeOutput branch_output(const State& s, const InteractionGraph& g, const NetSolution& sol, bool spans, bool particle_centred) {
+  EdgeOutput out{"electrical", {}, {{"current", "A", {}}, {"conductance", "S", {}}, {"power", "W", {}}}};
+  if (!particle_centred) return out;
+  auto id_of = [&](Index v) {
+    return g.is_wall_node(v) ? -1 - static_cast<std::int64_t>(static_cast<std::size_t>(v) - g.particle_nodes)
+                             : static_cast<std::int64_t>(s.particles.id[v]);
+  };
+  for (std::size_t e = 0; e < g.size(); ++e) {
+    if (!(sol.edge_g[e] > 0.0)) continue;
+    const double I_e = spans ? sol.res.flux[e] : 0.0;
+    out.pairs.push_back(id_of(g.a[e]));
+    out.pairs.push_back(id_of(g.b[e]));
+    out.fields[0].values.push_back(I_e);
+    out.fields[1].values.push_back(sol.edge_g[e]);
+    out.fields[2].values.push_back(I_e * I_e / sol.edge_g[e]);
+  }
+  return out;
+}
+
+/// Open-circuit results (no particle reaches an electrode, empty_electrode = "open").
+void open_circuit(State& s, const Params& p, Result& r, EdgeOutput& edges) {
+  auto& u = s.particles.fields.data("electric_potential");
+  auto& q = s.particles.fields.data("joule_power");
+  std::fill(u.begin(), u.end(), kNaN);
+  std::fill(q.begin(), q.end(), 0.0);
+  edges = EdgeOutput{};
+  const double solves = r.solves;
+  r = Result{};
+  r.resistance = kInf;
+  r.voltage = p.voltage;
+  r.length = p.length > 0.0 ? p.length : kNaN;
+  r.conductivity_eff = kNaN;
+  r.floating = static_cast<double>(s.particles.size());
+  r.solves = solves + 1.0;
+  s.marks["signal/electrical_resistance"] = -1.0;
+}
+
+}  // namespace
+
 void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   const auto t0 = std::chrono::steady_clock::now();
   GraphOptions go;
@@ -264,206 +504,39 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   if (high.empty() || low.empty()) {
     // empty_electrode = "open": no particle reaches an electrode (e.g. an aggregate that does not
     // reach a face of the cpc_fillers box): no current can flow; open-circuit results.
-    std::fill(s.particles.fields.data("electric_potential").begin(), s.particles.fields.data("electric_potential").end(), kNaN);
-    std::fill(s.particles.fields.data("joule_power").begin(), s.particles.fields.data("joule_power").end(), 0.0);
-    edges_ = EdgeOutput{};
-    const double solves = r_.solves;
-    r_ = Result{};
-    r_.resistance = kInf;
-    r_.voltage = p_.voltage;
-    r_.length = p_.length > 0.0 ? p_.length : kNaN;
-    r_.conductivity_eff = kNaN;
-    r_.floating = static_cast<double>(s.particles.size());
-    r_.solves = solves + 1.0;
+    open_circuit(s, p_, r_, edges_);
     r_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    s.marks["signal/electrical_resistance"] = -1.0;
     return;
   }
   for (Index v : high)
     if (std::find(low.begin(), low.end(), v) != low.end())
       throw SetupError("electrical_network: a particle belongs to both electrodes '" + p_.high + "' and '" + p_.low + "'");
-  const std::size_t np = s.particles.size();
-  auto particle = [&](Index v) { return g.is_wall_node(v) ? Index{-1} : v; };
-  ResistorNet net;
-  // For the contact-centred topology: centre node of each particle that keeps one (electrode
-  // particles) and its star; every other particle's star becomes a mesh between its contacts.
-  std::vector<Index> centre(g.nodes(), -1);
-  std::vector<std::vector<std::pair<Index, double>>> star;  // per graph node: (contact node, access conductance)
-  if (p_.topology == "particle_centred") {
-    net.nodes = g.nodes();
-    // Joule split: each side is heated by the part of the branch resistance on its side (its
-    // half-particle and half of any contact layer; a one-resistance branch half-half).
-    for (std::size_t e = 0; e < g.size(); ++e)
-      net.add(g.a[e], g.b[e], G[e], particle(g.a[e]), particle(g.b[e]), std::isfinite(share[e]) ? share[e] : 0.5);
-    net.high = high;
-    net.low = low;
-  } else {
-    // Contact-centred: a node at each conducting contact; a particle's resistance between two of
-    // its contacts p, q is the star-mesh transform of its access resistances R_i(p) (the branch
-    // model's share of side i), g_pq = g_p g_q / sum_k g_k, times the path-length factor
-    // (|x_p - x_i| + |x_q - x_i|) / |x_p - x_q| >= 1 (chord_scaling): current turning near the
-    // edge of a particle takes the chord, not the way through the centre. Without the factor it
-    // is exactly the particle-centred network (star-mesh theorem); on a straight chain the
-    // factor is 1, so both topologies agree there.
-    star.assign(g.nodes(), {});
-    for (std::size_t e = 0; e < g.size(); ++e) {
-      if (!(G[e] > 0.0)) continue;
-      if (!std::isfinite(share[e]))
-        throw SetupError("electrical_network: the contact_centred topology needs a model with resistance inside the particles (holm, sintered_neck, transmission_surface), not '" + p_.model + "'");
-      const Index c = static_cast<Index>(net.nodes++);
-      const double Ra = share[e] / G[e], Rb = (1.0 - share[e]) / G[e];
-      star[g.a[e]].push_back({c, Ra > 0.0 ? 1.0 / Ra : kInf});
-      star[g.b[e]].push_back({c, Rb > 0.0 ? 1.0 / Rb : kInf});
-    }
-    std::vector<char> keeps(g.nodes(), 0);
-    for (Index v : high) keeps[v] = 1;
-    for (Index v : low) keeps[v] = 1;
-    for (std::size_t v = 0; v < g.nodes(); ++v) {
-      if (!keeps[v]) continue;
-      centre[v] = static_cast<Index>(net.nodes++);
-      for (const auto& [c, gc] : star[v]) net.add(centre[v], c, gc, particle(static_cast<Index>(v)), particle(static_cast<Index>(v)));
-    }
-    for (Index v : high) net.high.push_back(centre[v]);
-    for (Index v : low) net.low.push_back(centre[v]);
-    // Contact positions per node (for the chord factor).
-    std::vector<Vec3> xc(net.nodes, Vec3::Zero());
-    for (std::size_t e = 0, c = 0; e < g.size(); ++e)
-      if (G[e] > 0.0) xc[c++] = contact_point(s, g, e, g.is_wall_node(g.a[e]) ? g.b[e] : g.a[e]);
-    for (std::size_t v = 0; v < np; ++v) {
-      if (keeps[v]) continue;
-      const auto& st = star[v];
-      double sum = 0.0;
-      for (const auto& [c, gc] : st) sum += gc;
-      const Vec3& xi = s.particles.position[v];
-      for (std::size_t x = 0; x < st.size(); ++x)
-        for (std::size_t y = x + 1; y < st.size(); ++y) {
-          double f = 1.0;
-          if (p_.chord_scaling) {
-            const double arms = (xc[st[x].first] - xi).norm() + (xc[st[y].first] - xi).norm();
-            const double chord = (xc[st[x].first] - xc[st[y].first]).norm();
-            f = arms > 0.0 ? arms / std::max(chord, 1e-6 * arms) : 1.0;  // capped at 1e6
-          }
-          net.add(st[x].first, st[y].first, st[x].second * st[y].second / sum * f, static_cast<Index>(v), static_cast<Index>(v));
-        }
-    }
-  }
-  LaplacianProblem prob;
-  prob.nodes = net.nodes;
-  prob.a = net.a;
-  prob.b = net.b;
-  prob.g = net.g;
-  prob.step = info.step;
-  // Current-driven: the high electrode is one equipotential node fed with `current`; the low
-  // one is grounded. Otherwise both electrodes are held at their potentials.
+  const bool particle_centred = p_.topology == "particle_centred";
+  const BuiltNet b = particle_centred ? particle_centred_net(g, G, share, high, low) : contact_centred_net(s, g, G, share, high, low, p_);
+  const ResistorNet& net = b.net;
   const bool driven = p_.current > 0.0;
-  // Applied voltage: the parameter, or the controller's signal. The network is linear, so a zero
-  // voltage is solved at 1 V and scaled by 0: the resistance stays known (a controller needs it).
-  double applied = p_.voltage;
-  if (!p_.voltage_signal.empty()) {
-    const auto it = s.marks.find("signal/" + p_.voltage_signal);
-    if (it != s.marks.end()) applied = it->second;
-    if (!(applied >= 0.0) || !std::isfinite(applied))
-      throw PhysicsError(info.step, {}, "voltage", "electrical_network: the voltage signal '" + p_.voltage_signal + "' is " + std::to_string(applied));
-  }
-  const double solved_voltage = applied > 0.0 ? applied : 1.0;
-  const Index super = net.high.front();
-  std::vector<Index> ma, mb;
-  std::vector<double> mg, source;
-  if (driven) {
-    std::vector<char> in_high(net.nodes, 0);
-    for (Index v : net.high) in_high[v] = 1;
-    ma = net.a; mb = net.b; mg = net.g;
-    for (std::size_t e = 0; e < mg.size(); ++e) {
-      if (in_high[ma[e]]) ma[e] = super;
-      if (in_high[mb[e]]) mb[e] = super;
-      if (ma[e] == mb[e]) mg[e] = 0.0;  // inside the electrode: carries nothing
-    }
-    prob.a = ma;
-    prob.b = mb;
-    prob.g = mg;
-    source.assign(net.nodes, 0.0);
-    source[super] = p_.current;
-    prob.source = source;
-    prob.dirichlet = {DirichletGroup{net.low, 0.0}};
-  } else {
-    prob.dirichlet = {DirichletGroup{net.high, solved_voltage}, DirichletGroup{net.low, 0.0}};
-  }
-  std::vector<double> cap;
-  if (p_.solver == "pseudo_transient") {
-    if (p_.topology != "particle_centred")
-      throw SetupError("electrical_network: the pseudo_transient solver needs the particle_centred topology (C_i = m_i c per particle)");
-    cap.assign(net.nodes, p_.specific_capacity);  // wall nodes: 1 x c (they are electrodes, never free)
-    for (std::size_t i = 0; i < np; ++i) cap[i] = s.particles.mass[i] * p_.specific_capacity;
-    prob.capacitance = cap;
-  }
-  LaplacianResult res = solver_.solve(prob);
-  double unit_resistance = kInf;  // dV / I of the solve, whatever the applied voltage
-  if (!driven && !res.dirichlet_flux.empty() && res.dirichlet_flux[0] > 0.0) unit_resistance = solved_voltage / res.dirichlet_flux[0];
-  if (!driven && applied != solved_voltage) {
-    const double f = applied / solved_voltage;
-    for (double& x : res.value) if (std::isfinite(x)) x *= f;
-    for (double& x : res.flux) x *= f;
-    for (double& x : res.dirichlet_flux) x *= f;
-  }
-  if (driven)
-    for (Index v : net.high) res.value[v] = res.value[super];  // the merged electrode nodes
-  const std::vector<double>& edge_g = driven ? mg : net.g;
+  const double applied = applied_voltage(s, p_, info.step);
+  const NetSolution sol = solve_net(s, net, p_, applied, info.step, solver_);
+  const LaplacianResult& res = sol.res;
 
-  auto& u = s.particles.fields.data("electric_potential");
   auto& q = s.particles.fields.data("joule_power");
-  std::fill(q.begin(), q.end(), 0.0);
-  double power = 0.0;
-  for (std::size_t e = 0; e < edge_g.size(); ++e) {
-    if (!(edge_g[e] > 0.0) || res.flux[e] == 0.0) continue;
-    const double pe = res.flux[e] * res.flux[e] / edge_g[e];  // I^2 R
-    power += pe;
-    if (net.heat_a[e] >= 0) q[net.heat_a[e]] += net.share[e] * pe;
-    if (net.heat_b[e] >= 0) q[net.heat_b[e]] += (1.0 - net.share[e]) * pe;
-  }
-  std::size_t floating = 0;
-  for (std::size_t i = 0; i < np; ++i) {
-    if (p_.topology == "particle_centred" || centre[i] >= 0) {
-      u[i] = res.value[p_.topology == "particle_centred" ? i : static_cast<std::size_t>(centre[i])];
-    } else {  // the centre potential of the equivalent star
-      double num = 0.0, den = 0.0;
-      for (const auto& [c, gc] : star[i])
-        if (std::isfinite(res.value[c])) { num += gc * res.value[c]; den += gc; }
-      u[i] = den > 0.0 ? num / den : kNaN;
-    }
-    if (std::isnan(u[i])) ++floating;
-  }
+  double power = joule_power(net, sol, q);
+  const std::size_t floating = particle_potentials(b, particle_centred, res, s.particles.fields.data("electric_potential"));
   // No spanning path: exactly zero current (round-off in the equipotential halves is not current).
   const bool spans = spanning(net.nodes, net.a, net.b, net.g, net.high, net.low);
   if (!spans) { std::fill(q.begin(), q.end(), 0.0); power = 0.0; }
-  // Per-branch results of the particle-centred network: ids of the two ends (a wall is
-  // -1 - wall index), current from the first to the second [A], conductance [S], power [W].
-  edges_ = EdgeOutput{"electrical", {}, {{"current", "A", {}}, {"conductance", "S", {}}, {"power", "W", {}}}};
-  if (p_.topology == "particle_centred") {
-    auto id_of = [&](Index v) {
-      return g.is_wall_node(v) ? -1 - static_cast<std::int64_t>(static_cast<std::size_t>(v) - g.particle_nodes)
-                               : static_cast<std::int64_t>(s.particles.id[v]);
-    };
-    for (std::size_t e = 0; e < g.size(); ++e) {
-      if (!(edge_g[e] > 0.0)) continue;
-      const double I_e = spans ? res.flux[e] : 0.0;
-      edges_.pairs.push_back(id_of(g.a[e]));
-      edges_.pairs.push_back(id_of(g.b[e]));
-      edges_.fields[0].values.push_back(I_e);
-      edges_.fields[1].values.push_back(edge_g[e]);
-      edges_.fields[2].values.push_back(I_e * I_e / edge_g[e]);
-    }
-  }
+  edges_ = branch_output(s, g, sol, spans, particle_centred);
   if (driven && !spans)
     throw PhysicsError(info.step, {}, "electrical current",
                        "electrical_network: " + std::to_string(p_.current) + " A injected at '" + p_.high +
                            "' has no path to '" + p_.low + "' (the network is open)");
   const double I = !spans ? 0.0 : driven ? p_.current : res.dirichlet_flux[0];
   const double I_low = !spans ? 0.0 : driven ? res.dirichlet_flux[0] : res.dirichlet_flux[1];
-  const double V = driven ? res.value[super] : applied;
+  const double V = driven ? res.value[sol.super] : applied;
   r_.current = I;
   r_.voltage = V;
   r_.current_mismatch = I != 0.0 ? std::abs(I + I_low) / std::abs(I) : std::abs(I_low);
-  r_.resistance = I > 0.0 ? V / I : (spans && !driven ? unit_resistance : kInf);
+  r_.resistance = I > 0.0 ? V / I : (spans && !driven ? sol.unit_resistance : kInf);
   s.marks["signal/electrical_resistance"] = std::isfinite(r_.resistance) ? r_.resistance : -1.0;
   r_.power = power;
   r_.power_particles = 0.0;

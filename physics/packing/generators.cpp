@@ -319,9 +319,7 @@ std::map<std::string, double> FillGenerator::report(const State& s) const {
   r["mean_radius_formula"] = formula_mean_radius();
   if (s.particles.fields.has("radius_growth/scale") && s.particles.size())
     r["growth_scale"] = s.particles.fields.data("radius_growth/scale")[0];  // 1 = fully grown
-  double rs = 0.0;
-  for (double x : s.particles.radius) rs += x;
-  r["mean_radius"] = s.particles.size() ? rs / static_cast<double>(s.particles.size()) : 0.0;
+  r["mean_radius"] = s.particles.mean_radius();
   return r;
 }
 

@@ -217,15 +217,10 @@ std::vector<std::array<Index, 2>> current_pairs(const State& s) {
 }  // namespace
 
 namespace {
-double mean_radius(const State& s) {
-  double sum = 0.0;
-  for (double r : s.particles.radius) sum += r;
-  return sum / static_cast<double>(s.particles.size());
-}
 /// The wall profile of seed-001 packings: bins of half a mean diameter, the cylinder's end
 /// faces excluded over 4 mean diameters, the interior from 4 mean diameters.
 DensityProfile profile(const State& s) {
-  const double d = 2.0 * mean_radius(s);
+  const double d = 2.0 * s.particles.mean_radius();
   return wall_density_profile(s.particles.position, s.particles.radius, container_region(s), 0.5 * d, 4.0 * d, 4.0 * d);
 }
 void add_microstructure(const State& s, double gap_relative, std::map<std::string, double>& r) {

@@ -360,13 +360,10 @@ TEST_CASE("cohesive beam stable step: below the stability limit measured by bise
   CHECK(energy_growth(0.9 * estimate) < 1.5);  // bounded energy at 0.9 of the estimate
 }
 
-TEST_CASE("bond_virial_failure: the Love-Weber hydrostatic stress of a stretched cubic lattice, and breaking at it",
-          "[beam][bonds][failure]") {
-  // A simple cubic lattice (spacing 2r) of bonded elements stretched by e along x only: every x
-  // bond carries F = E S e (axial), the others nothing. An interior element has two x bonds with
-  // lever L0 / 2 = r, so sigma_xx = 2 r F / V and sigma_h = sigma_xx / 3 (V = sphere / f_v).
-  State s;
-  const double e = 1e-4;
+namespace {
+/// A 3 x 3 x 3 simple cubic lattice (spacing 2r) of bonded elements (54 bonds) stretched by e
+/// along x, its bond forces filled by one pass of the beam law.
+void stretched_lattice(State& s, double e) {
   for (int x = 0; x < 3; ++x)
     for (int y = 0; y < 3; ++y)
       for (int z = 0; z < 3; ++z) test::add_sphere(s, Vec3(2 * kR * x, 2 * kR * y, 2 * kR * z), kR, kRho);
@@ -376,6 +373,17 @@ TEST_CASE("bond_virial_failure: the Love-Weber hydrostatic stress of a stretched
   BondModelT<CohesiveBeam> bonds(beam_params());
   s.bonds.prepare(s.particles.size());
   bonds.pass(s.particles, s.bonds, 0.0);
+}
+}  // namespace
+
+TEST_CASE("bond_virial_failure: the Love-Weber hydrostatic stress of a stretched cubic lattice, and breaking at it",
+          "[beam][bonds][failure]") {
+  // A simple cubic lattice (spacing 2r) of bonded elements stretched by e along x only: every x
+  // bond carries F = E S e (axial), the others nothing. An interior element has two x bonds with
+  // lever L0 / 2 = r, so sigma_xx = 2 r F / V and sigma_h = sigma_xx / 3 (V = sphere / f_v).
+  State s;
+  const double e = 1e-4;
+  stretched_lattice(s, e);
   const double fv = 0.6, F = kE * S * e, V = 4.0 / 3.0 * kPi * kR * kR * kR / fv;
   const std::vector<double> h = physics::bond_hydrostatic_stress(s.particles, s.bonds, fv);
   const Index centre = 13;  // (1, 1, 1)
@@ -410,15 +418,7 @@ TEST_CASE("bond_virial_failure, von Mises: the virial tensor of a stretched cubi
   // its trace / 3 is bond_hydrostatic_stress, and its von Mises stress is sigma_xx (uniaxial).
   State s;
   const double e = 1e-4;
-  for (int x = 0; x < 3; ++x)
-    for (int y = 0; y < 3; ++y)
-      for (int z = 0; z < 3; ++z) test::add_sphere(s, Vec3(2 * kR * x, 2 * kR * y, 2 * kR * z), kR, kRho);
-  REQUIRE(bond_within_gap(s, 1e-3 * kR) == 54);
-  for (auto& x : s.particles.position) x.x() *= 1.0 + e;
-  s.bonds_active = true;
-  BondModelT<CohesiveBeam> bonds(beam_params());
-  s.bonds.prepare(s.particles.size());
-  bonds.pass(s.particles, s.bonds, 0.0);
+  stretched_lattice(s, e);
   const double fv = 0.6, F = kE * S * e, V = 4.0 / 3.0 * kPi * kR * kR * kR / fv;
   const auto sig = physics::bond_virial_stress(s.particles, s.bonds, fv);
   const auto h = physics::bond_hydrostatic_stress(s.particles, s.bonds, fv);
