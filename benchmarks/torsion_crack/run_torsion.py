@@ -59,7 +59,7 @@ def scene_for(config, n, seed):
     if seed is not None:
         j["seed"] = seed
     for st in j["stages"]:
-        if "create_bonds" in st:
+        if "gap_tolerance" in st.get("create_bonds", {}):  # absolute [m]; gap_tolerance_relative follows the radii
             st["create_bonds"]["gap_tolerance"] *= scale
     for s in j["particle_sets"].values():
         if "thickness" in s:

@@ -521,9 +521,10 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
       }
       if (!resuming) delete_stage_sets(s, st.delete_sets);
       std::size_t bonds_made = 0;
+      const double bond_gap = st.create_bonds_gap * (st.create_bonds_gap_relative ? s.particles.mean_radius() : 1.0);
       if (!resuming && st.create_bonds_gap >= 0.0) {
         if (s.bonds.state_columns() != sc.bond_law->state_columns()) s.bonds.set_state_columns(sc.bond_law->state_columns());
-        bonds_made = bond_within_gap(s, st.create_bonds_gap);
+        bonds_made = bond_within_gap(s, bond_gap);
       }
       s.bonds.contact_rule = sc.bond_contact_rule;
       json set_counts;
@@ -551,7 +552,10 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
       js["type"] = st.type;
       if (!set_counts.is_null()) js["particle_sets"] = set_counts;
       if (!st.delete_sets.empty()) js["deleted_particles"] = deletion_summary(s, st.delete_sets);
-      if (st.create_bonds_gap >= 0.0) js["bonds_created"] = bonds_made;
+      if (st.create_bonds_gap >= 0.0) {
+        js["bonds_created"] = bonds_made;
+        js["bonds_created_gap_m"] = bond_gap;
+      }
       if (st.dynamics) {
         std::optional<SnapshotObserver> snap;
         if (st.snapshots) {

@@ -682,10 +682,16 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
   if (js.contains("create_bonds")) {
     const std::string bp = path + "/create_bonds";
     const json& cb = js["create_bonds"];
-    if (!cb.is_object() || cb.size() != 1 || !cb.contains("gap_tolerance") || !cb["gap_tolerance"].is_number() ||
-        !(cb["gap_tolerance"].get<double>() >= 0.0))
-      errors.push_back({bp, "expected {\"gap_tolerance\": number >= 0} [m] (bond every pair whose gap is at most this; 0 = touching pairs), found " + describe(cb)});
-    else st.create_bonds_gap = cb["gap_tolerance"].get<double>();
+    const bool rel = cb.is_object() && cb.contains("gap_tolerance_relative");
+    const char* key = rel ? "gap_tolerance_relative" : "gap_tolerance";
+    if (!cb.is_object() || cb.size() != 1 || !cb.contains(key) || !cb[key].is_number() || !(cb[key].get<double>() >= 0.0))
+      errors.push_back({bp, "expected {\"gap_tolerance\": number >= 0} [m] or {\"gap_tolerance_relative\": number >= 0} "
+                            "[1, of the mean radius at the stage start] (bond every pair whose gap is at most this; 0 = "
+                            "touching pairs), found " + describe(cb)});
+    else {
+      st.create_bonds_gap = cb[key].get<double>();
+      st.create_bonds_gap_relative = rel;
+    }
     if (!ctx.has_bond_law) errors.push_back({bp, "creating bonds needs a bond law: add \"bonds\": {\"law\": ...} at the top level"});
     r["create_bonds"] = cb;
   }
@@ -1458,7 +1464,7 @@ json schema_json(const Registry& reg) {
   for (const auto& [k, v] : reg.bond_laws()) j["bond_laws"][k] = spec_to_json(v.spec);
   for (const auto& [k, v] : reg.modules()) j["modules"][k] = spec_to_json(v.spec);
   j["module_clock"] = spec_to_json(clock_spec().spec());
-  j["stage"]["create_bonds"] = "object {\"gap_tolerance\": m}: bond every pair whose gap is at most this at the stage start";
+  j["stage"]["create_bonds"] = "object {\"gap_tolerance\": m} or {\"gap_tolerance_relative\": fraction of the mean radius}: bond every pair whose gap is at most this at the stage start";
   j["bonds"] = "object {\"law\": bond law, \"params\": {...}, \"contact_rule\": \"exclude\"|\"add\"}";
   for (const auto& [k, v] : reg.generators()) j["generators"][k] = spec_to_json(v.spec);
   return j;

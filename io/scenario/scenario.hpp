@@ -48,6 +48,10 @@ struct StageDef {
   std::vector<std::string> remove_walls;
   std::string from_snapshot;          ///< load particles, contacts and walls from a checkpoint
   double create_bonds_gap = -1.0;     ///< >= 0: bond every pair with gap <= this at the stage start [m]
+  /// true: create_bonds_gap is a fraction [1] of the mean radius at the stage start (after the
+  /// generator), resolved there: `{"gap_tolerance_relative": g}`, as the networks'
+  /// touch_tolerance_relative, so a bond set follows the packing's element size.
+  bool create_bonds_gap_relative = false;
   bool dynamics = true;               ///< false: a generator stage with nothing to settle (lattice, relax)
   std::vector<std::pair<std::string, SetSelector>> sets;  ///< particle sets (re)evaluated at the stage start
   /// `"delete_sets"`: particle sets evaluated at the stage start (after the generator, before

@@ -58,6 +58,10 @@ ParamSpec<TorsionTest::Params> TorsionTest::spec() {
   s.add("resistance_signal", &Params::resistance_signal).doc("signal holding the resistance (\"\": none)");
   s.add("resistance_threshold", &Params::resistance_threshold).unit("1").positive()
       .doc("the resistance onset is the first twist where R / R0 - 1 exceeds this");
+  s.add("resistance_jump_ratio", &Params::resistance_jump_ratio).unit("1").positive()
+      .doc("the jump onset is the first twist where R / R0 reaches this (2: R doubled)");
+  s.add("resistance_persistence", &Params::resistance_persistence).unit("rad").nonnegative()
+      .doc("a resistance crossing counts only if it holds over this twist span (0: unfiltered)");
   s.add("report_twists", &Params::report_twists).unit("rad").doc("twists at which R / R0 is recorded (columns torsion_resistance_ratio_at_<twist>)");
   return s;
 }
@@ -111,8 +115,22 @@ void TorsionTest::advance(State& s, const StepInfo&) {
     m[kKey + "fit_tT"] += theta * v[1];
   }
   first("onset_break", !intact);
-  first("onset_resistance", ratio - 1.0 > p_.resistance_threshold);
-  first("separation", std::isinf(ratio));
+  // Resistance crossings through the persistence filter: a candidate span starts where the
+  // condition first holds, is confirmed once the twist has advanced by resistance_persistence
+  // with the condition held throughout, and is rejected (counted) when it falls back before.
+  auto held = [&](const std::string& k, bool cond) {
+    if (m.count(kKey + k)) return;
+    const std::string c = kKey + k + "/candidate";
+    if (!cond) {
+      if (m.erase(c) > 0) m[kKey + k + "/rejected"] += 1.0;
+      return;
+    }
+    if (!m.count(c)) m[c] = theta;
+    if (std::abs(theta - m[c]) >= p_.resistance_persistence) m[kKey + k] = m[c];
+  };
+  held("onset_resistance", ratio - 1.0 > p_.resistance_threshold);
+  held("jump", ratio >= p_.resistance_jump_ratio);
+  held("separation", std::isinf(ratio));
   for (double t : p_.report_twists) {
     const std::string k = "report/" + format_number(t);
     if (std::abs(theta) >= t && !m.count(kKey + k)) m[kKey + k] = ratio;
@@ -123,7 +141,8 @@ std::vector<std::string> TorsionTest::columns() const {
   std::vector<std::string> c = {"torsion_twist", "torsion_torque", "torsion_torque_twisted_end", "torsion_shear_stress",
                                 "torsion_shear_ratio", "torsion_elastic_torque", "torsion_torque_ratio",
                                 "torsion_resistance_ratio", "torsion_break_onset_twist", "torsion_resistance_onset_twist",
-                                "torsion_separation_twist", "torsion_stiffness_ratio"};
+                                "torsion_separation_twist", "torsion_stiffness_ratio", "torsion_resistance_jump_twist",
+                                "torsion_resistance_rejected_rises", "torsion_resistance_rejected_jumps"};
   for (double t : p_.report_twists) c.push_back(report_column(t));
   return c;
 }
@@ -173,7 +192,11 @@ std::vector<double> TorsionTest::column_values(const State& s) const {
   v[10] = mark(s, "separation");
   const double fit_tt = mark(s, "fit_tt"), fit_tT = mark(s, "fit_tT");
   v[11] = fit_tt > 0.0 ? fit_tT / fit_tt / (p_.shear_modulus * J / L) : kNaN;
-  for (std::size_t k = 0; k < p_.report_twists.size(); ++k) v[12 + k] = mark(s, "report/" + format_number(p_.report_twists[k]));
+  v[12] = mark(s, "jump");
+  const double rejected_rises = mark(s, "onset_resistance/rejected"), rejected_jumps = mark(s, "jump/rejected");
+  v[13] = std::isnan(rejected_rises) ? 0.0 : rejected_rises;
+  v[14] = std::isnan(rejected_jumps) ? 0.0 : rejected_jumps;
+  for (std::size_t k = 0; k < p_.report_twists.size(); ++k) v[15 + k] = mark(s, "report/" + format_number(p_.report_twists[k]));
   return v;
 }
 

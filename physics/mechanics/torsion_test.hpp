@@ -16,7 +16,14 @@
 ///   resistance   R / R0 with R = signal "electrical_resistance" (electrical_network) and R0
 ///                its first value; +inf when no path spans the electrodes (the pin separated)
 ///   onsets       the twist of the first broken bond, the first twist where R / R0 - 1 exceeds
-///                `resistance_threshold`, the first twist where R is infinite (NaN until then)
+///                `resistance_threshold`, the first where R / R0 >= `resistance_jump_ratio` (2: R
+///                doubled, seed 001's "more than doubles"), the first where R is infinite (no
+///                path: separation); NaN until then
+///   filter       a resistance crossing counts only when the condition holds while the twist
+///                advances by `resistance_persistence` [rad]; the onset is the twist where that
+///                held span began (0: the first crossing, unfiltered). A crossing that falls back
+///                before the span ends (the crack halves rattling, the elastic noise) is rejected
+///                and counted (torsion_resistance_rejected_rises / _jumps)
 ///   reports      R / R0 when the twist first reaches each of `report_twists`
 ///   stiffness    torsion_stiffness_ratio = k / (G J / L), k the least-squares slope of T against
 ///                theta through the origin over every call before the first break (averages out
@@ -35,6 +42,8 @@
 /// | yield_shear_stress   | Pa   | tau_y (column torsion_shear_ratio = tau_max / tau_y)         |
 /// | resistance_signal    | -    | signal holding R ("" : no resistance columns' input, R/R0 NaN) |
 /// | resistance_threshold | 1    | onset of the resistance rise: R / R0 - 1 above this          |
+/// | resistance_jump_ratio| 1    | R / R0 of the jump onset (2: the twist where R doubles)      |
+/// | resistance_persistence| rad | twist span a resistance crossing must hold to count          |
 /// | report_twists        | rad  | twists at which R / R0 is recorded                           |
 #include <string>
 #include <vector>
@@ -57,6 +66,8 @@ class TorsionTest final : public Module {
     double yield_shear_stress = 0.0;
     std::string resistance_signal = "electrical_resistance";
     double resistance_threshold = 0.01;
+    double resistance_jump_ratio = 2.0;
+    double resistance_persistence = 0.0;
     std::vector<double> report_twists;
   };
   static ParamSpec<Params> spec();
