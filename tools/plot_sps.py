@@ -16,12 +16,15 @@ files). Writes into OUT_DIR (default RUN_DIR):
   calibration_map.png           kappa_eff of the calibration snapshot over (delta_gb, epsilon)
                                 (seed 000 Fig. 9), when the run calibrated gb_thickness;
   sps_table.csv                 per snapshot target: porosity taken, kappa_eff of each stage,
-                                measured kappa, relative error [%]; then each stage's wall time.
+                                measured kappa, relative error [%], the Hashin-Shtrikman upper
+                                bound kappa_b 2(1-p)/(2+p) at the porosity taken and each stage's
+                                kappa over it (> 1 violates the bound); then each stage's wall time.
 Each PNG comes with the data drawn in it, as CSV of the same name beside it:
   conductivity_vs_porosity.csv  series (stage, measured, bulk), snapshot, porosity, kappa_eff
                                 [S/m], the +-5 % band of the measured points;
   neck_histograms.csv           snapshot, target and taken porosity, necks, bin edges of
-                                a / r_min, % of necks in the bin;
+                                a / r_min, % of necks in the bin, the snapshot's median a / r_min
+                                and % of necks in the last bin (0.9-1);
   densification.csv             kind (row / snapshot), simulation time [s], physical time [s],
                                 temperature [K], porosity_mass, porosity (snapshot rows: the
                                 value taken, placed by interpolation in time as in the plot);
@@ -55,6 +58,13 @@ BAND = 0.05
 
 class InputError(Exception):
     pass
+
+
+def hashin_shtrikman_upper(porosity, kappa_bulk=KAPPA_BULK):
+    """Hashin-Shtrikman upper bound of a porous body with insulating pores [S/m]:
+    kappa_b 2 (1 - p) / (2 + p) (Hashin & Shtrikman 1962, J. Appl. Phys. 33, 3125, with a zero-
+    conductivity second phase). No isotropic body of bulk kappa_b and porosity p conducts more."""
+    return kappa_bulk * 2.0 * (1.0 - porosity) / (2.0 + porosity)
 
 
 def measured_at(porosity):
@@ -189,9 +199,11 @@ def plot_necks(d, run, plt, path, csv_path):
         percent = 100 * neck_histogram(x)
         ax.bar(centres + (j - (len(taken) - 1) / 2) * width, percent, width,
                label=f"porosity {s['value']:.3f} ({x.size} necks)")
-        data += [[s["index"], s.get("target"), s["value"], x.size, b / NECK_BINS, (b + 1) / NECK_BINS, percent[b]] for b in range(NECK_BINS)]
-    write_csv(csv_path, ["snapshot", "target_porosity", "porosity", "necks", "a_over_rmin_low", "a_over_rmin_high", "percent_of_necks"],
-              data)
+        median = float(np.median(x)) if x.size else math.nan
+        data += [[s["index"], s.get("target"), s["value"], x.size, b / NECK_BINS, (b + 1) / NECK_BINS, percent[b], median,
+                  percent[-1]] for b in range(NECK_BINS)]
+    write_csv(csv_path, ["snapshot", "target_porosity", "porosity", "necks", "a_over_rmin_low", "a_over_rmin_high", "percent_of_necks",
+                         "median_a_over_rmin", "percent_in_last_bin"], data)
     ax.set_xticks(np.linspace(0, 1, NECK_BINS + 1))
     ax.set_xlim(0, 1)
     ax.set_xlabel("a / r_min (neck radius / smaller particle radius)")
@@ -282,7 +294,8 @@ def table(d):
     """Rows of sps_table.csv: one per snapshot target, then one per stage (wall time)."""
     stages = d["stages"]
     head = (["row", "target_porosity", "porosity_taken"] + [f"kappa_{n} [S/m]" for n in stages]
-            + ["kappa_measured [S/m]"] + [f"rel_err_{n} [%]" for n in stages] + ["wall_time_s"])
+            + ["kappa_measured [S/m]"] + [f"rel_err_{n} [%]" for n in stages]
+            + ["hashin_shtrikman_upper [S/m]"] + [f"{n}_over_bound" for n in stages] + ["wall_time_s"])
     by_target = {s.get("target"): s for s in d["snap"]["taken"]}
     targets = sorted(set(by_target) | set(d["snap"].get("not_reached", [])) - {None}, reverse=True)
     out = [head]
@@ -293,7 +306,9 @@ def table(d):
         out.append(["snapshot", f"{p:g}", f"{s['value']:.4f}" if s else "not reached"]
                    + [f"{k:.4g}" if k is not None else "" for k in ks]
                    + [f"{km:.4g}" if km else ""]
-                   + [f"{100 * (k / km - 1):+.1f}" if k is not None and km else "" for k in ks] + [""])
+                   + [f"{100 * (k / km - 1):+.1f}" if k is not None and km else "" for k in ks])
+        hs = hashin_shtrikman_upper(s["value"]) if s else None
+        out[-1] += ([f"{hs:.4g}" if hs else ""] + [f"{k / hs:.3f}" if k is not None and hs else "" for k in ks] + [""])
     for st in d["summary"]["stages"]:
         out.append([f"stage {st['name']}"] + [""] * (len(head) - 2) + [f"{st.get('wall_time_s', math.nan):.2f}"])
     return out

@@ -7,8 +7,9 @@
 #      configs/materials/cast_iron_beams.json is the same command's output).
 #   2. The same tension test with those parameters (strength 1e30 so the criterion stress is
 #      measured, nothing breaks) at every N of --sizes, same geometry and clamped-layer
-#      thickness, packing seed --seed; packing protocol and bonding (touching pairs) as the
-#      scene's (seed 001's protocol since issue 20: relax to the overall 0.63, force tolerance 1e-3).
+#      thickness, packing seed --seed; packing protocol and bonding as the scene's (since issue 20:
+#      seed 001's protocol, relax to the overall 0.63, force tolerance 1e-3; bonds between
+#      neighbours at gap <= 0.02 r_mean).
 #   Per run: E_M, nu_M (stage `hold`, equilibrium), their errors against the targets, the ratio
 #   bonds_max_failure_stress / tension_stress and the macroscopic stress at which the first bond
 #   would break with the calibrated strength, sigma_break = sigma_mu_f / ratio (linear elastic
@@ -25,8 +26,10 @@
 # small sample is denser); they drift with N alongside E_M, a likely cause of the N-dependence
 # measured (not isolated by a separate experiment).
 # Outputs: OUTDIR/results.csv, OUTDIR/results.json (default OUTDIR: this directory).
-# Committed: results.csv/json (seed 1, with the calibration, calibration.json) and
-# results_seed2.csv/json (--seed 2 --skip-calibration --outdir ...: the packing scatter).
+# Committed: results.csv/json (seed 1), results_seed2.csv/json and results_seed3.csv/json
+# (--seed S --skip-calibration --outdir ...: the packing scatter), all with the committed beams,
+# and calibration.json (the calibration's iterations: --sizes 4000 --seed 1). summarize.py tables
+# them per N with the bending study (bending.py, bending.csv) in summary.csv.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"

@@ -83,6 +83,17 @@ Vec3 contact_point(const State& s, const InteractionGraph& g, std::size_t e, Ind
   return p.position[i] + dx * (di / D);
 }
 
+/// Extent of the particles along the unit vector e, surfaces included: max(x.e + r) - min(x.e - r) [m].
+double extent_along(const ParticleStore& p, const Vec3& e) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double z = p.position[i].dot(e);
+    lo = std::min(lo, z - p.radius[i]);
+    hi = std::max(hi, z + p.radius[i]);
+  }
+  return hi - lo;
+}
+
 Vec3 centroid(const State& s, const std::vector<Index>& nodes) {
   Vec3 c = Vec3::Zero();
   for (Index i : nodes) c += s.particles.position[i];
@@ -122,6 +133,9 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("voltage", &P::voltage).unit("V").positive().doc("potential difference between the electrodes");
   s.add("current", &P::current).unit("A").nonnegative().doc("> 0: inject this current at `high` (one equipotential electrode) instead of holding the voltage; `low` stays at 0 V");
   s.add("length", &P::length).unit("m").nonnegative().doc("L of kappa_eff = I L / (dV A); 0: distance between the electrodes' particle centroids");
+  s.add("length_mode", &P::length_mode).choices({"electrode_centroids", "sample_height"})
+      .doc("L when length = 0: the distance of the electrodes' particle centroids, or the sample height (Eq. 28 as "
+           "written: the extent of the particles, surfaces included, along the axis from the low to the high electrode)");
   s.add("area", &P::area).unit("m^2").nonnegative().doc("A of kappa_eff; 0: cross-section of the first cylinder wall (else kappa_eff is not reported)");
   s.add("branches", &P::branches).choices({"all", "bonds"})
       .doc("all: contacts, necks and intact bonds conduct; bonds: only intact bonds (cohesive-beam solids, seed 001)");
@@ -547,7 +561,10 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   r_.iterations = res.iterations;
   // L and A of Eq. 28.
   double L = p_.length;
-  if (!(L > 0.0) && !go.walls) L = (centroid(s, high) - centroid(s, low)).norm();
+  if (!(L > 0.0) && !go.walls) {
+    const Vec3 axis = centroid(s, high) - centroid(s, low);
+    L = p_.length_mode == "sample_height" ? extent_along(s.particles, axis.normalized()) : axis.norm();
+  }
   double A = p_.area;
   if (!(A > 0.0))
     for (const auto& w : s.walls)

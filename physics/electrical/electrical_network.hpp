@@ -58,7 +58,8 @@
 /// | voltage            | V     | potential of `high` (low = 0)                                  |
 /// | voltage_signal     | -     | take the voltage from State signal "signal/<name>" at each solve (a controller's output) |
 /// | current            | A     | > 0: inject this current at `high` instead (electrode equipotential) |
-/// | length, area       | m, m2 | L and A of Eq. 28 (0: distance of the electrodes' centroids; the die cross-section) |
+/// | length, area       | m, m2 | L and A of Eq. 28 (0: from length_mode; the die cross-section) |
+/// | length_mode        | -     | L when length = 0: electrode_centroids (distance of the electrodes' particle centroids) or sample_height (Eq. 28 as written: the particles' extent, surfaces included, along the electrode axis) |
 /// | solver, tolerance  | -, 1  | direct, cg_ic, cg_jacobi, amg, pseudo_transient; iterative relative residual |
 /// | displacement_field | -     | touching/tunnelling: a 3-component particle field u [m] (ptc_self_heating's ptc_displacement): pair gaps become gap + n . (u_b - u_a); clock every step by default |
 /// | open_conductance   | S     | touching: conductance of a pair of the graph (gap <= touch_tolerance) whose gap after the displacement exceeds the tolerance (0: none) |
@@ -97,6 +98,7 @@ class ElectricalNetwork final : public Module {
     std::string voltage_signal;
     double current = 0.0;
     double length = 0.0;
+    std::string length_mode = "electrode_centroids";
     double area = 0.0;
     std::string solver = "direct";
     double tolerance = 1e-10;

@@ -187,6 +187,15 @@ TEST_CASE("electrical_network: simple cubic lattice with the transmission surfac
     CHECK(test::relative_error(r.resistance, rho * l / A) < 1e-12);
     CHECK(test::relative_error(r.length, l) < 1e-12);
   }
+  SECTION("length_mode sample_height (Eq. 28 as written): L = the lattice's height m d + 2 r - d, kappa_eff with it") {
+    p.alpha_constant = 4.0;
+    p.area = A;
+    p.length_mode = "sample_height";
+    const auto r = solve(s, p);
+    const double H = (m - 1) * d + 2 * kR;
+    CHECK(test::relative_error(r.length, H) < 1e-12);
+    CHECK(test::relative_error(r.conductivity_eff, H / (rho * l / A) / A) < 1e-10);
+  }
   SECTION("the full alpha(n), f(e) model: the boundary elements change it (reported)") {
     const auto r = solve(s, p);
     const double err = r.resistance / (rho * l / A) - 1.0;

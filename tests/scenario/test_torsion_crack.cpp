@@ -210,7 +210,8 @@ TEST_CASE("pin torsion (configs/torsion_crack.json at N = 1000): elastic torque,
   // element size because the packing protocol does (see README). The bands here are regression
   // guards around the N = 1000 figures, not the issue's 3 % / 5 %: stiffness within 20 % of
   // G J / L, first break within 15 % of 0.0416 rad, the pin still conducting like an intact one
-  // at 0.05 rad (R/R0 < 1.1) and more than 1.5 R0 at 0.07 rad (seed 001: more than doubled), and
+  // at 0.03 rad (R/R0 < 1.01; since issue 20 the crack runs before 0.05 rad) and more than 1.5 R0
+  // at 0.07 rad (seed 001: more than doubled), and
   // the intact-pin checks of check_intact (action = reaction, quasi-static, R unchanged).
   // [slow]: 40 s on one thread; the elastic range runs in the fast suite (test above).
   test::ScratchDir tmp("sparkdem_torsion_1000");
@@ -223,7 +224,7 @@ TEST_CASE("pin torsion (configs/torsion_crack.json at N = 1000): elastic torque,
                           << f["torsion_resistance_ratio_at_0.05"] << ", at 0.07 " << f["torsion_resistance_ratio_at_0.07"]);
   CHECK(std::abs(f["torsion_stiffness_ratio"].get<double>() - 1.0) < 0.20);
   CHECK(std::abs(f["torsion_break_onset_twist"].get<double>() / predicted - 1.0) < 0.15);
-  CHECK(f["torsion_resistance_ratio_at_0.05"].get<double>() < 1.1);
+  CHECK(f["torsion_resistance_ratio_at_0.03"].get<double>() < 1.01);
   const json& r07 = f["torsion_resistance_ratio_at_0.07"];
   CHECK((r07.is_null() || r07.get<double>() > 1.5));  // null: +inf, separated
   check_intact(intact_rows(out / "timeseries.csv"));
