@@ -8,9 +8,6 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "io/scenario/pipeline.hpp"
-#include "io/scenario/scenario.hpp"
-#include "physics/register_all.hpp"
 #include "support/scratch.hpp"
 
 namespace fs = std::filesystem;
@@ -26,15 +23,8 @@ json pull_stage(const json& create_bonds, const std::string& tag) {
   scene["stages"].erase(2);
   scene["stages"][1]["create_bonds"] = create_bonds;
   scene["stages"][1]["stop"] = {{"steps", 1}};
-  Registry reg;
-  physics::register_all(reg);
-  io::Scenario sc = io::load_scenario(scene, reg, base);
   test::ScratchDir tmp("sparkdem_create_bonds_" + tag);
-  io::RunOptions opt;
-  opt.outdir = tmp.path / "out";
-  opt.quiet = true;
-  opt.threads = 1;
-  const json summary = io::run_scenario(sc, opt);
+  const json summary = test::run_scene(scene, base, tmp.path / "out");
   REQUIRE(summary["status"] == "completed");
   return summary["stages"][1];
 }

@@ -69,18 +69,13 @@ TEST_CASE("hot press scene: temperature, physical time and compact columns", "[t
   // the punch force is 2000 Pa x pi (6 mm)^2 within 1 % at the end.
   json scene = test::load_data("hot_press_small.json");
   test::ScratchDir tmp("sparkdem_hot_press");
-  io::Scenario sc = io::load_scenario(scene, test::registry(), tmp.path);
-  io::RunOptions opt;
-  opt.outdir = tmp.path / "out";
-  opt.quiet = true;
-  opt.threads = 1;
-  const json summary = io::run_scenario(sc, opt);
+  const json summary = test::run_scene(scene, tmp.path, tmp.path / "out");
   REQUIRE(summary["status"] == "completed");
   const json& f = summary["stages"][1]["final"];
   CHECK(summary["stages"][1]["physical_time_s"].get<double>() == Approx(80.0).epsilon(1e-12));
   CHECK(f["temperature"].get<double>() == 900.0);
   CHECK(std::abs(f["compact_height"].get<double>() - (0.0125 - f["wall_top_offset"].get<double>())) <= 1e-15);
-  const Porosities ref = frame_porosities(opt.outdir / "frames/frame_000001.h5", 0.006, 0.0125 - f["wall_top_offset"].get<double>());
+  const Porosities ref = frame_porosities(tmp.path / "out" / "frames/frame_000001.h5", 0.006, 0.0125 - f["wall_top_offset"].get<double>());
   CHECK(std::abs(f["porosity_mass"].get<double>() - ref.mass) <= 1e-12);
   CHECK(std::abs(f["porosity"].get<double>() - ref.lenses) <= 1e-12);
   CHECK(std::abs(f["relative_density"].get<double>() - (1.0 - ref.lenses)) <= 1e-12);

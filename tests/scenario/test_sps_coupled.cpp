@@ -72,12 +72,7 @@ TEST_CASE("SPS coupled (reduced): Joule heating under PI control follows the hea
   scene["stages"] = json::array({scene["stages"][0], scene["stages"][1]});
   scene["stages"][1]["output"]["timeseries_every"] = 10;  // rows for the V I integral (200 in the config)
   test::ScratchDir tmp("sparkdem_sps_coupled");
-  io::Scenario sc = io::load_scenario(scene, test::registry(), fs::path(SPARKDEM_SOURCE_DIR) / "configs");
-  io::RunOptions opt;
-  opt.outdir = tmp.path / "out";
-  opt.quiet = true;
-  opt.threads = 1;
-  const json summary = io::run_scenario(sc, opt);
+  const json summary = test::run_scene(scene, fs::path(SPARKDEM_SOURCE_DIR) / "configs", tmp.path / "out");
   REQUIRE(summary["status"] == "completed");
   const json& f = summary["stages"][1]["final"];
   INFO(f.dump(1));
@@ -88,14 +83,14 @@ TEST_CASE("SPS coupled (reduced): Joule heating under PI control follows the hea
   CHECK(f["heat_lost_energy"].get<double>() > 0.0);
   CHECK(f["heat_temperature_max"].get<double>() > f["heat_temperature_min"].get<double>());
   // Energy delivered by the supply (electrical columns) = heat taken in (heat columns), eta = 1.
-  const Window w = supply_window(opt.outdir / "results.h5", 1.0, 200.0);
+  const Window w = supply_window(tmp.path / "out" / "results.h5", 1.0, 200.0);
   INFO("supplied " << w.supplied << " J, stored + lost " << w.taken_in << " J over " << w.rows << " rows");
   REQUIRE(w.rows > 600);
   CHECK(w.taken_in > 0.9 * f["heat_joule_energy"].get<double>());  // the window holds nearly all the heating
   CHECK(std::abs(w.supplied / w.taken_in - 1.0) <= 1e-3);
   // Stored heat from the final frame: C_i = rho c (4/3) pi r_ref^3 (configs/sps_coupled.json:
   // rho = 5910 kg/m^3, c = 600 J/(kg K), capacity "sphere"), every particle started at 423 K.
-  const auto frame = io::H5File::open_read(opt.outdir / "frames/frame_000001.h5");
+  const auto frame = io::H5File::open_read(tmp.path / "out" / "frames/frame_000001.h5");
   REQUIRE(static_cast<double>(frame.attribute_int64("/", "step")) == f["step"].get<double>());  // the stage's last state
   const auto T = frame.read_doubles("/particles/temperature"), r = frame.read_doubles("/particles/radius"),
              r_ref = frame.read_doubles("/particles/radius_ref");

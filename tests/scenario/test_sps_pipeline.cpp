@@ -44,12 +44,7 @@ json small_pipeline() {
 /// Runs the scene and checks the list at the top of this file.
 void check_pipeline(const json& scene) {
   test::ScratchDir tmp("sparkdem_sps");
-  io::Scenario sc = io::load_scenario(scene, test::registry(), fs::path(SPARKDEM_SOURCE_DIR) / "configs");
-  io::RunOptions opt;
-  opt.outdir = tmp.path / "out";
-  opt.quiet = true;
-  opt.threads = 1;
-  const json summary = io::run_scenario(sc, opt);
+  const json summary = test::run_scene(scene, fs::path(SPARKDEM_SOURCE_DIR) / "configs", tmp.path / "out");
   REQUIRE(summary["status"] == "completed");
   const json& press = summary["stages"][2];
   REQUIRE(press["name"] == "hot_press");

@@ -43,14 +43,8 @@ std::vector<std::vector<std::string>> read_csv(const fs::path& f) {
 /// Load `scene` (relative paths against `base`), run it into a scratch directory with one thread
 /// and return the summary; `out` receives the output directory.
 json run_scene(const json& scene, const fs::path& base, const test::ScratchDir& tmp, fs::path& out) {
-  Registry reg;
-  physics::register_all(reg);
-  io::Scenario sc = io::load_scenario(scene, reg, base);
-  io::RunOptions opt;
-  opt.outdir = out = tmp.path / "out";
-  opt.quiet = true;
-  opt.threads = 1;
-  return io::run_scenario(sc, opt);
+  out = tmp.path / "out";
+  return test::run_scene(scene, base, out);
 }
 }  // namespace
 

@@ -11,6 +11,8 @@
 #include <unistd.h>
 
 #include "engine/model/registry.hpp"
+#include "io/scenario/pipeline.hpp"
+#include "io/scenario/scenario.hpp"
 #include "physics/register_all.hpp"
 
 namespace sparkdem::test {
@@ -43,6 +45,17 @@ inline const Registry& registry() {
   return reg;
 }
 
+/// Load `scene` (relative paths against `base`) and run it quietly on one thread into `outdir`;
+/// the run's summary.
+inline nlohmann::json run_scene(const nlohmann::json& scene, const std::filesystem::path& base,
+                                const std::filesystem::path& outdir) {
+  io::Scenario sc = io::load_scenario(scene, registry(), base);
+  io::RunOptions opt;
+  opt.outdir = outdir;
+  opt.quiet = true;
+  opt.threads = 1;
+  return io::run_scenario(sc, opt);
+}
 
 /// A scene of tests/scenario/data, parsed.
 inline nlohmann::json load_data(const std::string& name) {
