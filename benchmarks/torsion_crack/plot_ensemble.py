@@ -101,8 +101,8 @@ def main():
                 continue
             tw = [num(x["torsion_twist"]) for x in r["rows"]]
             lw = 1.4 if s == 1 else 0.7
-            ax_t.plot(tw, [num(x["torsion_torque_ratio"]) * t / max(1e-12, t) if t > 0 else math.nan
-                           for x, t in zip(r["rows"], tw)], lw=lw, label="seed %d" % s)
+            ax_t.plot(tw, [num(x["torsion_torque_ratio"]) if t > 0 else math.nan for x, t in zip(r["rows"], tw)],
+                      lw=lw, label="seed %d" % s)
             rr = [num(x["torsion_resistance_ratio"]) for x in r["rows"]]
             ax_r.plot(tw, [min(x, 1e3) if not math.isnan(x) else math.nan for x in rr], lw=lw)
             ax_b.plot(tw, [num(x["bonds_broken"]) for x in r["rows"]], lw=lw)

@@ -521,7 +521,8 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
       }
       if (!resuming) delete_stage_sets(s, st.delete_sets);
       std::size_t bonds_made = 0;
-      const double bond_gap = st.create_bonds_gap * (st.create_bonds_gap_relative ? s.particles.mean_radius() : 1.0);
+      const double bond_gap = st.create_bonds_gap >= 0.0 && st.create_bonds_gap_relative
+                                  ? st.create_bonds_gap * s.particles.mean_radius() : st.create_bonds_gap;
       if (!resuming && st.create_bonds_gap >= 0.0) {
         if (s.bonds.state_columns() != sc.bond_law->state_columns()) s.bonds.set_state_columns(sc.bond_law->state_columns());
         bonds_made = bond_within_gap(s, bond_gap);

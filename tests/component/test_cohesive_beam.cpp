@@ -207,12 +207,8 @@ TEST_CASE("a cantilever of bonded elements under a tip load settles at P L^3 / (
   for (int k = 0; k < kN; ++k) test::add_sphere(s, Vec3(2 * kR * k, 0, 0), kR, kRho);
   const std::size_t made = bond_within_gap(s, 1e-3 * kR);
   REQUIRE(made == kN - 1);
-  SetSelector clamp, tip;
-  clamp.kind = tip.kind = SetSelector::Kind::Ids;
-  clamp.ids = {s.particles.id[0]};
-  tip.ids = {s.particles.id[kN - 1]};
-  assign_set(s, "clamp", clamp);
-  assign_set(s, "tip", tip);
+  test::id_set(s, "clamp", {s.particles.id[0]});
+  test::id_set(s, "tip", {s.particles.id[kN - 1]});
   const double L = 2 * kR * (kN - 1);
   const double P = 1e-5;  // [N]; deflection ~1e-4 L: linear regime
   const double expected = P * L * L * L / (3 * kE * I);
@@ -255,12 +251,8 @@ TEST_CASE("torsion_test on a twisted chain of beams: twist = w t, torque = G I0 
   State s;
   for (int k = 0; k < kN; ++k) test::add_sphere(s, Vec3(0, 0, 2 * kR * k), kR, kRho);
   REQUIRE(bond_within_gap(s, 1e-3 * kR) == kN - 1);
-  SetSelector bottom, top;
-  bottom.kind = top.kind = SetSelector::Kind::Ids;
-  bottom.ids = {s.particles.id[0]};
-  top.ids = {s.particles.id[kN - 1]};
-  assign_set(s, "bottom", bottom);
-  assign_set(s, "top", top);
+  test::id_set(s, "bottom", {s.particles.id[0]});
+  test::id_set(s, "top", {s.particles.id[kN - 1]});
 
   physics::HertzMindlin::Params hp;
   ContactModelT<physics::HertzMindlin> contact(hp);

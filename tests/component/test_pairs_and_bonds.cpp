@@ -116,12 +116,8 @@ class Bonder final : public Module {
 void two_spheres(State& s, double d) {
   test::add_sphere(s, Vec3(-0.5 * d, 0, 0), kR, kRho);
   test::add_sphere(s, Vec3(0.5 * d, 0, 0), kR, kRho);
-  SetSelector a, b;
-  a.kind = b.kind = SetSelector::Kind::Ids;
-  a.ids = {s.particles.id[0]};
-  b.ids = {s.particles.id[1]};
-  assign_set(s, "left", a);
-  assign_set(s, "right", b);
+  test::id_set(s, "left", {s.particles.id[0]});
+  test::id_set(s, "right", {s.particles.id[1]});
 }
 
 /// Rows of the table holding the pair of particles 0 and 1.

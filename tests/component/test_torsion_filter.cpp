@@ -12,7 +12,6 @@
 #include <string>
 #include <vector>
 
-#include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
 #include "physics/mechanics/torsion_test.hpp"
 #include "tests/support/scene.hpp"
@@ -37,12 +36,8 @@ Script run_script(double persistence) {
   State s;
   test::add_sphere(s, Vec3(0, 0, 0), 1e-4, 7000.0);
   test::add_sphere(s, Vec3(0, 0, 2e-4), 1e-4, 7000.0);
-  SetSelector bottom, top;
-  bottom.kind = top.kind = SetSelector::Kind::Ids;
-  bottom.ids = {s.particles.id[0]};
-  top.ids = {s.particles.id[1]};
-  assign_set(s, "bottom", bottom);
-  assign_set(s, "top", top);
+  test::id_set(s, "bottom", {s.particles.id[0]});
+  test::id_set(s, "top", {s.particles.id[1]});
   physics::TorsionTest::Params p;
   p.radius = 1e-4;
   p.shear_modulus = 1e10;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "engine/simulation.hpp"
+#include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
 
 namespace sparkdem::test {
@@ -20,6 +21,15 @@ inline Index add_sphere(State& s, const Vec3& x, double r, double rho, const Vec
   const Index i = s.particles.add(x, r, sphere_mass(r, rho));
   s.particles.velocity[i] = v;
   return i;
+}
+
+/// Assign the particle set `name` to the particles with these global ids (SetSelector Ids);
+/// returns the member count.
+inline std::size_t id_set(State& s, const std::string& name, std::vector<Id> ids) {
+  SetSelector sel;
+  sel.kind = SetSelector::Kind::Ids;
+  sel.ids = std::move(ids);
+  return assign_set(s, name, sel);
 }
 
 /// A fixed plane wall through `point` with inward unit normal `normal`.
