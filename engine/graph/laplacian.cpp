@@ -110,7 +110,7 @@ std::vector<Index> component_roots(std::size_t nodes, std::span<const Index> a, 
   std::vector<Index> parent(nodes);
   std::iota(parent.begin(), parent.end(), Index{0});
   for (std::size_t e = 0; e < g.size(); ++e) {
-    if (a[e] == b[e] || !(g[e] > 0.0)) continue;
+    if (a[e] == b[e] || g[e] == 0.0 || std::isnan(g[e])) continue;  // signed elements (sphere_element) connect too
     const Index ra = find_root(parent, a[e]), rb = find_root(parent, b[e]);
     if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
   }
@@ -434,7 +434,7 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
   if (!p.shunt.empty() && p.shunt.size() != n)
     throw SetupError("Laplacian: shunt has " + std::to_string(p.shunt.size()) + " entries for " + std::to_string(n) + " nodes");
   for (std::size_t e = 0; e < ne; ++e)
-    if (!(p.g[e] >= 0.0) || !std::isfinite(p.g[e]))
+    if (!std::isfinite(p.g[e]) || (!p.signed_conductances && !(p.g[e] >= 0.0)))
       physics_fail(p.step, "conductance",
                          "edge " + std::to_string(e) + " (nodes " + std::to_string(p.a[e]) + ", " + std::to_string(p.b[e]) +
                              ") has g = " + std::to_string(p.g[e]) + "; conductances must be finite and >= 0");

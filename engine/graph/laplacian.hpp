@@ -100,7 +100,7 @@ double gershgorin_step(const Eigen::SparseMatrix<double>& A, std::span<const dou
 Eigen::SparseMatrix<double> assemble_laplacian(std::size_t nodes, std::span<const Index> a, std::span<const Index> b,
                                                std::span<const double> g);
 
-/// Connected components over the conducting edges (g > 0, a != b), by union-find: the root of
+/// Connected components over the conducting edges (g != 0 and not NaN, a != b: a negative element entry joins its nodes too), by union-find: the root of
 /// every node, which is the smallest node index of its component (deterministic). Node
 /// indices must be valid. The one component search shared by the Laplacian solver, the
 /// effective resistance and the network modules.
@@ -118,6 +118,11 @@ struct LaplacianProblem {
   std::size_t nodes = 0;
   std::span<const Index> a, b;            ///< edge end points
   std::span<const double> g;              ///< conductance per edge, >= 0 (0 = no edge)
+  /// Accept negative conductances: the edges of a multi-terminal element whose matrix is
+  /// positive semi-definite with zero row sums but not an M-matrix (the sphere element of
+  /// physics/electrical/sphere_element.hpp). The caller guarantees that the assembled matrix is
+  /// positive semi-definite; the pseudo-transient method then has no stability guarantee.
+  bool signed_conductances = false;
   std::vector<DirichletGroup> dirichlet;  ///< disjoint node sets with prescribed values
   std::span<const double> source;         ///< injected q_v per node (empty = none); ignored at Dirichlet nodes
   std::span<const double> shunt;          ///< s_v >= 0 per node (empty = none)

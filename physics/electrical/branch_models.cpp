@@ -32,6 +32,37 @@ void resolve_touch_tolerance(BranchModel& m, double touch_tolerance_relative, co
   m.touch_tolerance = touch_tolerance_relative * s.particles.mean_radius();
 }
 
+std::vector<double> sintered_neck_radii(const BranchModel& m, const State& s, const InteractionGraph& g) {
+  const auto& p = s.particles;
+  auto radius = [&](Index v) { return g.is_wall_node(v) ? kInf : p.radius[v]; };
+  std::vector<double> a(g.size(), 0.0);
+  for (std::size_t e = 0; e < g.size(); ++e) {
+    const double ra = radius(g.a[e]), rb = radius(g.b[e]);
+    const bool law_neck = m.neck == "law" && g.kind[e] == EdgeKind::Neck;
+    if (law_neck) a[e] = g.radius[e];
+    else if (g.overlap[e] > 0.0 && std::isfinite(ra) && std::isfinite(rb))
+      a[e] = m.neck == "cv" ? el::cv_neck_radius(ra, rb, g.overlap[e]) : el::coble_neck_radius(ra, rb, g.overlap[e]);
+    // A neck never exceeds the smaller particle (§7.9; the kernels leave the cap to the caller):
+    // the Coble neck of a deep overlap would (1.8 r_min at h = 0.9 r_min, size ratio 10), and
+    // without the grain-boundary-fraction correction nothing else caps it.
+    a[e] = std::min(a[e], std::min(ra, rb));
+  }
+  if (m.gbf_correction) {
+    std::vector<double> node_r(g.nodes());
+    for (std::size_t v = 0; v < g.nodes(); ++v) node_r[v] = radius(static_cast<Index>(v));
+    a = el::corrected_neck_radii(g.a, g.b, a, node_r);
+  }
+  return a;
+}
+
+double hemisphere_access_conductance(const BranchModel& m, double kappa_S_per_m, double r_m, double a_m) {
+  return el::hemisphere_conductance(hemisphere_law(m.hemisphere), kappa_S_per_m, r_m, a_m);
+}
+
+double layer_conductance(const BranchModel& m, double kappa_S_per_m, double a_m) {
+  return m.gb_thickness > 0.0 ? el::grain_boundary_layer_conductance(kappa_S_per_m, a_m, m.gb_epsilon, m.gb_thickness) : kInf;
+}
+
 std::vector<double> branch_conductances(const BranchModel& m, const State& s, const InteractionGraph& g,
                                         const std::vector<double>& k_edge, std::vector<double>& share_a) {
   const auto& p = s.particles;
@@ -47,23 +78,7 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
       G[e] = a > 0.0 ? el::holm_conductance(a, k_edge[e], k_edge[e]) : 0.0;
     }
   } else if (m.model == "sintered_neck") {
-    std::vector<double> a(g.size(), 0.0);
-    for (std::size_t e = 0; e < g.size(); ++e) {
-      const double ra = radius(g.a[e]), rb = radius(g.b[e]);
-      const bool law_neck = m.neck == "law" && g.kind[e] == EdgeKind::Neck;
-      if (law_neck) a[e] = g.radius[e];
-      else if (g.overlap[e] > 0.0 && std::isfinite(ra) && std::isfinite(rb))
-        a[e] = m.neck == "cv" ? el::cv_neck_radius(ra, rb, g.overlap[e]) : el::coble_neck_radius(ra, rb, g.overlap[e]);
-      // A neck never exceeds the smaller particle (§7.9; the kernels leave the cap to the caller):
-      // the Coble neck of a deep overlap would (1.8 r_min at h = 0.9 r_min, size ratio 10), and
-      // without the grain-boundary-fraction correction nothing else caps it.
-      a[e] = std::min(a[e], std::min(ra, rb));
-    }
-    if (m.gbf_correction) {
-      std::vector<double> node_r(g.nodes());
-      for (std::size_t v = 0; v < g.nodes(); ++v) node_r[v] = radius(static_cast<Index>(v));
-      a = el::corrected_neck_radii(g.a, g.b, a, node_r);
-    }
+    const std::vector<double> a = sintered_neck_radii(m, s, g);
     const el::HemisphereLaw law = hemisphere_law(m.hemisphere);
     const el::GrainBoundaryLayer layer =
         m.gb_thickness > 0.0 ? el::GrainBoundaryLayer::layer(m.gb_epsilon, m.gb_thickness) : el::GrainBoundaryLayer::none();

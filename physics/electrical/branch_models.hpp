@@ -54,6 +54,17 @@ struct BranchModel {
 std::vector<double> branch_conductances(const BranchModel& m, const State& s, const InteractionGraph& g,
                                         const std::vector<double>& k_edge, std::vector<double>& share_a);
 
+/// sintered_neck: the neck radius [m] per graph edge (0: no neck): the contact law's neck column
+/// (neck = law) or Coble / constant volume from the overlap, capped at r_min, then the
+/// grain-boundary-fraction correction (Eqs. 21-25) when enabled.
+std::vector<double> sintered_neck_radii(const BranchModel& m, const State& s, const InteractionGraph& g);
+
+/// sintered_neck: the half-particle conductance [S] of the model's hemisphere law (Eqs. 19-20).
+double hemisphere_access_conductance(const BranchModel& m, double kappa_S_per_m, double r_m, double a_m);
+
+/// sintered_neck: the grain-boundary layer's conductance [S] (Eq. 26); +inf without a layer.
+double layer_conductance(const BranchModel& m, double kappa_S_per_m, double a_m);
+
 /// The near-pair gap the model needs in the interaction graph (tunnelling cut-off, touching
 /// tolerance, 0 otherwise).
 double branch_model_near_gap(const BranchModel& m);

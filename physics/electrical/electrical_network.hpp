@@ -59,6 +59,7 @@
 /// | voltage_signal     | -     | take the voltage from State signal "signal/<name>" at each solve (a controller's output) |
 /// | current            | A     | > 0: inject this current at `high` instead (electrode equipotential) |
 /// | length, area       | m, m2 | L and A of Eq. 28 (0: from length_mode; the die cross-section) |
+/// | topology           | -     | particle_centred (seeds 000/001), contact_centred (seed 003), sphere_element (sintered_neck: nodes at the necks, each particle a sphere element whose necks share its volume; column electrical_negative_share) |
 /// | length_mode        | -     | L when length = 0: electrode_centroids (distance of the electrodes' particle centroids) or sample_height (Eq. 28 as written: the particles' extent, surfaces included, along the electrode axis) |
 /// | solver, tolerance  | -, 1  | direct, cg_ic, cg_jacobi, amg, pseudo_transient; iterative relative residual |
 /// | displacement_field | -     | touching/tunnelling: a 3-component particle field u [m] (ptc_self_heating's ptc_displacement): pair gaps become gap + n . (u_b - u_a); clock every step by default |
@@ -82,6 +83,7 @@ class ElectricalNetwork final : public Module {
     std::string topology = "particle_centred";
     std::string branches = "all";
     bool chord_scaling = true;
+    std::string element_cap = "equal_area";
     double conductivity = 1e6;
     double temperature = 293.15;
     bool temperature_field = false;
@@ -166,6 +168,7 @@ class ElectricalNetwork final : public Module {
     double solves = 0.0;
     double voltage = 0.0;            ///< potential of the high electrode [V] (given, or from the injected current)
     double power_particles = 0.0;    ///< part of `power` that heats particles (joule_power summed) [W]; the rest heats wall electrodes
+    double negative_share = 0.0;     ///< sphere_element: sum of the negative element conductances over the positive ones [-]
   };
   const Result& result() const { return r_; }
 
@@ -173,6 +176,8 @@ class ElectricalNetwork final : public Module {
   /// Branch conductances [S] per graph edge, and the share of each branch resistance on side a
   /// (NaN when the model puts all of it at the contact).
   std::vector<double> conductances(const State& s, const InteractionGraph& g, std::vector<double>& share_a) const;
+  /// Bulk conductivity per particle [S/m]: at `temperature`, or at its `temperature` field value.
+  std::vector<double> particle_conductivities(const State& s) const;
   Params p_;
   double kappa_ = 0.0;  ///< bulk conductivity at the evaluation temperature [S/m]
   electrical::ConductivityLaw law_;  ///< kappa(T)

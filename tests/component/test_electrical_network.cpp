@@ -55,7 +55,7 @@ void chain(State& s, int n, double delta, const Vec3& x0 = Vec3::Zero()) {
 /// n random spheres (radius kR (r0 + dr U)) in a cube of edge L, placed one by one and kept only if
 /// no overlap exceeds 5 % of the smaller radius, then all radii grown by 1.35 so that many pairs
 /// overlap; electrode sets "bottom" / "top" are the slabs within 1.5 kR of the two z faces.
-void random_packing(State& s, std::size_t n, std::uint64_t seed, double r0, double dr, double L) {
+void random_packing(State& s, std::size_t n, std::uint64_t seed, double r0, double dr, double L, double growth = 1.35) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> U(0.0, 1.0);
   while (s.particles.size() < n) {
@@ -66,7 +66,7 @@ void random_packing(State& s, std::size_t n, std::uint64_t seed, double r0, doub
       ok = s.particles.radius[i] + r - (s.particles.position[i] - x).norm() < 0.05 * std::min(r, s.particles.radius[i]);
     if (ok) test::add_sphere(s, x, r, 2500.0);
   }
-  for (auto& r : s.particles.radius) r *= 1.35;
+  for (auto& r : s.particles.radius) r *= growth;
   box_set(s, "bottom", Vec3(-1, -1, -1), Vec3(1, 1, 1.5 * kR));
   box_set(s, "top", Vec3(-1, -1, L - 1.5 * kR), Vec3(1, 1, 1));
 }
@@ -291,5 +291,88 @@ TEST_CASE("electrical_network: the contact-centred topology against the particle
     CHECK(cc.resistance < pc.resistance);  // Rayleigh monotonicity: every mesh conductance grew
     CHECK(cc.power_mismatch < 1e-10);
     WARN("random packing of 250 spheres: contact-centred / particle-centred resistance = " << cc.resistance / pc.resistance);
+  }
+}
+
+namespace {
+/// Mass porosity of the slab z in [z0, z1] of the particles' lateral extent (the square
+/// [min(x - r), max(x + r)] in x and y): 1 - (sphere volume inside, overlaps counted as often as
+/// covered) / (slab volume), by counting cell centres of an n^3 grid. Returns the square's area.
+double slab_mass_porosity(const State& s, double z0, double z1, int n, double& area) {
+  const auto& P = s.particles;
+  double lo = 1e300, hi = -1e300;
+  for (std::size_t i = 0; i < P.size(); ++i)
+    for (int d = 0; d < 2; ++d) { lo = std::min(lo, P.position[i][d] - P.radius[i]); hi = std::max(hi, P.position[i][d] + P.radius[i]); }
+  area = (hi - lo) * (hi - lo);
+  const double hx = (hi - lo) / n, hz = (z1 - z0) / n;
+  double covered = 0.0;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    const Vec3& c = P.position[i];
+    const double r = P.radius[i];
+    for (int k = 0; k < n; ++k) {
+      const double z = z0 + (k + 0.5) * hz - c.z();
+      if (std::abs(z) > r) continue;
+      for (int j = 0; j < n; ++j) {
+        const double y = lo + (j + 0.5) * hx - c.y();
+        if (y * y + z * z > r * r) continue;
+        for (int q = 0; q < n; ++q) {
+          const double x = lo + (q + 0.5) * hx - c.x();
+          if (x * x + y * y + z * z <= r * r) covered += 1.0;
+        }
+      }
+    }
+  }
+  return 1.0 - covered / (static_cast<double>(n) * n * n);
+}
+
+double set_centroid_z(const State& s, const std::string& set) {
+  const auto& f = s.particles.fields.data("set/" + set);
+  double z = 0.0, k = 0.0;
+  for (std::size_t i = 0; i < f.size(); ++i)
+    if (f[i] > 0.5) { z += s.particles.position[i].z(); k += 1.0; }
+  return z / k;
+}
+}  // namespace
+
+TEST_CASE("electrical_network: the sphere-element topology stays below the Hashin-Shtrikman bound", "[electrical][sphere_element]") {
+  // Random polydisperse packings grown by 1.2 / 1.35 / 1.5 (deeper overlaps, larger constant-
+  // volume necks): kappa_eff = L / (R A) between the electrode centroid planes over the slab's
+  // area, against kappa 2 (1 - p) / (2 + p) at the slab's mass porosity p (the network's
+  // constant-volume necks keep the spheres' mass). The seed's particle-centred network (a
+  // hemisphere per neck) exceeds the bound on these packings (issue 21); printed, not asserted.
+  // Also: monotone in neck size (growth), Kirchhoff and power balance with the signed element
+  // conductances.
+  double previous = 0.0;
+  for (double growth : {1.2, 1.35, 1.5}) {
+    State s;
+    random_packing(s, 300, 17, 0.6, 0.8, 10 * kR, growth);
+    State s2 = s;
+    ElectricalNetwork::Params p;
+    p.model = "sintered_neck";
+    p.neck = "cv";
+    p.hemisphere = "fe_table";
+    p.gbf_correction = true;
+    p.conductivity = kKappa;
+    p.high = "top";
+    p.low = "bottom";
+    p.voltage = 1.0;
+    p.topology = "sphere_element";
+    const double z0 = set_centroid_z(s, "bottom"), z1 = set_centroid_z(s, "top");
+    double area = 0.0;
+    const double porosity = slab_mass_porosity(s, z0, z1, 80, area);
+    p.length = z1 - z0;
+    p.area = area;
+    const auto se = solve(s, p);
+    p.topology = "particle_centred";
+    const auto pc = solve(s2, p);
+    const double hs = kKappa * 2.0 * (1.0 - porosity) / (2.0 + porosity);
+    WARN("growth " << growth << ": mass porosity " << porosity << ", kappa / HS bound: sphere element " << se.conductivity_eff / hs
+                   << ", particle-centred " << pc.conductivity_eff / hs << ", negative share " << se.negative_share);
+    REQUIRE(std::isfinite(se.conductivity_eff));
+    CHECK(se.conductivity_eff < hs);
+    CHECK(se.conductivity_eff > previous);
+    CHECK(se.current_mismatch < 1e-8);
+    CHECK(se.power_mismatch < 1e-8);
+    previous = se.conductivity_eff;
   }
 }

@@ -153,6 +153,15 @@ std::vector<Case> all_cases() {
   json scaled_press = load_data("hot_press_small.json");
   scaled_press["stages"][1]["mass_scaling"] = 10.0;
   scaled_press["stages"][1]["mass_floor_radius"] = 0.0012;  // every particle (r = 1 mm) is a "fine"
+  // The sphere-element network (signed element conductances, its negative share held in the
+  // checkpoint) on the hot press, every 500 steps.
+  json element_press = load_data("hot_press_small.json");
+  element_press["particle_sets"] = {{"el_top", {{"type", "top_layer"}, {"thickness", 0.001}}},
+                                    {"el_bottom", {{"type", "bottom_layer"}, {"thickness", 0.001}}}};
+  element_press["stages"][1]["sets"] = {"el_top", "el_bottom"};
+  element_press["stages"][1]["modules"]["electrical_network"] = {
+      {"model", "sintered_neck"}, {"neck", "cv"}, {"hemisphere", "fe_table"}, {"topology", "sphere_element"}, {"conductivity", 1e6},
+      {"high", "el_top"}, {"low", "el_bottom"}, {"empty_electrode", "open"}, {"clock", {{"kind", "every_n_steps"}, {"n", 500}}}};
   json explicit_heat = load_data("joule_press_small.json");
   explicit_heat["stages"][1]["modules"]["heat_conduction"]["scheme"] = "explicit";
   explicit_heat["stages"][1]["modules"]["heat_conduction"]["model"] = "transmission_surface";
@@ -177,6 +186,7 @@ std::vector<Case> all_cases() {
       {"hot press: temperature_history with thermal expansion, pressure table in physical time, compact monitor",
        load_data("hot_press_small.json"), 1, 2333},
       {"hot press with mass scaling and a mass floor (per-particle factors in the checkpoint)", scaled_press, 1, 2333},
+      {"hot press with the sphere-element electrical network", element_press, 1, 2333},
       {"coupled Joule press: temperature_controller, electrical_network on a voltage signal with kappa(T), implicit heat_conduction with losses and expansion",
        load_data("joule_press_small.json"), 1, 1777},
       {"explicit heat_conduction on adaptive substeps, electrical every 7 steps", explicit_heat, 1, 1777},
@@ -197,7 +207,7 @@ std::vector<Case> all_cases() {
 /// and none runs long; "generic restart: every case is in one group" keeps them complete.
 const std::vector<std::vector<std::string_view>> kGroups = {
     {"lattice", "deposit", "fill", "relax", "dynamics taking snapshots"},
-    {"hot press:", "hot press with mass scaling", "coupled Joule press", "explicit heat_conduction"},
+    {"hot press:", "hot press with mass scaling", "hot press with the sphere-element", "coupled Joule press", "explicit heat_conduction"},
     {"cohesive-beam pin", "bonded tension", "cpc_fillers configuration", "self-heating PTC"},
     {"cpc_fillers then Hertz settling with ptc_strain on the RKPM"},
 };
