@@ -16,6 +16,7 @@ on log delta_gb, eps = 0.16) and applied to the other three.
 
 Writes OUT/networks.csv (one row per snapshot) and OUT/networks_layer.csv (the calibration).
 Usage: networks.py RUN_DIR OUT_DIR [--sparkdem build/sparkdem] [--skip-voxel]
+       networks.py --summary OUT.csv DIR [DIR ...]   (mean and std over runs of every column)
 """
 import argparse
 import csv
@@ -84,7 +85,35 @@ def calibrate(sparkdem, snapshot, topology, work):
     return math.exp(x1), f1 + TARGET
 
 
+def summarize(out, dirs):
+    """Mean and sample std over the runs in `dirs` of every numeric column, per snapshot (networks.csv)
+    and per topology and snapshot (networks_layer.csv)."""
+    import statistics as st
+    rows = []
+    for name, keys in (("networks.csv", ("snapshot",)), ("networks_layer.csv", ("topology", "snapshot"))):
+        groups = {}
+        for d in dirs:
+            for r in csv.DictReader(open(os.path.join(d, name))):
+                groups.setdefault(tuple(r[k] for k in keys), []).append(r)
+        for key, rs in groups.items():
+            for col in rs[0]:
+                if col in keys or col == "role":
+                    continue
+                try:
+                    v = [float(r[col]) for r in rs]
+                except ValueError:
+                    continue
+                rows.append({"table": name, "group": "/".join(key), "column": col, "runs": len(v), "mean": st.mean(v),
+                             "std": st.stdev(v) if len(v) > 1 else 0.0})
+    with open(out, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
 def main():
+    if len(sys.argv) > 2 and sys.argv[1] == "--summary":
+        return summarize(sys.argv[2], sys.argv[3:])
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("run")
     ap.add_argument("out")

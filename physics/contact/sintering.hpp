@@ -10,7 +10,8 @@
 /// dashpot eta_n), in parallel with the sintering driving force and a numerical damper:
 ///   F_n   = F_e + F_d - F_s                         (repulsive positive, along n = j -> i)
 ///   dF_e/dt = k_n (v - F_e / eta_n),  v = -v_n the approach rate;  du_s/dt = F_e / eta_n
-///   k_n   = 2 E* sqrt(R*) sqrt(|h - u_s|)           (Hertz tangent on the elastic approach)
+///   k_n   = 2 E* sqrt(R*) sqrt(|h - u_s|)           (Hertz tangent on the elastic approach; with
+///           neck_stiffness = neck_radius: 2 E* max(a, sqrt(R* |h - u_s|)), the bonded neck)
 ///   eta_n = pi a^4 / (8 D_eff),  D_eff = D_gb delta_b Omega / (k_B T),
 ///   D_gb  = D_0 exp(-Q / (R_gas T)),  T = mean temperature of the pair
 ///   F_s   = pi gamma_s [4 R (1 - cos(psi/2)) + a sin(psi/2)]   while a < a_eq = r_min sin(psi/2)
@@ -168,6 +169,7 @@ struct Sintering {
     std::string cold_necks = "bonded";
     std::string after_equilibrium = "frozen";
     double creep_overlap_limit = 1.0;
+    std::string neck_stiffness = "elastic_approach";
   };
   static ParamSpec<Params> spec() {
     using P = Params;
@@ -194,6 +196,10 @@ struct Sintering {
     s.add("sintering_radius", &P::sintering_radius).choices({"r_min", "r_eff", "two_r_eff"}).doc("R of the driving force for unequal spheres");
     s.add("cold_necks", &P::cold_necks).choices({"bonded", "contact"}).doc("a neck below the start temperature: elastic bond (tension too) or frictional contact");
     s.add("creep_overlap_limit", &P::creep_overlap_limit).unit("1").positive().doc("creep: the dashpot stops at overlap h = this x r_min");
+    s.add("neck_stiffness", &P::neck_stiffness).choices({"elastic_approach", "neck_radius"})
+        .doc("spring of a pair with a neck: Hertz on the elastic approach, 2 E* sqrt(R* |h - u_s|) (the Kratos code), or the bonded "
+             "circular contact of the neck, 2 E* max(a, sqrt(R* |h - u_s|)) (Johnson, Contact Mechanics, 1985, section 5.2: a flat circular "
+             "junction of radius a is 2 E* a stiff); tangential 8 G* times the same radius");
     s.add("after_equilibrium", &P::after_equilibrium).choices({"frozen", "creep"}).doc("neck at a_eq: the dashpot stops (frozen, Kratos) or keeps creeping under load (creep); the driving force stops in both");
     return s;
   }
@@ -211,7 +217,8 @@ struct Sintering {
         neck_kind_(p.neck == "coble" ? NeckKind::Coble : p.neck == "cv" ? NeckKind::ConstantVolume : NeckKind::Kratos),
         radius_kind_(p.sintering_radius == "r_eff" ? RadiusKind::Reff
                      : p.sintering_radius == "two_r_eff" ? RadiusKind::TwoReff : RadiusKind::Rmin),
-        cold_contact_(p.cold_necks == "contact"), creep_(p.after_equilibrium == "creep") {}
+        cold_contact_(p.cold_necks == "contact"), creep_(p.after_equilibrium == "creep"),
+        neck_spring_(p.neck_stiffness == "neck_radius") {}
 
   bool alive(const double* st) const { return st[kNeck] > 0.0; }
   /// The run watchdog's default bound on overlap / smaller radius (engine/watchdog.hpp):
@@ -255,7 +262,8 @@ struct Sintering {
     // Mechanical-time viscosity: eta / s.
     const double eta_n = flowing ? viscosity(a, T) / g.time_scale : std::numeric_limits<double>::infinity();
     const double he = h - st[kViscous];
-    const double kn = 2.0 * e_star_ * std::sqrt(g.r_eff * std::abs(he));
+    const double r_spring = spring_radius(g.r_eff, he, a);
+    const double kn = 2.0 * e_star_ * r_spring;
     const double v = -m.vn;
     double fe = st[kElastic];
     double us = st[kViscous];
@@ -274,7 +282,7 @@ struct Sintering {
     const double cn = 2.0 * p_.damping_ratio * std::sqrt(g.m_eff * kn);
     double fn = fe + cn * (v - us_rate) - fs;
     // Tangential Maxwell element.
-    const double kt = 8.0 * g_star_ * std::sqrt(g.r_eff * std::abs(he));
+    const double kt = 8.0 * g_star_ * r_spring;
     const double eta_t = p_.tangential_factor * eta_n;
     Vec3 ft(st[kTangential], st[kTangential + 1], st[kTangential + 2]);
     const double mag = ft.norm();
@@ -329,12 +337,18 @@ struct Sintering {
     return f;
   }
 
-  /// Stiffness on the elastic approach |h - u_s| of a live pair (the Gershgorin rows).
+  /// Contact radius of the spring [m]: the Hertz radius of the elastic approach sqrt(R* |h - u_s|),
+  /// or (neck_stiffness = neck_radius) the larger of it and the neck radius a.
+  double spring_radius(double r_eff, double elastic_approach, double a) const {
+    const double hertz = std::sqrt(r_eff * std::abs(elastic_approach));
+    return neck_spring_ ? std::max(hertz, a) : hertz;
+  }
+  /// Stiffness of a live pair (the Gershgorin rows): 2 E* and 8 G* times spring_radius.
   double normal_stiffness(const ContactGeometry& g, const double* st) const {
-    return 2.0 * e_star_ * std::sqrt(g.r_eff * std::abs(g.overlap - st[kViscous]));
+    return 2.0 * e_star_ * spring_radius(g.r_eff, g.overlap - st[kViscous], st[kNeck]);
   }
   double tangential_stiffness(const ContactGeometry& g, const double* st) const {
-    return 8.0 * g_star_ * std::sqrt(g.r_eff * std::abs(g.overlap - st[kViscous]));
+    return 8.0 * g_star_ * spring_radius(g.r_eff, g.overlap - st[kViscous], st[kNeck]);
   }
   /// Numerical dashpots of a live pair {c_n, c_t} [N s/m] (the explicit-damping step limit).
   std::pair<double, double> damping(const ContactGeometry& g, const double* st) const {
@@ -357,6 +371,7 @@ struct Sintering {
   RadiusKind radius_kind_;
   bool cold_contact_;
   bool creep_;
+  bool neck_spring_;  ///< neck_stiffness = neck_radius
 };
 
 }  // namespace sparkdem::physics

@@ -292,3 +292,38 @@ TEST_CASE("Sintering beyond the equilibrium neck: frozen stops the dashpot, cree
     }
   }
 }
+
+TEST_CASE("Sintering neck stiffness: Hertz on the elastic approach, or the bonded neck 2 E* a", "[sintering]") {
+  // A pair with neck a and elastic approach h - u_s: the Kratos spring is 2 E* sqrt(R* |h - u_s|),
+  // which vanishes with the elastic approach; neck_stiffness = neck_radius takes the bonded
+  // circular junction, 2 E* max(a, sqrt(R* |h - u_s|)) (Johnson 1985 §5.2), 8 G* the same radius
+  // tangentially. Exact to rounding.
+  ContactGeometry g = equal_pair_geometry();
+  g.overlap = 0.02 * kR;
+  std::vector<double> st(Sintering::state_columns().size(), 0.0);
+  st[Sintering::kNeck] = 0.3 * kR;
+  st[Sintering::kViscous] = 0.0199 * kR;  // elastic approach 1e-4 R
+  auto p = law_params();
+  const double e_star = p.youngs_modulus / (2.0 * (1.0 - p.poisson_ratio * p.poisson_ratio));
+  const double hertz = std::sqrt(g.r_eff * 1e-4 * kR);
+  const Sintering kratos(p);
+  CHECK(kratos.normal_stiffness(g, st.data()) == Approx(2.0 * e_star * hertz).epsilon(1e-9));
+  p.neck_stiffness = "neck_radius";
+  const Sintering bonded(p);
+  CHECK(bonded.normal_stiffness(g, st.data()) == Approx(2.0 * e_star * 0.3 * kR).epsilon(1e-12));
+  CHECK(bonded.tangential_stiffness(g, st.data()) / bonded.normal_stiffness(g, st.data()) ==
+        Approx(kratos.tangential_stiffness(g, st.data()) / kratos.normal_stiffness(g, st.data())).epsilon(1e-12));
+  // A large elastic approach: the Hertz radius exceeds the neck and both agree.
+  st[Sintering::kNeck] = 1e-3 * kR;
+  CHECK(bonded.normal_stiffness(g, st.data()) == Approx(kratos.normal_stiffness(g, st.data())).epsilon(1e-12));
+  // The force responds with that spring: an elastic (cold) step of approach dx changes F_e by k dx.
+  st[Sintering::kNeck] = 0.3 * kR;
+  st[Sintering::kElastic] = 0.0;
+  g.temperature = 300.0;
+  RelativeMotion m;
+  m.vt = Vec3::Zero();
+  m.vn = -1e-6;  // approaching at 1 um/s
+  const double dt = 1e-9;
+  bonded(g, m, dt, st.data());
+  CHECK(st[Sintering::kElastic] == Approx(2.0 * e_star * 0.3 * kR * 1e-6 * dt).epsilon(1e-9));
+}
