@@ -61,6 +61,8 @@ def voxelise(x, r, lo, n, h, region=None):
     (overlaps counted as often as they are covered: the mass of the spheres)."""
     solid = np.zeros(n, dtype=bool)
     counted = 0
+    global _COVER
+    _COVER = np.zeros(n, dtype=np.uint16)  # spheres covering each voxel (profiles of the mass porosity)
     for c, rad in zip(x, r):
         i0 = np.maximum(np.floor((c - rad - lo) / h - 0.5).astype(int), 0)
         i1 = np.minimum(np.ceil((c + rad - lo) / h - 0.5).astype(int) + 1, n)
@@ -73,6 +75,7 @@ def voxelise(x, r, lo, n, h, region=None):
             inside &= region[i0[0]:i1[0], i0[1]:i1[1], None]
         counted += int(inside.sum())
         solid[i0[0]:i1[0], i0[1]:i1[1], i0[2]:i1[2]] |= inside
+        _COVER[i0[0]:i1[0], i0[1]:i1[1], i0[2]:i1[2]] += inside.astype(np.uint16)
     return solid, counted
 
 
@@ -149,6 +152,33 @@ def solve(solid, h, tol):
     return I_top, dict(unknowns=m, iterations=its[0], solve_s=secs, mismatch=abs(I_top - I_bot) / abs(I_top) if I_top else float("nan"))
 
 
+def write_profiles(path, solid, cover, inside, lo, h, R_die):
+    """Union and mass porosity in annuli of 2 um from the die wall inwards and in slabs of 5 um
+    along z (the wall layers and the core of the sample)."""
+    n = solid.shape
+    xc = lo[0] + (np.arange(n[0]) + 0.5) * h
+    yc = lo[1] + (np.arange(n[1]) + 0.5) * h
+    rho = np.sqrt(xc[:, None] ** 2 + yc[None, :] ** 2)
+    rows = []
+    for k in range(int(R_die / 2e-6) + 1):
+        ring = inside & (rho >= R_die - (k + 1) * 2e-6) & (rho < R_die - k * 2e-6)
+        if ring.sum() == 0:
+            continue
+        m = np.broadcast_to(ring[:, :, None], n)
+        rows.append(("radial", (k + 0.5) * 2e-6, 1.0 - solid[m].mean(), 1.0 - cover[m].mean()))
+    zc = (np.arange(n[2]) + 0.5) * h
+    for k in range(int(zc[-1] / 5e-6) + 1):
+        sl = (zc >= k * 5e-6) & (zc < (k + 1) * 5e-6)
+        if sl.sum() == 0:
+            continue
+        m = inside[:, :, None] & sl[None, None, :]
+        rows.append(("axial", (k + 0.5) * 5e-6, 1.0 - solid[m].mean(), 1.0 - cover[m].mean()))
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["profile", "distance_from_wall_or_bottom_m", "porosity_union", "porosity_mass"])
+        w.writerows(rows)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("snapshot")
@@ -158,6 +188,8 @@ def main():
     ap.add_argument("--geometry", default="union", choices=["union", "mass"],
                     help="union: the spheres as they are (lens volumes lost); mass: radii scaled by one factor until the union holds the spheres' mass (porosity = the mass porosity)")
     ap.add_argument("--csv", help="append one row to this CSV")
+    ap.add_argument("--no-solve", action="store_true", help="porosities (and profiles) only")
+    ap.add_argument("--profiles", help="write the radial and axial profiles of the union and mass porosity (whole box) to this CSV")
     a = ap.parse_args()
     x, r, z_bot, z_top, R_die = read_snapshot(a.snapshot)
     h = a.voxel
@@ -182,12 +214,17 @@ def main():
         region_voxels = int(np.prod(n))
     solid, counted = voxelise(x, r, lo, n, h, inside)
     porosity_mass = 1.0 - counted / region_voxels
+    if a.profiles and a.box == "whole":
+        write_profiles(a.profiles, solid, _COVER, inside, lo, h, R_die)
     scale = 1.0
     if a.geometry == "mass":
         scale = inflate_to_mass(x, r, lo, n, h, inside, counted)
         solid, _ = voxelise(x, scale * r, lo, n, h, inside)
     t_vox = time.time() - t0
     porosity = 1.0 - solid.sum() / region_voxels
+    if a.no_solve:
+        print(f"porosity_union={porosity:.6g} porosity_mass={porosity_mass:.6g} radius_scale={scale:.6g}")
+        return
     I, info = solve(solid, h, a.tol)
     L = (n[2] - 1) * h
     k_rel = I * h * L / (1.0 * area)  # link conductance kappa h with kappa = 1, dV = 1

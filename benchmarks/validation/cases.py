@@ -359,7 +359,49 @@ NOTCH = Case(
 TABLE1 = {0.216: 4.33e6, 0.164: 6.14e6, 0.106: 7.44e6, 0.050: 8.77e6}
 
 
-def run_nial(config):
+def element_stage(snapshot, gb_thickness, scene):
+    """A zero-step stage on `snapshot` with the scene's conductivity module switched to the sphere-element
+    topology (issue 21; physics/electrical/sphere_element.hpp), layer thickness gb_thickness [m]."""
+    mod = json.loads(json.dumps(only_stage(scene, name="conductivity_no_gb")["modules"]["electrical_network"]))
+    mod.update({"topology": "sphere_element", "gb_thickness": gb_thickness})
+    return {"name": "element", "type": "dynamics", "sets": ["top_electrode", "bottom_electrode"], "from_snapshot": snapshot,
+            "dt_fraction": 0.1, "stop": {"steps": 0}, "modules": {"electrical_network": mod}}
+
+
+def element_kappa(ctx, scene, snapshots, gb_thickness, name):
+    """kappa_eff [S/m] of the sphere-element network on each snapshot (one scene, a stage each)."""
+    c = json.loads(json.dumps(scene))
+    c["stages"] = [dict(element_stage(sn, gb_thickness, scene), name=f"element_{k}") for k, sn in enumerate(snapshots)]
+    out = ctx.sparkdem(c, name=name)
+    import csv as _csv
+    rows = list(_csv.DictReader(open(os.path.join(out, "timeseries.csv"))))
+    return [float(next(r for r in rows if int(r["stage"]) == k)["electrical_conductivity_eff"]) for k in range(len(snapshots))]
+
+
+def element_figures(ctx, scene, out, at, target_index):
+    """The sphere-element network on the run's snapshots: without the layer, and with the layer's
+    thickness calibrated on snapshot `target_index` (secant on log delta_gb, epsilon as in the scene,
+    to 1e-4 of the target) then applied to every snapshot. Returns (no layer, calibrated, delta)."""
+    snaps = [os.path.abspath(os.path.join(out, "snapshots", f"hot_press_{k}.h5")) for k in range(len(at))]
+    snaps = [sn if os.path.exists(sn) else None for sn in snaps]
+    if any(sn is None for sn in snaps):
+        return {}, {}, None
+    bare = element_kappa(ctx, scene, snaps, 0.0, "element_no_layer")
+    target = TABLE1[at[target_index]]
+    f = lambda x: element_kappa(ctx, scene, [snaps[target_index]], math.exp(x), f"element_cal_{x:.6f}")[0] - target
+    x0, x1 = math.log(1e-7), math.log(1e-6)
+    f0, f1 = f(x0), f(x1)
+    for _ in range(30):
+        if abs(f1) < 1e-4 * target or f1 == f0:
+            break
+        x0, x1, f0 = x1, x1 - f1 * (x1 - x0) / (f1 - f0), f1
+        f1 = f(x1)
+    delta = math.exp(x1)
+    cal = element_kappa(ctx, scene, snaps, delta, "element_calibrated")
+    return dict(enumerate(bare)), dict(enumerate(cal)), delta
+
+
+def run_nial(config, element=False):
     def run(ctx):
         import sps_outputs as so
         c = ctx.config(config)
@@ -382,6 +424,17 @@ def run_nial(config):
                 continue
             res[f"kappa_{p:.3f}"] = fig(gb[idx], ref, porosity_taken=taken.get(idx, {}).get("value"),
                                         kappa_without_layer=nogb.get(idx), delta_gb_calibrated_m=cal.get("value"))
+        if element and 0.164 in at:
+            bare, calibrated, delta = element_figures(ctx, c, out, at, at.index(0.164))
+            for idx, p in enumerate(at):
+                ref = next((k for q, k in TABLE1.items() if abs(q - p) < 1e-9), None)
+                if ref is None or idx not in calibrated:
+                    continue
+                hs = 9.8e6 * 2.0 * (1.0 - taken.get(idx, {}).get("value", p)) / (2.0 + taken.get(idx, {}).get("value", p))
+                res[f"element_kappa_{p:.3f}"] = fig(calibrated[idx], ref, porosity_taken=taken.get(idx, {}).get("value"),
+                                                    kappa_without_layer=bare.get(idx), delta_gb_calibrated_m=delta,
+                                                    hashin_shtrikman_bound_mass_porosity=hs,
+                                                    kappa_without_layer_over_bound=bare.get(idx, float("nan")) / hs)
         return res
     return run
 
@@ -395,11 +448,17 @@ NIAL_TUNED = [{"parameter": "configs/sps_nial.json#/stages/1/walls/top/max_speed
 NIAL = Case(
     "seed000/nial", ["configs/sps_nial.json"],
     {"full": {"sizes": [17876], "seeds": [2024, 2025, 2026]}},
-    run_nial("configs/sps_nial.json"),
+    run_nial("configs/sps_nial.json", element=True),
     [Figure(f"seed000/nial_kappa_{p:.3f}", f"kappa_{p:.3f}", NIAL_SRC, NIAL_REF + f" at porosity {p}", 0.05,
             calibrated_on=NIAL_CAL, tuned=NIAL_TUNED,
             variants=["without the grain-boundary layer (extra.kappa_without_layer)"])
-     for p in (0.216, 0.106, 0.050)])
+     for p in (0.216, 0.106, 0.050)]
+    + [Figure(f"seed000/nial_element_kappa_{p:.3f}", f"element_kappa_{p:.3f}", NIAL_SRC + "; sphere-element network (issue 21)",
+              NIAL_REF + f" at porosity {p}", 0.05, calibrated_on=NIAL_CAL + ", for the sphere-element network",
+              tuned=NIAL_TUNED,
+              variants=["without the grain-boundary layer (extra.kappa_without_layer, its ratio to the Hashin-Shtrikman bound at "
+                        "the mass porosity in extra.kappa_without_layer_over_bound)"])
+       for p in (0.216, 0.106, 0.050)])
 NIAL_SMALL = Case(
     "seed000/nial_small", ["configs/sps_nial_small.json"],
     {"fast": {"sizes": [300], "seeds": [1]}},
