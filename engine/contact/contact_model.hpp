@@ -102,6 +102,23 @@ inline constexpr double kPi = 3.14159265358979323846;
 constexpr std::size_t kBlock = 1024;  // fixed reduction blocks: results independent of thread count
 }
 
+/// Grain-boundary fraction per particle (seed 000 Eq. 22), f_i = sum over its rows of
+/// pi a^2 / (4 pi r_i^2), a = the row's state column `neck_column` (live rows with a > 0). Serial
+/// in row order: the same sums on any thread count.
+inline std::vector<double> grain_boundary_fractions(const ParticleStore& p, const ContactTable& t, int neck_column) {
+  std::vector<double> f(p.size(), 0.0);
+  const int w = t.state_width();
+  if (neck_column < 0 || neck_column >= w) return f;
+  for (std::size_t r = 0; r < t.size(); ++r) {
+    const double a = t.state(r)[neck_column];
+    if (!(a > 0.0)) continue;
+    const Index i = t.i(r), j = t.j(r);
+    f[i] += a * a / (4.0 * p.radius[i] * p.radius[i]);
+    f[j] += a * a / (4.0 * p.radius[j] * p.radius[j]);
+  }
+  return f;
+}
+
 template <class Law>
 class ContactModelT final : public ContactModel {
  public:
@@ -124,6 +141,9 @@ class ContactModelT final : public ContactModel {
     if constexpr (is_thermal<Law>())
       if (p.fields.has("temperature")) temp = p.fields.data("temperature").data();
     const int w = t.state_width();
+    std::vector<double> gbf;  // per particle, for laws that ask for it
+    if constexpr (requires(const Law& l) { l.grain_boundary_fraction_column(); })
+      if (law_.grain_boundary_fraction_column() >= 0) gbf = grain_boundary_fractions(p, t, law_.grain_boundary_fraction_column());
     auto& F = t.force();
     auto& Ti = t.torque_i();
     auto& Tj = t.torque_j();
@@ -156,6 +176,7 @@ class ContactModelT final : public ContactModel {
         g.temperature = temp ? 0.5 * (temp[i] + temp[j]) : std::numeric_limits<double>::quiet_NaN();
         g.time_scale = time_scale;
       }
+      if (!gbf.empty()) g.gb_fraction = std::max(gbf[i], gbf[j]);
       const RelativeMotion m = relative_motion(g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
       const ContactForces f = law_(g, m, dt, state);
       F[r] = f.force;

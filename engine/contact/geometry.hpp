@@ -22,6 +22,11 @@ struct ContactGeometry {
   /// processes run in physical time.
   double temperature = 0.0;
   double time_scale = 1.0;
+  /// Filled only for laws that ask for it (grain_boundary_fraction_column() >= 0): the larger
+  /// grain-boundary fraction f = sum_k a_k^2 / (4 r^2) of the pair's two particles over their
+  /// necks a_k of the previous step (seed 000 Eq. 22: the share of a particle's surface that is
+  /// grain boundary; f -> 1 as the particle's surface is all boundary, i.e. at full density).
+  double gb_fraction = 0.0;
 };
 
 struct RelativeMotion {

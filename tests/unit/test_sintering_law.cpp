@@ -327,3 +327,31 @@ TEST_CASE("Sintering neck stiffness: Hertz on the elastic approach, or the bonde
   bonded(g, m, dt, st.data());
   CHECK(st[Sintering::kElastic] == Approx(2.0 * e_star * 0.3 * kR * 1e-6 * dt).epsilon(1e-9));
 }
+
+TEST_CASE("Sintering creep stops at full density (grain-boundary fraction)", "[sintering]") {
+  // Past a_eq with creep: the dashpot flows while the pair's larger grain-boundary fraction is
+  // below creep_stop_gb_fraction and is frozen (u_s and F_e kept) at or above it; 0 never stops.
+  auto p = law_params();
+  p.after_equilibrium = "creep";
+  ContactGeometry g = equal_pair_geometry();
+  g.overlap = 0.9 * kR;
+  const double a = std::min(neck_of(g.overlap), kR);
+  RelativeMotion m;
+  m.vt = Vec3::Zero();
+  const double F0 = 1e-3, us0 = 0.85 * kR, dt = 1e-4;
+  struct Case { double stop, fraction; bool flows; };
+  for (const Case c : {Case{0.0, 5.0, true}, Case{1.0, 0.99, true}, Case{1.0, 1.0, false}, Case{1.0, 1.7, false}}) {
+    p.creep_stop_gb_fraction = c.stop;
+    const Sintering law(p);
+    CHECK(law.grain_boundary_fraction_column() == (c.stop > 0.0 ? static_cast<int>(Sintering::kNeck) : -1));
+    g.gb_fraction = c.fraction;
+    std::vector<double> st(Sintering::state_columns().size(), 0.0);
+    st[Sintering::kNeck] = a;
+    st[Sintering::kElastic] = F0;
+    st[Sintering::kViscous] = us0;
+    law(g, m, dt, st.data());
+    INFO("stop " << c.stop << ", fraction " << c.fraction);
+    CHECK((st[Sintering::kViscous] > us0) == c.flows);
+    CHECK((st[Sintering::kElastic] < F0) == c.flows);
+  }
+}
