@@ -615,10 +615,17 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
     if (std::find(low.begin(), low.end(), v) != low.end())
       throw SetupError("electrical_network: a particle belongs to both electrodes '" + p_.high + "' and '" + p_.low + "'");
   const bool particle_centred = p_.topology == "particle_centred";
-  const BuiltNet b = particle_centred                    ? particle_centred_net(g, G, share, high, low)
-                     : p_.topology == "contact_centred" ? contact_centred_net(s, g, G, share, high, low, p_)
-                                                        : sphere_element_net(s, g, branch_, particle_conductivities(s), high, low,
-                                                                             p_.element_cap == "rim" ? el::CapRule::Rim : el::CapRule::EqualArea, r_.negative_share);
+  BuiltNet b;
+  if (particle_centred) b = particle_centred_net(g, G, share, high, low);
+  else if (p_.topology == "contact_centred") b = contact_centred_net(s, g, G, share, high, low, p_);
+  else {
+    try {  // the element kernels throw ConfigError on degenerate geometry (e.g. two necks in one direction)
+      b = sphere_element_net(s, g, branch_, particle_conductivities(s), high, low,
+                             p_.element_cap == "rim" ? el::CapRule::Rim : el::CapRule::EqualArea, r_.negative_share);
+    } catch (const ConfigError& e) {
+      throw PhysicsError(info.step, {}, "sphere element", e.what());
+    }
+  }
   const ResistorNet& net = b.net;
   const bool driven = p_.current > 0.0;
   const double applied = applied_voltage(s, p_, info.step);
