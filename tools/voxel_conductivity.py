@@ -56,13 +56,11 @@ def read_snapshot(path):
 
 
 def voxelise(x, r, lo, n, h, region=None):
-    """Solid mask (nx, ny, nz): voxel centres lo + (i + 1/2) h inside any sphere (and inside
-    `region`, a boolean (nx, ny) mask, when given), and the voxel count of the spheres one by one
-    (overlaps counted as often as they are covered: the mass of the spheres)."""
-    solid = np.zeros(n, dtype=bool)
-    counted = 0
-    global _COVER
-    _COVER = np.zeros(n, dtype=np.uint16)  # spheres covering each voxel (profiles of the mass porosity)
+    """Cover count (nx, ny, nz): how many spheres contain each voxel centre lo + (i + 1/2) h (only
+    inside `region`, a boolean (nx, ny) mask, when given). The solid is cover > 0; cover.sum() is
+    the voxel count of the spheres one by one (overlaps counted as often as they are covered: the
+    mass of the spheres)."""
+    cover = np.zeros(n, dtype=np.uint16)
     for c, rad in zip(x, r):
         i0 = np.maximum(np.floor((c - rad - lo) / h - 0.5).astype(int), 0)
         i1 = np.minimum(np.ceil((c + rad - lo) / h - 0.5).astype(int) + 1, n)
@@ -73,10 +71,8 @@ def voxelise(x, r, lo, n, h, region=None):
         inside = d2 <= rad * rad
         if region is not None:
             inside &= region[i0[0]:i1[0], i0[1]:i1[1], None]
-        counted += int(inside.sum())
-        solid[i0[0]:i1[0], i0[1]:i1[1], i0[2]:i1[2]] |= inside
-        _COVER[i0[0]:i1[0], i0[1]:i1[1], i0[2]:i1[2]] += inside.astype(np.uint16)
-    return solid, counted
+        cover[i0[0]:i1[0], i0[1]:i1[1], i0[2]:i1[2]] += inside.astype(np.uint16)
+    return cover
 
 
 def inflate_to_mass(x, r, lo, n, h, region, counted):
@@ -86,8 +82,8 @@ def inflate_to_mass(x, r, lo, n, h, region, counted):
     a, b = 1.0, 1.3
     while b - a > 1e-4:
         m = 0.5 * (a + b)
-        solid, _ = voxelise(x, m * r, lo, n, h, region)
-        (a, b) = (m, b) if solid.sum() < counted else (a, m)
+        covered = int((voxelise(x, m * r, lo, n, h, region) > 0).sum())
+        (a, b) = (m, b) if covered < counted else (a, m)
     return 0.5 * (a + b)
 
 
@@ -212,14 +208,16 @@ def main():
         inside = np.ones(n[:2], dtype=bool)
         area = (n[0] * h) * (n[1] * h)
         region_voxels = int(np.prod(n))
-    solid, counted = voxelise(x, r, lo, n, h, inside)
+    cover = voxelise(x, r, lo, n, h, inside)
+    solid = cover > 0
+    counted = int(cover.sum(dtype=np.int64))
     porosity_mass = 1.0 - counted / region_voxels
     if a.profiles and a.box == "whole":
-        write_profiles(a.profiles, solid, _COVER, inside, lo, h, R_die)
+        write_profiles(a.profiles, solid, cover, inside, lo, h, R_die)
     scale = 1.0
     if a.geometry == "mass":
         scale = inflate_to_mass(x, r, lo, n, h, inside, counted)
-        solid, _ = voxelise(x, scale * r, lo, n, h, inside)
+        solid = voxelise(x, scale * r, lo, n, h, inside) > 0
     t_vox = time.time() - t0
     porosity = 1.0 - solid.sum() / region_voxels
     if a.no_solve:

@@ -72,17 +72,27 @@ def voxel(snapshot, box, h):
     return {k: v for k, v in (x.split("=", 1) for x in out.split())}
 
 
-def calibrate(sparkdem, snapshot, topology, work):
-    """delta_gb [m] with kappa(snapshot) = TARGET: secant on log(delta) from 0.1 and 1 um."""
-    f = lambda d: run_stages(sparkdem, [network_stage(snapshot, topology, d)], work)[network_stage(snapshot, topology, d)["name"]][0] - TARGET
+def calibrate_thickness(kappa_of, target):
+    """delta_gb [m] with kappa_of(delta_gb) = target [S/m]: secant on log(delta) from 0.1 and 1 um,
+    to 1e-4 of the target (at most 30 steps). Returns (delta_gb, kappa there). Shared with the
+    ledger's NiAl case (benchmarks/validation/cases.py)."""
+    f = lambda x: kappa_of(math.exp(x)) - target
     x0, x1 = math.log(1e-7), math.log(1e-6)
-    f0, f1 = f(math.exp(x0)), f(math.exp(x1))
+    f0, f1 = f(x0), f(x1)
     for _ in range(30):
-        if abs(f1) < 1e-4 * TARGET or f1 == f0:
+        if abs(f1) < 1e-4 * target or f1 == f0:
             break
         x0, x1, f0 = x1, x1 - f1 * (x1 - x0) / (f1 - f0), f1
-        f1 = f(math.exp(x1))
-    return math.exp(x1), f1 + TARGET
+        f1 = f(x1)
+    return math.exp(x1), f1 + target
+
+
+def calibrate(sparkdem, snapshot, topology, work):
+    """delta_gb [m] with kappa(snapshot) = TARGET (calibrate_thickness)."""
+    def kappa_of(d):
+        st = network_stage(snapshot, topology, d)
+        return run_stages(sparkdem, [st], work)[st["name"]][0]
+    return calibrate_thickness(kappa_of, TARGET)
 
 
 def summarize(out, dirs):

@@ -25,7 +25,7 @@ def voxel_sc(r, n=120):
         for k in (-1,0,1):
           x.append([0.5+i,0.5+j,0.5+k]); rr.append(r)
     x=np.array(x); rr=np.array(rr)
-    solid, _ = vc.voxelise(x, rr, np.zeros(3), np.array([n,n,n]), h)
+    solid = vc.voxelise(x, rr, np.zeros(3), np.array([n,n,n]), h) > 0
     # Dirichlet on the first/last voxel layers: planes at h/2 and 1-h/2
     I,info=vc.solve(solid,h,1e-8)
     L=(n-1)*h

@@ -21,6 +21,7 @@ import sys
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(REPO, "benchmarks", "joule_rod"))
 sys.path.insert(0, os.path.join(REPO, "benchmarks", "torsion_crack"))
+sys.path.insert(0, os.path.join(REPO, "benchmarks", "sps_nial"))
 sys.path.insert(0, os.path.join(REPO, "tools"))
 
 
@@ -380,23 +381,16 @@ def element_kappa(ctx, scene, snapshots, gb_thickness, name):
 
 def element_figures(ctx, scene, out, at, target_index):
     """The sphere-element network on the run's snapshots: without the layer, and with the layer's
-    thickness calibrated on snapshot `target_index` (secant on log delta_gb, epsilon as in the scene,
-    to 1e-4 of the target) then applied to every snapshot. Returns (no layer, calibrated, delta)."""
+    thickness calibrated on snapshot `target_index` (networks.calibrate_thickness, epsilon as in the
+    scene) then applied to every snapshot. Returns (no layer, calibrated, delta)."""
     snaps = [os.path.abspath(os.path.join(out, "snapshots", f"hot_press_{k}.h5")) for k in range(len(at))]
     snaps = [sn if os.path.exists(sn) else None for sn in snaps]
     if any(sn is None for sn in snaps):
         return {}, {}, None
+    from networks import calibrate_thickness  # benchmarks/sps_nial/networks.py
     bare = element_kappa(ctx, scene, snaps, 0.0, "element_no_layer")
-    target = TABLE1[at[target_index]]
-    f = lambda x: element_kappa(ctx, scene, [snaps[target_index]], math.exp(x), f"element_cal_{x:.6f}")[0] - target
-    x0, x1 = math.log(1e-7), math.log(1e-6)
-    f0, f1 = f(x0), f(x1)
-    for _ in range(30):
-        if abs(f1) < 1e-4 * target or f1 == f0:
-            break
-        x0, x1, f0 = x1, x1 - f1 * (x1 - x0) / (f1 - f0), f1
-        f1 = f(x1)
-    delta = math.exp(x1)
+    delta, _ = calibrate_thickness(
+        lambda d: element_kappa(ctx, scene, [snaps[target_index]], d, f"element_cal_{math.log(d):.6f}")[0], TABLE1[at[target_index]])
     cal = element_kappa(ctx, scene, snaps, delta, "element_calibrated")
     return dict(enumerate(bare)), dict(enumerate(cal)), delta
 

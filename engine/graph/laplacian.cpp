@@ -424,9 +424,12 @@ void LaplacianSolver::visit(Archive& ar, const std::string& prefix) {
   if (!ar.reading() || ar.has(prefix + "/warm_start")) ar.visit(prefix + "/warm_start", warm_);
 }
 
-LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
-  const auto t0 = std::chrono::steady_clock::now();
-  Impl& im = *impl_;
+namespace {
+
+/// The input checks of LaplacianSolver::solve: sizes, finite conductances (>= 0 unless the
+/// problem is signed), sources, capacitances and pseudo-transient settings, shunts. Returns
+/// whether any node has a shunt.
+bool check_problem(const LaplacianProblem& p, const LaplacianOptions& opt) {
   const std::size_t n = p.nodes, ne = p.a.size();
   check_edges(n, p.a, p.b, p.g);
   if (!p.source.empty() && p.source.size() != n)
@@ -441,7 +444,7 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
   for (std::size_t v = 0; v < p.source.size(); ++v)
     if (!std::isfinite(p.source[v]))
       physics_fail(p.step, "source", "node " + std::to_string(v) + " has a non-finite source");
-  const bool pseudo = opt_.method == LaplacianMethod::PseudoTransient;
+  const bool pseudo = opt.method == LaplacianMethod::PseudoTransient;
   if (pseudo) {
     if (p.capacitance.size() != n)
       throw SetupError("Laplacian: the pseudo-transient method needs one capacitance per node (" +
@@ -450,7 +453,7 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
       if (!(p.capacitance[v] > 0.0) || !std::isfinite(p.capacitance[v]))
         physics_fail(p.step, "capacitance", "node " + std::to_string(v) + " has capacitance " +
                                                 std::to_string(p.capacitance[v]) + "; it must be finite and > 0");
-    const auto& po = opt_.pseudo;
+    const auto& po = opt.pseudo;
     if (!(po.dt >= 0.0) || !std::isfinite(po.dt) || (po.dt == 0.0 && !(po.dt_fraction > 0.0 && std::isfinite(po.dt_fraction))))
       throw SetupError("Laplacian: pseudo-transient step dt = " + std::to_string(po.dt) + ", dt_fraction = " +
                        std::to_string(po.dt_fraction) + ": give dt > 0, or dt = 0 and dt_fraction > 0");
@@ -466,27 +469,188 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
       physics_fail(p.step, "shunt", "node " + std::to_string(v) + " has shunt " + std::to_string(p.shunt[v]));
     any_shunt = any_shunt || p.shunt[v] > 0.0;
   }
+  return any_shunt;
+}
 
-  // Dirichlet nodes.
-  std::vector<std::int32_t> group_of(n, -1);
-  std::size_t n_dirichlet = 0;
-  double dirichlet_sum = 0.0;
+/// The Dirichlet group of every node (-1: none), with the count of Dirichlet nodes and the sum
+/// of their values; throws on a non-finite value, a node out of range or in two groups.
+struct DirichletNodes {
+  std::vector<std::int32_t> group_of;
+  std::size_t count = 0;
+  double sum = 0.0;
+};
+DirichletNodes dirichlet_nodes(const LaplacianProblem& p) {
+  DirichletNodes d;
+  d.group_of.assign(p.nodes, -1);
   for (std::size_t k = 0; k < p.dirichlet.size(); ++k) {
     const auto& gr = p.dirichlet[k];
     if (!std::isfinite(gr.value))
       physics_fail(p.step, "Dirichlet value", "group " + std::to_string(k) + " has a non-finite value");
     for (const Index v : gr.nodes) {
-      if (v < 0 || static_cast<std::size_t>(v) >= n)
+      if (v < 0 || static_cast<std::size_t>(v) >= p.nodes)
         throw SetupError("Laplacian: Dirichlet group " + std::to_string(k) + " names node " + std::to_string(v) +
-                         " outside 0.." + std::to_string(n) + "-1");
-      if (group_of[v] >= 0)
-        throw SetupError("Laplacian: node " + std::to_string(v) + " is in Dirichlet group " + std::to_string(group_of[v]) +
-                         (group_of[v] == static_cast<std::int32_t>(k) ? " twice" : " and in group " + std::to_string(k)));
-      group_of[v] = static_cast<std::int32_t>(k);
-      ++n_dirichlet;
-      dirichlet_sum += gr.value;
+                         " outside 0.." + std::to_string(p.nodes) + "-1");
+      if (d.group_of[v] >= 0)
+        throw SetupError("Laplacian: node " + std::to_string(v) + " is in Dirichlet group " + std::to_string(d.group_of[v]) +
+                         (d.group_of[v] == static_cast<std::int32_t>(k) ? " twice" : " and in group " + std::to_string(k)));
+      d.group_of[v] = static_cast<std::int32_t>(k);
+      ++d.count;
+      d.sum += gr.value;
     }
   }
+  return d;
+}
+
+/// Node values (Dirichlet values, solved values, NaN on floating nodes), branch fluxes and
+/// Dirichlet-group fluxes of a solved reduced system x.
+void write_results(const LaplacianProblem& p, const std::vector<std::int32_t>& role, const std::vector<std::int32_t>& group_of,
+                   const std::vector<char>& active, const Eigen::VectorXd& x, LaplacianResult& res) {
+  const std::size_t n = p.nodes, ne = p.a.size();
+  res.value.assign(n, kNaN);
+  for (std::size_t v = 0; v < n; ++v) {
+    if (role[v] == -1) res.value[v] = p.dirichlet[group_of[v]].value;
+    else if (role[v] >= 0) res.value[v] = x[role[v]];
+  }
+  res.flux.assign(ne, 0.0);
+  res.dirichlet_flux.assign(p.dirichlet.size(), 0.0);
+  for (std::size_t e = 0; e < ne; ++e) {
+    if (!active[e]) continue;
+    const Index a = p.a[e], b = p.b[e];
+    if (role[a] == -2) continue;  // floating component (then b is floating too)
+    const double f = p.g[e] * (res.value[a] - res.value[b]);
+    res.flux[e] = f;
+    if (role[a] == -1) res.dirichlet_flux[group_of[a]] += f;
+    if (role[b] == -1) res.dirichlet_flux[group_of[b]] -= f;
+  }
+}
+
+}  // namespace
+
+/// Numeric factorisation of the assembled reduced matrix for the chosen method (the
+/// pseudo-transient method: lambda_max(C^-1 A) by Lanczos and the Gershgorin step).
+void LaplacianSolver::factorize_(const LaplacianProblem& p, const std::vector<double>& cap_free, LaplacianResult& res) {
+  Impl& im = *impl_;
+  const auto m = static_cast<std::size_t>(im.A.rows());
+  const double* val = im.A.valuePtr();
+  const auto nnz = static_cast<std::size_t>(im.A.nonZeros());
+  im.factor_valid = false;
+  bool ok = true;
+  switch (opt_.method) {
+    case LaplacianMethod::Direct: im.ldlt.factorize(im.A); ok = im.ldlt.info() == Eigen::Success; break;
+    case LaplacianMethod::CgIncompleteCholesky:
+      im.cg_ic.factorize(im.A);
+      ok = im.cg_ic.preconditioner().info() == Eigen::Success;
+      break;
+    case LaplacianMethod::CgDiagonal: im.cg_diag.factorize(im.A); break;
+    case LaplacianMethod::PseudoTransient: {
+      const auto& po = opt_.pseudo;
+      im.pt_lambda = max_generalized_eigenvalue(im.A, cap_free, po.eigen_tolerance, po.eigen_max_iterations);
+      if (!im.pt_lambda.converged || !(im.pt_lambda.value > 0.0))
+        physics_fail(p.step, "pseudo-transient stability limit",
+                     "lambda_max(C^-1 A) not found to the relative accuracy " + std::to_string(po.eigen_tolerance) +
+                         " in " + std::to_string(im.pt_lambda.iterations) + " Lanczos steps (estimate " +
+                         std::to_string(im.pt_lambda.value) + ", residual bound " +
+                         std::to_string(im.pt_lambda.residual_bound) + ")");
+      im.pt_gershgorin = gershgorin_step(im.A, cap_free);
+      im.pt_capacitance = cap_free;
+      break;
+    }
+    case LaplacianMethod::Amg:
+      if (!im.amg)
+        im.amg = std::make_unique<HypreAmgPcg>(HypreAmgPcg::Settings{opt_.amg_strong_threshold, opt_.amg_aggressive_levels});
+      im.amg->setup(im.A);
+      break;
+  }
+  if (!ok)
+    physics_fail(p.step, "Laplacian", "the factorisation of the reduced " + std::to_string(m) + " x " +
+                                                    std::to_string(m) + " system failed");
+  ++factorizations_;
+  res.factorized = true;
+  im.factored_values.assign(val, val + nnz);
+  im.factor_valid = true;
+}
+
+/// The iterative methods (CG with IC or Jacobi, AMG-PCG, pseudo-transient) on the reduced
+/// system A x = rhs from the warm start (`fallback` where a free node has none); fills the
+/// iteration count and the pseudo-transient report of res, fails when not converged.
+Eigen::VectorXd LaplacianSolver::iterate_(const LaplacianProblem& p, const std::vector<Index>& free_node, const Eigen::VectorXd& rhs,
+                                          double fallback, LaplacianResult& res) {
+  Impl& im = *impl_;
+  const std::size_t n = p.nodes, m = free_node.size();
+  const bool pseudo = opt_.method == LaplacianMethod::PseudoTransient;
+  Eigen::VectorXd guess(static_cast<Eigen::Index>(m));
+  Eigen::VectorXd x;
+  const bool use_warm = opt_.warm_start && warm_.size() == n;
+  for (std::size_t f = 0; f < m; ++f) {
+    const double w = use_warm ? warm_[free_node[f]] : kNaN;
+    guess[f] = std::isfinite(w) ? w : fallback;
+  }
+  const int max_it = opt_.max_iterations > 0 ? opt_.max_iterations
+                     : pseudo                ? 1000000
+                                             : static_cast<int>(2 * m);
+  bool ok = false;
+  const char* what = "conjugate gradients";
+  if (opt_.method == LaplacianMethod::CgIncompleteCholesky) {
+    im.cg_ic.setTolerance(opt_.tolerance);
+    im.cg_ic.setMaxIterations(max_it);
+    x = im.cg_ic.solveWithGuess(rhs, guess);
+    res.iterations = static_cast<int>(im.cg_ic.iterations());
+    ok = im.cg_ic.info() == Eigen::Success;
+  } else if (opt_.method == LaplacianMethod::CgDiagonal) {
+    im.cg_diag.setTolerance(opt_.tolerance);
+    im.cg_diag.setMaxIterations(max_it);
+    x = im.cg_diag.solveWithGuess(rhs, guess);
+    res.iterations = static_cast<int>(im.cg_diag.iterations());
+    ok = im.cg_diag.info() == Eigen::Success;
+  } else if (opt_.method == LaplacianMethod::Amg) {
+    what = "AMG-preconditioned conjugate gradients";
+    x = guess;
+    const auto out = im.amg->solve(rhs, x, opt_.tolerance, max_it);
+    res.iterations = out.iterations;
+    ok = out.converged;
+  } else {
+    const auto& po = opt_.pseudo;
+    auto& rep = res.pseudo;
+    rep.lambda_max = im.pt_lambda.value;
+    rep.lambda_residual_bound = im.pt_lambda.residual_bound;
+    rep.eigen_iterations = im.pt_lambda.iterations;
+    rep.dt_limit = 2.0 / im.pt_lambda.value;
+    rep.dt_gershgorin = im.pt_gershgorin;
+    rep.dt = po.dt > 0.0 ? po.dt : po.dt_fraction * rep.dt_limit;
+    if (rep.dt >= rep.dt_limit && !po.allow_unstable)
+      physics_fail(p.step, "pseudo-transient step",
+                   "dt = " + std::to_string(rep.dt) + " s is not below the true stability limit 2/lambda_max(C^-1 K) = " +
+                       std::to_string(rep.dt_limit) + " s (the Gershgorin safe step is " +
+                       std::to_string(rep.dt_gershgorin) + " s); the iteration would diverge. Lower dt, or set "
+                       "allow_unstable to run it anyway");
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const auto& gr : p.dirichlet)
+      if (!gr.nodes.empty()) { lo = std::min(lo, gr.value); hi = std::max(hi, gr.value); }
+    x = guess;
+    const auto [iters, indicator] = pseudo_transient(im.A, rhs, im.pt_capacitance, rep.dt, po, hi > lo ? hi - lo : 0.0,
+                                                     max_it, x, p.step, rep.dt_limit);
+    res.iterations = iters;
+    rep.change_indicator = indicator;
+    ok = true;
+  }
+  if (!ok)
+    physics_fail(p.step, "Laplacian",
+                 std::string(what) + " did not reach the relative tolerance " + std::to_string(opt_.tolerance) +
+                     " in " + std::to_string(res.iterations) + " iterations (" + std::to_string(m) + " unknowns)");
+  return x;
+}
+
+LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Impl& im = *impl_;
+  const std::size_t n = p.nodes, ne = p.a.size();
+  const bool any_shunt = check_problem(p, opt_);
+  const bool pseudo = opt_.method == LaplacianMethod::PseudoTransient;
+
+  const DirichletNodes dn = dirichlet_nodes(p);
+  const std::vector<std::int32_t>& group_of = dn.group_of;
+  const std::size_t n_dirichlet = dn.count;
+  const double dirichlet_sum = dn.sum;
   if (n_dirichlet == 0 && !any_shunt)
     throw SetupError("Laplacian: no Dirichlet node and no shunt: the potential is defined only up to a constant "
                      "(give at least one node a prescribed value)");
@@ -583,43 +747,7 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
     for (std::size_t f = 0; f < m; ++f) cap_free[f] = p.capacitance[free_node[f]];
     same_values = same_values && cap_free == im.pt_capacitance;
   }
-  if (!same_values && m > 0) {
-    im.factor_valid = false;
-    bool ok = true;
-    switch (opt_.method) {
-      case LaplacianMethod::Direct: im.ldlt.factorize(im.A); ok = im.ldlt.info() == Eigen::Success; break;
-      case LaplacianMethod::CgIncompleteCholesky:
-        im.cg_ic.factorize(im.A);
-        ok = im.cg_ic.preconditioner().info() == Eigen::Success;
-        break;
-      case LaplacianMethod::CgDiagonal: im.cg_diag.factorize(im.A); break;
-      case LaplacianMethod::PseudoTransient: {
-        const auto& po = opt_.pseudo;
-        im.pt_lambda = max_generalized_eigenvalue(im.A, cap_free, po.eigen_tolerance, po.eigen_max_iterations);
-        if (!im.pt_lambda.converged || !(im.pt_lambda.value > 0.0))
-          physics_fail(p.step, "pseudo-transient stability limit",
-                       "lambda_max(C^-1 A) not found to the relative accuracy " + std::to_string(po.eigen_tolerance) +
-                           " in " + std::to_string(im.pt_lambda.iterations) + " Lanczos steps (estimate " +
-                           std::to_string(im.pt_lambda.value) + ", residual bound " +
-                           std::to_string(im.pt_lambda.residual_bound) + ")");
-        im.pt_gershgorin = gershgorin_step(im.A, cap_free);
-        im.pt_capacitance = cap_free;
-        break;
-      }
-      case LaplacianMethod::Amg:
-        if (!im.amg)
-          im.amg = std::make_unique<HypreAmgPcg>(HypreAmgPcg::Settings{opt_.amg_strong_threshold, opt_.amg_aggressive_levels});
-        im.amg->setup(im.A);
-        break;
-    }
-    if (!ok)
-      physics_fail(p.step, "Laplacian", "the factorisation of the reduced " + std::to_string(m) + " x " +
-                                                      std::to_string(m) + " system failed");
-    ++factorizations_;
-    res.factorized = true;
-    im.factored_values.assign(val, val + nnz);
-    im.factor_valid = true;
-  }
+  if (!same_values && m > 0) factorize_(p, cap_free, res);
 
   // Right-hand side: sources, then the Dirichlet neighbours in edge order.
   Eigen::VectorXd rhs = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(m));
@@ -635,91 +763,14 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
   // Solve.
   Eigen::VectorXd x = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(m));
   if (m > 0) {
-    if (opt_.method == LaplacianMethod::Direct) {
-      x = im.ldlt.solve(rhs);
-    } else {
-      Eigen::VectorXd guess(static_cast<Eigen::Index>(m));
-      const double fallback = n_dirichlet > 0 ? dirichlet_sum / static_cast<double>(n_dirichlet) : 0.0;
-      const bool use_warm = opt_.warm_start && warm_.size() == n;
-      for (std::size_t f = 0; f < m; ++f) {
-        const double w = use_warm ? warm_[free_node[f]] : kNaN;
-        guess[f] = std::isfinite(w) ? w : fallback;
-      }
-      const int max_it = opt_.max_iterations > 0 ? opt_.max_iterations
-                         : pseudo                ? 1000000
-                                                 : static_cast<int>(2 * m);
-      bool ok = false;
-      const char* what = "conjugate gradients";
-      if (opt_.method == LaplacianMethod::CgIncompleteCholesky) {
-        im.cg_ic.setTolerance(opt_.tolerance);
-        im.cg_ic.setMaxIterations(max_it);
-        x = im.cg_ic.solveWithGuess(rhs, guess);
-        res.iterations = static_cast<int>(im.cg_ic.iterations());
-        ok = im.cg_ic.info() == Eigen::Success;
-      } else if (opt_.method == LaplacianMethod::CgDiagonal) {
-        im.cg_diag.setTolerance(opt_.tolerance);
-        im.cg_diag.setMaxIterations(max_it);
-        x = im.cg_diag.solveWithGuess(rhs, guess);
-        res.iterations = static_cast<int>(im.cg_diag.iterations());
-        ok = im.cg_diag.info() == Eigen::Success;
-      } else if (opt_.method == LaplacianMethod::Amg) {
-        what = "AMG-preconditioned conjugate gradients";
-        x = guess;
-        const auto out = im.amg->solve(rhs, x, opt_.tolerance, max_it);
-        res.iterations = out.iterations;
-        ok = out.converged;
-      } else {
-        const auto& po = opt_.pseudo;
-        auto& rep = res.pseudo;
-        rep.lambda_max = im.pt_lambda.value;
-        rep.lambda_residual_bound = im.pt_lambda.residual_bound;
-        rep.eigen_iterations = im.pt_lambda.iterations;
-        rep.dt_limit = 2.0 / im.pt_lambda.value;
-        rep.dt_gershgorin = im.pt_gershgorin;
-        rep.dt = po.dt > 0.0 ? po.dt : po.dt_fraction * rep.dt_limit;
-        if (rep.dt >= rep.dt_limit && !po.allow_unstable)
-          physics_fail(p.step, "pseudo-transient step",
-                       "dt = " + std::to_string(rep.dt) + " s is not below the true stability limit 2/lambda_max(C^-1 K) = " +
-                           std::to_string(rep.dt_limit) + " s (the Gershgorin safe step is " +
-                           std::to_string(rep.dt_gershgorin) + " s); the iteration would diverge. Lower dt, or set "
-                           "allow_unstable to run it anyway");
-        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-        for (const auto& gr : p.dirichlet)
-          if (!gr.nodes.empty()) { lo = std::min(lo, gr.value); hi = std::max(hi, gr.value); }
-        x = guess;
-        const auto [iters, indicator] = pseudo_transient(im.A, rhs, im.pt_capacitance, rep.dt, po, hi > lo ? hi - lo : 0.0,
-                                                         max_it, x, p.step, rep.dt_limit);
-        res.iterations = iters;
-        rep.change_indicator = indicator;
-        ok = true;
-      }
-      if (!ok)
-        physics_fail(p.step, "Laplacian",
-                     std::string(what) + " did not reach the relative tolerance " + std::to_string(opt_.tolerance) +
-                         " in " + std::to_string(res.iterations) + " iterations (" + std::to_string(m) + " unknowns)");
-    }
+    if (opt_.method == LaplacianMethod::Direct) x = im.ldlt.solve(rhs);
+    else x = iterate_(p, free_node, rhs, n_dirichlet > 0 ? dirichlet_sum / static_cast<double>(n_dirichlet) : 0.0, res);
     const double rn = rhs.norm();
     res.residual_norm = (im.A * x - rhs).norm();
     res.relative_residual = rn > 0.0 ? res.residual_norm / rn : res.residual_norm;
   }
 
-  // Node values, branch fluxes, Dirichlet-group fluxes.
-  res.value.assign(n, kNaN);
-  for (std::size_t v = 0; v < n; ++v) {
-    if (role[v] == -1) res.value[v] = p.dirichlet[group_of[v]].value;
-    else if (role[v] >= 0) res.value[v] = x[role[v]];
-  }
-  res.flux.assign(ne, 0.0);
-  res.dirichlet_flux.assign(p.dirichlet.size(), 0.0);
-  for (std::size_t e = 0; e < ne; ++e) {
-    if (!active[e]) continue;
-    const Index a = p.a[e], b = p.b[e];
-    if (role[a] == -2) continue;  // floating component (then b is floating too)
-    const double f = p.g[e] * (res.value[a] - res.value[b]);
-    res.flux[e] = f;
-    if (role[a] == -1) res.dirichlet_flux[group_of[a]] += f;
-    if (role[b] == -1) res.dirichlet_flux[group_of[b]] -= f;
-  }
+  write_results(p, role, group_of, active, x, res);
   warm_ = res.value;
   res.solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;

@@ -267,6 +267,11 @@ class LaplacianSolver {
 
  private:
   struct Impl;
+  /// The numeric factorisation step of solve() (laplacian.cpp).
+  void factorize_(const LaplacianProblem& p, const std::vector<double>& cap_free, LaplacianResult& res);
+  /// The iterative solution step of solve() (laplacian.cpp).
+  Eigen::VectorXd iterate_(const LaplacianProblem& p, const std::vector<Index>& free_node, const Eigen::VectorXd& rhs, double fallback,
+                           LaplacianResult& res);
   LaplacianOptions opt_;
   std::unique_ptr<Impl> impl_;
   std::vector<double> warm_;

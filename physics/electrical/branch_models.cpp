@@ -88,7 +88,7 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
       G[e] = el::sintered_neck_conductance(law, layer, k, k, ra, rb, a[e]);
       // Side a: its hemisphere and half the grain-boundary layer (Eq. 17).
       const double Ka = std::isfinite(ra) ? el::hemisphere_conductance(law, k, ra, a[e]) : kInf;
-      const double Kc = layer.enabled ? el::grain_boundary_layer_conductance(k, a[e], layer.epsilon, layer.thickness_m) : kInf;
+      const double Kc = layer_conductance(m, k, a[e]);
       if (G[e] > 0.0) share_a[e] = (1.0 / Ka + 0.5 / Kc) * G[e];
     }
   } else if (m.model == "transmission_surface") {
