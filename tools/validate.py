@@ -231,15 +231,16 @@ def run_one(runner, case, tier, n, seed, workdir):
 
 # ---------------------------------------------------------------- records
 
-def ensemble(runs, fig):
-    """Statistics of figure `fig` over the runs that produced it."""
+def ensemble(runs, fig, absolute=False):
+    """Statistics of figure `fig` over the runs that produced it; the error is relative to the
+    reference, or (absolute) measured - reference in the figure's unit."""
     have = [r for r in runs if fig in r["figures"]]
     if not have:
         return None
     per_seed = [{"seed": r["seed"], "measured": r["figures"][fig]["measured"],
                  "reference": r["figures"][fig]["reference"]} for r in have]
     for p in per_seed:
-        p["error"] = (p["measured"] - p["reference"]) / abs(p["reference"])
+        p["error"] = (p["measured"] - p["reference"]) / (1.0 if absolute else abs(p["reference"]))
     errs = [p["error"] for p in per_seed]
     out = {"measured": statistics.fmean(p["measured"] for p in per_seed),
            "reference": statistics.fmean(p["reference"] for p in per_seed),
@@ -264,7 +265,7 @@ def tuned_by_config_change(case, first_values):
 
 
 def make_record(case, fig, tier, n, runs, runner, first_values, fast_bands):
-    st = ensemble(runs, fig.key)
+    st = ensemble(runs, fig.key, fig.absolute)
     failed = [r for r in runs if r["error"]]
     rec = {"case": fig.id, "source": fig.source, "reference_origin": fig.reference_origin,
            "kind": "validation" if tier == "full" else "regression", "tier": tier, "N": n,
@@ -272,6 +273,7 @@ def make_record(case, fig, tier, n, runs, runner, first_values, fast_bands):
            "wall_s": round(sum(r["wall_s"] for r in runs), 2), "cpu_s": round(sum(r["cpu_s"] for r in runs), 2),
            "threads": runner.threads, "commit": runner.commit, "date": time.strftime("%Y-%m-%d %H:%M:%S"),
            "configs": config_hashes(case), "variants": fig.variants,
+           **({"error_kind": "absolute"} if fig.absolute else {}),
            "tuned_after_seeing": list(fig.tuned) + tuned_by_config_change(case, first_values),
            "runs": [{"seed": r["seed"], "rundir": r["rundir"], "wall_s": round(r["wall_s"], 2),
                      "cpu_s": round(r["cpu_s"], 2), "load_average_start": round(r["load"], 2), "error": r["error"]}
@@ -467,6 +469,17 @@ def cmd_run(a):
     return 0
 
 
+def fmt_err(rec, x):
+    """An error of a record: in % (relative) or as a signed number in the figure's unit (absolute)."""
+    if rec.get("error_kind") == "absolute" and x is not None:
+        return f"{x:+.4f}"
+    return fmt_pct(x)
+
+
+def fmt_std(rec, x):
+    return f"{x:.4f}" if rec.get("error_kind") == "absolute" else f"{100 * x:.2f}"
+
+
 def fmt_pct(x):
     if x is None:
         return "n/a"
@@ -482,14 +495,16 @@ def band_text(rec):
     if isinstance(b, dict):
         lo, hi = b["error_range"]
         return f"[{100 * lo:+.3g}, {100 * hi:+.3g}] %"
+    if rec.get("error_kind") == "absolute":
+        return f"±{b:g} (absolute)"
     return f"±{100 * b:g} %"
 
 
 def summary_line(rec):
-    std = f" ± {100 * rec['std']:.2f}" if rec.get("std") is not None else ""
+    std = f" ± {fmt_std(rec, rec['std'])}" if rec.get("std") is not None else ""
     verdict = "PASS" if rec["pass"] else ("TUNED" if rec.get("tuned_after_seeing") and rec["kind"] == "validation"
                                           else "MISS")
-    return (f"{verdict:5s} {rec['case']} N={rec['N']} ({rec['kind']}): error {fmt_pct(rec.get('error'))}{std} "
+    return (f"{verdict:5s} {rec['case']} N={rec['N']} ({rec['kind']}): error {fmt_err(rec, rec.get('error'))}{std} "
             f"over {rec.get('count', 0)} run(s), band {band_text(rec)}, {rec['wall_s']:.1f} s wall")
 
 
@@ -516,11 +531,12 @@ def ledger_table(ledger, kind):
     lines = ["| case | N | seeds | reference | measured | error (mean ± std) | band | verdict | wall [s] | CPU [s] | commit |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        std = f" ± {100 * r['std']:.2f} %" if r.get("std") is not None else ""
+        std = f" ± {fmt_std(r, r['std'])} %" if r.get("std") is not None and r.get("error_kind") != "absolute" else \
+            f" ± {fmt_std(r, r['std'])}" if r.get("std") is not None else ""
         ref = "n/a" if r.get("reference") is None else f"{r['reference']:.6g}"
         meas = "n/a" if r.get("measured") is None else f"{r['measured']:.6g}"
         flag = " (scatter > band)" if r.get("scatter_exceeds_band") else ""
-        lines.append(f"| {r['case']} | {r['N']} | {len(r['seeds'])} | {ref} | {meas} | {fmt_pct(r.get('error'))}{std}{flag} | "
+        lines.append(f"| {r['case']} | {r['N']} | {len(r['seeds'])} | {ref} | {meas} | {fmt_err(r, r.get('error'))}{std}{flag} | "
                      f"{band_text(r)} | {verdict(r)} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['commit']} |")
     return "\n".join(lines)
 
@@ -607,7 +623,7 @@ def write_plot(ledger, path):
     ax.set_yscale("log")
     ax.set_xlabel("run time: wall seconds, all seeds and reference tools of the record (one thread each)")
     ax.set_ylim(floor / 2, None)
-    ax.set_ylabel("|error| of the ensemble mean [%]  (grey bar: the band; floor 1e-3 %)")
+    ax.set_ylabel("|error| of the ensemble mean [%]  (absolute figures, e.g. porosity: x 100; grey bar: the band; floor 1e-3 %)")
     ax.set_title("sparkdem validation ledger, full tier (filled: pass, open: miss or tuned)")
     ax.grid(True, which="both", alpha=0.3)
     if done:
@@ -660,7 +676,7 @@ def cmd_derive_bands(a):
                 if r["error"]:
                     print(f"  seed {r['seed']}: {r['error']}", file=sys.stderr)
             for fig in c.figures:
-                st = ensemble(runs, fig.key)
+                st = ensemble(runs, fig.key, fig.absolute)
                 if st is None or st["count"] < 3:
                     print(f"  {fig.id} N={n}: fewer than 3 runs, no band", file=sys.stderr)
                     continue

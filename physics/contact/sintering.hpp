@@ -9,7 +9,11 @@
 /// Normal: a Maxwell branch (Hertz spring k_n in series with the grain-boundary-diffusion
 /// dashpot eta_n), in parallel with the sintering driving force and a numerical damper:
 ///   F_n   = F_e + F_d - F_s                         (repulsive positive, along n = j -> i)
-///   dF_e/dt = k_n (v - F_e / eta_n),  v = -v_n the approach rate;  du_s/dt = F_e / eta_n
+///   dF_e/dt = k_n (v - F_e / eta_n),  v = dh/dt = -v_n + d(r_i + r_j)/dt;  du_s/dt = F_e / eta_n
+///           (v is the overlap rate: the centres' approach plus the radii's thermal growth, so a
+///           cooled neck pulls its particles together as the solid it stands for contracts; with
+///           -v_n alone a compact cooled in the die kept its centres and gained porosity
+///           (1 - p) 3 alpha dT, issue 21 item 7)
 ///   k_n   = 2 E* sqrt(R*) sqrt(|h - u_s|)           (Hertz tangent on the elastic approach; with
 ///           neck_stiffness = neck_radius: 2 E* max(a, sqrt(R* |h - u_s|)), the bonded neck)
 ///   eta_n = pi a^4 / (8 D_eff),  D_eff = D_gb delta_b Omega / (k_B T),
@@ -213,11 +217,12 @@ struct Sintering {
     return s;
   }
   /// State: neck radius [m], Maxwell force F_e [N], viscous approach u_s [m], tangential elastic
-  /// force [N] (3 values).
+  /// force [N] (3 values), r_i + r_j at the last evaluation [m] (the thermal approach rate).
   static std::vector<std::string> state_columns() {
-    return {"neck_radius", "elastic_force", "viscous_approach", "tangential_fx", "tangential_fy", "tangential_fz"};
+    return {"neck_radius", "elastic_force", "viscous_approach", "tangential_fx", "tangential_fy", "tangential_fz",
+            "radius_sum"};
   }
-  enum Column { kNeck = 0, kElastic = 1, kViscous = 2, kTangential = 3 };
+  enum Column { kNeck = 0, kElastic = 1, kViscous = 2, kTangential = 3, kRadiusSum = 6 };
 
   explicit Sintering(const Params& p)
       : p_(p), e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
@@ -277,7 +282,12 @@ struct Sintering {
     const double he = h - st[kViscous];
     const double r_spring = spring_radius(g.r_eff, he, a);
     const double kn = 2.0 * e_star_ * r_spring;
-    const double v = -m.vn;
+    // Approach rate of the Maxwell element: the centres' approach plus the radii's growth (thermal
+    // expansion changes h at fixed centres: a neck cooled by dT pulls its particles together by
+    // alpha dT (r_i + r_j), as the solid it stands for contracts).
+    const double radius_sum = g.r_i + g.r_j;
+    const double v = -m.vn + (st[kRadiusSum] > 0.0 && dt > 0.0 ? (radius_sum - st[kRadiusSum]) / dt : 0.0);
+    st[kRadiusSum] = radius_sum;
     double fe = st[kElastic];
     double us = st[kViscous];
     double fs = 0.0, us_rate = 0.0;

@@ -54,6 +54,10 @@ ParamSpec<CompactParams> compact_spec() {
   s.add("top", &P::top).doc("upper punch: a plane wall normal to the die axis, facing the lower one");
   s.add("interior_margin", &P::interior_margin).unit("m").nonnegative()
       .doc("porosity_interior: region this far from every wall (0: one largest particle diameter)");
+  s.add("envelope_cell", &P::envelope_cell).unit("1").positive()
+      .doc("porosity_envelope: size of the caliper cells (slices along the axis, sectors about it) in mean particle "
+           "diameters; a cell must hold a surface particle (a compact filling the die reads 0.99 of its radius at 2, "
+           "the die radius at 3)");
   return s;
 }
 
@@ -87,13 +91,49 @@ CylinderRegion compact_region(const State& s, const CompactParams& p) {
 }
 
 std::vector<std::string> CompactMonitor::columns(const State&) const {
-  return {"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass"};
+  return {"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass", "envelope_radius",
+          "porosity_envelope"};
+}
+
+double envelope_volume(const std::vector<Vec3>& positions, const std::vector<double>& radii, const CylinderRegion& region,
+                       double cell_diameters) {
+  const std::size_t n = positions.size();
+  if (n == 0) return 0.0;
+  double r_mean = 0.0;
+  for (double r : radii) r_mean += r / static_cast<double>(n);
+  const double cell = cell_diameters * 2.0 * r_mean;
+  const int nz = std::max(1, static_cast<int>(std::lround(region.height / cell)));
+  const int nt = std::max(4, static_cast<int>(std::lround(2.0 * kPi * region.radius / cell)));
+  const Vec3 axis = region.axis.normalized();
+  const Vec3 e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+  std::vector<double> extent(static_cast<std::size_t>(nz) * nt, -1.0);  // -1: no particle in the cell
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 d = positions[i] - region.base;
+    const double z = d.dot(axis);
+    const int iz = std::clamp(static_cast<int>(std::floor(z / region.height * nz)), 0, nz - 1);
+    const double angle = std::atan2(d.dot(e2), d.dot(e1)) + kPi;  // [0, 2 pi]
+    const int it = std::clamp(static_cast<int>(std::floor(angle / (2.0 * kPi) * nt)), 0, nt - 1);
+    double& e = extent[static_cast<std::size_t>(iz) * nt + it];
+    e = std::max(e, (d - z * axis).norm() + radii[i]);
+  }
+  double volume = 0.0;
+  for (int iz = 0; iz < nz; ++iz) {
+    double sum = 0.0;
+    int cells = 0;
+    for (int it = 0; it < nt; ++it)
+      if (const double e = extent[static_cast<std::size_t>(iz) * nt + it]; e >= 0.0) {
+        sum += e;
+        ++cells;
+      }
+    if (cells > 0) volume += kPi * (sum / cells) * (sum / cells) * region.height / nz;
+  }
+  return volume;
 }
 
 std::vector<double> CompactMonitor::values(const State& s) const {
   const CylinderRegion region = compact_region(s, p_);
   const auto& p = s.particles;
-  if (p.size() == 0) return {1.0, 1.0, 0.0, region.height, 1.0};
+  if (p.size() == 0) return {1.0, 1.0, 0.0, region.height, 1.0, 0.0, 1.0};
   const auto pairs = find_pairs(p.position, p.radius, 0.0);
   const double porosity = 1.0 - compact_solid_volume(p.position, p.radius, pairs, region) / region_volume(region);
   double margin = p_.interior_margin;
@@ -107,7 +147,17 @@ std::vector<double> CompactMonitor::values(const State& s) const {
   // Mass-conserving porosity: the spheres' volume without subtracting the lenses (in sintering
   // DEM the overlap stands for shrinkage; the lens material sits in the neck).
   const double porosity_mass = 1.0 - compact_solid_volume(p.position, p.radius, {}, region) / region_volume(region);
-  return {porosity, interior, 1.0 - porosity, region.height, porosity_mass};
+  // The sample's own envelope (a cooled sample leaves the die wall): its solid by mass (spheres
+  // clipped to the punches only) in its profiled envelope volume.
+  CylinderRegion all = region;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const Vec3 d = p.position[i] - region.base;
+    all.radius = std::max(all.radius, (d - d.dot(region.axis) * region.axis).norm() + p.radius[i]);
+  }
+  const double v_env = envelope_volume(p.position, p.radius, region, p_.envelope_cell);
+  const double porosity_envelope = 1.0 - compact_solid_volume(p.position, p.radius, {}, all) / v_env;
+  const double r_env = std::sqrt(v_env / (kPi * region.height));
+  return {porosity, interior, 1.0 - porosity, region.height, porosity_mass, r_env, porosity_envelope};
 }
 
 }  // namespace sparkdem::physics

@@ -50,6 +50,7 @@ struct CompactParams {
   std::string bottom = "bottom";    ///< plane wall (lower punch)
   std::string top = "top";          ///< plane wall (upper punch)
   double interior_margin = 0.0;     ///< [m] interior region margin from every wall; 0 = one largest diameter
+  double envelope_cell = 3.0;       ///< [mean diameters] caliper cells of porosity_envelope (envelope_volume)
 };
 ParamSpec<CompactParams> compact_spec();
 
@@ -59,12 +60,33 @@ ParamSpec<CompactParams> compact_spec();
 /// the axis or do not face each other.
 CylinderRegion compact_region(const State& s, const CompactParams& p);
 
+/// Volume [m^3] of a sample's own envelope, profiled like a caliper around it: the compact
+/// region (height H between the punches, die radius R) is cut into n_z = max(1, round(H / c))
+/// slices along the axis and n_t = max(4, round(2 pi R / c)) sectors about it, c = cell_diameters
+/// x 2 r_mean (r_mean the mean particle radius); each (slice, sector) cell with a particle centre gets the outermost
+/// extent of its particles, max (rho_i + r_i) (rho the distance from the axis); a slice's envelope
+/// radius is the mean over its non-empty sectors, and V = sum over slices pi R_k^2 H / n_z (a
+/// slice without particles adds nothing). Centres beyond the punches count in the end slices.
+/// A single particle pinned at the die (e.g. by punch friction) moves one sector, not the whole
+/// envelope; the sector mean is the surface a profilometer would average.
+/// Cells must be large enough to hold a surface particle, else a cell's outermost particle is an
+/// interior one and the envelope shrinks: on the reduced NiAl compact (314 particles, R = 3.4
+/// d_mean) filling its die before densification, c = 1 / 2 / 3 mean diameters read 0.94 / 0.99 /
+/// 1.005 of the die radius (CompactParams::envelope_cell = 3).
+double envelope_volume(const std::vector<Vec3>& positions, const std::vector<double>& radii, const CylinderRegion& region,
+                       double cell_diameters);
+
 /// Time-series columns: porosity = 1 - V_s / (pi R^2 H); porosity_interior (the same in the
 /// region shrunk by interior_margin from every wall); relative_density = 1 - porosity;
 /// compact_height = H [m]; porosity_mass = 1 - sum_i V(sphere_i ∩ region) / (pi R^2 H), the
 /// lenses NOT subtracted: in a sintering compact the overlap stands for shrinkage and the lens
 /// material sits in the neck, so this is the porosity by mass (Archimedes) — the one to compare
-/// with measured samples; `porosity` (lenses subtracted) falls behind it as necks grow. Overlapping pairs are found afresh from the current positions
+/// with measured samples; `porosity` (lenses subtracted) falls behind it as necks grow;
+/// envelope_radius [m] = sqrt(V_env / (pi H)) with V_env = envelope_volume(), and
+/// porosity_envelope = 1 - V_spheres / V_env (spheres clipped to the punches only, lenses not
+/// subtracted: by mass, in the sample's own envelope): a sample that shrinks away
+/// from the die wall on cooling is measured on its own size, as a sample taken out of the die
+/// (issue 21 item 7). Overlapping pairs are found afresh from the current positions
 /// (cell-grid search, O(N); deterministic order), so bonded pairs and pairs of any law count.
 class CompactMonitor final : public Monitor {
  public:

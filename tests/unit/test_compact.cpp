@@ -137,7 +137,8 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   const CompactMonitor mon(cp);
   const auto cols = mon.columns(s);
   const auto vals = mon.values(s);
-  REQUIRE(cols == std::vector<std::string>{"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass"});
+  REQUIRE(cols == std::vector<std::string>{"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass",
+                                              "envelope_radius", "porosity_envelope"});
   const double V = sphere_volume(r), VL = lens_volume(r, r, 1.6e-3);
   const double H = 8.8e-3, R = 4.5e-3;
   const double porosity = 1.0 - (4.0 * V - VL - cap_volume(r, 0.3e-3)) / (kPi * R * R * H);
@@ -148,6 +149,11 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   CHECK(std::abs(vals[3] - H) <= 1e-18);
   // By mass: the lens is not subtracted.
   CHECK(std::abs(vals[4] - (1.0 - (4.0 * V - cap_volume(r, 0.3e-3)) / (kPi * R * R * H))) <= 1e-12);
+  // Envelope columns: the profiled envelope of the spheres (envelope_volume, tested below) and
+  // the solid by mass in it (no sphere clipped radially; D's cap below the bottom punch is not solid).
+  const double v_env = envelope_volume(s.particles.position, s.particles.radius, compact_region(s, cp), cp.envelope_cell);
+  CHECK(std::abs(vals[5] - std::sqrt(v_env / (kPi * H))) <= 1e-15);
+  CHECK(std::abs(vals[6] - (1.0 - (4.0 * V - cap_volume(r, 0.3e-3)) / v_env)) <= 1e-12);
   // The die axis may point either way; the punches must face each other across it.
   std::get<CylinderShape>(s.walls[0].shape).axis = -Vec3::UnitZ();
   CHECK(std::abs(mon.values(s)[0] - porosity) <= 1e-12);
@@ -157,4 +163,40 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   CHECK_THROWS_AS(CompactMonitor(cp).values(s), SetupError);
   cp.top = "lid";
   CHECK_THROWS_AS(CompactMonitor(cp).values(s), SetupError);
+}
+
+TEST_CASE("sample envelope: caliper profile of rings, a barrel and an outlier", "[compact][packing]") {
+  // Region: R = 10 mm, H = 2 mm about z from the origin; spheres r = 1 mm: one slice (n_z =
+  // round(H / 2 r) = 1) and n_t = round(2 pi R / 2 r) = 31 sectors. A ring of 3 n_t spheres at
+  // rho = 8 mm fills every sector with spheres reaching rho + r: V = pi (rho + r)^2 H exactly.
+  const double r = 1e-3, H = 2e-3, R = 10e-3;
+  const CylinderRegion region{Vec3::Zero(), Vec3::UnitZ(), R, H};
+  const int nt = 31;
+  auto ring = [&](double rho, double z, int count, std::vector<Vec3>& x, std::vector<double>& rad) {
+    for (int k = 0; k < count; ++k) {
+      const double t = 2.0 * kPi * (k + 0.37) / count;
+      x.emplace_back(rho * std::cos(t), rho * std::sin(t), z);
+      rad.push_back(r);
+    }
+  };
+  std::vector<Vec3> x;
+  std::vector<double> rad;
+  ring(8e-3, 1e-3, 3 * nt, x, rad);
+  CHECK(envelope_volume(x, rad, region, 1.0) == Approx(kPi * 9e-3 * 9e-3 * H).epsilon(1e-12));
+  // One outlier 1 mm farther out in one sector moves that sector's extent by 1 mm: the slice
+  // radius by 1 mm / n_t, not to the outlier.
+  x.emplace_back(9e-3, 0.0, 1e-3);
+  rad.push_back(r);
+  CHECK(envelope_volume(x, rad, region, 1.0) == Approx(kPi * std::pow(9e-3 + 1e-3 / nt, 2) * H).epsilon(1e-12));
+  // A barrel: H = 4 mm gives two slices; rings at rho = 8 mm (lower) and 6 mm (upper).
+  const CylinderRegion tall{Vec3::Zero(), Vec3::UnitZ(), R, 4e-3};
+  std::vector<Vec3> xb;
+  std::vector<double> rb;
+  ring(8e-3, 1e-3, 3 * nt, xb, rb);
+  ring(6e-3, 3e-3, 3 * nt, xb, rb);
+  CHECK(envelope_volume(xb, rb, tall, 1.0) == Approx(kPi * (9e-3 * 9e-3 + 7e-3 * 7e-3) * 2e-3).epsilon(1e-12));
+  CHECK(envelope_volume({}, {}, tall, 1.0) == 0.0);
+  // Cells of 3 diameters: n_z = 1, n_t = round(2 pi R / 6 r) = 10: the barrel is one slice whose
+  // sectors each reach the outer ring, rho = 8 mm + r.
+  CHECK(envelope_volume(xb, rb, tall, 3.0) == Approx(kPi * 9e-3 * 9e-3 * 4e-3).epsilon(1e-12));
 }

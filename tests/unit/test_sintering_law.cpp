@@ -355,3 +355,47 @@ TEST_CASE("Sintering creep stops at full density (grain-boundary fraction)", "[s
     CHECK((st[Sintering::kElastic] < F0) == c.flows);
   }
 }
+
+TEST_CASE("Sintering neck: thermal contraction loads the neck, a homogeneous contraction does not", "[sintering]") {
+  // A neck is the solid between two centres: its Maxwell element integrates the overlap rate
+  // dh/dt = -v_n + d(r_i + r_j)/dt. Cold (eta = +inf, a spring): radii shrunk by dr each at fixed
+  // centres change F_e by exactly -k_n 2 dr (tension: the neck pulls the centres together, k_n
+  // the tangent of the new elastic approach); the same shrink with the centres moved together
+  // by 2 dr (a homogeneous contraction to first order) leaves F_e unchanged (to round-off).
+  const Sintering law(law_params());
+  ContactGeometry g = equal_pair_geometry();
+  g.overlap = 0.01 * kR;
+  RelativeMotion m;
+  m.vt = Vec3::Zero();
+  std::vector<double> st(Sintering::state_columns().size(), 0.0);
+  const double dt = 1e-9;
+  law(g, m, dt, st.data());  // hot: the neck forms
+  g.temperature = 300.0;     // cold from here: an elastic bond
+  law(g, m, dt, st.data());
+  const double f0 = st[Sintering::kElastic];
+  const double dr = 1e-4 * kR;
+  auto shrink = [&](ContactGeometry q) {
+    q.r_i -= dr;
+    q.r_j -= dr;
+    q.r_eff = 0.5 * q.r_i;
+    q.overlap -= 2.0 * dr;
+    return q;
+  };
+  // Fixed centres.
+  const ContactGeometry gs = shrink(g);
+  std::vector<double> st1 = st;
+  const double kn = law.normal_stiffness(gs, st1.data());
+  law(gs, m, dt, st1.data());
+  CHECK(st1[Sintering::kElastic] == Approx(f0 - kn * 2.0 * dr).epsilon(1e-12));
+  CHECK(st1[Sintering::kElastic] < f0);
+  // Centres approaching by 2 dr over the step: the overlap keeps its value, F_e too.
+  ContactGeometry gh = shrink(g);
+  gh.overlap = g.overlap;
+  std::vector<double> st2 = st;
+  RelativeMotion mh = m;
+  mh.vn = -2.0 * dr / dt;
+  law(gh, mh, dt, st2.data());
+  CHECK(std::abs(st2[Sintering::kElastic] - f0) <= 1e-9 * std::abs(kn * 2.0 * dr));
+  // The radius sum is state (checkpointed with the contact): a fresh state sees no rate.
+  CHECK(st2[Sintering::kRadiusSum] == gh.r_i + gh.r_j);
+}
