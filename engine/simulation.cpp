@@ -10,6 +10,7 @@
 #include "engine/core/interrupt.hpp"
 #include "engine/integrate/velocity_verlet.hpp"
 #include "engine/state/pair_transfer.hpp"
+#include "engine/core/parallel.hpp"
 
 namespace {
 /// A number with 6 significant digits (std::to_string prints 1e-9 s as 0.000000).
@@ -291,7 +292,7 @@ void Simulation::rotate_prescribed(double dt, double t_stage_new) {
 void Simulation::zero_forces() {
   auto& p = s_.particles;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
   for (std::int64_t i = 0; i < n; ++i) { p.force[i].setZero(); p.torque[i].setZero(); }
 }
 
@@ -345,7 +346,7 @@ bool Simulation::event_due(const PlanItem& it, Step step) const {
     const auto& x0 = p.fields.data(base + "x0");
     const double lim2 = t.moved_beyond * t.moved_beyond;
     int moved = 0;
-#pragma omp parallel for schedule(static) reduction(max : moved)
+#pragma omp parallel for schedule(static) reduction(max : moved) if (par::worth(n, par::kLight))
     for (std::int64_t i = 0; i < n; ++i) {
       const Vec3 d = p.position[i] - Vec3(x0[3 * i], x0[3 * i + 1], x0[3 * i + 2]);
       if (d.squaredNorm() > lim2) moved = 1;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "engine/core/error.hpp"
+#include "engine/core/parallel.hpp"
 
 namespace sparkdem {
 
@@ -55,7 +56,7 @@ void check_finite(const State& s, const WatchdogContext& ctx) {
   const auto& p = s.particles;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
   int bad = 0;
-#pragma omp parallel for schedule(static) reduction(max : bad)
+#pragma omp parallel for schedule(static) reduction(max : bad) if (par::worth(n, par::kLight))
   for (std::int64_t i = 0; i < n; ++i)
     if (!(finite3(p.position[i]) && finite3(p.velocity[i]) && finite3(p.omega[i]) && finite3(p.force[i]) &&
           finite3(p.torque[i])))
@@ -68,7 +69,7 @@ void check_finite(const State& s, const WatchdogContext& ctx) {
     const auto& f = p.fields.data(name);
     const std::int64_t m = static_cast<std::int64_t>(f.size());
     int fb = 0;
-#pragma omp parallel for schedule(static) reduction(max : fb)
+#pragma omp parallel for schedule(static) reduction(max : fb) if (par::worth(m, par::kLight))
     for (std::int64_t k = 0; k < m; ++k)
       if (!field_ok(f[k], c)) fb = 1;
     bad = std::max(bad, fb);
@@ -110,7 +111,7 @@ void check_speed(const State& s, const WatchdogConfig& c, const WatchdogContext&
   if (!(ctx.dt > 0.0) && !(c.max_speed > 0.0)) return;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
   int bad = 0;
-#pragma omp parallel for schedule(static) reduction(max : bad)
+#pragma omp parallel for schedule(static) reduction(max : bad) if (par::worth(n, par::kLight))
   for (std::int64_t i = 0; i < n; ++i) {
     const double vmax = c.max_speed > 0.0 ? c.max_speed : p.radius[i] / ctx.dt;
     if (p.velocity[i].squaredNorm() > vmax * vmax) bad = 1;
@@ -144,7 +145,7 @@ void check_overlap(const State& s, const WatchdogConfig& c, const WatchdogContex
   const auto& ov = t.overlap();
   const std::int64_t rows = static_cast<std::int64_t>(t.size());
   int bad = 0;
-#pragma omp parallel for schedule(static) reduction(max : bad)
+#pragma omp parallel for schedule(static) reduction(max : bad) if (par::worth(rows, par::kLight))
   for (std::int64_t r = 0; r < rows; ++r)
     if (ov[r] > bound * std::min(p.radius[t.i(r)], p.radius[t.j(r)])) bad = 1;
   if (!bad) return;

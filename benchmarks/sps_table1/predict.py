@@ -16,6 +16,8 @@ diameters, chosen on a compact filling its die before densification: physics/pac
 Used by the ledger case seed000/table1_densification (benchmarks/validation/cases.py) with the
 ledger's runner; standalone:
     predict.py --sparkdem build/sparkdem --seed 2024 --workdir DIR [--csv FILE]
+    predict.py --collect RUNDIR... --csv FILE     one row per run of finished workdirs (the ledger's
+                                                  N300_seed* directories): seed, run, D_0, porosities
 """
 import argparse
 import csv
@@ -123,14 +125,45 @@ def predict(run, seed, log=print):
     return result, d0, history
 
 
+def collect(rundirs, path):
+    """One CSV row per finished run (calibration steps and predictions) of the given workdirs."""
+    fields = ["rundir", "seed", "run", "sample", "d0_m2_s", "measured", "porosity_envelope", "porosity_envelope_minus_measured",
+              "porosity_mass", "porosity_mass_hold_end", "envelope_radius_m"]
+    rows = []
+    for d in rundirs:
+        for name in sorted(os.listdir(d)):
+            if not (name.endswith("_out") and (name.startswith("calibrate_") or name.startswith("sample"))):
+                continue
+            with open(os.path.join(d, name[:-4] + ".json")) as f:
+                sc = json.load(f)
+            k = int(sc["name"].rsplit("sample", 1)[1])
+            press = next(s for s in sc["stages"] if s["name"] == "hot_press")
+            p = porosities(os.path.join(d, name)) or {}
+            rows.append({"rundir": os.path.basename(d), "seed": sc["seed"], "run": name[:-4], "sample": k,
+                         "d0_m2_s": "%.6g" % press["contact"]["params"]["gb_diffusivity_prefactor"], "measured": MEASURED[k],
+                         **{f: "%.5g" % v for f, v in p.items()},
+                         "porosity_envelope_minus_measured": "%+.4f" % (p["porosity_envelope"] - MEASURED[k]) if p else ""})
+    with open(path + ".tmp", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields)
+        w.writeheader()
+        w.writerows(rows)
+    os.replace(path + ".tmp", path)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--sparkdem", required=True)
+    ap.add_argument("--collect", nargs="+", metavar="RUNDIR")
+    ap.add_argument("--sparkdem")
     ap.add_argument("--seed", type=int, default=2024)
-    ap.add_argument("--workdir", required=True)
+    ap.add_argument("--workdir")
     ap.add_argument("--threads", type=int, default=1)
     ap.add_argument("--csv")
     a = ap.parse_args()
+    if a.collect:
+        collect(a.collect, a.csv or "prediction.csv")
+        return
+    if not (a.sparkdem and a.workdir):
+        ap.error("--sparkdem and --workdir are needed to run")
     os.makedirs(a.workdir, exist_ok=True)
 
     def run(sc, name):

@@ -23,6 +23,7 @@
 
 #include "engine/state/bond_table.hpp"
 #include "engine/state/particle_store.hpp"
+#include "engine/core/parallel.hpp"
 
 namespace sparkdem {
 
@@ -120,7 +121,7 @@ class BondModelT final : public BondModel {
     auto& Ti = b.torque_i();
     auto& Tj = b.torque_j();
     std::vector<std::uint8_t> broke(b.size(), 0);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(rows, par::kHeavy))
     for (std::int64_t r = 0; r < rows; ++r) {
       if (b.broken(r)) { F[r].setZero(); Ti[r].setZero(); Tj[r].setZero(); continue; }
       const Index i = b.i(r), j = b.j(r);

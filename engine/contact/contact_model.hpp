@@ -35,6 +35,7 @@
 #include "engine/state/contact_table.hpp"
 #include "engine/state/particle_store.hpp"
 #include "engine/walls/wall.hpp"
+#include "engine/core/parallel.hpp"
 
 namespace sparkdem {
 
@@ -148,7 +149,7 @@ class ContactModelT final : public ContactModel {
     auto& Ti = t.torque_i();
     auto& Tj = t.torque_j();
     auto& ov = t.overlap();
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(rows, par::kHeavy))
     for (std::int64_t r = 0; r < rows; ++r) {
       const Index i = t.i(r), j = t.j(r);
       const Vec3 d = p.position[i] - p.position[j];
@@ -203,7 +204,7 @@ class ContactModelT final : public ContactModel {
       const std::size_t nblocks = (n + detail::kBlock - 1) / detail::kBlock;
       std::vector<Vec3> partial(nblocks, Vec3::Zero());
       std::vector<double> partial_n(nblocks, 0.0);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(static_cast<std::int64_t>(n), par::kHeavy))
       for (std::int64_t b = 0; b < static_cast<std::int64_t>(nblocks); ++b) {
         const std::size_t lo = b * detail::kBlock, hi = std::min(n, lo + detail::kBlock);
         for (std::size_t q = lo; q < hi; ++q) {

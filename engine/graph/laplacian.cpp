@@ -14,6 +14,7 @@
 #include "engine/core/error.hpp"
 #include "engine/graph/hypre_amg.hpp"
 #include "engine/graph/interaction_graph.hpp"
+#include "engine/core/parallel.hpp"
 
 namespace sparkdem {
 
@@ -157,7 +158,7 @@ void laplacian_apply(const EdgeIncidence& inc, std::span<const double> g, std::s
   if (g.size() != inc.edges)
     throw SetupError("laplacian_apply: " + std::to_string(g.size()) + " conductances for " + std::to_string(inc.edges) + " edges");
   const auto nn = static_cast<std::int64_t>(n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(nn, par::kHeavy))
   for (std::int64_t v = 0; v < nn; ++v) {
     double s = 0.0;
     for (std::int64_t k = inc.start[v]; k < inc.start[v + 1]; ++k) {

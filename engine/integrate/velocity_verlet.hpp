@@ -6,12 +6,13 @@
 #include <cmath>
 
 #include "engine/state/particle_store.hpp"
+#include "engine/core/parallel.hpp"
 
 namespace sparkdem {
 
 inline void verlet_first_half(ParticleStore& p, double dt) {
   const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
   for (std::int64_t i = 0; i < n; ++i) {
     if (p.fixed[i]) {  // prescribed velocity (zero = frozen): moved, not integrated
       if (p.fixed[i] == 1) p.position[i] += dt * p.velocity[i];  // 2: a rotating set, moved by the simulation
@@ -30,7 +31,7 @@ inline void verlet_first_half(ParticleStore& p, double dt) {
 
 inline void verlet_second_half(ParticleStore& p, double dt) {
   const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
   for (std::int64_t i = 0; i < n; ++i) {
     if (p.fixed[i]) continue;
     p.velocity[i] += 0.5 * dt / p.mass[i] * p.force[i];

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include "engine/core/parallel.hpp"
 
 namespace sparkdem {
 
@@ -83,7 +84,7 @@ std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const s
 
   const int nthreads = omp_get_max_threads();
   std::vector<std::vector<std::array<Index, 2>>> local(nthreads);
-#pragma omp parallel
+#pragma omp parallel if (par::worth(static_cast<std::int64_t>(n), par::kHeavy))
   {
     auto& buf = local[omp_get_thread_num()];
     std::vector<Index> found;
@@ -139,7 +140,7 @@ bool VerletTracker::needs_rebuild(const std::vector<Vec3>& x, const std::vector<
   for (std::size_t k = 0; k < wall_u.size(); ++k) du = std::max(du, std::abs(wall_u[k] - u0_[k]));
   const std::int64_t n = static_cast<std::int64_t>(x.size());
   // max-reductions are exact, so the decision does not depend on the thread count
-#pragma omp parallel for schedule(static) reduction(max : dmax2, drmax)
+#pragma omp parallel for schedule(static) reduction(max : dmax2, drmax) if (par::worth(n, par::kLight))
   for (std::int64_t i = 0; i < n; ++i) {
     dmax2 = std::max(dmax2, (x[i] - x0_[i]).squaredNorm());
     drmax = std::max(drmax, r[i] - r0_[i]);

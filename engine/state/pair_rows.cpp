@@ -4,6 +4,7 @@
 #include <unordered_map>
 
 #include "engine/core/error.hpp"
+#include "engine/core/parallel.hpp"
 
 namespace sparkdem {
 
@@ -67,7 +68,7 @@ void PairRows::build_incidence(std::size_t n) {
 
 void PairRows::gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
   const std::int64_t n = static_cast<std::int64_t>(force.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
   for (std::int64_t p = 0; p < n; ++p) {
     Vec3 f = Vec3::Zero(), t = Vec3::Zero();
     for (std::int64_t k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {

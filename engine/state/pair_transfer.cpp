@@ -1,5 +1,7 @@
 #include "engine/state/pair_transfer.hpp"
 
+#include <unordered_set>
+
 #include "engine/neighbor/neighbor_search.hpp"
 
 namespace sparkdem {
@@ -7,8 +9,11 @@ namespace sparkdem {
 std::vector<std::size_t> bond_contacts(State& s, const std::vector<std::size_t>& contact_rows) {
   std::vector<std::size_t> out;
   const auto& p = s.particles;
+  // A copy: every add() invalidates the table's cached key set, and rebuilding it per bond made
+  // bonding N pairs O(N^2) (1e5 lattice bonds took minutes).
+  std::unordered_set<std::uint64_t> bonded = s.bonds.intact_keys();
   for (const std::size_t r : contact_rows) {
-    if (s.bonds.intact_keys().count(s.contacts.key(r))) continue;
+    if (!bonded.insert(s.contacts.key(r)).second) continue;
     HandedState h;
     h.names = s.contacts.state_columns();
     h.values.assign(s.contacts.state(r), s.contacts.state(r) + s.contacts.state_width());
@@ -28,10 +33,12 @@ std::size_t bond_particles(State& s, Index a, Index b) {
 std::size_t bond_within_gap(State& s, double gap_tolerance) {
   const auto& p = s.particles;
   std::size_t made = 0;
+  std::unordered_set<std::uint64_t> bonded = s.bonds.intact_keys();  // a copy (see bond_contacts)
   for (const auto& pr : find_pairs(p.position, p.radius, gap_tolerance)) {
     const Index a = pr[0], b = pr[1];
-    if (s.bonds.intact_keys().count(pair_key(p.id[a], p.id[b]))) continue;
+    if (bonded.count(pair_key(p.id[a], p.id[b]))) continue;
     if ((p.position[a] - p.position[b]).norm() - p.radius[a] - p.radius[b] > gap_tolerance) continue;
+    bonded.insert(pair_key(p.id[a], p.id[b]));
     s.bonds.add(a, b, p.id, p.position, p.orientation);
     ++made;
   }

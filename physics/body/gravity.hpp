@@ -12,6 +12,7 @@
 #include "engine/model/module.hpp"
 #include "engine/model/param_spec.hpp"
 #include "engine/state/state.hpp"
+#include "engine/core/parallel.hpp"
 
 namespace sparkdem::physics {
 
@@ -31,7 +32,7 @@ class Gravity final : public Module {
   void advance(State& s, const StepInfo&) override {
     auto& p = s.particles;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
     for (std::int64_t i = 0; i < n; ++i) p.force[i] += p.mass[i] * p_.acceleration;
   }
 
@@ -59,7 +60,7 @@ class ViscousDamping final : public Module {
   void advance(State& s, const StepInfo&) override {
     auto& p = s.particles;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
     for (std::int64_t i = 0; i < n; ++i) {
       if (p.fixed[i]) continue;  // prescribed: its force is a reported reaction, not integrated
       p.force[i] -= p_.rate * p.mass[i] * p.velocity[i];
@@ -97,7 +98,7 @@ class LocalDamping final : public Module {
     auto& p = s.particles;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
     auto sign = [](double x) { return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0; };
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
     for (std::int64_t i = 0; i < n; ++i) {
       // A prescribed (or frozen) particle is not integrated: its force is the reaction of the
       // rest of the system (set_<name>_f*, tension_test), which damping must not alter.

@@ -7,6 +7,7 @@
 #include "engine/neighbor/neighbor_search.hpp"
 #include "engine/state/pair_rows.hpp"
 #include "physics/body/gravity.hpp"
+#include "engine/core/parallel.hpp"
 
 namespace sparkdem::physics {
 
@@ -541,7 +542,7 @@ void RelaxGenerator::generate(State& s) {
       // Wall candidates: within r + skin of the wall at the build (valid until the next rebuild,
       // as the pairs); the others have q > 1 against that wall and feel no force from it.
       near_wall.assign(N * nw, 0);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
       for (std::int64_t i = static_cast<std::int64_t>(first); i < n; ++i)
         for (std::size_t w = 0; w < nw; ++w) {
           Vec3 nrm;
@@ -552,12 +553,12 @@ void RelaxGenerator::generate(State& s) {
     }
     const std::int64_t np = static_cast<std::int64_t>(pairs.size());
     double om = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : om)
+#pragma omp parallel for schedule(static) reduction(max : om) if (par::worth(np, par::kHeavy))
     for (std::int64_t r = 0; r < np; ++r)
       om = std::max(om, relax_pair(k, p.position[pairs[r][0]], p.position[pairs[r][1]], p.radius[pairs[r][0]],
                                    p.radius[pairs[r][1]], fpair[r]).overlap);
     double fm = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : fm, om)
+#pragma omp parallel for schedule(static) reduction(max : fm, om) if (par::worth(n, par::kHeavy))
     for (std::int64_t i = 0; i < n; ++i) {
       Vec3 f = Vec3::Zero();
       for (std::int64_t c = inc_start[i]; c < inc_start[i + 1]; ++c) {
@@ -595,7 +596,7 @@ void RelaxGenerator::generate(State& s) {
     }
     // FIRE mixing v = (1 - alpha) v + alpha |v| F/|F| (P > 0) or v = 0 (P <= 0), then
     // semi-implicit Euler with a displacement cap of max_step * r.
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
     for (std::int64_t i = 0; i < n; ++i) {
       if (mix < 1.0) v_[i] = (1.0 - mix) * v_[i] + vf * F[i];
       else v_[i].setZero();

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "engine/core/error.hpp"
+#include "engine/core/parallel.hpp"
 
 namespace sparkdem::physics::thermal {
 
@@ -41,7 +42,7 @@ void apply(State& s, double alpha, double t0, TempOf temp) {
   auto& p = s.particles;
   const auto& rr = p.fields.data("radius_ref");
   const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
   for (std::int64_t i = 0; i < n; ++i) {
     p.radius[i] = expanded_radius(rr[i], alpha, temp(i), t0);
     p.inertia[i] = 0.4 * p.mass[i] * p.radius[i] * p.radius[i];

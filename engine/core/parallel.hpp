@@ -1,0 +1,56 @@
+#pragma once
+/// Threads only where they pay (issue 23 item 1). Every OpenMP loop of a time step opens a parallel
+/// region, a fork and a join: about a microsecond while the workers spin between regions (the
+/// default wait policy), tens of microseconds when they sleep (OMP_WAIT_POLICY=PASSIVE, the setting
+/// for shared machines). Opened for every loop, they made a few-particle scene 1.5 (default) to 94
+/// (PASSIVE) times slower on two threads than on one (benchmarks/threads/). Each loop therefore
+/// carries `if (par::worth(n, par::kLight or par::kHeavy))`: it runs on the calling thread below
+/// a minimum item count set by the work per item and by the wait policy, measured there.
+/// Results never depend on it: the loops are element-wise, max-reductions or fixed-block sums
+/// (tests/scenario/test_restart.cpp compares 1 and 2 threads with every loop forced parallel).
+///
+/// SPARKDEM_PARALLEL_MIN_ITEMS=N (environment, read once) replaces every minimum: 1 forces every
+/// loop onto the team (tests), other values measure where threads start to pay (benchmarks).
+#include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <cstdlib>
+#include <string>
+
+namespace sparkdem::par {
+
+enum Kind {
+  kLight,  ///< a few flops per item (integration, zeroing, checks, the per-particle gather)
+  kHeavy,  ///< a contact law, a bond, a neighbour-cell search or a graph row per item
+};
+
+/// Minimum items per kind [light, heavy] under each wait policy (benchmarks/threads/README.md):
+/// spinning workers pay from a few hundred items, sleeping ones from thousands (rows) to tens of
+/// thousands (light items).
+inline constexpr std::int64_t kMinSpinning[2] = {512, 256};
+inline constexpr std::int64_t kMinPassive[2] = {65536, 8192};
+
+/// True when OMP_WAIT_POLICY asks for sleeping workers (case-insensitive "passive").
+inline bool passive_wait_policy() {
+  const char* e = std::getenv("OMP_WAIT_POLICY");
+  if (!e) return false;
+  std::string v(e);
+  std::transform(v.begin(), v.end(), v.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return v == "passive";
+}
+
+/// The minimum item count of a loop of that kind (the environment override, else by wait policy).
+inline std::int64_t min_items(Kind kind) {
+  static const std::int64_t forced = [] {
+    const char* e = std::getenv("SPARKDEM_PARALLEL_MIN_ITEMS");
+    return e ? std::max<std::int64_t>(1, std::atoll(e)) : std::int64_t{0};
+  }();
+  static const bool passive = passive_wait_policy();
+  if (forced > 0) return forced;
+  return passive ? kMinPassive[kind] : kMinSpinning[kind];
+}
+
+/// True when a loop of n items of that kind is worth a parallel region.
+inline bool worth(std::int64_t n, Kind kind) { return n >= min_items(kind); }
+
+}  // namespace sparkdem::par
