@@ -436,7 +436,7 @@ def run_nial(config, element=False):
 
 
 NIAL_SRC = "seed 000 (NiAl SPS), Table 1: effective conductivity of the measured samples, evaluated cold"
-NIAL_REF = "measured kappa of seed 000 Table 1; L and A from the snapshot (electrode-layer distance, die section)"
+NIAL_REF = "measured kappa of seed 000 Table 1; L and A from the snapshot (Eq. 28 as written: sample height, die section)"
 NIAL_CAL = "grain-boundary layer epsilon/delta_gb on the porosity 0.164 snapshot only (kappa = 6.14e6 S/m)"
 NIAL_TUNED = [{"parameter": "configs/sps_nial.json#/stages/1/walls/top/max_speed, /stages/2/walls/top/max_speed",
                "why": "punch servo speed limit raised to 0.05 m/s so the punch follows the pressure, chosen after "

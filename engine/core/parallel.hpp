@@ -27,7 +27,7 @@ enum Kind {
 /// Minimum items per kind [light, heavy] under each wait policy (benchmarks/threads/README.md):
 /// spinning workers pay from a few hundred items, sleeping ones from thousands (rows) to tens of
 /// thousands (light items).
-inline constexpr std::int64_t kMinSpinning[2] = {512, 256};
+inline constexpr std::int64_t kMinSpinning[2] = {256, 128};
 inline constexpr std::int64_t kMinPassive[2] = {65536, 8192};
 
 /// True when OMP_WAIT_POLICY asks for sleeping workers (case-insensitive "passive").
