@@ -427,13 +427,11 @@ void Simulation::run_module(const PlanItem& it, Step step, double t_stage, doubl
   }
 }
 
-StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool resume) {
-  using clock = std::chrono::steady_clock;
-  const auto t_start = clock::now();
+/// Wall motions of the stage and its prescribed-velocity sets (marked fixed, given their velocity
+/// at a fresh start).
+void Simulation::bind_walls_and_sets(const StageConfig& cfg, bool resume) {
   auto& p = s_.particles;
-  prepare(cfg);
-
-  // Wall motions of this stage (prescribed motions start from the current offset).
+  // Prescribed motions start from the current offset.
   for (auto& w : s_.walls) {
     auto it = cfg.motions.find(w.name);
     w.motion = it != cfg.motions.end() ? it->second : WallMotion{};
@@ -457,31 +455,40 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
         }
       }
   }
-  if (!resume) {
-    s_.stage_step0 = s_.step;
-    s_.stage_t0 = s_.time;
-    s_.stage_phys_t0 = s_.physical_time;
-    s_.stage_time_scale = cfg.time_scale;
-    // Event clocks start afresh: each event module runs at the end of the stage's first step.
-    for (const PlanItem& it : plan_.items)
-      if (it.kind == PlanItem::Kind::Module)
-        std::erase_if(s_.marks, [&](const auto& kv) { return kv.first.rfind("trigger/" + it.name + "/", 0) == 0; });
-    // A state saved inside a mass-scaled stage (a snapshot) carries its factors: undo them first,
-    // so every stage starts from the true masses.
-    undo_mass_factors(p);
-    if (cfg.mass_scaling != 1.0 || cfg.mass_floor_radius > 0.0) {
-      // The factor of each particle is kept in a field (checkpointed), so the end of the stage
-      // undoes exactly what its start did, also after a restart and with radii that changed.
-      p.fields.declare(FieldInfo{kMassFactorField, 1, "1", 1.0, false}, p.size());
-      auto& f = p.fields.data(kMassFactorField);
-      for (std::size_t i = 0; i < p.size(); ++i) {
-        const double fines = p.radius[i] < cfg.mass_floor_radius ? std::pow(cfg.mass_floor_radius / p.radius[i], 3) : 1.0;
-        f[i] = cfg.mass_scaling * fines;
-        p.mass[i] *= f[i];
-        p.inertia[i] *= f[i];
-      }
+}
+
+/// A fresh stage: its clocks start here, event marks are cleared and the stage's mass factors
+/// applied (those of a mass-scaled stage a snapshot came from undone first).
+void Simulation::begin_stage(const StageConfig& cfg) {
+  auto& p = s_.particles;
+  s_.stage_step0 = s_.step;
+  s_.stage_t0 = s_.time;
+  s_.stage_phys_t0 = s_.physical_time;
+  s_.stage_time_scale = cfg.time_scale;
+  // Event clocks start afresh: each event module runs at the end of the stage's first step.
+  for (const PlanItem& it : plan_.items)
+    if (it.kind == PlanItem::Kind::Module)
+      std::erase_if(s_.marks, [&](const auto& kv) { return kv.first.rfind("trigger/" + it.name + "/", 0) == 0; });
+  // A state saved inside a mass-scaled stage (a snapshot) carries its factors: undo them first,
+  // so every stage starts from the true masses.
+  undo_mass_factors(p);
+  if (cfg.mass_scaling != 1.0 || cfg.mass_floor_radius > 0.0) {
+    // The factor of each particle is kept in a field (checkpointed), so the end of the stage
+    // undoes exactly what its start did, also after a restart and with radii that changed.
+    p.fields.declare(FieldInfo{kMassFactorField, 1, "1", 1.0, false}, p.size());
+    auto& f = p.fields.data(kMassFactorField);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const double fines = p.radius[i] < cfg.mass_floor_radius ? std::pow(cfg.mass_floor_radius / p.radius[i], 3) : 1.0;
+      f[i] = cfg.mass_scaling * fines;
+      p.mass[i] *= f[i];
+      p.inertia[i] *= f[i];
     }
   }
+}
+
+/// The neighbour skin [m]: the checkpoint's on resume, else the stage's (0: 0.3 x smallest radius).
+void Simulation::choose_skin(const StageConfig& cfg, bool resume) {
+  const auto& p = s_.particles;
   if (resume) {
     skin_ = s_.stage_skin;
   } else {
@@ -492,65 +499,24 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     }
     s_.stage_skin = skin_;
   }
-  // Before step 0: overlaps of the starting packing (reported; refused or relaxed as configured)
-  // and pressure walls with nothing to push on (engine/start_checks.hpp).
-  InitialOverlapReport overlap0;
-  if (!resume) {
-    overlap0 = apply_initial_overlap_policy(s_, cfg.name, cfg.initial_overlap, cfg.initial_overlap_limit);
-    check_pressure_walls(s_, cfg.name, cfg.motions);
-  }
-  if (!resume) {
-    s_.verlet = VerletTracker{};
-    update_neighbors(skin_, 0);
-  }
+}
 
-  time_scale_ = resume ? s_.stage_time_scale : cfg.time_scale;
-  if (!(time_scale_ > 0.0)) throw SetupError("stage '" + cfg.name + "': time_scale must be positive");
-  StageResult res;
-  stats_ = &res;
-  res.name = cfg.name;
-  res.initial_overlap = overlap0;
-  res.plan = plan_.names();
-  res.particles = p.size();
-  // On resume the stage's step comes from the checkpoint, so the continuation is exact. The
-  // checkpoint's clocks must then be those the stepping loop below computes (time = stage_t0 +
-  // k dt, physical time = phys_t0 + scale k dt, bit for bit): a checkpoint that breaks them was
-  // not written by a run (and a wrong dt could make the stage run for ever).
-  if (resume) {
-    const double t_stage = static_cast<double>(s_.step - s_.stage_step0) * s_.stage_dt;
-    if (!(s_.stage_dt > 0.0) || s_.time != s_.stage_t0 + t_stage ||
-        s_.physical_time != s_.stage_phys_t0 + time_scale_ * t_stage)
-      throw SetupError("stage '" + cfg.name + "': the checkpoint's clocks are inconsistent (step " + std::to_string(s_.step) +
-                       ", stage start step " + std::to_string(s_.stage_step0) + ", dt " + fmt_g(s_.stage_dt) + " s, time " +
-                       fmt_g(s_.time) + " s, stage start time " + fmt_g(s_.stage_t0) + " s)");
-  }
-  const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
-  s_.stage_dt = dt_used;
-  res.dt = dt_used;
-  res.stable_dt_at_start = cfg.mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
-  res.dt_fraction_used = dt_used / res.stable_dt_at_start;
-  if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt)
-    throw SetupError("stage '" + cfg.name + "': dt = " + fmt_g(dt_used) + " s is " + fmt_g(res.dt_fraction_used) +
-                     " of the stable step " + fmt_g(res.stable_dt_at_start) +
-                     " s of the contact law; lower dt or set allow_unstable_dt");
-  // Fixed-clock modules: their step against their own stable step (in their time domain).
-  // Adaptive clocks choose their substeps from it; event clocks run quasi-static solves.
-  auto check_modules = [&](bool at_start) {
-    for (const auto& it : plan_.items) {
-      if (it.kind != PlanItem::Kind::Module) continue;
-      const Clock::Kind kind = it.clock.kind;
-      if (kind == Clock::Kind::AdaptiveSubsteps || kind == Clock::Kind::OnEvent) continue;
-      const double scale = it.module->time_domain() == TimeDomain::Physical ? time_scale_ : 1.0;
-      const double mdt = it.clock.dt(dt_used) * scale, sdt = it.module->stable_dt(s_);
-      if (!(mdt > sdt) || cfg.allow_unstable_dt) continue;
-      const std::string msg = "module '" + it.name + "' runs with dt = " + fmt_g(mdt) + " s above its stable step " +
-                              fmt_g(sdt) + " s";
-      if (at_start) throw SetupError("stage '" + cfg.name + "': " + msg);
-      throw PhysicsError(s_.step, {}, "time step", msg + " of the current state; use an adaptive clock or a smaller step");
-    }
-  };
-  check_modules(true);
-  // What each module will do (printed at the stage start by the I/O layer).
+/// On resume the stage's step comes from the checkpoint, so the continuation is exact. The
+/// checkpoint's clocks must then be those run_stage's stepping loop computes (time = stage_t0 +
+/// k dt, physical time = phys_t0 + scale k dt, bit for bit): a checkpoint that breaks them was
+/// not written by a run (and a wrong dt could make the stage run for ever).
+void Simulation::check_resumed_clocks(const StageConfig& cfg) const {
+  const double t_stage = static_cast<double>(s_.step - s_.stage_step0) * s_.stage_dt;
+  if (!(s_.stage_dt > 0.0) || s_.time != s_.stage_t0 + t_stage ||
+      s_.physical_time != s_.stage_phys_t0 + time_scale_ * t_stage)
+    throw SetupError("stage '" + cfg.name + "': the checkpoint's clocks are inconsistent (step " + std::to_string(s_.step) +
+                     ", stage start step " + std::to_string(s_.stage_step0) + ", dt " + fmt_g(s_.stage_dt) + " s, time " +
+                     fmt_g(s_.time) + " s, stage start time " + fmt_g(s_.stage_t0) + " s)");
+}
+
+/// What each module will do at step dt_used [s] (printed at the stage start by the I/O layer).
+std::vector<ModuleStep> Simulation::module_steps(double dt_used) const {
+  std::vector<ModuleStep> out;
   for (const auto& it : plan_.items) {
     if (it.kind != PlanItem::Kind::Module) continue;
     const double scale = it.module->time_domain() == TimeDomain::Physical ? time_scale_ : 1.0;
@@ -582,22 +548,155 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
       }
       case Clock::Kind::OnEvent: ms.dt = 0.0; ms.calls_per_step = 0.0; ms.clock = "on event (quasi-static)"; break;
     }
-    res.module_steps.push_back(ms);
+    out.push_back(ms);
   }
+  return out;
+}
+
+/// One mechanical step: the plan's items in order; t_new = stage time at the end of the step.
+void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_new, double t_area) {
+  auto& p = s_.particles;
+  for (const PlanItem& it : plan_.items) {
+    switch (it.kind) {
+      case PlanItem::Kind::IntegrateFirstHalf:
+        verlet_first_half(p, dt_used);
+        rotate_prescribed(dt_used, t_new);
+        break;
+      case PlanItem::Kind::Walls:
+        for (auto& w : s_.walls) advance_wall(w, t_new, dt_used, t_area, time_scale_);
+        break;
+      case PlanItem::Kind::Neighbors: update_neighbors(skin_, cfg.sort_every_rebuilds); break;
+      case PlanItem::Kind::ZeroForces: zero_forces(); break;
+      case PlanItem::Kind::ContactPairs: pair_forces(dt_used); break;
+      case PlanItem::Kind::Bonds: bond_forces(dt_used, s_.step + 1); break;
+      case PlanItem::Kind::ContactWalls: wall_forces(dt_used); break;
+      case PlanItem::Kind::Module: run_module(it, s_.step + 1, t_new, dt_used); break;
+      case PlanItem::Kind::IntegrateSecondHalf: verlet_second_half(p, dt_used); break;
+    }
+  }
+}
+
+/// The stage's watchdog settings: its max speed defaults to blowup_speed; a frozen stage or one
+/// that takes no step (a one-off evaluation of its modules) moves nothing, so only the non-finite
+/// check runs there.
+/// A fresh stage's state before step 0: walls at stage time 0, forces, and one run of every
+/// event-clock module (a stage of zero steps evaluates them), counted in res.
+/// Fixed-clock modules: their step against their own stable step (in their time domain); adaptive
+/// clocks choose their substeps from it, event clocks run quasi-static solves. Above it: a
+/// SetupError at the stage start, a PhysicsError during the stage (unless allow_unstable_dt).
+void Simulation::check_module_steps(const StageConfig& cfg, double dt_used, bool at_start) const {
+  for (const auto& it : plan_.items) {
+    if (it.kind != PlanItem::Kind::Module) continue;
+    const Clock::Kind kind = it.clock.kind;
+    if (kind == Clock::Kind::AdaptiveSubsteps || kind == Clock::Kind::OnEvent) continue;
+    const double scale = it.module->time_domain() == TimeDomain::Physical ? time_scale_ : 1.0;
+    const double mdt = it.clock.dt(dt_used) * scale, sdt = it.module->stable_dt(s_);
+    if (!(mdt > sdt) || cfg.allow_unstable_dt) continue;
+    const std::string msg = "module '" + it.name + "' runs with dt = " + fmt_g(mdt) + " s above its stable step " +
+                            fmt_g(sdt) + " s";
+    if (at_start) throw SetupError("stage '" + cfg.name + "': " + msg);
+    throw PhysicsError(s_.step, {}, "time step", msg + " of the current state; use an adaptive clock or a smaller step");
+  }
+}
+
+void Simulation::evaluate_start(double dt_used, double t_area, StageResult& res) {
+  for (auto& w : s_.walls) advance_wall(w, 0.0, dt_used, t_area, time_scale_);
+  compute_forces(dt_used, 0.0);
+  // Event-clock modules run once on the initial state (a stage of zero steps evaluates them).
+  for (const PlanItem& it : plan_.items)
+    if (it.kind == PlanItem::Kind::Module && it.clock.kind == Clock::Kind::OnEvent) {
+      const bool physical = it.module->time_domain() == TimeDomain::Physical;
+      it.module->advance(s_, StepInfo{s_.step, physical ? s_.stage_phys_t0 : s_.stage_t0, 0.0, 0});
+      mark_event_run(it, s_.step);
+      ++res.module_calls[it.name];
+    }
+}
+
+WatchdogConfig Simulation::stage_watchdog(const StageConfig& cfg) const {
+  WatchdogConfig wd = cfg.watchdog;
+  if (!(wd.max_speed > 0.0)) wd.max_speed = cfg.blowup_speed;
+  if (wd.check_every < 1) throw SetupError("stage '" + cfg.name + "': watchdog.check_every must be at least 1");
+  if (!cfg.mechanics || cfg.max_steps == 0 || !(cfg.duration > 0.0)) {
+    // Its geometry is given (e.g. an overlapping packing built for a network test).
+    wd.max_speed = std::numeric_limits<double>::infinity();
+    wd.max_overlap_ratio = std::numeric_limits<double>::infinity();
+    wd.energy_growth_factor = 0.0;
+  }
+  return wd;
+}
+
+/// The stage's counts and last monitor values into res; the stage's mass factors and prescribed
+/// sets released.
+void Simulation::end_stage(const std::vector<std::string>& cols, const std::vector<double>& vals, StageResult& res) {
+  auto& p = s_.particles;
+  res.steps = s_.step - s_.stage_step0;
+  res.simulated_time = s_.time - s_.stage_t0;
+  res.physical_time = s_.physical_time - s_.stage_phys_t0;
+  for (std::size_t q = 0; q < cols.size(); ++q) res.final_values[cols[q]] = vals[q];
+  undo_mass_factors(p);
+  for (auto& f : p.fixed) f = 0;
+  prescribed_.clear();
+}
+
+/// Walls with a halt condition stop once their monitored quantity reaches its value (sampled
+/// into cols, vals only when a wall has one).
+void Simulation::halt_walls(std::vector<std::string>& cols, std::vector<double>& vals) {
+  bool sampled = false;
+  for (auto& w : s_.walls) {
+    if (w.halted || w.motion.halt_quantity.empty()) continue;
+    if (!sampled) { sample(cols, vals); sampled = true; }
+    auto it = std::find(cols.begin(), cols.end(), w.motion.halt_quantity);
+    if (it == cols.end()) throw SetupError("wall '" + w.name + "': halt quantity '" + w.motion.halt_quantity + "' is not monitored");
+    if (vals[it - cols.begin()] >= w.motion.halt_value) w.halted = true;
+  }
+}
+
+StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool resume) {
+  using clock = std::chrono::steady_clock;
+  const auto t_start = clock::now();
+  auto& p = s_.particles;
+  prepare(cfg);
+
+  bind_walls_and_sets(cfg, resume);
+  if (!resume) begin_stage(cfg);
+  choose_skin(cfg, resume);
+  // Before step 0: overlaps of the starting packing (reported; refused or relaxed as configured)
+  // and pressure walls with nothing to push on (engine/start_checks.hpp).
+  InitialOverlapReport overlap0;
+  if (!resume) {
+    overlap0 = apply_initial_overlap_policy(s_, cfg.name, cfg.initial_overlap, cfg.initial_overlap_limit);
+    check_pressure_walls(s_, cfg.name, cfg.motions);
+  }
+  if (!resume) {
+    s_.verlet = VerletTracker{};
+    update_neighbors(skin_, 0);
+  }
+
+  time_scale_ = resume ? s_.stage_time_scale : cfg.time_scale;
+  if (!(time_scale_ > 0.0)) throw SetupError("stage '" + cfg.name + "': time_scale must be positive");
+  StageResult res;
+  stats_ = &res;
+  res.name = cfg.name;
+  res.initial_overlap = overlap0;
+  res.plan = plan_.names();
+  res.particles = p.size();
+  if (resume) check_resumed_clocks(cfg);
+  const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
+  s_.stage_dt = dt_used;
+  res.dt = dt_used;
+  res.stable_dt_at_start = cfg.mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+  res.dt_fraction_used = dt_used / res.stable_dt_at_start;
+  if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt)
+    throw SetupError("stage '" + cfg.name + "': dt = " + fmt_g(dt_used) + " s is " + fmt_g(res.dt_fraction_used) +
+                     " of the stable step " + fmt_g(res.stable_dt_at_start) +
+                     " s of the contact law; lower dt or set allow_unstable_dt");
+  // Fixed-clock modules: their step against their own stable step (in their time domain).
+  // Adaptive clocks choose their substeps from it; event clocks run quasi-static solves.
+  check_module_steps(cfg, dt_used, true);
+  res.module_steps = module_steps(dt_used);
   obs.steps_planned(dt_used, res.stable_dt_at_start, res.module_steps);
   const double t_area = die_area(s_.walls);
-  if (!resume) {
-    for (auto& w : s_.walls) advance_wall(w, 0.0, dt_used, t_area, time_scale_);
-    compute_forces(dt_used, 0.0);
-    // Event-clock modules run once on the initial state (a stage of zero steps evaluates them).
-    for (const PlanItem& it : plan_.items)
-      if (it.kind == PlanItem::Kind::Module && it.clock.kind == Clock::Kind::OnEvent) {
-        const bool physical = it.module->time_domain() == TimeDomain::Physical;
-        it.module->advance(s_, StepInfo{s_.step, physical ? s_.stage_phys_t0 : s_.stage_t0, 0.0, 0});
-        mark_event_run(it, s_.step);
-        ++res.module_calls[it.name];
-      }
-  }
+  if (!resume) evaluate_start(dt_used, t_area, res);
 
   std::vector<std::string> cols;
   std::vector<double> vals;
@@ -621,17 +720,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   }
   // The run watchdog: the state of the stage start must pass it (a scene it refuses stops before
   // step 0), and that state is the first healthy copy.
-  WatchdogConfig wd = cfg.watchdog;
-  if (!(wd.max_speed > 0.0)) wd.max_speed = cfg.blowup_speed;
-  if (wd.check_every < 1) throw SetupError("stage '" + cfg.name + "': watchdog.check_every must be at least 1");
-  if (!cfg.mechanics || cfg.max_steps == 0 || !(cfg.duration > 0.0)) {
-    // A frozen stage, or one that takes no step (a one-off evaluation of its modules), moves
-    // nothing: its geometry is given (e.g. an overlapping packing built for a network test), so
-    // only the non-finite check runs.
-    wd.max_speed = std::numeric_limits<double>::infinity();
-    wd.max_overlap_ratio = std::numeric_limits<double>::infinity();
-    wd.energy_growth_factor = 0.0;
-  }
+  const WatchdogConfig wd = stage_watchdog(cfg);
   WatchdogContext wctx;
   wctx.dt = dt_used;
   wctx.stable_dt = res.stable_dt_at_start;
@@ -649,46 +738,19 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   }
   if (wd.snapshot_every_checks > 0) obs.healthy(s_);
 
-  auto halt_walls = [&]() {
-    bool sampled = false;
-    for (auto& w : s_.walls) {
-      if (w.halted || w.motion.halt_quantity.empty()) continue;
-      if (!sampled) { sample(cols, vals); sampled = true; }
-      auto it = std::find(cols.begin(), cols.end(), w.motion.halt_quantity);
-      if (it == cols.end()) throw SetupError("wall '" + w.name + "': halt quantity '" + w.motion.halt_quantity + "' is not monitored");
-      if (vals[it - cols.begin()] >= w.motion.halt_value) w.halted = true;
-    }
-  };
   bool reached = false;
   const Step log_every = cfg.log_every > 0 ? cfg.log_every : 100;
   for (;;) {
     const Step k = s_.step - s_.stage_step0;  // steps done in this stage
     if (k >= cfg.max_steps || static_cast<double>(k) * dt_used >= cfg.duration * (1.0 - 1e-12)) break;
     if (k > 0 && k % cfg.check_every == 0) {
-      halt_walls();
+      halt_walls(cols, vals);
       if (until_holds()) { reached = true; break; }
     }
 
     // ---- one step: execute the plan ----
     const double t_new = static_cast<double>(k + 1) * dt_used;  // stage time at the end of the step
-    for (const PlanItem& it : plan_.items) {
-      switch (it.kind) {
-        case PlanItem::Kind::IntegrateFirstHalf:
-          verlet_first_half(p, dt_used);
-          rotate_prescribed(dt_used, t_new);
-          break;
-        case PlanItem::Kind::Walls:
-          for (auto& w : s_.walls) advance_wall(w, t_new, dt_used, t_area, time_scale_);
-          break;
-        case PlanItem::Kind::Neighbors: update_neighbors(skin_, cfg.sort_every_rebuilds); break;
-        case PlanItem::Kind::ZeroForces: zero_forces(); break;
-        case PlanItem::Kind::ContactPairs: pair_forces(dt_used); break;
-        case PlanItem::Kind::Bonds: bond_forces(dt_used, s_.step + 1); break;
-        case PlanItem::Kind::ContactWalls: wall_forces(dt_used); break;
-        case PlanItem::Kind::Module: run_module(it, s_.step + 1, t_new, dt_used); break;
-        case PlanItem::Kind::IntegrateSecondHalf: verlet_second_half(p, dt_used); break;
-      }
-    }
+    execute_plan(cfg, dt_used, t_new, t_area);
     ++s_.step;
     s_.time = s_.stage_t0 + t_new;
     s_.physical_time = s_.stage_phys_t0 + time_scale_ * t_new;
@@ -701,7 +763,8 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
       if (dt_used > st)
         throw PhysicsError(s_.step, {}, "time step",
                            "dt = " + fmt_g(dt_used) + " s now exceeds the stable step " + fmt_g(st) +
-                               " s of the current state (contacts stiffened); lower dt_fraction or dt");      check_modules(false);
+                               " s of the current state (contacts stiffened); lower dt_fraction or dt");
+      check_module_steps(cfg, dt_used, false);
     }
     const bool row = cfg.timeseries_every > 0 && kk % cfg.timeseries_every == 0;
     if (row || (watch_every > 0 && kk % watch_every == 0)) {
@@ -723,16 +786,10 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   obs.frame(s_);
   if (!reached && !cfg.until.empty()) reached = until_holds();
   res.until_reached = cfg.until.empty() || reached;
-  res.steps = s_.step - s_.stage_step0;
-  res.simulated_time = s_.time - s_.stage_t0;
-  res.physical_time = s_.physical_time - s_.stage_phys_t0;
   sample(cols, vals);
   obs.timeseries(cols, vals);
   obs.watch(s_, cols, vals);
-  for (std::size_t q = 0; q < cols.size(); ++q) res.final_values[cols[q]] = vals[q];
-  undo_mass_factors(p);
-  for (auto& f : p.fixed) f = 0;
-  prescribed_.clear();
+  end_stage(cols, vals, res);
   res.wall_seconds = std::chrono::duration<double>(clock::now() - t_start).count();
   res.particle_steps_per_second =
       res.wall_seconds > 0 ? static_cast<double>(res.steps) * static_cast<double>(p.size()) / res.wall_seconds : 0.0;

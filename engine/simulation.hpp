@@ -186,6 +186,18 @@ class Simulation {
   void run_module(const PlanItem& it, Step step, double t_stage, double dt_m);
   bool event_due(const PlanItem& it, Step step) const;
   void mark_event_run(const PlanItem& it, Step step);
+  // The named steps of run_stage.
+  void bind_walls_and_sets(const StageConfig& cfg, bool resume);
+  void begin_stage(const StageConfig& cfg);
+  void choose_skin(const StageConfig& cfg, bool resume);
+  void check_resumed_clocks(const StageConfig& cfg) const;
+  std::vector<ModuleStep> module_steps(double dt_used) const;
+  void execute_plan(const StageConfig& cfg, double dt_used, double t_new, double t_area);
+  WatchdogConfig stage_watchdog(const StageConfig& cfg) const;
+  void evaluate_start(double dt_used, double t_area, StageResult& res);
+  void check_module_steps(const StageConfig& cfg, double dt_used, bool at_start) const;
+  void halt_walls(std::vector<std::string>& cols, std::vector<double>& vals);
+  void end_stage(const std::vector<std::string>& cols, const std::vector<double>& vals, StageResult& res);
   State& s_;
   const ContactModel& law_;
   const BondModel* bond_law_ = nullptr;

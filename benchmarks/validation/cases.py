@@ -22,6 +22,7 @@ REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 sys.path.insert(0, os.path.join(REPO, "benchmarks", "joule_rod"))
 sys.path.insert(0, os.path.join(REPO, "benchmarks", "torsion_crack"))
 sys.path.insert(0, os.path.join(REPO, "benchmarks", "sps_nial"))
+sys.path.insert(0, os.path.join(REPO, "benchmarks", "sps_table1"))
 sys.path.insert(0, os.path.join(REPO, "tools"))
 
 
@@ -467,7 +468,6 @@ NIAL_SMALL = Case(
 
 def run_table1_densification(ctx):
     """benchmarks/sps_table1/predict.py: D_0 calibrated on sample 2, samples 1, 3, 4 predicted."""
-    sys.path.insert(0, os.path.join(REPO, "benchmarks", "sps_table1"))
     import predict
     result, d0, history = predict.predict(lambda sc, name: ctx.sparkdem(sc, name), ctx.seed, log=lambda m: None)
     out = {}
