@@ -166,8 +166,9 @@ class Runner:
         cmd = [self.sparkdem, "run", spath, "-o", out, "--threads", str(self.threads), "--quiet"] + self.report_only
         return self.command(cmd, rundir, name, mpath)
 
-    def command(self, cmd, rundir, name, mpath=None):
-        env = dict(os.environ, OMP_NUM_THREADS=str(self.threads), OMP_WAIT_POLICY="PASSIVE")
+    def command(self, cmd, rundir, name, mpath=None, extra_env=None):
+        os.makedirs(rundir, exist_ok=True)
+        env = dict(os.environ, OMP_NUM_THREADS=str(self.threads), OMP_WAIT_POLICY="PASSIVE", **(extra_env or {}))
         load0 = os.getloadavg()[0]
         t0 = time.time()
         with open(os.path.join(rundir, name + ".log"), "w") as log, open(os.path.join(rundir, name + ".err"), "w") as err:
@@ -207,8 +208,10 @@ class RunContext:
             raise RuntimeError(f"sparkdem exited with {meta['rc']}: see {os.path.join(self.rundir, name + '.err')}")
         return os.path.join(self.rundir, "out" if name == "scenario" else name + "_out")
 
-    def command(self, cmd, name):
-        meta = self.runner.command(cmd, self.rundir, name)
+    def command(self, cmd, name, extra_env=None):
+        """Runs a reference or benchmark tool in the run directory (extra_env: more environment
+        variables); returns the path of its standard output."""
+        meta = self.runner.command(cmd, self.rundir, name, extra_env=extra_env)
         self.wall_s += meta["wall_s"]
         self.cpu_s += meta["cpu_s"]
         if meta["rc"] != 0:

@@ -3,8 +3,9 @@
 //   bench_rkpm single   rigid sphere (a = 1) in a matrix ball (b = 3): field error against the
 //                       closed form vs node spacing, alpha = 1 and 100 (E = 1, nu = 0.35)
 //   bench_rkpm two      the paper's convergence test: two touching spheres of radius 0.1 at the
-//                       centre of a unit cube, eps0 = 1 %, alpha = 100 E, E = 1: change of the
-//                       centre distance vs node count (paper: converged above ~7000 nodes)
+//                       centre of a unit cube (or a ball of radius 0.5: RKPM_DOMAIN=ball), eps0 =
+//                       1 %, alpha = 100 E, E = 1: change of the centre distance vs node count
+//                       (paper: converged above ~7000 nodes); options in the environment (two())
 // Output: one CSV line per resolution on stdout (header first).
 #include <chrono>
 #include <cmath>
@@ -62,24 +63,57 @@ void single(double nu, const std::vector<double>& spacings, int order, int sub) 
     }
 }
 
-void two(double nu, const std::vector<int>& per_edge, int order, int sub) {
+/// Options of `two` from the environment: RKPM_DOMAIN cube | ball (ball: radius
+/// RKPM_BALL_RADIUS, default 0.5, centred in the unit cube: the matrix ball of
+/// tools/two_sphere_reference.py with b / R = 5), RKPM_ALPHA_R_OVER_E (10: the paper's alpha = 100 E
+/// with R = 0.1), RKPM_DEPTH (cut_cell_depth), RKPM_SURFACE_SPACING, RKPM_NODES (comma-separated
+/// nodes per edge of the domain's bounding cube), RKPM_SUPPORT (support_factor).
+double env_or(const char* name, double fallback) {
+  const char* v = std::getenv(name);
+  return v ? std::atof(v) : fallback;
+}
+
+void two(double nu, std::vector<int> per_edge, int order, int sub) {
   const double R = 0.1, eps0 = 0.01;
-  std::printf("nodes_per_edge,nodes,unknowns,nonzeros,iterations,residual,distance_change,distance_change_over_eps0_D,assembly_s,solve_s\n");
+  const char* dom = std::getenv("RKPM_DOMAIN");
+  const bool ball = dom && !std::strcmp(dom, "ball");
+  if (const char* nodes = std::getenv("RKPM_NODES")) {
+    per_edge.clear();
+    for (const char* q = nodes; *q;) {
+      per_edge.push_back(std::atoi(q));
+      while (*q && *q != ',') ++q;
+      if (*q == ',') ++q;
+    }
+  }
+  std::printf("domain,b_over_R,alpha_R_over_E,nu,depth,nodes_per_edge,h_over_R,nodes,unknowns,nonzeros,volume_points,surface_points,quad_volume,"
+              "exact_volume,iterations,residual,distance_change_over_eps0_D,assembly_s,solve_s\n");
   for (int m : per_edge) {
     rkpm::Params p;
     p.poisson_ratio = nu;
-    p.node_spacing = 1.0 / (m - 1);
-    p.bond_penalty = 100.0;
+    const double b = ball ? env_or("RKPM_BALL_RADIUS", 0.5) : 0.5;
+    p.node_spacing = 2.0 * b / (m - 1);
+    p.bond_penalty = env_or("RKPM_ALPHA_R_OVER_E", 10.0) / R;
     p.quadrature_order = order;
     p.cell_subdivision = sub;
+    p.cut_cell_depth = static_cast<int>(env_or("RKPM_DEPTH", 2));
+    p.surface_spacing = env_or("RKPM_SURFACE_SPACING", 0.5);
+    p.support_factor = env_or("RKPM_SUPPORT", 2.0);
     if (const char* sv = std::getenv("RKPM_SOLVER")) p.solver = sv;
     rkpm::Domain d;
     d.lo = Vec3(0, 0, 0);
     d.hi = Vec3(1, 1, 1);
+    if (ball) {
+      d.lo = Vec3::Constant(0.5 - b);
+      d.hi = Vec3::Constant(0.5 + b);
+      d.ball_radius = b;
+    }
     const rkpm::Result r = rkpm::solve_unit({Vec3(0.5 - R, 0.5, 0.5), Vec3(0.5 + R, 0.5, 0.5)}, {R, R}, d, p);
     const double dd = eps0 * (r.sphere_displacement[1] - r.sphere_displacement[0]).x();
-    std::printf("%d,%zu,%zu,%zu,%d,%.3e,%.6e,%.6f,%.2f,%.2f\n", m, r.approximation.nodes(), r.unknowns, r.nonzeros, r.iterations,
-                r.residual, dd, dd / (eps0 * 2 * R), r.assembly_seconds, r.solve_seconds);
+    const double outer = ball ? 4.0 / 3.0 * M_PI * b * b * b : 1.0;
+    std::printf("%s,%g,%g,%g,%d,%d,%.4f,%zu,%zu,%zu,%zu,%zu,%.6f,%.6f,%d,%.3e,%.6f,%.2f,%.2f\n", ball ? "ball" : "cube", ball ? b / R : 5.0, p.bond_penalty * R, nu,
+                p.cut_cell_depth, m, p.node_spacing / R, r.approximation.nodes(), r.unknowns, r.nonzeros, r.volume_points, r.surface_points,
+                r.quadrature_volume, outer - 2.0 * 4.0 / 3.0 * M_PI * R * R * R, r.iterations, r.residual, dd / (eps0 * 2 * R),
+                r.assembly_seconds, r.solve_seconds);
     std::fflush(stdout);
   }
 }
@@ -105,10 +139,16 @@ void box(double L, double h, double support, int order, int sub, double nu, doub
   p.quadrature_order = order;
   p.cell_subdivision = sub;
   p.poisson_ratio = nu;
+  p.cut_cell_depth = static_cast<int>(env_or("RKPM_DEPTH", 2));
   if (const char* sv = std::getenv("RKPM_SOLVER")) p.solver = sv;
-  rkpm::Domain d;
-  d.lo = Vec3::Zero();
-  d.hi = Vec3::Constant(L);
+  rkpm::Domain d;  // the smallest cube holding [0, L]^3 and every filler (as ptc_strain)
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Constant(L);
+  for (std::size_t i = 0; i < n; ++i) {
+    lo = lo.cwiseMin(x[i] - Vec3::Constant(r[i]));
+    hi = hi.cwiseMax(x[i] + Vec3::Constant(r[i]));
+  }
+  d.lo = lo;
+  d.hi = lo + Vec3::Constant((hi - lo).maxCoeff());
   const rkpm::Result res = rkpm::solve_unit(x, r, d, p);
   ptc::MatrixParams mp;
   mp.min_gap = 0.1;
@@ -126,8 +166,8 @@ void box(double L, double h, double support, int order, int sub, double nu, doub
       negb += sb.opening[e] < 0;
       ++nc;
     }
-  std::printf("L %g n %zu h %g nodes %zu unknowns %zu nnz %zu CG %d residual %.2e vol %.1f (box %.1f, spheres %.1f) assembly %.1f s solve %.1f s\n",
-              L, n, h, res.approximation.nodes(), res.unknowns, res.nonzeros, res.iterations, res.residual, res.quadrature_volume, L * L * L,
+  std::printf("depth %d points %zu L %g n %zu h %g nodes %zu unknowns %zu nnz %zu CG %d residual %.2e vol %.1f (box %.1f, spheres %.1f) assembly %.1f s solve %.1f s\n",
+              p.cut_cell_depth, res.volume_points, L, n, h, res.approximation.nodes(), res.unknowns, res.nonzeros, res.iterations, res.residual, res.quadrature_volume, L * L * L,
               n * 4.0 / 3.0 * M_PI, res.assembly_seconds, res.solve_seconds);
   std::printf("contacts %zu: mean unit opening / D rkpm %.5f (negative %.3f) bonded %.5f (negative %.3f)\n", nc, mr / nc,
               double(negr) / nc, mb / nc, double(negb) / nc);

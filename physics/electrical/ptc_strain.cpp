@@ -41,6 +41,13 @@ PtcStrain::PtcStrain(const Params& p) : p_(p) {
   if (he.size() == 1) throw SetupError("ptc_strain: opening_histogram_edges needs at least two edges (or none)");
   for (std::size_t k = 1; k < he.size(); ++k)
     if (!(he[k] > he[k - 1])) throw SetupError("ptc_strain: opening_histogram_edges must increase strictly");
+  if (p_.strain_statistics && p_.matrix_model != "rkpm")
+    throw SetupError("ptc_strain: strain_statistics needs matrix_model \"rkpm\" (the bonded network has no strain field)");
+  const auto& se = p_.strain_histogram_edges;
+  if (se.size() == 1) throw SetupError("ptc_strain: strain_histogram_edges needs at least two edges (or none)");
+  for (std::size_t k = 1; k < se.size(); ++k)
+    if (!(se[k] > se[k - 1])) throw SetupError("ptc_strain: strain_histogram_edges must increase strictly");
+  if (!se.empty() && !(p_.opening_strain > 0.0)) throw SetupError("ptc_strain: strain_histogram_edges need opening_strain > 0");
   if (p_.surface_points % 2 != 0) throw SetupError("ptc_strain: surface_points must be even (antipodal pairs)");
   law_ = ptc::ThermalStrainLaw{p_.expansion_coefficient,
                               p_.expansion_coefficient_melt > 0.0 ? p_.expansion_coefficient_melt : p_.expansion_coefficient,
@@ -57,7 +64,7 @@ PtcStrain::PtcStrain(const Params& p) : p_(p) {
       tsuffix_.push_back(sfx);
     }
   }
-  held_.assign(kFixed + 3 * suffix_.size() + histogram_columns() + (tsuffix_.empty() ? 0 : 1 + 4 * tsuffix_.size()), kNaN);
+  held_.assign(kFixed + 3 * suffix_.size() + histogram_columns() + strain_columns() + (tsuffix_.empty() ? 0 : 1 + 4 * tsuffix_.size()), kNaN);
 }
 
 ParamSpec<PtcStrain::Params> PtcStrain::spec() {
@@ -110,6 +117,18 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
   s.add("pin_penalty", &P::pin_penalty).positive().doc("rkpm: translation pin at the box centre, beta / (E h)");
   s.add("cg_tolerance", &P::cg_tolerance).positive().doc("rkpm: relative residual of the conjugate-gradient solve");
   s.add("cg_max_iterations", &P::cg_max_iterations).min(1).doc("rkpm: conjugate-gradient iteration limit");
+  s.add("cut_cell_depth", &P::cut_cell_depth).range(0, 8)
+      .doc("rkpm: octree levels splitting the quadrature cells cut by a sphere surface (0: staircase on the cells)");
+  s.add("surface_spacing", &P::surface_spacing).positive()
+      .doc("rkpm: penalty surface point spacing / h (at least surface_points per sphere)");
+  s.add("boundary", &P::boundary).choices({"free", "clamped", "rollers"})
+      .doc("rkpm: free expansion (translation pinned), clamped faces (u = 0) or rollers (u.n = 0) by penalty");
+  s.add("boundary_penalty", &P::boundary_penalty).positive().doc("rkpm: clamped / rollers penalty beta / (E / h)");
+  s.add("strain_statistics", &P::strain_statistics)
+      .doc("rkpm: max principal strain of the matrix at every volume quadrature point (means, negative fractions)");
+  s.add("strain_histogram_edges", &P::strain_histogram_edges)
+      .doc("bin edges [1] of the max principal strain at eps0 = opening_strain (columns strain_total_hist_<k>, "
+           "strain_mech_hist_<k>, _below, _above; needs strain_statistics)");
   s.add("linear_solver", &P::linear_solver).choices({"cg_ic", "cg", "ldlt", "auto"})
       .doc("rkpm: CG with incomplete Cholesky (cg_ic), Jacobi CG (cg), sparse LDLT (ldlt), auto (LDLT when small)");
   return s;
@@ -122,7 +141,14 @@ void PtcStrain::bind(State& s) {
   length_ = percolation::box_length(s, p_.length, "ptc_strain");
 }
 
-void PtcStrain::advance(State& s, const StepInfo&) {
+struct PtcStrain::UnitResult {
+  ptc::Contacts contacts;
+  std::size_t matrix_size = 0;  ///< springs (bonded) or RKPM nodes
+  double residual = 0.0;
+  std::vector<double> strain;   ///< the strain columns (strain_columns() values)
+};
+
+PtcStrain::UnitResult PtcStrain::unit_contacts(const State& s) const {
   ptc::MatrixParams mp;
   mp.matrix_modulus = p_.matrix_modulus;
   mp.bond_area = p_.bond_area;
@@ -131,52 +157,74 @@ void PtcStrain::advance(State& s, const StepInfo&) {
   mp.touch_tolerance = p_.touch_tolerance;
   mp.regularisation = p_.regularisation;
   const std::size_t n = s.particles.size();
-  std::size_t matrix_size = 0;  // springs (bonded) or RKPM nodes
-  double residual = 0.0;
-  ptc::Contacts c;
+  UnitResult u;
   if (p_.matrix_model == "bonded") {
     const ptc::SpringNetwork net = ptc::build_network(s.particles.position, s.particles.radius, mp);
     const ptc::UnitSolution sol = ptc::solve_unit(n, net, mp);
-    c = ptc::touching_contacts(net, sol, p_.touch_tolerance);
-    matrix_size = net.size();
-    residual = sol.residual;
-  } else {
-    rkpm::Params rp;
-    rp.youngs_modulus = p_.matrix_modulus;
-    rp.poisson_ratio = p_.poisson_ratio;
-    rp.node_spacing = p_.node_spacing;
-    rp.support_factor = p_.support_factor;
-    rp.quadrature_order = static_cast<int>(p_.quadrature_order);
-    rp.cell_subdivision = static_cast<int>(p_.cell_subdivision);
-    rp.surface_points = static_cast<int>(p_.surface_points);
-    rp.bond_penalty = p_.bond_penalty;
-    rp.pin_penalty = p_.pin_penalty;
-    rp.cg_tolerance = p_.cg_tolerance;
-    rp.cg_max_iterations = static_cast<int>(p_.cg_max_iterations);
-    rp.solver = p_.linear_solver;
-    // The polymer box: the smallest cube holding [0, L]^3 and every filler (the contact algorithm
-    // has no walls, so a filler may end partly or wholly outside [0, L]^3; it stays embedded).
-    Vec3 lo = Vec3::Zero(), hi = Vec3::Constant(length_);
-    for (std::size_t i = 0; i < n; ++i) {
-      lo = lo.cwiseMin(s.particles.position[i] - Vec3::Constant(s.particles.radius[i]));
-      hi = hi.cwiseMax(s.particles.position[i] + Vec3::Constant(s.particles.radius[i]));
-    }
-    rkpm::Domain dom;
-    dom.lo = lo;
-    dom.hi = lo + Vec3::Constant((hi - lo).maxCoeff());
-    const rkpm::Result r = rkpm::solve_unit(s.particles.position, s.particles.radius, dom, rp);
-    // The touching pairs (springs of a network cut at the touch tolerance) with the RKPM openings.
-    ptc::MatrixParams tp = mp;
-    tp.cutoff_gap = p_.touch_tolerance;
-    const ptc::SpringNetwork touching = ptc::build_network(s.particles.position, s.particles.radius, tp);
-    ptc::UnitSolution sol;
-    sol.displacement = r.sphere_displacement;
-    for (std::size_t e = 0; e < touching.size(); ++e)
-      sol.opening.push_back(touching.normal[e].dot(r.sphere_displacement[touching.b[e]] - r.sphere_displacement[touching.a[e]]));
-    c = ptc::touching_contacts(touching, sol, p_.touch_tolerance);
-    matrix_size = r.approximation.nodes();
-    residual = r.residual;
+    u.contacts = ptc::touching_contacts(net, sol, p_.touch_tolerance);
+    u.matrix_size = net.size();
+    u.residual = sol.residual;
+    return u;
   }
+  rkpm::Params rp;
+  rp.youngs_modulus = p_.matrix_modulus;
+  rp.poisson_ratio = p_.poisson_ratio;
+  rp.node_spacing = p_.node_spacing;
+  rp.support_factor = p_.support_factor;
+  rp.quadrature_order = static_cast<int>(p_.quadrature_order);
+  rp.cell_subdivision = static_cast<int>(p_.cell_subdivision);
+  rp.cut_cell_depth = static_cast<int>(p_.cut_cell_depth);
+  rp.surface_points = static_cast<int>(p_.surface_points);
+  rp.surface_spacing = p_.surface_spacing;
+  rp.bond_penalty = p_.bond_penalty;
+  rp.pin_penalty = p_.pin_penalty;
+  rp.boundary = p_.boundary;
+  rp.boundary_penalty = p_.boundary_penalty;
+  rp.cg_tolerance = p_.cg_tolerance;
+  rp.cg_max_iterations = static_cast<int>(p_.cg_max_iterations);
+  rp.solver = p_.linear_solver;
+  rp.strain_statistics = p_.strain_statistics;
+  for (double e : p_.strain_histogram_edges) rp.strain_edges.push_back(e / p_.opening_strain);
+  // The polymer box: the smallest cube holding [0, L]^3 and every filler (the contact algorithm
+  // has no walls, so a filler may end partly or wholly outside [0, L]^3; it stays embedded).
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Constant(length_);
+  for (std::size_t i = 0; i < n; ++i) {
+    lo = lo.cwiseMin(s.particles.position[i] - Vec3::Constant(s.particles.radius[i]));
+    hi = hi.cwiseMax(s.particles.position[i] + Vec3::Constant(s.particles.radius[i]));
+  }
+  rkpm::Domain dom;
+  dom.lo = lo;
+  dom.hi = lo + Vec3::Constant((hi - lo).maxCoeff());
+  const rkpm::Result r = rkpm::solve_unit(s.particles.position, s.particles.radius, dom, rp);
+  // The touching pairs (springs of a network cut at the touch tolerance) with the RKPM openings.
+  ptc::MatrixParams tp = mp;
+  tp.cutoff_gap = p_.touch_tolerance;
+  const ptc::SpringNetwork touching = ptc::build_network(s.particles.position, s.particles.radius, tp);
+  ptc::UnitSolution sol;
+  sol.displacement = r.sphere_displacement;
+  for (std::size_t e = 0; e < touching.size(); ++e)
+    sol.opening.push_back(touching.normal[e].dot(r.sphere_displacement[touching.b[e]] - r.sphere_displacement[touching.a[e]]));
+  u.contacts = ptc::touching_contacts(touching, sol, p_.touch_tolerance);
+  u.matrix_size = r.approximation.nodes();
+  u.residual = r.residual;
+  if (p_.strain_statistics) {  // per unit eps0 -> at opening_strain
+    const rkpm::StrainStatistics& st = r.strain;
+    const double e0 = p_.opening_strain;
+    u.strain = {e0 * st.total_mean, e0 * st.mechanical_mean, st.total_negative_fraction, st.mechanical_negative_fraction};
+    if (p_.strain_histogram_edges.size() >= 2) {
+      u.strain.insert(u.strain.end(), st.total_histogram.begin(), st.total_histogram.end());
+      u.strain.insert(u.strain.end(), st.mechanical_histogram.begin(), st.mechanical_histogram.end());
+    }
+  }
+  return u;
+}
+
+void PtcStrain::advance(State& s, const StepInfo&) {
+  const std::size_t n = s.particles.size();
+  const UnitResult unit = unit_contacts(s);
+  const ptc::Contacts& c = unit.contacts;
+  const std::size_t matrix_size = unit.matrix_size;
+  const double residual = unit.residual;
   const std::vector<double> eb = ptc::break_strains(c, p_.break_gap);
   const std::vector<Index> high = set_members(s, p_.high, "ptc_strain"), low = set_members(s, p_.low, "ptc_strain");
 
@@ -224,6 +272,7 @@ void PtcStrain::advance(State& s, const StepInfo&) {
     for (double& v : count) v = rel.empty() ? kNaN : v / static_cast<double>(rel.size());
     held_.insert(held_.end(), count.begin(), count.end());
   }
+  held_.insert(held_.end(), unit.strain.begin(), unit.strain.end());
   if (!tsuffix_.empty()) {
     held_.push_back(std::isfinite(held_[2]) ? ptc::temperature_at_strain(law_, held_[2]) : kInf);
     for (double T : p_.temperatures) {
@@ -265,6 +314,21 @@ std::vector<std::string> PtcStrain::columns() const {
     }
     c.emplace_back("ptc_strain_opening_hist_below");
     c.emplace_back("ptc_strain_opening_hist_above");
+  }
+  if (p_.strain_statistics) {
+    for (const char* q : {"strain_total_mean", "strain_mech_mean", "strain_total_negative_fraction", "strain_mech_negative_fraction"})
+      c.push_back(std::string("ptc_strain_") + q);
+    const std::size_t ms = p_.strain_histogram_edges.size();
+    if (ms >= 2)
+      for (const char* kind : {"total", "mech"}) {
+        for (std::size_t k = 0; k + 1 < ms; ++k) {
+          char buf[64];
+          std::snprintf(buf, sizeof buf, "ptc_strain_strain_%s_hist_%02zu", kind, k);
+          c.emplace_back(buf);
+        }
+        c.push_back(std::string("ptc_strain_strain_") + kind + "_hist_below");
+        c.push_back(std::string("ptc_strain_strain_") + kind + "_hist_above");
+      }
   }
   if (!tsuffix_.empty()) c.push_back("ptc_strain_switching_temperature");
   for (const auto& sfx : tsuffix_)

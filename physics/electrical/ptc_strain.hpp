@@ -35,6 +35,12 @@
 ///                                 closed-form linearity, eps0 x delta / D
 ///   opening_negative_fraction     fraction of contacts that close (delta < 0) [1]
 ///   solve_residual                ||K u - f|| / ||f|| of the unit solve [1]
+///   strain_{total,mech}_mean, strain_{total,mech}_negative_fraction   (rkpm with
+///                                 strain_statistics) volume means / fractions of the max
+///                                 principal total strain sym(grad u) and mechanical strain
+///                                 sym(grad u) - eps0 I at eps0 = opening_strain [1]; then, with
+///                                 m + 1 >= 2 strain_histogram_edges, strain_{total,mech}_hist_<k>,
+///                                 _below, _above: volume fractions per bin (the paper's Fig. 4)
 ///   opening_hist_<k>              (only if opening_histogram_edges has m + 1 >= 2 edges) the
 ///                                 fraction of contacts whose relative opening (as opening_mean)
 ///                                 lies in [edge_k, edge_k+1), k = 0..m-1, then
@@ -109,6 +115,12 @@ class PtcStrain final : public Module {
     double cg_tolerance = 1e-10;                  ///< [1]
     std::int64_t cg_max_iterations = 20000;
     std::string linear_solver = "cg_ic";          ///< rkpm: "cg_ic" | "cg" | "ldlt" | "auto"
+    std::int64_t cut_cell_depth = 2;              ///< rkpm: octree levels in cut quadrature cells
+    double surface_spacing = 0.5;                 ///< rkpm: surface point spacing / h
+    std::string boundary = "free";                ///< rkpm: "free" | "clamped" | "rollers"
+    double boundary_penalty = 100.0;              ///< rkpm: beta / (E / h) for clamped / rollers
+    bool strain_statistics = false;               ///< rkpm: max principal strain of the matrix field (Fig. 4)
+    std::vector<double> strain_histogram_edges;   ///< [1] bin edges of that strain at eps0 = opening_strain
   };
   static ParamSpec<Params> spec();
   explicit PtcStrain(const Params& p);
@@ -139,6 +151,14 @@ class PtcStrain final : public Module {
   std::size_t histogram_columns() const {
     return p_.opening_histogram_edges.size() >= 2 ? p_.opening_histogram_edges.size() + 1 : 0;
   }
+  std::size_t strain_columns() const {
+    if (!p_.strain_statistics) return 0;
+    return 4 + (p_.strain_histogram_edges.size() >= 2 ? 2 * (p_.strain_histogram_edges.size() + 1) : 0);
+  }
+  /// One unit solve of the chosen matrix model: the touching contacts with their unit openings;
+  /// matrix size (springs or RKPM nodes), residual and the strain columns into the arguments.
+  struct UnitResult;
+  UnitResult unit_contacts(const State& s) const;
 };
 
 }  // namespace sparkdem::physics

@@ -7,6 +7,7 @@
 #include <string>
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -92,6 +93,29 @@ class SphereGrid {
         }
     return -1;
   }
+  /// Calls f(I) for every sphere whose surface may come within `reach` of x (|x - c_I| < R_I + reach).
+  template <class F>
+  void visit_near(const Vec3& x, double reach, F&& f) const {
+    if (c_.empty()) return;
+    int lo[3], hi[3];
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::max(0, static_cast<int>(std::floor((x[d] - rmax_ - reach - lo_[d]) / cell_)));
+      hi[d] = std::min(n_[d] - 1, static_cast<int>(std::floor((x[d] + rmax_ + reach - lo_[d]) / cell_)));
+      if (lo[d] > hi[d]) return;
+    }
+    for (int i = lo[0]; i <= hi[0]; ++i)
+      for (int j = lo[1]; j <= hi[1]; ++j)
+        for (int k = lo[2]; k <= hi[2]; ++k) {
+          const std::size_t key = index(i, j, k);
+          for (std::size_t q = start_[key]; q < start_[key + 1]; ++q) {
+            const std::int64_t sp = item_[q];
+            const double rr = r_[sp] + reach;
+            if ((x - c_[sp]).squaredNorm() < rr * rr) f(sp);
+          }
+        }
+  }
+  const Vec3& centre(std::int64_t I) const { return c_[I]; }
+  double radius(std::int64_t I) const { return r_[I]; }
 
  private:
   int cell_of(const Vec3& x, int d) const { return std::clamp(static_cast<int>((x[d] - lo_[d]) / cell_), 0, n_[d] - 1); }
@@ -317,11 +341,44 @@ std::array<double, 2> single_sphere_closed_form(double a, double b, double E, do
   return {A, B};
 }
 
-// --- the solve ----------------------------------------------------------------------------
+// --- the solve, in named steps ------------------------------------------------------------
 
-Result solve_unit(const std::vector<Vec3>& centre, const std::vector<double>& radius, const Domain& domain, const Params& p) {
-  using clock = std::chrono::steady_clock;
-  const auto t0 = clock::now();
+namespace {
+
+struct Material {
+  double E = 1.0, lambda = 0.0, mu = 0.0, threeK = 0.0;
+  explicit Material(const Params& p)
+      : E(p.youngs_modulus),
+        lambda(p.youngs_modulus * p.poisson_ratio / ((1.0 + p.poisson_ratio) * (1.0 - 2.0 * p.poisson_ratio))),
+        mu(p.youngs_modulus / (2.0 * (1.0 + p.poisson_ratio))),
+        threeK(3.0 * lambda + 2.0 * mu) {}
+};
+
+/// The matrix domain with its fitted node grid.
+struct Frame {
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Ones(), c = Vec3::Zero();
+  bool ball = false;
+  double ball_radius = 0.0;
+  double h = 1.0;
+  std::array<int, 3> cells{1, 1, 1};
+  bool in_domain(const Vec3& x) const {
+    if (ball) return (x - c).norm() <= ball_radius;
+    for (int d = 0; d < 3; ++d)
+      if (x[d] < lo[d] - 1e-12 * h || x[d] > hi[d] + 1e-12 * h) return false;
+    return true;
+  }
+};
+
+struct QPoint {
+  Vec3 x;
+  double w;
+};
+struct VolumeQuadrature {
+  std::vector<QPoint> points;
+  std::vector<std::size_t> cell_start;  ///< points of background cell k: [cell_start[k], cell_start[k+1])
+};
+
+void check_params(const std::vector<Vec3>& centre, const std::vector<double>& radius, const Domain& domain, const Params& p) {
   if (centre.size() != radius.size()) throw SetupError("rkpm_matrix: centres and radii differ in length");
   if (!(p.youngs_modulus > 0.0)) throw SetupError("rkpm_matrix: youngs_modulus must be > 0");
   if (!(p.poisson_ratio > -1.0 && p.poisson_ratio < 0.5)) throw SetupError("rkpm_matrix: poisson_ratio must be in (-1, 0.5)");
@@ -329,244 +386,343 @@ Result solve_unit(const std::vector<Vec3>& centre, const std::vector<double>& ra
   if (!(p.support_factor > 1.0)) throw SetupError("rkpm_matrix: support_factor must be > 1 (linear basis needs >= 4 nodes in reach)");
   if (p.quadrature_order < 1 || p.quadrature_order > 8) throw SetupError("rkpm_matrix: quadrature_order must be in 1..8");
   if (p.cell_subdivision < 1) throw SetupError("rkpm_matrix: cell_subdivision must be >= 1");
+  if (p.cut_cell_depth < 0 || p.cut_cell_depth > 8) throw SetupError("rkpm_matrix: cut_cell_depth must be in 0..8");
+  if (!(p.surface_spacing > 0.0)) throw SetupError("rkpm_matrix: surface_spacing must be > 0");
   if (!(p.bond_penalty >= 0.0) || !(p.pin_penalty > 0.0)) throw SetupError("rkpm_matrix: bond_penalty >= 0 and pin_penalty > 0 expected");
   if (p.solver != "cg" && p.solver != "cg_ic" && p.solver != "ldlt" && p.solver != "auto")
     throw SetupError("rkpm_matrix: solver must be \"cg\", \"cg_ic\", \"ldlt\" or \"auto\", found \"" + p.solver + "\"");
+  if (p.boundary != "free" && p.boundary != "clamped" && p.boundary != "rollers")
+    throw SetupError("rkpm_matrix: boundary must be \"free\", \"clamped\" or \"rollers\", found \"" + p.boundary + "\"");
+  if (p.boundary != "free" && domain.ball_radius > 0.0)
+    throw SetupError("rkpm_matrix: boundary \"" + p.boundary + "\" needs a box domain (the ball is traction-free)");
+  if (!(p.boundary_penalty > 0.0)) throw SetupError("rkpm_matrix: boundary_penalty must be > 0");
+  for (std::size_t k = 1; k < p.strain_edges.size(); ++k)
+    if (!(p.strain_edges[k] > p.strain_edges[k - 1])) throw SetupError("rkpm_matrix: strain_edges must increase strictly");
   for (double r : radius)
     if (!(r > 0.0)) throw SetupError("rkpm_matrix: sphere radii must be > 0");
-  const std::vector<Vec3> unit_points = sphere_points(p.surface_points);
+}
 
-  const double E = p.youngs_modulus, nu = p.poisson_ratio;
-  const double lambda = E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
-  const double mu = E / (2.0 * (1.0 + nu));
-  const double threeK = 3.0 * lambda + 2.0 * mu;
-  const bool ball = domain.ball_radius > 0.0;
-  const Vec3 c = 0.5 * (domain.lo + domain.hi);
-  Vec3 lo = domain.lo, hi = domain.hi;
-  if (ball) {
-    lo = c - Vec3::Constant(domain.ball_radius);
-    hi = c + Vec3::Constant(domain.ball_radius);
+/// Node grid: h fits each edge; the box edges must be multiples of one spacing.
+Frame fit_frame(const Domain& domain, const Params& p) {
+  Frame f;
+  f.ball = domain.ball_radius > 0.0;
+  f.ball_radius = domain.ball_radius;
+  f.c = 0.5 * (domain.lo + domain.hi);
+  f.lo = domain.lo;
+  f.hi = domain.hi;
+  if (f.ball) {
+    f.lo = f.c - Vec3::Constant(domain.ball_radius);
+    f.hi = f.c + Vec3::Constant(domain.ball_radius);
   }
-  if (!((hi - lo).minCoeff() > 0.0)) throw SetupError("rkpm_matrix: empty domain");
-  // Node grid: h fits each edge; the domain must be a cube for one h (box edges may differ: use
-  // the per-direction cell count with a common h = the largest fitted spacing).
-  std::array<int, 3> cells{};
-  double h = 0.0;
+  if (!((f.hi - f.lo).minCoeff() > 0.0)) throw SetupError("rkpm_matrix: empty domain");
+  f.h = 0.0;
   for (int d = 0; d < 3; ++d) {
-    cells[d] = std::max(1, static_cast<int>(std::lround((hi[d] - lo[d]) / p.node_spacing)));
-    h = std::max(h, (hi[d] - lo[d]) / cells[d]);
+    f.cells[d] = std::max(1, static_cast<int>(std::lround((f.hi[d] - f.lo[d]) / p.node_spacing)));
+    f.h = std::max(f.h, (f.hi[d] - f.lo[d]) / f.cells[d]);
   }
-  for (int d = 0; d < 3; ++d) {
-    if (std::abs(cells[d] * h - (hi[d] - lo[d])) > 1e-9 * h)
+  for (int d = 0; d < 3; ++d)
+    if (std::abs(f.cells[d] * f.h - (f.hi[d] - f.lo[d])) > 1e-9 * f.h)
       throw SetupError("rkpm_matrix: the domain edges are not multiples of one node spacing (use a cube)");
-  }
-  Result res;
-  res.approximation = Approximation(lo, cells, h, p.support_factor);
-  Approximation& ap = res.approximation;
-  auto in_domain = [&](const Vec3& x) {
-    if (ball) return (x - c).norm() <= domain.ball_radius;
-    for (int d = 0; d < 3; ++d)
-      if (x[d] < lo[d] - 1e-12 * h || x[d] > hi[d] + 1e-12 * h) return false;
-    return true;
-  };
-  const SphereGrid spheres(centre, radius);
+  return f;
+}
 
-  // 1. Volume quadrature points, grouped by background cell.
+enum class Cover { Empty, Full, Cut };
+
+/// Does the cube (centre o, half edge a) lie wholly in the matrix, wholly outside it (inside a
+/// sphere or outside the domain), or is it cut by a sphere surface or the ball boundary?
+Cover classify(const Frame& f, const SphereGrid& sg, const Vec3& o, double a) {
+  const double hd = std::sqrt(3.0) * a;
+  Cover state = Cover::Full;
+  if (f.ball) {
+    const double d = (o - f.c).norm();
+    if (d - hd > f.ball_radius) return Cover::Empty;
+    if (d + hd > f.ball_radius) state = Cover::Cut;
+  }
+  bool empty = false;
+  sg.visit_near(o, hd, [&](std::int64_t I) {
+    const double d = (o - sg.centre(I)).norm();
+    if (d + hd <= sg.radius(I)) empty = true;
+    else if (d - hd < sg.radius(I)) state = Cover::Cut;
+  });
+  return empty ? Cover::Empty : state;
+}
+
+/// Gauss points of the cube (o, a): a full cube keeps them all; a cut cube is split into eight
+/// (depth_left > 0) or, at the last level, keeps the points that fall in the matrix.
+void cube_points(const Frame& f, const SphereGrid& sg, const Vec3& o, double a, int depth_left, const std::vector<double>& gx,
+                 const std::vector<double>& gw, std::vector<QPoint>& out) {
+  const Cover cover = classify(f, sg, o, a);
+  if (cover == Cover::Empty) return;
+  if (cover == Cover::Cut && depth_left > 0) {
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 s((k & 1) ? 0.5 : -0.5, (k & 2) ? 0.5 : -0.5, (k & 4) ? 0.5 : -0.5);
+      cube_points(f, sg, o + a * s, 0.5 * a, depth_left - 1, gx, gw, out);
+    }
+    return;
+  }
+  const double vol = a * a * a;  // (2a)^3 / 8: the Gauss weights on [-1, 1]^3 sum to 8
+  const std::size_t n = gx.size();
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j)
+      for (std::size_t k = 0; k < n; ++k) {
+        const Vec3 x = o + a * Vec3(gx[i], gx[j], gx[k]);
+        if (cover == Cover::Cut && (!f.in_domain(x) || sg.inside(x) >= 0)) continue;
+        out.push_back({x, vol * gw[i] * gw[j] * gw[k]});
+      }
+}
+
+VolumeQuadrature volume_quadrature(const Frame& f, const SphereGrid& sg, const Params& p) {
   std::vector<double> gx, gw;
   gauss_legendre(p.quadrature_order, gx, gw);
   const int s = p.cell_subdivision;
-  const double hc = h / s;
-  const std::array<int, 3> nc = {cells[0] * s, cells[1] * s, cells[2] * s};
-  struct QPoint { Vec3 x; double w; };
-  std::vector<QPoint> qp;
-  std::vector<std::size_t> cell_start;
-  cell_start.reserve(static_cast<std::size_t>(nc[0]) * nc[1] * nc[2] + 1);
-  const double wcell = hc * hc * hc / 8.0;
+  const double hc = f.h / s;
+  const std::array<int, 3> nc = {f.cells[0] * s, f.cells[1] * s, f.cells[2] * s};
+  VolumeQuadrature vq;
+  vq.cell_start.reserve(static_cast<std::size_t>(nc[0]) * nc[1] * nc[2] + 1);
   for (int i = 0; i < nc[0]; ++i)
     for (int j = 0; j < nc[1]; ++j)
       for (int k = 0; k < nc[2]; ++k) {
-        cell_start.push_back(qp.size());
-        const Vec3 o = lo + hc * Vec3(i + 0.5, j + 0.5, k + 0.5);
-        for (int a = 0; a < p.quadrature_order; ++a)
-          for (int b = 0; b < p.quadrature_order; ++b)
-            for (int e = 0; e < p.quadrature_order; ++e) {
-              const Vec3 x = o + 0.5 * hc * Vec3(gx[a], gx[b], gx[e]);
-              if (!in_domain(x) || spheres.inside(x) >= 0) continue;
-              qp.push_back({x, wcell * gw[a] * gw[b] * gw[e]});
-            }
+        vq.cell_start.push_back(vq.points.size());
+        cube_points(f, sg, f.lo + hc * Vec3(i + 0.5, j + 0.5, k + 0.5), 0.5 * hc, p.cut_cell_depth, gx, gw, vq.points);
       }
-  cell_start.push_back(qp.size());
-  // 2. Keep the nodes whose support holds a volume point.
-  {
-    std::vector<char> flag(ap.grid_nodes(), 0);
-    std::vector<std::int64_t> near;
-    for (const QPoint& q : qp) {
-      ap.grid_nodes_near(q.x, ap.support(), near);
-      for (std::int64_t g : near) flag[g] = 1;
-    }
-    ap.keep(flag);
+  vq.cell_start.push_back(vq.points.size());
+  return vq;
+}
+
+/// Keep the nodes whose support holds a volume point (a node deep in a sphere has an empty row).
+void keep_supported_nodes(Approximation& ap, const VolumeQuadrature& vq) {
+  std::vector<char> flag(ap.grid_nodes(), 0);
+  std::vector<std::int64_t> near;
+  for (const QPoint& q : vq.points) {
+    ap.grid_nodes_near(q.x, ap.support(), near);
+    for (std::int64_t g : near) flag[g] = 1;
   }
+  ap.keep(flag);
+}
+
+/// Block pattern: nodes within 2 rho; sphere I with the nodes within R_I + rho of its centre.
+BlockMatrix sparsity(const Approximation& ap, const std::vector<Vec3>& centre, const std::vector<double>& radius) {
   const std::size_t nn = ap.nodes(), ns = centre.size();
-  if (nn == 0) throw SetupError("rkpm_matrix: no volume quadrature point in the domain");
-  res.volume_points = qp.size();
-
-  // 3. Sparsity pattern: nodes within 2 rho; sphere I with nodes within R_I + rho of its centre.
   std::vector<std::vector<std::int64_t>> cols(nn + ns);
-  {
-    std::vector<std::int64_t> near;
-    for (std::size_t i = 0; i < nn; ++i) {
-      ap.grid_nodes_near(ap.positions()[i], 2.0 * ap.support(), near);
-      for (std::int64_t g : near)
-        if (ap.id(g) >= 0) cols[i].push_back(ap.id(g));
-    }
-    for (std::size_t I = 0; I < ns; ++I) {
-      const auto S = static_cast<std::int64_t>(nn + I);
-      cols[S].push_back(S);
-      ap.grid_nodes_near(centre[I], radius[I] + ap.support(), near);
-      for (std::int64_t g : near)
-        if (ap.id(g) >= 0) {
-          cols[S].push_back(ap.id(g));
-          cols[ap.id(g)].push_back(S);
-        }
-    }
+  std::vector<std::int64_t> near;
+  for (std::size_t i = 0; i < nn; ++i) {
+    ap.grid_nodes_near(ap.positions()[i], 2.0 * ap.support(), near);
+    for (std::int64_t g : near)
+      if (ap.id(g) >= 0) cols[i].push_back(ap.id(g));
   }
-  BlockMatrix K(std::move(cols));
-  Eigen::VectorXd F = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * (nn + ns)));
-
-  // 4. Volume integrals, cell by cell (local dense accumulation, then scatter).
-  {
-    std::vector<std::int64_t> ids;
-    std::vector<double> phi;
-    std::vector<Vec3> grad;
-    std::vector<int> local(nn, -1);
-    std::vector<std::int64_t> lnodes;
-    std::vector<Eigen::Matrix3d> lk;
-    std::vector<char> touched;
-    for (std::size_t cell = 0; cell + 1 < cell_start.size(); ++cell) {
-      if (cell_start[cell] == cell_start[cell + 1]) continue;
-      lnodes.clear();
-      struct PointData { std::vector<int> l; std::vector<Vec3> g; double w; };
-      std::vector<PointData> pts;
-      for (std::size_t q = cell_start[cell]; q < cell_start[cell + 1]; ++q) {
-        if (!ap.shape(qp[q].x, ids, phi, &grad))
-          throw SetupError("rkpm_matrix: singular moment matrix at a volume point (raise support_factor)");
-        PointData pd;
-        pd.w = qp[q].w;
-        for (std::size_t a = 0; a < ids.size(); ++a) {
-          if (local[ids[a]] < 0) { local[ids[a]] = static_cast<int>(lnodes.size()); lnodes.push_back(ids[a]); }
-          pd.l.push_back(local[ids[a]]);
-          pd.g.push_back(grad[a]);
-          F.segment<3>(3 * ids[a]) += qp[q].w * threeK * grad[a];
-        }
-        res.quadrature_volume += qp[q].w;
-        pts.push_back(std::move(pd));
+  for (std::size_t I = 0; I < ns; ++I) {
+    const auto S = static_cast<std::int64_t>(nn + I);
+    cols[S].push_back(S);
+    ap.grid_nodes_near(centre[I], radius[I] + ap.support(), near);
+    for (std::int64_t g : near)
+      if (ap.id(g) >= 0) {
+        cols[S].push_back(ap.id(g));
+        cols[ap.id(g)].push_back(S);
       }
-      const std::size_t nl = lnodes.size();
-      lk.assign(nl * nl, Eigen::Matrix3d::Zero());
-      touched.assign(nl * nl, 0);
-      // Block (a, b) for local a <= b only; K_ba = K_ab^T.
-      for (const PointData& pd : pts)
-        for (std::size_t a = 0; a < pd.l.size(); ++a)
-          for (std::size_t b = 0; b < pd.l.size(); ++b) {
-            if (pd.l[a] > pd.l[b]) continue;
-            const Vec3 ga = pd.w * pd.g[a];
-            const Vec3& gb = pd.g[b];
-            const std::size_t key = static_cast<std::size_t>(pd.l[a]) * nl + pd.l[b];
-            Eigen::Matrix3d& blk = lk[key];
-            blk.noalias() += lambda * ga * gb.transpose() + mu * gb * ga.transpose();
-            blk.diagonal().array() += mu * ga.dot(gb);
-            touched[key] = 1;
-          }
-      for (std::size_t a = 0; a < nl; ++a)
-        for (std::size_t b = a; b < nl; ++b)
-          if (touched[a * nl + b]) {
-            K.add(lnodes[a], lnodes[b], lk[a * nl + b]);
-            if (b != a) K.add(lnodes[b], lnodes[a], lk[a * nl + b].transpose());
-          }
-      for (std::int64_t id : lnodes) local[id] = -1;
-    }
   }
+  return BlockMatrix(std::move(cols));
+}
 
-  // 5. Sphere surface penalty: alpha int (u - U_I)^2.
-  {
-    std::vector<std::int64_t> ids;
-    std::vector<double> phi;
-    std::vector<int> local(nn, -1);
-    std::vector<std::int64_t> lnodes;
-    std::vector<double> lm, lv;
-    for (std::size_t I = 0; I < ns; ++I) {
-      const double w = 4.0 * kPi * radius[I] * radius[I] / static_cast<double>(unit_points.size());
-      lnodes.clear();
-      lm.clear();
-      double area = 0.0;
-      struct SP { std::vector<int> l; std::vector<double> f; };
-      std::vector<SP> sps;
-      for (const Vec3& e : unit_points) {
-        const Vec3 x = centre[I] + radius[I] * e;
-        if (!in_domain(x) || spheres.inside(x, static_cast<std::int64_t>(I)) >= 0) continue;
-        if (!ap.shape(x, ids, phi, nullptr))
-          throw SetupError("rkpm_matrix: singular moment matrix at a surface point of sphere " + std::to_string(I) +
-                           " (raise support_factor)");
-        SP sp;
-        for (std::size_t a = 0; a < ids.size(); ++a) {
-          if (local[ids[a]] < 0) { local[ids[a]] = static_cast<int>(lnodes.size()); lnodes.push_back(ids[a]); }
-          sp.l.push_back(local[ids[a]]);
-          sp.f.push_back(phi[a]);
+/// K += int_Omega B^T C B dV and F += int_Omega 3K grad(phi) dV, background cell by cell (dense
+/// local blocks, then one scatter per cell). Returns the integrated matrix volume.
+double assemble_volume(BlockMatrix& K, Eigen::VectorXd& F, const Approximation& ap, const VolumeQuadrature& vq, const Material& m) {
+  double volume = 0.0;
+  std::vector<std::int64_t> ids;
+  std::vector<double> phi;
+  std::vector<Vec3> grad;
+  std::vector<int> local(ap.nodes(), -1);
+  std::vector<std::int64_t> lnodes;
+  std::vector<Eigen::Matrix3d> lk;
+  std::vector<char> touched;
+  struct PointData {
+    std::vector<int> l;
+    std::vector<Vec3> g;
+    double w;
+  };
+  std::vector<PointData> pts;
+  for (std::size_t cell = 0; cell + 1 < vq.cell_start.size(); ++cell) {
+    if (vq.cell_start[cell] == vq.cell_start[cell + 1]) continue;
+    lnodes.clear();
+    pts.clear();
+    for (std::size_t q = vq.cell_start[cell]; q < vq.cell_start[cell + 1]; ++q) {
+      const QPoint& qp = vq.points[q];
+      if (!ap.shape(qp.x, ids, phi, &grad)) throw SetupError("rkpm_matrix: singular moment matrix at a volume point (raise support_factor)");
+      PointData pd;
+      pd.w = qp.w;
+      for (std::size_t a = 0; a < ids.size(); ++a) {
+        if (local[ids[a]] < 0) {
+          local[ids[a]] = static_cast<int>(lnodes.size());
+          lnodes.push_back(ids[a]);
         }
-        area += w;
-        sps.push_back(std::move(sp));
-        ++res.surface_points;
+        pd.l.push_back(local[ids[a]]);
+        pd.g.push_back(grad[a]);
+        F.segment<3>(3 * ids[a]) += qp.w * m.threeK * grad[a];
       }
-      if (!(area > 0.0))
-        throw SetupError("rkpm_matrix: sphere " + std::to_string(I) + " has no surface point in contact with the matrix");
-      const std::size_t nl = lnodes.size();
-      lm.assign(nl * nl, 0.0);
-      lv.assign(nl, 0.0);
-      for (const SP& sp : sps)
-        for (std::size_t a = 0; a < sp.l.size(); ++a) {
-          lv[sp.l[a]] += p.bond_penalty * w * sp.f[a];
-          for (std::size_t b = 0; b < sp.l.size(); ++b) lm[sp.l[a] * nl + sp.l[b]] += p.bond_penalty * w * sp.f[a] * sp.f[b];
+      volume += qp.w;
+      pts.push_back(std::move(pd));
+    }
+    const std::size_t nl = lnodes.size();
+    lk.assign(nl * nl, Eigen::Matrix3d::Zero());
+    touched.assign(nl * nl, 0);
+    for (const PointData& pd : pts)  // block (a, b) for local a <= b only; K_ba = K_ab^T
+      for (std::size_t a = 0; a < pd.l.size(); ++a)
+        for (std::size_t b = 0; b < pd.l.size(); ++b) {
+          if (pd.l[a] > pd.l[b]) continue;
+          const Vec3 ga = pd.w * pd.g[a];
+          const Vec3& gb = pd.g[b];
+          const std::size_t key = static_cast<std::size_t>(pd.l[a]) * nl + pd.l[b];
+          Eigen::Matrix3d& blk = lk[key];
+          blk.noalias() += m.lambda * ga * gb.transpose() + m.mu * gb * ga.transpose();
+          blk.diagonal().array() += m.mu * ga.dot(gb);
+          touched[key] = 1;
         }
-      const auto S = static_cast<std::int64_t>(nn + I);
-      for (std::size_t a = 0; a < nl; ++a) {
-        for (std::size_t b = 0; b < nl; ++b)
-          if (lm[a * nl + b] != 0.0) K.add_scalar(lnodes[a], lnodes[b], lm[a * nl + b]);
-        if (lv[a] != 0.0) {
-          K.add_scalar(lnodes[a], S, -lv[a]);
-          K.add_scalar(S, lnodes[a], -lv[a]);
+    for (std::size_t a = 0; a < nl; ++a)
+      for (std::size_t b = a; b < nl; ++b)
+        if (touched[a * nl + b]) {
+          K.add(lnodes[a], lnodes[b], lk[a * nl + b]);
+          if (b != a) K.add(lnodes[b], lnodes[a], lk[a * nl + b].transpose());
+        }
+    for (std::int64_t id : lnodes) local[id] = -1;
+  }
+  return volume;
+}
+
+/// Surface points per sphere: at least surface_points, and one per (surface_spacing h)^2 of area.
+int surface_count(double R, double h, const Params& p) {
+  const double want = 4.0 * kPi * R * R / std::pow(p.surface_spacing * h, 2);
+  const double capped = std::min(want, 1e6);
+  int n = std::max(p.surface_points, static_cast<int>(std::ceil(capped)));
+  return n + (n % 2);
+}
+
+/// Sphere penalty alpha int_{dS_I} (u - U_I)^2 dS (points outside the domain or inside another
+/// sphere are dropped: no polymer there). Counts the kept surface points into res.
+void assemble_surface(BlockMatrix& K, const Approximation& ap, const Frame& f, const SphereGrid& sg, const std::vector<Vec3>& centre,
+                      const std::vector<double>& radius, const Params& p, Result& res) {
+  const std::size_t nn = ap.nodes();
+  std::vector<std::int64_t> ids;
+  std::vector<double> phi;
+  std::vector<int> local(nn, -1);
+  std::vector<std::int64_t> lnodes;
+  std::vector<double> lm, lv;
+  std::vector<std::pair<int, std::vector<Vec3>>> point_sets;  // cache by count
+  struct SP {
+    std::vector<int> l;
+    std::vector<double> f;
+  };
+  std::vector<SP> sps;
+  for (std::size_t I = 0; I < centre.size(); ++I) {
+    const int n = surface_count(radius[I], f.h, p);
+    auto it = std::find_if(point_sets.begin(), point_sets.end(), [n](const auto& e) { return e.first == n; });
+    if (it == point_sets.end()) it = point_sets.insert(point_sets.end(), {n, sphere_points(n)});
+    const std::vector<Vec3>& unit_points = it->second;
+    const double w = 4.0 * kPi * radius[I] * radius[I] / static_cast<double>(n);
+    lnodes.clear();
+    sps.clear();
+    double area = 0.0;
+    for (const Vec3& e : unit_points) {
+      const Vec3 x = centre[I] + radius[I] * e;
+      if (!f.in_domain(x) || sg.inside(x, static_cast<std::int64_t>(I)) >= 0) continue;
+      if (!ap.shape(x, ids, phi, nullptr))
+        throw SetupError("rkpm_matrix: singular moment matrix at a surface point of sphere " + std::to_string(I) + " (raise support_factor)");
+      SP sp;
+      for (std::size_t a = 0; a < ids.size(); ++a) {
+        if (local[ids[a]] < 0) {
+          local[ids[a]] = static_cast<int>(lnodes.size());
+          lnodes.push_back(ids[a]);
+        }
+        sp.l.push_back(local[ids[a]]);
+        sp.f.push_back(phi[a]);
+      }
+      area += w;
+      sps.push_back(std::move(sp));
+      ++res.surface_points;
+    }
+    if (!(area > 0.0)) throw SetupError("rkpm_matrix: sphere " + std::to_string(I) + " has no surface point in contact with the matrix");
+    const std::size_t nl = lnodes.size();
+    lm.assign(nl * nl, 0.0);
+    lv.assign(nl, 0.0);
+    for (const SP& sp : sps)
+      for (std::size_t a = 0; a < sp.l.size(); ++a) {
+        lv[sp.l[a]] += p.bond_penalty * w * sp.f[a];
+        for (std::size_t b = 0; b < sp.l.size(); ++b) lm[sp.l[a] * nl + sp.l[b]] += p.bond_penalty * w * sp.f[a] * sp.f[b];
+      }
+    const auto S = static_cast<std::int64_t>(nn + I);
+    for (std::size_t a = 0; a < nl; ++a) {
+      for (std::size_t b = 0; b < nl; ++b)
+        if (lm[a * nl + b] != 0.0) K.add_scalar(lnodes[a], lnodes[b], lm[a * nl + b]);
+      if (lv[a] != 0.0) {
+        K.add_scalar(lnodes[a], S, -lv[a]);
+        K.add_scalar(S, lnodes[a], -lv[a]);
+      }
+    }
+    K.add_scalar(S, S, p.bond_penalty * area);
+    for (std::int64_t id : lnodes) local[id] = -1;
+  }
+}
+
+/// Essential conditions. "free": statically determinate pins (no reaction under the
+/// self-equilibrated thermal load). "clamped" / "rollers": beta int_{dOmega} |u|^2 (resp.
+/// (u.n)^2) dS over the six box faces (u-bar = 0), beta = boundary_penalty E / h, Gauss points on
+/// the background cells of each face (points inside a sphere dropped).
+void assemble_boundary(BlockMatrix& K, const Approximation& ap, const Frame& f, const SphereGrid& sg, std::size_t spheres,
+                       const Params& p, const Material& m) {
+  std::vector<std::int64_t> ids;
+  std::vector<double> phi;
+  auto penalise = [&](const Vec3& x, double beta, const Vec3* normal, int comp_mask) {
+    if (!ap.shape(x, ids, phi, nullptr)) throw SetupError("rkpm_matrix: singular moment matrix at a boundary point");
+    for (std::size_t a = 0; a < ids.size(); ++a)
+      for (std::size_t b = 0; b < ids.size(); ++b) {
+        const double s = beta * phi[a] * phi[b];
+        if (normal) {
+          for (int c = 0; c < 3; ++c)
+            for (int d = 0; d < 3; ++d) K.add_entry(ids[a], ids[b], c, d, s * (*normal)[c] * (*normal)[d]);
+        } else {
+          for (int c = 0; c < 3; ++c)
+            if (comp_mask & (1 << c)) K.add_entry(ids[a], ids[b], c, c, s);
         }
       }
-      K.add_scalar(S, S, p.bond_penalty * area);
-      for (std::int64_t id : lnodes) local[id] = -1;
+  };
+  if (p.boundary == "free") {
+    const double beta = p.pin_penalty * m.E * f.h;
+    penalise(f.c, beta, nullptr, 7);
+    if (spheres == 0) {  // without spheres the rigid rotations are free too: 3-2-1 pins
+      const double arm = 0.25 * (f.hi - f.lo).minCoeff();
+      penalise(f.c + Vec3(arm, 0, 0), beta, nullptr, 2 | 4);
+      penalise(f.c + Vec3(0, arm, 0), beta, nullptr, 4);
     }
+    return;
   }
-
-  // 6. Pins (statically determinate, no reaction under the self-equilibrated thermal load).
-  {
-    const double beta = p.pin_penalty * E * h;
-    std::vector<std::int64_t> ids;
-    std::vector<double> phi;
-    auto pin = [&](const Vec3& x, int comp_mask) {
-      if (!ap.shape(x, ids, phi, nullptr)) throw SetupError("rkpm_matrix: singular moment matrix at a pin point");
-      for (std::size_t a = 0; a < ids.size(); ++a)
-        for (std::size_t b = 0; b < ids.size(); ++b)
-          for (int comp = 0; comp < 3; ++comp)
-            if (comp_mask & (1 << comp)) K.add_entry(ids[a], ids[b], comp, comp, beta * phi[a] * phi[b]);
-    };
-    pin(c, 7);
-    if (ns == 0) {
-      const double arm = 0.25 * (hi - lo).minCoeff();
-      pin(c + Vec3(arm, 0, 0), 2 | 4);
-      pin(c + Vec3(0, arm, 0), 4);
+  std::vector<double> gx, gw;
+  gauss_legendre(p.quadrature_order, gx, gw);
+  const double beta = p.boundary_penalty * m.E / f.h;
+  const int s = p.cell_subdivision;
+  const double hc = f.h / s;
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      Vec3 normal = Vec3::Zero();
+      normal[axis] = side ? 1.0 : -1.0;
+      for (int i = 0; i < f.cells[u] * s; ++i)
+        for (int j = 0; j < f.cells[v] * s; ++j)
+          for (std::size_t a = 0; a < gx.size(); ++a)
+            for (std::size_t b = 0; b < gx.size(); ++b) {
+              Vec3 x;
+              x[axis] = side ? f.hi[axis] : f.lo[axis];
+              x[u] = f.lo[u] + hc * (i + 0.5 + 0.5 * gx[a]);
+              x[v] = f.lo[v] + hc * (j + 0.5 + 0.5 * gx[b]);
+              if (sg.inside(x) >= 0) continue;
+              const double w = 0.25 * hc * hc * gw[a] * gw[b];
+              penalise(x, beta * w, p.boundary == "rollers" ? &normal : nullptr, 7);
+            }
     }
-  }
-  const auto t1 = clock::now();
-  res.assembly_seconds = std::chrono::duration<double>(t1 - t0).count();
+}
 
-  // 7. Solve.
-  const Eigen::SparseMatrix<double, Eigen::RowMajor, int> A = K.matrix();
-  res.unknowns = static_cast<std::size_t>(A.rows());
-  res.nonzeros = static_cast<std::size_t>(A.nonZeros());
+/// Solves A x = F by the chosen method; fills iterations, residual, solve time; throws if the
+/// solve stops above cg_tolerance.
+Eigen::VectorXd solve_system(const Eigen::SparseMatrix<double, Eigen::RowMajor, int>& A, const Eigen::VectorXd& F, const Params& p,
+                             Result& res) {
+  const auto t0 = std::chrono::steady_clock::now();
   const bool direct = p.solver == "ldlt" || (p.solver == "auto" && res.unknowns <= p.direct_limit);
   Eigen::VectorXd x;
   bool ok = true;
@@ -598,15 +754,93 @@ Result solve_unit(const std::vector<Vec3>& centre, const std::vector<double>& ra
   }
   const double fn = F.norm();
   res.residual = ok && fn > 0.0 ? (A * x - F).norm() / fn : (ok ? 0.0 : std::numeric_limits<double>::infinity());
-  res.solve_seconds = std::chrono::duration<double>(clock::now() - t1).count();
+  res.solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!ok || !(res.residual <= 10.0 * p.cg_tolerance))
     throw SetupError(std::string("rkpm_matrix: the ") + (direct ? "LDLT" : "conjugate-gradient") + " solve stopped at relative residual " +
                      std::to_string(res.residual) + " after " + std::to_string(res.iterations) + " iterations (cg_tolerance " +
                      std::to_string(p.cg_tolerance) + "): raise cg_max_iterations");
+  return x;
+}
+
+/// Max principal strain of the solved field at every volume point (per unit eps0): total
+/// eps = sym(grad u) and mechanical eps - I; volume-weighted histograms over strain_edges
+/// (m + 1 edges -> m bins, then below / above), means and the negative fractions.
+void strain_statistics(Result& res, const VolumeQuadrature& vq, const Params& p) {
+  const std::vector<double>& e = p.strain_edges;
+  const std::size_t m = e.size() >= 2 ? e.size() - 1 : 0;
+  StrainStatistics& st = res.strain;
+  st.total_histogram.assign(m + 2, 0.0);
+  st.mechanical_histogram.assign(m + 2, 0.0);
+  auto bin = [&](double v) -> std::size_t {
+    if (v < e.front()) return m;
+    if (v >= e.back()) return m + 1;
+    return static_cast<std::size_t>(std::upper_bound(e.begin(), e.end(), v) - e.begin()) - 1;
+  };
+  double vol = 0.0, mt = 0.0, mm = 0.0, nt = 0.0, nm = 0.0;
+  for (const QPoint& q : vq.points) {
+    const Eigen::Matrix3d G = res.displacement_gradient(q.x);
+    const Eigen::Matrix3d eps = 0.5 * (G + G.transpose());
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+    es.computeDirect(eps, Eigen::EigenvaluesOnly);
+    const double total = es.eigenvalues().maxCoeff(), mech = total - 1.0;
+    vol += q.w;
+    mt += q.w * total;
+    mm += q.w * mech;
+    if (total < 0.0) nt += q.w;
+    if (mech < 0.0) nm += q.w;
+    if (m > 0) {
+      st.total_histogram[bin(total)] += q.w;
+      st.mechanical_histogram[bin(mech)] += q.w;
+    }
+  }
+  if (vol > 0.0) {
+    for (double& h : st.total_histogram) h /= vol;
+    for (double& h : st.mechanical_histogram) h /= vol;
+    st.total_mean = mt / vol;
+    st.mechanical_mean = mm / vol;
+    st.total_negative_fraction = nt / vol;
+    st.mechanical_negative_fraction = nm / vol;
+  }
+  st.evaluated = true;
+}
+
+}  // namespace
+
+Result solve_unit(const std::vector<Vec3>& centre, const std::vector<double>& radius, const Domain& domain, const Params& p) {
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  check_params(centre, radius, domain, p);
+  const Material mat(p);
+  const Frame f = fit_frame(domain, p);
+  Result res;
+  res.approximation = Approximation(f.lo, f.cells, f.h, p.support_factor);
+  Approximation& ap = res.approximation;
+  const SphereGrid spheres(centre, radius);
+  const VolumeQuadrature vq = volume_quadrature(f, spheres, p);
+  keep_supported_nodes(ap, vq);
+  const std::size_t nn = ap.nodes(), ns = centre.size();
+  if (nn == 0) throw SetupError("rkpm_matrix: no volume quadrature point in the domain");
+  res.volume_points = vq.points.size();
+  BlockMatrix K = sparsity(ap, centre, radius);
+  Eigen::VectorXd F = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * (nn + ns)));
+  res.quadrature_volume = assemble_volume(K, F, ap, vq, mat);
+  assemble_surface(K, ap, f, spheres, centre, radius, p, res);
+  assemble_boundary(K, ap, f, spheres, ns, p, mat);
+  res.assembly_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+
+  const Eigen::SparseMatrix<double, Eigen::RowMajor, int> A = K.matrix();
+  res.unknowns = static_cast<std::size_t>(A.rows());
+  res.nonzeros = static_cast<std::size_t>(A.nonZeros());
+  const Eigen::VectorXd x = solve_system(A, F, p, res);
   res.node_coefficient.resize(nn);
   for (std::size_t i = 0; i < nn; ++i) res.node_coefficient[i] = x.segment<3>(3 * i);
   res.sphere_displacement.resize(ns);
   for (std::size_t I = 0; I < ns; ++I) res.sphere_displacement[I] = x.segment<3>(3 * (nn + I));
+  if (p.strain_statistics) {
+    const auto t2 = clock::now();
+    strain_statistics(res, vq, p);
+    res.strain.seconds = std::chrono::duration<double>(clock::now() - t2).count();
+  }
   return res;
 }
 

@@ -45,37 +45,49 @@
 /// 2.6x slower than Jacobi CG). The relative residual |K x - F| / |F| is reported.
 ///
 /// QUADRATURE (volume). Background cells of edge h / cell_subdivision tile the node grid;
-/// quadrature_order^3 Gauss-Legendre points per cell; a point is kept if it lies in the domain
-/// (box, or ball) and outside every sphere, with its full Gauss weight. Cut cells (crossed by a
-/// sphere surface or the ball boundary) are thus integrated with a staircase error: the
-/// integrated matrix volume differs from the exact one by O(cell size / R) per cut cell
-/// (`Result::quadrature_volume` is reported so it can be compared with the exact volume; the
-/// single-sphere test measures the effect on the displacement field by refining). The RKPM shape
+/// quadrature_order^3 Gauss-Legendre points per cell. A cell wholly in the matrix keeps all its
+/// points; a cell wholly inside a sphere or outside the domain none; a CUT cell (its circumscribed
+/// ball crosses a sphere surface or the ball boundary) is split into eight, recursively, down to
+/// cut_cell_depth levels; at the last level the cut sub-cells keep the Gauss points that lie in
+/// the matrix, with their full weight (staircase). The volume error is thus O(cell / 2^depth)
+/// per cut cell, and the gap between touching fillers is sampled down to h / (cell_subdivision
+/// 2^depth) (`Result::quadrature_volume` is reported against the exact volume). The RKPM shape
 /// functions are rational, so even uncut cells are integrated only approximately; the linear
 /// patch test is nevertheless passed exactly at ANY quadrature, because the reproduced linear
 /// field has the exact constant strain at every quadrature point (stress-free under eps_TH).
-/// QUADRATURE (surface). Each sphere carries `surface_points` points: a Fibonacci spiral on the
-/// upper half (z_k = 1 - (2k+1)/n, azimuth k x golden angle, k < n/2) and their antipodes, all
-/// with the equal weight 4 pi R^2 / n. The antipodal pairing integrates every odd polynomial
-/// exactly (and keeps an inversion-symmetric problem symmetric: the centred sphere stays at
-/// U = 0); even moments carry an O(1/n) error (n = 32: the second moment of a unit sphere is
-/// 4 pi / 3 within 0.1 %). Points outside the domain or inside another sphere are dropped
-/// (no polymer there: the overlap of touching pairs, the part of a sphere sticking out of the box).
-///
+/// QUADRATURE (surface). Sphere I carries n_I = max(surface_points, 4 pi R_I^2 / (surface_spacing
+/// h)^2) points (even): a Fibonacci spiral on the upper half (z_k = 1 - (2k+1)/n, azimuth k x
+/// golden angle, k < n/2) and their antipodes, all with the equal weight 4 pi R^2 / n. The
+/// antipodal pairing integrates every odd polynomial exactly (and keeps an inversion-symmetric
+/// problem symmetric: the centred sphere stays at U = 0); even moments carry an O(1/n) error
+/// (n = 32: the second moment of a unit sphere is 4 pi / 3 within 0.1 %). The spacing rule keeps
+/// the penalty integral resolved as h shrinks below R (a fixed 32 points at h = 0.5 R would leave
+/// nodal supports between surface points). Points outside the domain or inside another sphere
+/// are dropped (no polymer there: the overlap of touching pairs, the part of a sphere sticking
+/// out of the box).
 /// NODES. Grid lo + h (i, j, k), h = edge / round(edge / node_spacing) (the box edges are node
 /// planes; the ball uses its bounding cube). A node is kept only if its support holds at least
 /// one volume quadrature point (a node deep inside a sphere would have an empty row). Node count
 /// for a 70 R box at node_spacing = 3 R: 24^3 = 13 824 (paper: 12 000).
 ///
-/// ESSENTIAL CONDITIONS (not given by the paper; note §1.2 "free expansion with rigid-body modes
-/// removed"). The load is self-equilibrated (sum_i F_i = int 3K grad(sum phi_i) = 0; the moment
-/// vanishes likewise by linear consistency), so a statically determinate pin adds no reaction
-/// and leaves the free-expansion solution unchanged. Pin: beta |u(c)|^2 / 2 at the domain centre
-/// c (beta = pin_penalty E h): removes the three translations. Without spheres the three
-/// rotations are also free and are pinned the 3-2-1 way: u_y and u_z at c + a e_x, u_z at
-/// c + a e_y (a = a quarter of the domain edge). With spheres a rigid rotation of the whole
-/// is NOT a null mode (the spheres do not rotate, so it strains the penalty layer): no rotation
-/// pin then (it would add reactions).
+/// ESSENTIAL CONDITIONS (`boundary`; the paper writes a penalty beta on a part Gamma_u of the
+/// boundary with data u-bar and gives neither). "free" (default; note §1.2 "free expansion with
+/// rigid-body modes removed"; Fig. 7's inset, the effective phi falling by ~1.6 points at
+/// eps0 ~ 3 %, needs a composite that expands): the load is self-equilibrated (sum_i F_i =
+/// int 3K grad(sum phi_i) = 0; the moment vanishes likewise by linear consistency), so a
+/// statically determinate pin adds no reaction and leaves the free-expansion solution unchanged.
+/// Pin: beta |u(c)|^2 / 2 at the domain centre c (beta = pin_penalty E h): removes the three
+/// translations. Without spheres the three rotations are also free and are pinned the 3-2-1
+/// way: u_y and u_z at c + a e_x, u_z at c + a e_y (a = a quarter of the domain edge). With
+/// spheres a rigid rotation of the whole is NOT a null mode (the spheres do not rotate, so it
+/// strains the penalty layer): no rotation pin then (it would add reactions). Alternatives (box
+/// only): "clamped" beta int_{dBox} |u|^2 dS (u-bar = 0 on all six faces) and "rollers" beta
+/// int_{dBox} (u.n)^2 dS (no normal motion, free sliding), beta = boundary_penalty E / h.
+///
+/// STRAIN FIELD (Fig. 4 of the paper, "distribution of the maximum principal strain"): with
+/// strain_statistics on, the max principal value of the total strain sym(grad u) and of the
+/// mechanical strain sym(grad u) - eps0 I at every volume quadrature point, as volume-weighted
+/// histograms over strain_edges (per unit eps0), with means and negative fractions.
 ///
 /// E and alpha: the displacements depend on alpha / E (and nu), not on E alone.
 #include <array>
@@ -95,13 +107,29 @@ struct Params {
   double support_factor = 2.0;   ///< rho / h [1]
   int quadrature_order = 2;      ///< Gauss points per direction per background cell (1..6)
   int cell_subdivision = 2;      ///< background cells per node spacing, per direction (>= 1)
-  int surface_points = 32;       ///< per sphere, even (>= 2)
+  int cut_cell_depth = 2;        ///< octree levels splitting cut background cells (0: staircase on the cells)
+  int surface_points = 32;       ///< per sphere, even (>= 2): the minimum
+  double surface_spacing = 0.5;  ///< surface point spacing / h [1] (more points than surface_points when h < R)
   double bond_penalty = 100.0;   ///< alpha [Pa/m] (paper: 100 E in its length unit)
   double pin_penalty = 1.0;      ///< beta / (E h) [1]
   double cg_tolerance = 1e-10;   ///< relative residual |K d - F| / |F| (CG stop; checked for LDLT too)
   int cg_max_iterations = 20000;
   std::string solver = "cg_ic";  ///< "cg_ic" (incomplete Cholesky) | "cg" (Jacobi) | "ldlt" | "auto" (LDLT up to direct_limit unknowns, else cg_ic)
   std::size_t direct_limit = 3000;
+  std::string boundary = "free";  ///< "free" (pinned translation) | "clamped" | "rollers" (box faces)
+  double boundary_penalty = 100.0;  ///< beta / (E / h) [1] for clamped / rollers
+  bool strain_statistics = false;   ///< evaluate the max principal strain at every volume point
+  std::vector<double> strain_edges;  ///< histogram bin edges, per unit eps0 [1] (empty: means only)
+};
+
+/// Max principal strain over the matrix volume (per unit eps0; volume-weighted).
+struct StrainStatistics {
+  bool evaluated = false;
+  std::vector<double> total_histogram;       ///< m bins of strain_edges, then below, above [1]
+  std::vector<double> mechanical_histogram;  ///< the same for sym(grad u) - I
+  double total_mean = 0.0, mechanical_mean = 0.0;
+  double total_negative_fraction = 0.0, mechanical_negative_fraction = 0.0;
+  double seconds = 0.0;
 };
 
 /// The matrix domain before the spheres are removed: the box [lo, hi], or, if ball_radius > 0,
@@ -154,6 +182,7 @@ struct Result {
   std::size_t unknowns = 0;
   std::size_t nonzeros = 0;
   double assembly_seconds = 0.0, solve_seconds = 0.0;
+  StrainStatistics strain;                ///< filled if Params::strain_statistics
   /// u(x) per unit eps0 [m] (the RKPM field; inside spheres it is the extension of the field)
   Vec3 displacement(const Vec3& x) const;
   /// grad u (row = component, column = derivative) per unit eps0 [1]

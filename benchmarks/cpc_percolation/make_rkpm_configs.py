@@ -1,0 +1,131 @@
+#!/usr/bin/env python3
+"""Write the seed 002 RKPM switching-strain scenarios (issue 22) from one place.
+
+  make_rkpm_configs.py            writes configs/cpc_ptc_rkpm.json, cpc_ptc_rkpm_variants.json,
+                                  cpc_ptc_rkpm_resolution.json
+
+Choices fixed from the paper's text before any switching run of this stop (issue 22 item 3;
+benchmarks/cpc_percolation/rkpm_results.md gives the reasons):
+  boundary  "free" (translation pinned): Fig. 7's inset has the effective volume fraction falling
+            with eps0, so the composite expands; a clamped box would keep phi fixed
+  alpha     100 E with lengths in units of R (the main text's unit: L = 70, D = 2), alpha R / E = 100;
+            the SI's convergence test (R = 0.1 in a unit cube) has alpha R / E = 10: a variant
+  nu        0.35 (never tuned), with 0.30 and 0.40
+  lambda    35 R (the SM's and Fig. 1's reading, configs/cpc_percolation_segregated_radius.json);
+            70 R (the main text's lambda D reading) as the alternative
+Resolution as the paper's production runs: node spacing 3 R (24^3 grid nodes in the ~74 R cube,
+paper 12,000 nodes), support 2 h, 2x2x2 Gauss points in 2^3 cells per node cell, cut cells split
+once (cut_cell_depth 1: at h = 3 R the mean unit opening of a 20 R box at phi = 25 % is 0.09104 /
+0.09110 / 0.09107 D at depth 0 / 1 / 2, while depth 2 costs 4.5x the assembly of depth 1), surface
+points every h / 2 (at least 32 per sphere).
+Strain histograms (Fig. 4): max principal strain at eps0 = 1 %, 0.01 % bins from -1.2 % to 1.5 %
+(the mechanical strain of the matrix sits near -0.6 % at h = 3 R).
+"""
+import json
+import os
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+
+EPS0 = [0.0, 0.0025, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.025, 0.0285, 0.03, 0.0315, 0.035, 0.04, 0.05]
+OPEN_EDGES = [round(-0.002 + 0.0002 * k, 6) for k in range(61)]  # -0.2 % .. 1 % of D
+STRAIN_EDGES = [round(-0.012 + 0.0001 * k, 6) for k in range(271)]  # -1.2 % .. 1.5 %
+PRIMARY = {"boundary": "free", "bond_penalty": 100.0, "poisson_ratio": 0.35}
+
+
+def sfx(e):
+    return f"{100 * e:.2f}".replace(".", "p") + "pct"
+
+
+def collect(with_strain):
+    c = ["ptc_strain_springs", "ptc_strain_contacts", "ptc_strain_switching_strain", "ptc_strain_switching_strain_listed",
+         "ptc_strain_opening_mean", "ptc_strain_opening_median", "ptc_strain_opening_negative_fraction",
+         "ptc_strain_solve_residual"]
+    for e in EPS0:
+        c += [f"ptc_strain_coordination_{sfx(e)}", f"ptc_strain_resistivity_{sfx(e)}"]
+    c += ["contact_percolation_coordination", "packing.volume_fraction", "packing.particles", "packing.generation_wall_time_s"]
+    c += [f"ptc_strain_opening_hist_{k:02d}" for k in range(len(OPEN_EDGES) - 1)]
+    c += ["ptc_strain_opening_hist_below", "ptc_strain_opening_hist_above"]
+    if with_strain:
+        c += ["ptc_strain_strain_total_mean", "ptc_strain_strain_mech_mean", "ptc_strain_strain_total_negative_fraction",
+              "ptc_strain_strain_mech_negative_fraction"]
+        for kind in ("total", "mech"):
+            c += [f"ptc_strain_strain_{kind}_hist_{k:02d}" for k in range(len(STRAIN_EDGES) - 1)]
+            c += [f"ptc_strain_strain_{kind}_hist_below", f"ptc_strain_strain_{kind}_hist_above"]
+    return c
+
+
+def stage(name, lam, seeds, box=70.0, node_spacing=3.0, with_strain=True, **rk):
+    mod = {"high": "x_lo", "low": "x_hi", "touch_tolerance": 0.002, "break_gap": 0.002, "opening_strain": 0.01,
+           "eps0_values": EPS0, "opening_histogram_edges": OPEN_EDGES, "matrix_model": "rkpm",
+           "node_spacing": node_spacing, "support_factor": 2.0, "quadrature_order": 2, "cell_subdivision": 2,
+           "cut_cell_depth": 1, "surface_points": 32, "surface_spacing": 0.5, "cg_tolerance": 1e-10,
+           "cg_max_iterations": 20000}
+    mod.update(PRIMARY)
+    mod.update(rk)
+    if with_strain:
+        mod["strain_statistics"] = True
+        mod["strain_histogram_edges"] = STRAIN_EDGES
+    return {"name": name, "type": "cpc_fillers",
+            "generator": {"radius": 1.0, "box_length": box, "volume_fraction": 0.25, "aggregation_lambda": lam},
+            "dt": 1.0, "stop": {"steps": 0}, "sets": ["x_lo", "x_hi"],
+            "modules": {"contact_percolation": {"high": "x_lo", "low": "x_hi", "touch_tolerance": 0.002},
+                        "ptc_strain": mod},
+            "sweep": {"seeds": list(seeds), "collect": collect(with_strain)}}
+
+
+def scenario(name, description, stages):
+    return {"name": name, "description": description, "seed": 1,
+            "materials": [{"name": "filler", "density": 1000}],
+            "contact": {"law": "hertz_mindlin",
+                        "params": {"youngs_modulus": 1e6, "poisson_ratio": 0.3, "restitution": 0.5, "friction": 0.0}},
+            "particle_sets": {"x_lo": {"type": "touching_wall", "wall": "xlo", "tolerance": 0.0},
+                              "x_hi": {"type": "touching_wall", "wall": "xhi", "tolerance": 0.0}},
+            "stages": stages}
+
+
+COMMON = ("Seed 002 switching strain with the paper's continuum matrix (ptc_strain matrix_model rkpm: meshless RKPM, "
+          "linear basis, quartic spline, support 2 h, 2x2x2 Gauss points in 2^3 cells per node cell, cut cells split "
+          "once, surface points every h / 2) on cpc_fillers configurations (phi = 25 %). Choices fixed from the text "
+          "before the runs (benchmarks/cpc_percolation/make_rkpm_configs.py): free expansion, alpha = 100 E with "
+          "R = 1, nu = 0.35, lambda = 35 R (the SM's reading; 70 R = the main text's lambda D as alternative). "
+          "Break rule: a touching contact (gap <= 0.1 % of D) stops conducting when its gap exceeds 0.1 % of D. "
+          "Histograms: contact openings eps0 delta / D and the max principal strain of the matrix (volume-weighted) "
+          "at eps0 = 1 %. Results: benchmarks/cpc_percolation/rkpm_results.md.")
+
+
+def main():
+    seeds = range(1, 5)
+    primary = [stage(f"L70_lambda{lam:g}_rkpm", lam, seeds) for lam in (0.0, 35.0, 70.0)]
+    variants = []
+    for lam in (0.0, 35.0):
+        for tag, rk in (("nu0.30", {"poisson_ratio": 0.30}), ("nu0.40", {"poisson_ratio": 0.40}),
+                        ("alpha10", {"bond_penalty": 10.0}), ("clamped", {"boundary": "clamped"}),
+                        ("rollers", {"boundary": "rollers"})):
+            variants.append(stage(f"L70_lambda{lam:g}_rkpm_{tag}", lam, seeds, with_strain=False, **rk))
+    resolution = []
+    for h in (3.0, 2.0, 1.5, 1.2, 1.0):
+        resolution.append(stage(f"L24_lambda0_rkpm_h{h:g}", 0.0, seeds, box=24.0, node_spacing=h, with_strain=False))
+    out = {
+        "cpc_ptc_rkpm.json": scenario(
+            "cpc_ptc_rkpm", COMMON + " Node spacing 3 R (24^3 grid nodes in the ~74 R cube; paper: 12,000 nodes), "
+            "L = 70 R, 4 configurations per dispersion.", primary),
+        "cpc_ptc_rkpm_variants.json": scenario(
+            "cpc_ptc_rkpm_variants", COMMON + " One choice changed at a time: nu 0.30 / 0.40, alpha = 10 E (the SI "
+            "test's unit), clamped faces, roller faces; lambda 0 and 35 R, the same 4 configurations.", variants),
+        "cpc_ptc_rkpm_resolution.json": scenario(
+            "cpc_ptc_rkpm_resolution", COMMON + " Resolution study in a 24 R box (lambda = 0): node spacing 3, 2, "
+            "1.5, 1.2, 1 R on the same 4 configurations.", resolution),
+    }
+    for name, sc in out.items():
+        path = os.path.join(ROOT, "configs", name)
+        tmp = path + ".tmp"
+        with open(tmp, "w") as f:
+            json.dump(sc, f, indent=1)
+            f.write("\n")
+        os.replace(tmp, path)
+        print("wrote", path, len(sc["stages"]), "stages")
+
+
+if __name__ == "__main__":
+    main()
