@@ -35,6 +35,18 @@ COLLECT = ["contact_percolation_spanning", "contact_percolation_spanning_cluster
            "packing.generation_wall_time_s"]
 
 
+def scenario(name, description, stages):
+    """The scenario around cpc_fillers stages: a filler material, an inert contact law (the stages
+    freeze the mechanics) and the electrode sets on the faces x = 0 and x = L."""
+    return {"name": name, "description": description, "seed": 1,
+            "materials": [{"name": "filler", "density": 1000}],
+            "contact": {"law": "hertz_mindlin",
+                        "params": {"youngs_modulus": 1e6, "poisson_ratio": 0.3, "restitution": 0.5, "friction": 0.0}},
+            "particle_sets": {"x_lo": {"type": "touching_wall", "wall": "xlo", "tolerance": 0.0},
+                              "x_hi": {"type": "touching_wall", "wall": "xhi", "tolerance": 0.0}},
+            "stages": stages}
+
+
 def make_config(a):
     phis = [float(x) for x in a.phis.split(",")]
     seeds = list(range(1, a.seeds + 1))
@@ -53,21 +65,13 @@ def make_config(a):
                 "contact_percolation": {"high": "x_lo", "low": "x_hi", "touch_tolerance": tol,
                                         "cluster_resistances": True}},
             "sweep": {"seeds": seeds, "collect": COLLECT}})
-    cfg = {
-        "name": a.name,
-        "description": ("Seed 002 (Barbieri et al.) percolation of rigid monodisperse fillers: cpc_fillers configurations "
-                        "(contact algorithm gamma = 0.4, largest relative overlap <= 1e-3, open box; aggregation lambda = %g R) "
-                        "in a cube of L = %g R (lambda = 70 R = 35 D reproduces the paper's segregated phi_c ~ 4 %%), %d configurations (seeds) per volume fraction; electrodes = spheres reaching "
-                        "the faces x = 0 and x = L; touching = gap <= 0.1 %% of D; unit conductances; rho = R_eq L. "
-                        "Analyse with tools/plot_cpc.py analyse OUT. Written by tools/plot_cpc.py config."
-                        % (a.lam, a.box, a.seeds)),
-        "seed": 1,
-        "materials": [{"name": "filler", "density": 1000}],
-        "contact": {"law": "hertz_mindlin",
-                    "params": {"youngs_modulus": 1e6, "poisson_ratio": 0.3, "restitution": 0.5, "friction": 0.0}},
-        "particle_sets": {"x_lo": {"type": "touching_wall", "wall": "xlo", "tolerance": 0.0},
-                          "x_hi": {"type": "touching_wall", "wall": "xhi", "tolerance": 0.0}},
-        "stages": stages}
+    cfg = scenario(a.name,
+                   "Seed 002 (Barbieri et al.) percolation of rigid monodisperse fillers: cpc_fillers configurations "
+                   "(contact algorithm gamma = 0.4, largest relative overlap <= 1e-3, open box; aggregation lambda = %g R) "
+                   "in a cube of L = %g R, %d configurations (seeds) per volume fraction; electrodes = spheres reaching "
+                   "the faces x = 0 and x = L; touching = gap <= 0.1 %% of D; unit conductances; rho = R_eq L. "
+                   "Analyse with tools/plot_cpc.py analyse OUT. Written by tools/plot_cpc.py config."
+                   % (a.lam, a.box, a.seeds), stages)
     # Compact layout: one line per key of the top level and of each stage.
     lines = ["{"]
     top = [(k, v) for k, v in cfg.items() if k != "stages"]

@@ -23,9 +23,12 @@ Strain histograms (Fig. 4): max principal strain at eps0 = 1 %, 0.01 % bins from
 """
 import json
 import os
+import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from plot_cpc import scenario  # noqa: E402  (the scenario shell of every cpc_fillers config)
 
 EPS0 = [0.0, 0.0025, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.025, 0.0285, 0.03, 0.0315, 0.035, 0.04, 0.05]
 OPEN_EDGES = [round(-0.002 + 0.0002 * k, 6) for k in range(61)]  # -0.2 % .. 1 % of D
@@ -72,16 +75,6 @@ def stage(name, lam, seeds, box=70.0, node_spacing=3.0, with_strain=True, **rk):
             "modules": {"contact_percolation": {"high": "x_lo", "low": "x_hi", "touch_tolerance": 0.002},
                         "ptc_strain": mod},
             "sweep": {"seeds": list(seeds), "collect": collect(with_strain)}}
-
-
-def scenario(name, description, stages):
-    return {"name": name, "description": description, "seed": 1,
-            "materials": [{"name": "filler", "density": 1000}],
-            "contact": {"law": "hertz_mindlin",
-                        "params": {"youngs_modulus": 1e6, "poisson_ratio": 0.3, "restitution": 0.5, "friction": 0.0}},
-            "particle_sets": {"x_lo": {"type": "touching_wall", "wall": "xlo", "tolerance": 0.0},
-                              "x_hi": {"type": "touching_wall", "wall": "xhi", "tolerance": 0.0}},
-            "stages": stages}
 
 
 COMMON = ("Seed 002 switching strain with the paper's continuum matrix (ptc_strain matrix_model rkpm: meshless RKPM, "

@@ -523,6 +523,15 @@ BlockMatrix sparsity(const Approximation& ap, const std::vector<Vec3>& centre, c
   return BlockMatrix(std::move(cols));
 }
 
+/// The local (per cell or per sphere) index of node `id`, appended to lnodes on first use.
+int local_index(std::vector<int>& local, std::vector<std::int64_t>& lnodes, std::int64_t id) {
+  if (local[id] < 0) {
+    local[id] = static_cast<int>(lnodes.size());
+    lnodes.push_back(id);
+  }
+  return local[id];
+}
+
 /// K += int_Omega B^T C B dV and F += int_Omega 3K grad(phi) dV, background cell by cell (dense
 /// local blocks, then one scatter per cell). Returns the integrated matrix volume.
 double assemble_volume(BlockMatrix& K, Eigen::VectorXd& F, const Approximation& ap, const VolumeQuadrature& vq, const Material& m) {
@@ -550,11 +559,7 @@ double assemble_volume(BlockMatrix& K, Eigen::VectorXd& F, const Approximation& 
       PointData pd;
       pd.w = qp.w;
       for (std::size_t a = 0; a < ids.size(); ++a) {
-        if (local[ids[a]] < 0) {
-          local[ids[a]] = static_cast<int>(lnodes.size());
-          lnodes.push_back(ids[a]);
-        }
-        pd.l.push_back(local[ids[a]]);
+        pd.l.push_back(local_index(local, lnodes, ids[a]));
         pd.g.push_back(grad[a]);
         F.segment<3>(3 * ids[a]) += qp.w * m.threeK * grad[a];
       }
@@ -627,11 +632,7 @@ void assemble_surface(BlockMatrix& K, const Approximation& ap, const Frame& f, c
         throw SetupError("rkpm_matrix: singular moment matrix at a surface point of sphere " + std::to_string(I) + " (raise support_factor)");
       SP sp;
       for (std::size_t a = 0; a < ids.size(); ++a) {
-        if (local[ids[a]] < 0) {
-          local[ids[a]] = static_cast<int>(lnodes.size());
-          lnodes.push_back(ids[a]);
-        }
-        sp.l.push_back(local[ids[a]]);
+        sp.l.push_back(local_index(local, lnodes, ids[a]));
         sp.f.push_back(phi[a]);
       }
       area += w;
