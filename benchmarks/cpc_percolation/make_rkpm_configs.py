@@ -2,7 +2,7 @@
 """Write the seed 002 RKPM switching-strain scenarios (issue 22) from one place.
 
   make_rkpm_configs.py            writes configs/cpc_ptc_rkpm.json, cpc_ptc_rkpm_variants.json,
-                                  cpc_ptc_rkpm_resolution.json
+                                  cpc_ptc_rkpm_diagnostics.json, cpc_ptc_rkpm_resolution.json
 
 Choices fixed from the paper's text before any switching run of this stop (issue 22 item 3;
 benchmarks/cpc_percolation/rkpm_results.md gives the reasons):
@@ -99,6 +99,9 @@ def main():
     resolution = []
     for h in (3.0, 2.0, 1.5, 1.2, 1.0):
         resolution.append(stage(f"L24_lambda0_rkpm_h{h:g}", 0.0, range(1, 3), box=24.0, node_spacing=h, with_strain=False))
+    diagnostics = [stage(f"L70_lambda0_rkpm_{tag}_strain", 0.0, [1], **rk)
+                   for tag, rk in (("clamped", {"boundary": "clamped"}), ("rollers", {"boundary": "rollers"}),
+                                   ("alpha10", {"bond_penalty": 10.0}))]
     out = {
         "cpc_ptc_rkpm.json": scenario(
             "cpc_ptc_rkpm", COMMON + " Node spacing 3 R (24^3 grid nodes in the ~74 R cube; paper: 12,000 nodes), "
@@ -106,6 +109,9 @@ def main():
         "cpc_ptc_rkpm_variants.json": scenario(
             "cpc_ptc_rkpm_variants", COMMON + " One choice changed at a time: nu 0.30 / 0.40, alpha = 10 E (the SI "
             "test's unit), clamped faces, roller faces; lambda 0 and 35 R, the same 4 configurations.", variants),
+        "cpc_ptc_rkpm_diagnostics.json": scenario(
+            "cpc_ptc_rkpm_diagnostics", COMMON + " Diagnostics of the alternatives: the matrix strain histogram (Fig. 4) "
+            "with clamped faces, roller faces and alpha = 10 E, lambda = 0, configuration 1.", diagnostics),
         "cpc_ptc_rkpm_resolution.json": scenario(
             "cpc_ptc_rkpm_resolution", COMMON + " Resolution study in a 24 R box (lambda = 0): node spacing 3, 2, "
             "1.5, 1.2, 1 R on the same 2 configurations.", resolution),
