@@ -649,6 +649,7 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
     errors.push_back({path + "/dt_fraction", "give either dt or dt_fraction, not both"});
   // Modules
   r["modules"] = json::object();
+  const std::size_t errors_before_modules = errors.size();
   if (js.contains("modules")) {
     if (!js["modules"].is_object()) errors.push_back({path + "/modules", "expected an object {module name: {params}}, found " + describe(js["modules"])});
     else
@@ -913,7 +914,11 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
     r["snapshots"] = rs;
   }
   ctx.columns.reset();
-  if (st.from_snapshot.empty()) ctx.columns = stage_columns(st, ctx.wall_names, ctx.has_bond_law);
+  // A module that failed to build has no columns: the stage's columns are then unknown and the
+  // checks against them (snapshot column, sweep collect) are left out rather than reported for
+  // every column of the failed module.
+  const bool modules_built = errors.size() == errors_before_modules || !js.contains("modules");
+  if (st.from_snapshot.empty() && modules_built) ctx.columns = stage_columns(st, ctx.wall_names, ctx.has_bond_law);
   if (st.snapshots && ctx.columns && js["snapshots"].is_object() && js["snapshots"].contains("column") &&
       js["snapshots"]["column"].is_string() && !st.snapshots->column.empty()) {
     const std::string bad = unknown_column(st.snapshots->column, *ctx.columns);

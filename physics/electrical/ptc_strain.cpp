@@ -20,50 +20,86 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t kFixed = 8;  // columns before the per-eps0 block
 
+/// "all" or a comma-separated list of box faces -> the face names (checked).
+std::vector<std::string> face_list(const std::string& text) {
+  if (text == "all") return {"x_lo", "x_hi", "y_lo", "y_hi", "z_lo", "z_hi"};
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string face = text.substr(start, comma - start);
+    if (face != "x_lo" && face != "x_hi" && face != "y_lo" && face != "y_hi" && face != "z_lo" && face != "z_hi")
+      throw SetupError("ptc_strain: boundary_faces must be \"all\" or a comma-separated list of x_lo, x_hi, y_lo, y_hi, z_lo, "
+                       "z_hi, found \"" + text + "\"");
+    out.push_back(face);
+    start = comma + 1;
+  }
+  return out;
+}
+
 }  // namespace
 
+/// The column suffix of a value ("%.2f" with 'p' for the point, then `unit`), checked unique.
+bool add_suffix(double v, const char* format, std::set<std::string>& seen, std::vector<std::string>& out) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, v);
+  std::string sfx(buf);
+  std::replace(sfx.begin(), sfx.end(), '.', 'p');
+  out.push_back(sfx);
+  return seen.insert(sfx).second;
+}
+
+/// Edges of a histogram: none, or >= 2 strictly increasing.
+void check_edges(const std::vector<double>& e, const std::string& path, std::vector<Diagnostic>& errors) {
+  if (e.size() == 1) errors.push_back({path, "needs at least two edges (or none), found one"});
+  for (std::size_t k = 1; k < e.size(); ++k)
+    if (!(e[k] > e[k - 1])) {
+      errors.push_back({path, "must increase strictly, found " + std::to_string(e[k - 1]) + " then " + std::to_string(e[k])});
+      break;
+    }
+}
+
 PtcStrain::PtcStrain(const Params& p) : p_(p) {
-  if (p_.eps0_values.empty()) throw SetupError("ptc_strain: eps0_values is empty");
+  // Every consistency problem at once, with its path relative to the module (the loader prefixes it).
+  std::vector<Diagnostic> errors;
   std::set<std::string> seen;
+  if (p_.eps0_values.empty()) errors.push_back({"/eps0_values", "expected at least one eps0, found none"});
   for (double e : p_.eps0_values) {
-    if (!(e >= 0.0) || !std::isfinite(e)) throw SetupError("ptc_strain: eps0_values must be finite and >= 0");
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.2f", 100.0 * e);
-    std::string sfx(buf);
-    std::replace(sfx.begin(), sfx.end(), '.', 'p');
-    sfx += "pct";
-    if (!seen.insert(sfx).second) throw SetupError("ptc_strain: two eps0_values round to the same column " + sfx + " (0.01 % resolution)");
-    suffix_.push_back(sfx);
+    if (!(e >= 0.0) || !std::isfinite(e)) errors.push_back({"/eps0_values", "must be finite and >= 0, found " + std::to_string(e)});
+    else if (!add_suffix(100.0 * e, "%.2fpct", seen, suffix_))
+      errors.push_back({"/eps0_values", "two values round to the same column " + suffix_.back() + " (0.01 % resolution)"});
   }
   if (p_.matrix_model != "bonded" && p_.matrix_model != "rkpm")
-    throw SetupError("ptc_strain: matrix_model must be \"bonded\" or \"rkpm\", found \"" + p_.matrix_model + "\"");
-  const auto& he = p_.opening_histogram_edges;
-  if (he.size() == 1) throw SetupError("ptc_strain: opening_histogram_edges needs at least two edges (or none)");
-  for (std::size_t k = 1; k < he.size(); ++k)
-    if (!(he[k] > he[k - 1])) throw SetupError("ptc_strain: opening_histogram_edges must increase strictly");
+    errors.push_back({"/matrix_model", "must be \"bonded\" or \"rkpm\", found \"" + p_.matrix_model + "\""});
+  check_edges(p_.opening_histogram_edges, "/opening_histogram_edges", errors);
   if (p_.strain_statistics && p_.matrix_model != "rkpm")
-    throw SetupError("ptc_strain: strain_statistics needs matrix_model \"rkpm\" (the bonded network has no strain field)");
-  const auto& se = p_.strain_histogram_edges;
-  if (se.size() == 1) throw SetupError("ptc_strain: strain_histogram_edges needs at least two edges (or none)");
-  for (std::size_t k = 1; k < se.size(); ++k)
-    if (!(se[k] > se[k - 1])) throw SetupError("ptc_strain: strain_histogram_edges must increase strictly");
-  if (!se.empty() && !(p_.opening_strain > 0.0)) throw SetupError("ptc_strain: strain_histogram_edges need opening_strain > 0");
-  if (p_.surface_points % 2 != 0) throw SetupError("ptc_strain: surface_points must be even (antipodal pairs)");
+    errors.push_back({"/strain_statistics", "needs matrix_model \"rkpm\" (the bonded network has no strain field)"});
+  check_edges(p_.strain_histogram_edges, "/strain_histogram_edges", errors);
+  if (!p_.strain_histogram_edges.empty() && !(p_.opening_strain > 0.0))
+    errors.push_back({"/opening_strain", "strain_histogram_edges need opening_strain > 0, found " + std::to_string(p_.opening_strain)});
+  try {
+    face_list(p_.boundary_faces);
+  } catch (const SetupError& e) {
+    errors.push_back({"/boundary_faces", e.what()});
+  }
+  if (p_.surface_points % 2 != 0)
+    errors.push_back({"/surface_points", "must be even (antipodal pairs), found " + std::to_string(p_.surface_points)});
   law_ = ptc::ThermalStrainLaw{p_.expansion_coefficient,
                               p_.expansion_coefficient_melt > 0.0 ? p_.expansion_coefficient_melt : p_.expansion_coefficient,
                               p_.reference_temperature, p_.melting_temperature, p_.melting_strain, p_.melting_width};
   if (!p_.temperatures.empty()) {
-    ptc::validate(law_);
+    try {
+      ptc::validate(law_);
+    } catch (const SetupError& e) {
+      errors.push_back({"", e.what()});
+    }
     for (double T : p_.temperatures) {
-      if (!(T > 0.0) || !std::isfinite(T)) throw SetupError("ptc_strain: temperatures must be finite and > 0 K");
-      char buf[64];
-      std::snprintf(buf, sizeof buf, "T%.2fK", T);
-      std::string sfx(buf);
-      std::replace(sfx.begin(), sfx.end(), '.', 'p');
-      if (!seen.insert(sfx).second) throw SetupError("ptc_strain: two temperatures round to the same column " + sfx + " (0.01 K resolution)");
-      tsuffix_.push_back(sfx);
+      if (!(T > 0.0) || !std::isfinite(T)) errors.push_back({"/temperatures", "must be finite and > 0 K, found " + std::to_string(T)});
+      else if (!add_suffix(T, "T%.2fK", seen, tsuffix_))
+        errors.push_back({"/temperatures", "two temperatures round to the same column " + tsuffix_.back() + " (0.01 K resolution)"});
     }
   }
+  if (!errors.empty()) throw ConfigError(std::move(errors));
   held_.assign(kFixed + 3 * suffix_.size() + histogram_columns() + strain_columns() + (tsuffix_.empty() ? 0 : 1 + 4 * tsuffix_.size()), kNaN);
 }
 
@@ -124,6 +160,9 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
   s.add("boundary", &P::boundary).choices({"free", "clamped", "rollers"})
       .doc("rkpm: free expansion (translation pinned), clamped faces (u = 0) or rollers (u.n = 0) by penalty");
   s.add("boundary_penalty", &P::boundary_penalty).positive().doc("rkpm: clamped / rollers penalty beta / (E / h)");
+  s.add("boundary_faces", &P::boundary_faces)
+      .doc("rkpm: the box faces held by clamped / rollers: \"all\" or a comma-separated list of x_lo, x_hi, y_lo, y_hi, "
+           "z_lo, z_hi (e.g. \"z_lo\": a sample held on one face)");
   s.add("strain_statistics", &P::strain_statistics)
       .doc("rkpm: max principal strain of the matrix at every volume quadrature point (means, negative fractions)");
   s.add("strain_histogram_edges", &P::strain_histogram_edges)
@@ -180,6 +219,7 @@ PtcStrain::UnitResult PtcStrain::unit_contacts(const State& s) const {
   rp.pin_penalty = p_.pin_penalty;
   rp.boundary = p_.boundary;
   rp.boundary_penalty = p_.boundary_penalty;
+  rp.boundary_faces = face_list(p_.boundary_faces);
   rp.cg_tolerance = p_.cg_tolerance;
   rp.cg_max_iterations = static_cast<int>(p_.cg_max_iterations);
   rp.solver = p_.linear_solver;

@@ -119,6 +119,7 @@ class PtcStrain final : public Module {
     double surface_spacing = 0.5;                 ///< rkpm: surface point spacing / h
     std::string boundary = "free";                ///< rkpm: "free" | "clamped" | "rollers"
     double boundary_penalty = 100.0;              ///< rkpm: beta / (E / h) for clamped / rollers
+    std::string boundary_faces = "all";           ///< rkpm: Gamma_u, "all" or comma-separated x_lo, ..., z_hi
     bool strain_statistics = false;               ///< rkpm: max principal strain of the matrix field (Fig. 4)
     std::vector<double> strain_histogram_edges;   ///< [1] bin edges of that strain at eps0 = opening_strain
   };

@@ -396,6 +396,10 @@ void check_params(const std::vector<Vec3>& centre, const std::vector<double>& ra
   if (p.boundary != "free" && domain.ball_radius > 0.0)
     throw SetupError("rkpm_matrix: boundary \"" + p.boundary + "\" needs a box domain (the ball is traction-free)");
   if (!(p.boundary_penalty > 0.0)) throw SetupError("rkpm_matrix: boundary_penalty must be > 0");
+  for (const std::string& face : p.boundary_faces)
+    if (face != "x_lo" && face != "x_hi" && face != "y_lo" && face != "y_hi" && face != "z_lo" && face != "z_hi")
+      throw SetupError("rkpm_matrix: boundary_faces must name x_lo, x_hi, y_lo, y_hi, z_lo or z_hi, found \"" + face + "\"");
+  if (p.boundary != "free" && p.boundary_faces.empty()) throw SetupError("rkpm_matrix: boundary \"" + p.boundary + "\" needs boundary_faces");
   for (std::size_t k = 1; k < p.strain_edges.size(); ++k)
     if (!(p.strain_edges[k] > p.strain_edges[k - 1])) throw SetupError("rkpm_matrix: strain_edges must increase strictly");
   for (double r : radius)
@@ -664,7 +668,7 @@ void assemble_surface(BlockMatrix& K, const Approximation& ap, const Frame& f, c
 
 /// Essential conditions. "free": statically determinate pins (no reaction under the
 /// self-equilibrated thermal load). "clamped" / "rollers": beta int_{dOmega} |u|^2 (resp.
-/// (u.n)^2) dS over the six box faces (u-bar = 0), beta = boundary_penalty E / h, Gauss points on
+/// (u.n)^2) dS over the box faces listed in boundary_faces (u-bar = 0), beta = boundary_penalty E / h, Gauss points on
 /// the background cells of each face (points inside a sphere dropped).
 void assemble_boundary(BlockMatrix& K, const Approximation& ap, const Frame& f, const SphereGrid& sg, std::size_t spheres,
                        const Params& p, const Material& m) {
@@ -699,8 +703,10 @@ void assemble_boundary(BlockMatrix& K, const Approximation& ap, const Frame& f, 
   const double beta = p.boundary_penalty * m.E / f.h;
   const int s = p.cell_subdivision;
   const double hc = f.h / s;
+  static const char* names[3][2] = {{"x_lo", "x_hi"}, {"y_lo", "y_hi"}, {"z_lo", "z_hi"}};
   for (int axis = 0; axis < 3; ++axis)
     for (int side = 0; side < 2; ++side) {
+      if (std::find(p.boundary_faces.begin(), p.boundary_faces.end(), names[axis][side]) == p.boundary_faces.end()) continue;
       const int u = (axis + 1) % 3, v = (axis + 2) % 3;
       Vec3 normal = Vec3::Zero();
       normal[axis] = side ? 1.0 : -1.0;

@@ -81,8 +81,9 @@
 /// way: u_y and u_z at c + a e_x, u_z at c + a e_y (a = a quarter of the domain edge). With
 /// spheres a rigid rotation of the whole is NOT a null mode (the spheres do not rotate, so it
 /// strains the penalty layer): no rotation pin then (it would add reactions). Alternatives (box
-/// only): "clamped" beta int_{dBox} |u|^2 dS (u-bar = 0 on all six faces) and "rollers" beta
-/// int_{dBox} (u.n)^2 dS (no normal motion, free sliding), beta = boundary_penalty E / h.
+/// only): "clamped" beta int_{Gamma_u} |u|^2 dS (u-bar = 0) and "rollers" beta int_{Gamma_u} (u.n)^2 dS
+/// (no normal motion, free sliding), beta = boundary_penalty E / h, Gamma_u = the boundary_faces
+/// (default all six; e.g. {"z_lo"}: a sample held on one face, free elsewhere).
 ///
 /// STRAIN FIELD (Fig. 4 of the paper, "distribution of the maximum principal strain"): with
 /// strain_statistics on, the max principal value of the total strain sym(grad u) and of the
@@ -118,6 +119,7 @@ struct Params {
   std::size_t direct_limit = 3000;
   std::string boundary = "free";  ///< "free" (pinned translation) | "clamped" | "rollers" (box faces)
   double boundary_penalty = 100.0;  ///< beta / (E / h) [1] for clamped / rollers
+  std::vector<std::string> boundary_faces = {"x_lo", "x_hi", "y_lo", "y_hi", "z_lo", "z_hi"};  ///< faces of clamped / rollers
   bool strain_statistics = false;   ///< evaluate the max principal strain at every volume point
   std::vector<double> strain_edges;  ///< histogram bin edges, per unit eps0 [1] (empty: means only)
 };

@@ -587,3 +587,36 @@ TEST_CASE("a calibrating sweep over snapshots: scan, search to the closed form, 
   CHECK(r.err.find("is not bracketed by the scan") != std::string::npos);
   CHECK(read_csv(tmp.path / "B" / "sweep_fit.csv").size() == 5);  // header + the four scan rows
 }
+
+TEST_CASE("a module's own consistency errors carry their paths, all at once, without a cascade of unknown columns",
+          "[config_errors][scenario]") {
+  // ptc_strain checks its parameters in its constructor: every problem is reported with the
+  // module's path, and the sweep's collect columns of that module are not reported as unknown
+  // (the module was not built, so its columns are not known).
+  json scene = load_data("cpc_small.json");
+  CHECK_NOTHROW(sparkdem::io::load_scenario(scene, registry(), SPARKDEM_SOURCE_DIR));
+  json& m = scene["stages"][0]["modules"]["ptc_strain"];
+  m["boundary_faces"] = "z_lo,top";
+  m["strain_histogram_edges"] = {0.01};
+  m["strain_statistics"] = true;  // with the default bonded matrix
+  scene["stages"][0]["sweep"] = {{"seeds", {1, 2}}, {"collect", {"ptc_strain_contacts", "ptc_strain_switching_strain"}}};
+  scene["stages"].erase(1);  // a sweep is a branch: the settling stage after it would have no particles
+  const std::vector<std::pair<std::string, std::string>> expected = {
+      {"/stages/0/modules/ptc_strain/boundary_faces", "found \"z_lo,top\""},
+      {"/stages/0/modules/ptc_strain/strain_histogram_edges", "needs at least two edges"},
+      {"/stages/0/modules/ptc_strain/strain_statistics", "needs matrix_model \"rkpm\""},
+  };
+  try {
+    (void)sparkdem::io::load_scenario(scene, registry(), SPARKDEM_SOURCE_DIR);
+    FAIL("load_scenario accepted an invalid scenario");
+  } catch (const sparkdem::ConfigError& e) {
+    INFO("diagnostics: " << e.what());
+    CHECK(e.diagnostics().size() == expected.size());
+    for (const auto& [path, fragment] : expected) {
+      bool found = false;
+      for (const auto& d : e.diagnostics()) found = found || (d.path == path && d.message.find(fragment) != std::string::npos);
+      INFO("expected " << path << ": ..." << fragment);
+      CHECK(found);
+    }
+  }
+}
