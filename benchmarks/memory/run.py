@@ -6,8 +6,8 @@ usage: benchmarks/memory/run.py [--sparkdem build/sparkdem] [--scenes pour,sps_n
 For each scene: runs `sparkdem run configs/<scene>.json` on one thread and samples the process's
 VmRSS every 0.2 s (with the run.log line current at that moment, to locate the peak); the peak is
 the kernel's maximum resident set size of the process (ru_maxrss); the baseline is that of
-`sparkdem check` on the same scene (the executable, its libraries and
-the parsed scenario). Net bytes per particle = (peak - baseline) / particles, with particles the
+`sparkdem --version` (the executable and its shared libraries; `sparkdem check` would also count
+the particles a lattice generator makes while checking). Net bytes per particle = (peak - baseline) / particles, with particles the
 largest count in summary.json. Writes one CSV row per scene and prints it.
 """
 import argparse
@@ -75,7 +75,7 @@ def main():
     rows = []
     for scene in a.scenes.split(","):
         cfg = os.path.join(REPO, "configs", scene + ".json")
-        base, _, _, rc0 = peak_of([a.sparkdem, "check", cfg])
+        base, _, _, rc0 = peak_of([a.sparkdem, "--version"])
         with tempfile.TemporaryDirectory() as tmp:
             out = os.path.join(tmp, "out")
             peak, where, wall, rc = peak_of([a.sparkdem, "run", cfg, "-o", out, "--threads", "1", "--quiet"],
