@@ -10,7 +10,9 @@ and writes into DIR (default: the first OUTDIR)
                                fraction of closing contacts, switching strain [%] (mean, sample std,
                                min, max), Z at eps0 = 0 / 0.5 / 1 / 2 %, and where the stage computed
                                it the matrix strain at eps0 = 1 % (volume means of the max principal
-                               total / mechanical strain [%], peak bin [%], weight below zero)
+                               total / mechanical strain [%], peak bin [%], weight below zero), the
+                               largest solve residual and the wall time per configuration [s] (the
+                               items' run.log: generation, assembly, solve and the network evaluations)
   rkpm_opening_histogram.csv   bin_lo_pct, bin_hi_pct, one column per stage: fraction of touching
                                contacts per opening bin (percent of D; first / last rows: below /
                                above), averaged over the items
@@ -51,14 +53,29 @@ def stats(xs):
     return m, sd
 
 
+def item_wall_s(item_dir):
+    """The wall time of a sweep item from its run.log ("run completed: N steps, T s wall")."""
+    try:
+        with open(os.path.join(item_dir, "run.log")) as f:
+            for line in f:
+                if "run completed:" in line:
+                    return float(line.split(",")[-1].split()[0])
+    except (OSError, ValueError, IndexError):
+        pass
+    return math.nan
+
+
 def load(outdirs):
     stages = {}
     for outdir in outdirs:
         for path in sorted(glob.glob(os.path.join(outdir, "sweep_*.csv"))):
+            name = os.path.basename(path)[len("sweep_"):-4]
             rows = [r for r in read(path) if r.get("status", "") == "completed"]
             rows = [r for r in rows if not math.isnan(num(r.get("ptc_strain_opening_mean")))]
+            for r in rows:
+                r["wall_s"] = item_wall_s(os.path.join(outdir, "sweep_" + name, r["item"]))
             if rows:
-                stages[os.path.basename(path)[len("sweep_"):-4]] = rows
+                stages[name] = rows
     return stages
 
 
@@ -103,6 +120,7 @@ def summary_row(name, rows):
                     "strain_total_peak_pct": 50 * (STRAIN_EDGES[k] + STRAIN_EDGES[k + 1]),
                     "strain_total_negative": avg(rows, "ptc_strain_strain_total_negative_fraction")})
     row["max_solve_residual"] = max(num(r["ptc_strain_solve_residual"]) for r in rows)
+    row["wall_s_per_configuration"] = sum(num(r["wall_s"]) for r in rows) / len(rows)
     return row
 
 
