@@ -1170,16 +1170,27 @@ StageDef build_sweep_stage(StageContext& ctx, const json& js, const std::string&
     columns = c.columns;
   }
   // Table columns: time-series columns of the stage, or packing.<key> of its generator report.
+  // The first kMaxColumnErrors unknown columns are reported one by one (with a did-you-mean over
+  // the stage's columns); the rest in one line, so a long collect list of a module that lost its
+  // columns (e.g. an option switched off) stays readable and cheap to check.
+  constexpr std::size_t kMaxColumnErrors = 20;
+  std::size_t unknown_reported = 0;
+  std::vector<std::string> more_unknown;
   for (std::size_t q = 0; q < sw->collect.size(); ++q) {
     const std::string& name = sw->collect[q];
     const std::string at = path + "/sweep/collect/" + std::to_string(q);
     if (name.rfind("packing.", 0) == 0) {
       if (!st.generator) errors.push_back({at, "\"" + name + "\": this stage has no generator, so no packing report"});
-    } else if (columns) {
-      const std::string bad = unknown_column(name, *columns);
-      if (!bad.empty()) errors.push_back({at, bad + " (or packing.<key> of a generator's report)"});
+    } else if (columns && std::find(columns->begin(), columns->end(), name) == columns->end()) {
+      if (unknown_reported++ < kMaxColumnErrors)
+        errors.push_back({at, unknown_column(name, *columns) + " (or packing.<key> of a generator's report)"});
+      else
+        more_unknown.push_back(std::to_string(q));
     }
   }
+  if (!more_unknown.empty())
+    errors.push_back({path + "/sweep/collect", std::to_string(more_unknown.size()) + " more entries are not time-series columns of "
+                      "this stage (indices " + list_names(more_unknown) + ")"});
   if (st.snapshots) errors.push_back({path + "/snapshots", "a sweep stage takes no snapshots (take them in the stage it sweeps over)"});
   if (sw->kind == SweepDef::Kind::Snapshots && !st.from_snapshot.empty())
     errors.push_back({path + "/from_snapshot", "a sweep over snapshots starts from each snapshot; remove from_snapshot"});
