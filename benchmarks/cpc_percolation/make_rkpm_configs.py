@@ -13,7 +13,7 @@ benchmarks/cpc_percolation/rkpm_results.md gives the reasons):
   nu        0.35 (never tuned), with 0.30 and 0.40
   lambda    35 R (the SM's and Fig. 1's reading, configs/cpc_percolation_segregated_radius.json);
             70 R (the main text's lambda D reading) as the alternative
-Resolution as the paper's production runs: node spacing 3 R (24^3 grid nodes in the ~74 R cube,
+Resolution as the paper's production runs: node spacing 3 R (26^3 = 17,576 grid nodes in the ~74 R cube;
 paper 12,000 nodes), support 2 h, 2x2x2 Gauss points in 2^3 cells per node cell, cut cells split
 once (cut_cell_depth 1: at h = 3 R the mean unit opening of a 20 R box at phi = 25 % is 0.09104 /
 0.09110 / 0.09107 D at depth 0 / 1 / 2, while depth 2 costs 4.5x the assembly of depth 1), surface
