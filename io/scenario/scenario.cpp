@@ -679,6 +679,10 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
         }
       }
   }
+  // A module that failed to build has no columns: the stage's columns are then unknown and the
+  // checks against them (snapshot column, sweep collect) are left out rather than reported for
+  // every column of the failed module.
+  const bool modules_built = errors.size() == errors_before_modules;
   // Bonds created at the stage start
   if (js.contains("create_bonds")) {
     const std::string bp = path + "/create_bonds";
@@ -914,10 +918,6 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
     r["snapshots"] = rs;
   }
   ctx.columns.reset();
-  // A module that failed to build has no columns: the stage's columns are then unknown and the
-  // checks against them (snapshot column, sweep collect) are left out rather than reported for
-  // every column of the failed module.
-  const bool modules_built = errors.size() == errors_before_modules || !js.contains("modules");
   if (st.from_snapshot.empty() && modules_built) ctx.columns = stage_columns(st, ctx.wall_names, ctx.has_bond_law);
   if (st.snapshots && ctx.columns && js["snapshots"].is_object() && js["snapshots"].contains("column") &&
       js["snapshots"]["column"].is_string() && !st.snapshots->column.empty()) {

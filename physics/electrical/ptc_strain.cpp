@@ -20,23 +20,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t kFixed = 8;  // columns before the per-eps0 block
 
-/// "all" or a comma-separated list of box faces -> the face names (checked).
-std::vector<std::string> face_list(const std::string& text) {
-  if (text == "all") return {"x_lo", "x_hi", "y_lo", "y_hi", "z_lo", "z_hi"};
-  std::vector<std::string> out;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    const std::string face = text.substr(start, comma - start);
-    if (face != "x_lo" && face != "x_hi" && face != "y_lo" && face != "y_hi" && face != "z_lo" && face != "z_hi")
-      throw SetupError("ptc_strain: boundary_faces must be \"all\" or a comma-separated list of x_lo, x_hi, y_lo, y_hi, z_lo, "
-                       "z_hi, found \"" + text + "\"");
-    out.push_back(face);
-    start = comma + 1;
-  }
-  return out;
-}
-
 }  // namespace
 
 /// The column suffix of a value ("%.2f" with 'p' for the point, then `unit`), checked unique.
@@ -78,7 +61,7 @@ PtcStrain::PtcStrain(const Params& p) : p_(p) {
   if (!p_.strain_histogram_edges.empty() && !(p_.opening_strain > 0.0))
     errors.push_back({"/opening_strain", "strain_histogram_edges need opening_strain > 0, found " + std::to_string(p_.opening_strain)});
   try {
-    face_list(p_.boundary_faces);
+    faces_ = rkpm::parse_box_faces(p_.boundary_faces);
   } catch (const SetupError& e) {
     errors.push_back({"/boundary_faces", e.what()});
   }
@@ -219,7 +202,7 @@ PtcStrain::UnitResult PtcStrain::unit_contacts(const State& s) const {
   rp.pin_penalty = p_.pin_penalty;
   rp.boundary = p_.boundary;
   rp.boundary_penalty = p_.boundary_penalty;
-  rp.boundary_faces = face_list(p_.boundary_faces);
+  rp.boundary_faces = faces_;
   rp.cg_tolerance = p_.cg_tolerance;
   rp.cg_max_iterations = static_cast<int>(p_.cg_max_iterations);
   rp.solver = p_.linear_solver;

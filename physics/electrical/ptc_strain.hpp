@@ -149,6 +149,7 @@ class PtcStrain final : public Module {
   ptc::ThermalStrainLaw law_;         ///< eps0(T) (used when p_.temperatures is not empty)
   std::vector<std::string> tsuffix_;  ///< per temperature
   EdgeOutput contacts_;               ///< held per-contact results of the last evaluation
+  std::vector<std::string> faces_;    ///< boundary_faces, parsed
   std::size_t histogram_columns() const {
     return p_.opening_histogram_edges.size() >= 2 ? p_.opening_histogram_edges.size() + 1 : 0;
   }

@@ -75,33 +75,24 @@ class SphereGrid {
   }
   /// Index of a sphere (other than `skip`) with |x - c_I| < R_I (strict), or -1.
   std::int64_t inside(const Vec3& x, std::int64_t skip = -1) const {
-    if (c_.empty()) return -1;
-    int lo[3], hi[3];
-    for (int d = 0; d < 3; ++d) {
-      lo[d] = std::max(0, static_cast<int>(std::floor((x[d] - rmax_ - lo_[d]) / cell_)));
-      hi[d] = std::min(n_[d] - 1, static_cast<int>(std::floor((x[d] + rmax_ - lo_[d]) / cell_)));
-      if (lo[d] > hi[d]) return -1;
-    }
-    for (int i = lo[0]; i <= hi[0]; ++i)
-      for (int j = lo[1]; j <= hi[1]; ++j)
-        for (int k = lo[2]; k <= hi[2]; ++k) {
-          const std::size_t key = index(i, j, k);
-          for (std::size_t q = start_[key]; q < start_[key + 1]; ++q) {
-            const std::int64_t s = item_[q];
-            if (s != skip && (x - c_[s]).squaredNorm() < r_[s] * r_[s]) return s;
-          }
-        }
-    return -1;
+    std::int64_t found = -1;
+    visit_near(x, 0.0, [&](std::int64_t I) {
+      if (I == skip) return false;
+      found = I;
+      return true;
+    });
+    return found;
   }
-  /// Calls f(I) for every sphere whose surface may come within `reach` of x (|x - c_I| < R_I + reach).
+  /// Calls f(I) for every sphere whose surface may come within `reach` of x (|x - c_I| < R_I +
+  /// reach), until f returns true; returns whether it did.
   template <class F>
-  void visit_near(const Vec3& x, double reach, F&& f) const {
-    if (c_.empty()) return;
+  bool visit_near(const Vec3& x, double reach, F&& f) const {
+    if (c_.empty()) return false;
     int lo[3], hi[3];
     for (int d = 0; d < 3; ++d) {
       lo[d] = std::max(0, static_cast<int>(std::floor((x[d] - rmax_ - reach - lo_[d]) / cell_)));
       hi[d] = std::min(n_[d] - 1, static_cast<int>(std::floor((x[d] + rmax_ + reach - lo_[d]) / cell_)));
-      if (lo[d] > hi[d]) return;
+      if (lo[d] > hi[d]) return false;
     }
     for (int i = lo[0]; i <= hi[0]; ++i)
       for (int j = lo[1]; j <= hi[1]; ++j)
@@ -110,9 +101,10 @@ class SphereGrid {
           for (std::size_t q = start_[key]; q < start_[key + 1]; ++q) {
             const std::int64_t sp = item_[q];
             const double rr = r_[sp] + reach;
-            if ((x - c_[sp]).squaredNorm() < rr * rr) f(sp);
+            if ((x - c_[sp]).squaredNorm() < rr * rr && f(sp)) return true;
           }
         }
+    return false;
   }
   const Vec3& centre(std::int64_t I) const { return c_[I]; }
   double radius(std::int64_t I) const { return r_[I]; }
@@ -330,6 +322,20 @@ std::vector<Vec3> sphere_points(int n) {
   return out;
 }
 
+std::vector<std::string> parse_box_faces(const std::string& text) {
+  if (text == "all") return {kBoxFaces.begin(), kBoxFaces.end()};
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    out.push_back(text.substr(start, comma - start));
+    if (std::find(kBoxFaces.begin(), kBoxFaces.end(), out.back()) == kBoxFaces.end())
+      throw SetupError("must be \"all\" or a comma-separated list of x_lo, x_hi, y_lo, y_hi, z_lo, z_hi, found \"" + text + "\"");
+    start = comma + 1;
+  }
+  return out;
+}
+
 std::array<double, 2> single_sphere_closed_form(double a, double b, double E, double nu, double alpha) {
   const double mu = E / (2.0 * (1.0 + nu));
   const double K = E / (3.0 * (1.0 - 2.0 * nu));
@@ -397,7 +403,7 @@ void check_params(const std::vector<Vec3>& centre, const std::vector<double>& ra
     throw SetupError("rkpm_matrix: boundary \"" + p.boundary + "\" needs a box domain (the ball is traction-free)");
   if (!(p.boundary_penalty > 0.0)) throw SetupError("rkpm_matrix: boundary_penalty must be > 0");
   for (const std::string& face : p.boundary_faces)
-    if (face != "x_lo" && face != "x_hi" && face != "y_lo" && face != "y_hi" && face != "z_lo" && face != "z_hi")
+    if (std::find(kBoxFaces.begin(), kBoxFaces.end(), face) == kBoxFaces.end())
       throw SetupError("rkpm_matrix: boundary_faces must name x_lo, x_hi, y_lo, y_hi, z_lo or z_hi, found \"" + face + "\"");
   if (p.boundary != "free" && p.boundary_faces.empty()) throw SetupError("rkpm_matrix: boundary \"" + p.boundary + "\" needs boundary_faces");
   for (std::size_t k = 1; k < p.strain_edges.size(); ++k)
@@ -442,11 +448,11 @@ Cover classify(const Frame& f, const SphereGrid& sg, const Vec3& o, double a) {
     if (d - hd > f.ball_radius) return Cover::Empty;
     if (d + hd > f.ball_radius) state = Cover::Cut;
   }
-  bool empty = false;
-  sg.visit_near(o, hd, [&](std::int64_t I) {
+  const bool empty = sg.visit_near(o, hd, [&](std::int64_t I) {
     const double d = (o - sg.centre(I)).norm();
-    if (d + hd <= sg.radius(I)) empty = true;
-    else if (d - hd < sg.radius(I)) state = Cover::Cut;
+    if (d + hd <= sg.radius(I)) return true;  // wholly inside this sphere
+    if (d - hd < sg.radius(I)) state = Cover::Cut;
+    return false;
   });
   return empty ? Cover::Empty : state;
 }
@@ -703,10 +709,10 @@ void assemble_boundary(BlockMatrix& K, const Approximation& ap, const Frame& f, 
   const double beta = p.boundary_penalty * m.E / f.h;
   const int s = p.cell_subdivision;
   const double hc = f.h / s;
-  static const char* names[3][2] = {{"x_lo", "x_hi"}, {"y_lo", "y_hi"}, {"z_lo", "z_hi"}};
   for (int axis = 0; axis < 3; ++axis)
     for (int side = 0; side < 2; ++side) {
-      if (std::find(p.boundary_faces.begin(), p.boundary_faces.end(), names[axis][side]) == p.boundary_faces.end()) continue;
+      const std::string& face = kBoxFaces[static_cast<std::size_t>(2 * axis + side)];
+      if (std::find(p.boundary_faces.begin(), p.boundary_faces.end(), face) == p.boundary_faces.end()) continue;
       const int u = (axis + 1) % 3, v = (axis + 2) % 3;
       Vec3 normal = Vec3::Zero();
       normal[axis] = side ? 1.0 : -1.0;

@@ -101,6 +101,9 @@
 
 namespace sparkdem::physics::rkpm {
 
+/// The six faces of a box domain, in the order of (axis, side): x_lo, x_hi, y_lo, y_hi, z_lo, z_hi.
+inline const std::array<std::string, 6> kBoxFaces = {"x_lo", "x_hi", "y_lo", "y_hi", "z_lo", "z_hi"};
+
 struct Params {
   double youngs_modulus = 1.0;   ///< E [Pa]
   double poisson_ratio = 0.35;   ///< nu [1] (the paper gives none; 0.35 default, never tuned)
@@ -119,7 +122,7 @@ struct Params {
   std::size_t direct_limit = 3000;
   std::string boundary = "free";  ///< "free" (pinned translation) | "clamped" | "rollers" (box faces)
   double boundary_penalty = 100.0;  ///< beta / (E / h) [1] for clamped / rollers
-  std::vector<std::string> boundary_faces = {"x_lo", "x_hi", "y_lo", "y_hi", "z_lo", "z_hi"};  ///< faces of clamped / rollers
+  std::vector<std::string> boundary_faces{kBoxFaces.begin(), kBoxFaces.end()};  ///< faces of clamped / rollers
   bool strain_statistics = false;   ///< evaluate the max principal strain at every volume point
   std::vector<double> strain_edges;  ///< histogram bin edges, per unit eps0 [1] (empty: means only)
 };
@@ -194,6 +197,9 @@ struct Result {
 /// One solve for eps0 = 1. Throws SetupError on bad parameters, a singular moment matrix, or a
 /// CG solve that does not reach cg_tolerance.
 Result solve_unit(const std::vector<Vec3>& centre, const std::vector<double>& radius, const Domain& domain, const Params& p);
+
+/// "all" or a comma-separated list of kBoxFaces names -> the names; throws SetupError otherwise.
+std::vector<std::string> parse_box_faces(const std::string& text);
 
 /// The equal-weight antipodal Fibonacci point set on the unit sphere (n even): unit vectors.
 std::vector<Vec3> sphere_points(int n);
