@@ -297,8 +297,7 @@ void Simulation::zero_forces() {
 }
 
 void Simulation::pair_forces(double dt) {
-  law_.pair_pass(s_.particles, s_.contacts, dt, time_scale_);
-  s_.contacts.gather(s_.particles.force, s_.particles.torque);
+  law_.pair_forces(s_.particles, s_.contacts, dt, time_scale_);
 }
 
 void Simulation::bond_forces(double dt, Step step) {

@@ -56,6 +56,10 @@ class ContactModel {
   /// Particle-particle pass: fills table.force/torque/overlap rows (does not gather).
   /// `time_scale` = physical seconds per mechanical second (used by kThermal laws only).
   virtual void pair_pass(const ParticleStore& p, ContactTable& table, double dt, double time_scale = 1.0) const = 0;
+  /// pair_pass followed by table.gather into p.force / p.torque. Bit-identical to them when the
+  /// particles' forces and torques are zero on entry (as at the step's contact pass, after
+  /// zero_forces): on one thread the rows are added as they are computed (see the definition).
+  virtual void pair_forces(ParticleStore& p, ContactTable& table, double dt, double time_scale = 1.0) const = 0;
   /// Particle-wall pass over the candidate particles of each wall (those within r + skin at the
   /// last neighbour rebuild); adds forces and torques to the particles; returns wall loads.
   /// Wall history lives in the per-particle field "wall_state/<wall name>".
@@ -138,53 +142,47 @@ class ContactModelT final : public ContactModel {
 
   void pair_pass(const ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0) const override {
     const std::int64_t rows = static_cast<std::int64_t>(t.size());
-    const double* temp = nullptr;
-    if constexpr (is_thermal<Law>())
-      if (p.fields.has("temperature")) temp = p.fields.data("temperature").data();
-    const int w = t.state_width();
-    std::vector<double> gbf;  // per particle, for laws that ask for it
-    if constexpr (requires(const Law& l) { l.grain_boundary_fraction_column(); })
-      if (law_.grain_boundary_fraction_column() >= 0) gbf = grain_boundary_fractions(p, t, law_.grain_boundary_fraction_column());
+    const PassInputs in = pass_inputs(p, t, time_scale);
     auto& F = t.force();
     auto& Ti = t.torque_i();
     auto& Tj = t.torque_j();
-    auto& ov = t.overlap();
 #pragma omp parallel for schedule(static) if (par::worth(rows, par::kHeavy))
-    for (std::int64_t r = 0; r < rows; ++r) {
-      const Index i = t.i(r), j = t.j(r);
-      const Vec3 d = p.position[i] - p.position[j];
-      const double dist = d.norm();
-      const double delta = p.radius[i] + p.radius[j] - dist;
-      ov[r] = delta;
-      double* state = w > 0 ? t.state(r) : nullptr;
-      bool active = delta > 0.0;
-      if constexpr (is_persistent<Law>()) active = active || law_.alive(state);
-      if (!active || dist <= 0.0) {
-        F[r].setZero(); Ti[r].setZero(); Tj[r].setZero();
-        for (int k = 0; k < w; ++k) state[k] = 0.0;
-        continue;
-      }
-      ContactGeometry g;
-      g.n = d / dist;
-      g.overlap = delta;
-      g.r_eff = p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]);
-      g.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
-      g.arm_i = p.radius[i] - 0.5 * delta;
-      g.arm_j = p.radius[j] - 0.5 * delta;
-      g.r_i = p.radius[i];
-      g.r_j = p.radius[j];
-      if constexpr (is_thermal<Law>()) {
-        g.temperature = temp ? 0.5 * (temp[i] + temp[j]) : std::numeric_limits<double>::quiet_NaN();
-        g.time_scale = time_scale;
-      }
-      if (!gbf.empty()) g.gb_fraction = std::max(gbf[i], gbf[j]);
-      const RelativeMotion m = relative_motion(g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
-      const ContactForces f = law_(g, m, dt, state);
-      F[r] = f.force;
-      const Vec3 nxt = g.n.cross(f.tangential);
-      Ti[r] = -g.arm_i * nxt;
-      Tj[r] = -g.arm_j * nxt;
+    for (std::int64_t r = 0; r < rows; ++r)
+      if (!row_forces(p, t, r, dt, in, F[r], Ti[r], Tj[r])) { Ti[r].setZero(); Tj[r].setZero(); }
+  }
+
+  void pair_forces(ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0) const override {
+    const std::int64_t rows = static_cast<std::int64_t>(t.size());
+    if (par::worth(rows, par::kHeavy) && par::threads() > 1) {
+      pair_pass(p, t, dt, time_scale);
+      t.gather(p.force, p.torque);
+      return;
     }
+    // One thread: each live row is added to its two particles as it is computed, in row order.
+    // The sums start from the zeroed forces, so each takes the same operands in the same order as
+    // the gather (bit-identical) without storing and re-reading the torque rows. Consecutive rows
+    // often share i: its running sums stay in registers until i changes (a row never has j == i,
+    // so no other row of the run touches them). The force rows are filled as by pair_pass; the
+    // torque rows are not (only the gather reads them).
+    const PassInputs in = pass_inputs(p, t, time_scale);
+    auto& F = t.force();
+    Index cur = -1;
+    Vec3 fi = Vec3::Zero(), ti = Vec3::Zero(), tri, trj;
+    for (std::int64_t r = 0; r < rows; ++r) {
+      if (!row_forces(p, t, r, dt, in, F[r], tri, trj)) continue;
+      const Index i = t.i(r), j = t.j(r);
+      if (i != cur) {
+        if (cur >= 0) { p.force[cur] = fi; p.torque[cur] = ti; }
+        cur = i;
+        fi = p.force[i];
+        ti = p.torque[i];
+      }
+      fi += F[r];
+      ti += tri;
+      p.force[j] -= F[r];
+      p.torque[j] += trj;
+    }
+    if (cur >= 0) { p.force[cur] = fi; p.torque[cur] = ti; }
   }
 
   WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& cand,
@@ -324,6 +322,67 @@ class ContactModelT final : public ContactModel {
   }
 
  private:
+  /// What every row of one pass reads besides the particles: the temperature field (thermal
+  /// laws), the grain-boundary fractions (laws that ask for them) and the stage's time scale.
+  struct PassInputs {
+    const double* temp = nullptr;
+    std::vector<double> gbf;
+    double time_scale = 1.0;
+    int width = 0;
+  };
+  PassInputs pass_inputs(const ParticleStore& p, const ContactTable& t, double time_scale) const {
+    PassInputs in;
+    in.time_scale = time_scale;
+    in.width = t.state_width();
+    if constexpr (is_thermal<Law>())
+      if (p.fields.has("temperature")) in.temp = p.fields.data("temperature").data();
+    if constexpr (requires(const Law& l) { l.grain_boundary_fraction_column(); })
+      if (law_.grain_boundary_fraction_column() >= 0)
+        in.gbf = grain_boundary_fractions(p, t, law_.grain_boundary_fraction_column());
+    return in;
+  }
+
+  /// The law on row r: writes its overlap, and, for a live pair, the force on i and the torques
+  /// on i and j and returns true; a pair out of contact (and not kept alive by its law) has its
+  /// state cleared and returns false.
+  [[gnu::always_inline]] bool row_forces(const ParticleStore& p, ContactTable& t, std::int64_t r, double dt,
+                                         const PassInputs& in, Vec3& F, Vec3& Ti, Vec3& Tj) const {
+    const Index i = t.i(r), j = t.j(r);
+    const Vec3 d = p.position[i] - p.position[j];
+    const double dist = d.norm();
+    const double delta = p.radius[i] + p.radius[j] - dist;
+    t.overlap()[r] = delta;
+    double* state = in.width > 0 ? t.state(r) : nullptr;
+    bool active = delta > 0.0;
+    if constexpr (is_persistent<Law>()) active = active || law_.alive(state);
+    if (!active || dist <= 0.0) {
+      for (int k = 0; k < in.width; ++k) state[k] = 0.0;
+      F.setZero();  // the row forces are part of the state file and the frame output
+      return false;
+    }
+    ContactGeometry g;
+    g.n = d / dist;
+    g.overlap = delta;
+    g.r_eff = p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]);
+    g.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
+    g.arm_i = p.radius[i] - 0.5 * delta;
+    g.arm_j = p.radius[j] - 0.5 * delta;
+    g.r_i = p.radius[i];
+    g.r_j = p.radius[j];
+    if constexpr (is_thermal<Law>()) {
+      g.temperature = in.temp ? 0.5 * (in.temp[i] + in.temp[j]) : std::numeric_limits<double>::quiet_NaN();
+      g.time_scale = in.time_scale;
+    }
+    if (!in.gbf.empty()) g.gb_fraction = std::max(in.gbf[i], in.gbf[j]);
+    const RelativeMotion m = relative_motion(g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
+    const ContactForces f = law_(g, m, dt, state);
+    F = f.force;
+    const Vec3 nxt = g.n.cross(f.tangential);
+    Ti = -g.arm_i * nxt;
+    Tj = -g.arm_j * nxt;
+    return true;
+  }
+
   Law law_;
 };
 

@@ -17,6 +17,10 @@
 #include <cstdlib>
 #include <string>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace sparkdem::par {
 
 enum Kind {
@@ -48,6 +52,15 @@ inline std::int64_t min_items(Kind kind) {
   static const bool passive = passive_wait_policy();
   if (forced > 0) return forced;
   return passive ? kMinPassive[kind] : kMinSpinning[kind];
+}
+
+/// Threads a parallel region would get here (1 without OpenMP).
+inline int threads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
 }
 
 /// True when a loop of n items of that kind is worth a parallel region.

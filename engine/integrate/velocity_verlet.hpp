@@ -21,10 +21,14 @@ inline void verlet_first_half(ParticleStore& p, double dt) {
     p.velocity[i] += 0.5 * dt / p.mass[i] * p.force[i];
     p.position[i] += dt * p.velocity[i];
     p.omega[i] += 0.5 * dt / p.inertia[i] * p.torque[i];
-    const double angle = p.omega[i].norm() * dt;
-    if (angle > 0.0) {
-      const Quat dq(Eigen::AngleAxisd(angle, p.omega[i] / p.omega[i].norm()));
-      p.orientation[i] = (dq * p.orientation[i]).normalized();
+    const double w2 = p.omega[i].squaredNorm();
+    if (w2 > 0.0) {  // most spheres of a settling bed do not spin: no square root for them
+      const double w = std::sqrt(w2);
+      const double angle = w * dt;
+      if (angle > 0.0) {
+        const Quat dq(Eigen::AngleAxisd(angle, p.omega[i] / w));
+        p.orientation[i] = (dq * p.orientation[i]).normalized();
+      }
     }
   }
 }
