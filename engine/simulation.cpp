@@ -555,7 +555,11 @@ std::vector<ModuleStep> Simulation::module_steps(double dt_used) const {
 /// One mechanical step: the plan's items in order; t_new = stage time at the end of the step.
 void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_new, double t_area) {
   auto& p = s_.particles;
+  const bool timed = stats_ && s_.step % kSplitEvery == 0;
+  if (timed) ++stats_->core_sampled_steps;
   for (const PlanItem& it : plan_.items) {
+    const auto t0 = timed && it.kind != PlanItem::Kind::Module ? std::chrono::steady_clock::now()
+                                                               : std::chrono::steady_clock::time_point{};
     switch (it.kind) {
       case PlanItem::Kind::IntegrateFirstHalf:
         verlet_first_half(p, dt_used);
@@ -572,6 +576,8 @@ void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_n
       case PlanItem::Kind::Module: run_module(it, s_.step + 1, t_new, dt_used); break;
       case PlanItem::Kind::IntegrateSecondHalf: verlet_second_half(p, dt_used); break;
     }
+    if (timed && it.kind != PlanItem::Kind::Module)
+      stats_->core_seconds[it.name] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 }
 

@@ -9,6 +9,7 @@
     tools/validate.py check-hashes [--ledger FILE]            fail when a recorded config changed
     tools/validate.py check-docs FILE...                      fail when a quoted figure is not the ledger's
     tools/validate.py derive-bands --case GLOB --seeds S ...  fast-tier bands from measured scatter
+    tools/validate.py perf [DOC ...]                          the perf section from the benchmarks' files
 
 The table of cases is benchmarks/validation/cases.py: each case names its configs, how a run's
 scenario is made from them (N and the packing seed patched), and the figures it yields with their
@@ -38,6 +39,7 @@ LEDGER = os.path.join(VALDIR, "ledger.json")
 FAST_BANDS = os.path.join(VALDIR, "fast_bands.json")
 sys.path.insert(0, VALDIR)
 import cases as case_table  # noqa: E402  (benchmarks/validation/cases.py)
+import perf as perf_records  # noqa: E402  (benchmarks/validation/perf.py: the perf section)
 
 
 # ---------------------------------------------------------------- configs and hashes
@@ -530,6 +532,8 @@ def write_reports(ledger, outdir):
 
 
 def ledger_table(ledger, kind):
+    if kind == "perf":
+        return perf_records.table(ledger, full=False)
     rows = [r for r in ledger["records"] if r["kind"] == kind]
     lines = ["| case | N | seeds | reference | measured | error (mean ± std) | band | verdict | wall [s] | CPU [s] | commit |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -575,6 +579,9 @@ def write_markdown(ledger, path):
             parts.append(f"  - tuned after seeing: `{t['parameter']}`: {t['why']}")
         for v in r.get("variants", []):
             parts.append(f"  - variant: {v}")
+    if ledger.get("perf"):
+        parts += ["", "## Perf (speed and memory; `tools/validate.py perf` imports them from the benchmarks' files)", "",
+                  perf_records.table(ledger, full=True)]
     if ledger.get("rebases"):
         parts += ["", "## Rebases (new first config values after a documented model change)", ""]
         for b in ledger["rebases"]:
@@ -696,7 +703,7 @@ def cmd_derive_bands(a):
 
 
 # A generated table in a document: groups (opening marker, kind, table, closing marker).
-TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|regression) -->\n)(.*?)(<!-- ledger:end -->)", re.S)
+TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|regression|perf) -->\n)(.*?)(<!-- ledger:end -->)", re.S)
 
 
 def cmd_check_docs(a):
@@ -756,6 +763,22 @@ def cmd_update_docs(a):
     return 0
 
 
+def cmd_perf(a):
+    """Replaces the ledger's perf records by those of the benchmarks' files, redraws the reports and
+    rewrites the perf tables of the DOC files."""
+    recs, notes = perf_records.collect()
+    for n in notes:
+        print(n, file=sys.stderr)
+    with ledger_lock(a.ledger):
+        ledger = load_ledger(a.ledger)
+        ledger["perf"] = recs
+        write_json_atomic(a.ledger, ledger)
+    write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
+    print(f"perf: {len(recs)} records")
+    a.files = a.files or [os.path.join(REPO, "benchmarks", "README.md")]
+    return cmd_update_docs(a)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -801,6 +824,10 @@ def main(argv=None):
         common(p, runs=False)
         p.add_argument("files", nargs="+")
         p.set_defaults(fn=fn)
+    p = sub.add_parser("perf", help="the perf section from the benchmarks' result files")
+    common(p, runs=False)
+    p.add_argument("files", nargs="*", help="docs whose perf tables to rewrite (default benchmarks/README.md)")
+    p.set_defaults(fn=cmd_perf)
     p = sub.add_parser("derive-bands")
     common(p)
     p.add_argument("--seeds", nargs="+", type=int, required=True)

@@ -79,7 +79,8 @@ def run_lammps(lammps_in, rundir):
 
 def lammps_version():
     out = subprocess.run(["lmp", "-h"], capture_output=True, text=True).stdout.splitlines()
-    version = next((l.strip() for l in out if l.startswith("LAMMPS (")), "unknown")
+    version = next((l.split(" - ", 1)[1].strip() for l in out if l.startswith("Large-scale Atomic") and " - " in l),
+                   "unknown")
     compiler = next((l.strip() for l in out if "Compiler:" in l), "")
     return f"{version} {compiler}".strip()
 
@@ -91,6 +92,15 @@ def ke_difference(a, b):
         if step in a and kb > 0.0:
             worst = max(worst, abs(analyze_pour.pct(a[step], kb)))
     return worst
+
+
+def ke_difference_over_peak(a, b):
+    """Largest |KE_a - KE_b| over the common steps, relative to b's largest KE [%] (a ringing bed's
+    KE passes near zero, where the per-sample relative difference says little)."""
+    peak = max(b.values(), default=0.0)
+    if peak <= 0.0:
+        return float("nan")
+    return 100.0 * max((abs(a[s] - kb) for s, kb in b.items() if s in a), default=0.0) / peak
 
 
 def measure_scene(name, args, workdir):
@@ -130,6 +140,7 @@ def measure_scene(name, args, workdir):
             "particle_steps_per_s": f"{res['particles'] * res['steps'] / med:.4g}",
             "speedup_vs_lammps_serial": f"{lammps_med / med:.3f}",
             "max_ke_difference_vs_lammps_pct": f"{ke_difference(res['ke'], ref['ke']):.3g}",
+            "ke_difference_over_peak_pct": f"{ke_difference_over_peak(res['ke'], ref['ke']):.3g}",
             "mean_coordination": f"{analyze_pour.coordination(res['pos'], res['rad']):.4f}",
         })
     t1 = statistics.median(loops["sparkdem_t1"])
@@ -159,7 +170,7 @@ def main():
         rows += measure_scene(name, args, workdir)
     fields = ["scene", "variant", "particles", "steps", "repeats", "loop_s_median", "loop_s_min", "loop_s_max",
               "process_s_median", "particle_steps_per_s", "speedup_vs_lammps_serial", "thread_speedup",
-              "max_ke_difference_vs_lammps_pct", "mean_coordination", "commit", "lammps", "load_average_at_start"]
+              "max_ke_difference_vs_lammps_pct", "ke_difference_over_peak_pct", "mean_coordination", "commit", "lammps", "load_average_at_start"]
     for r in rows:
         r.update({"commit": commit, "lammps": lammps_version(), "load_average_at_start": f"{load:.2f}"})
         r.setdefault("thread_speedup", "")

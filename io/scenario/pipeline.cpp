@@ -573,6 +573,12 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         js["time_scale"] = st.cfg.time_scale;
         for (const auto& [m, n] : r.module_calls) js["module_calls"][m] = n;
         for (const auto& [m, t] : r.module_seconds) js["module_wall_time_s"][m] = t;
+        if (r.core_sampled_steps > 0) {
+          // Estimated from the timed steps (one in kSplitEvery), scaled by the steps taken.
+          const double scale = static_cast<double>(r.steps) / static_cast<double>(r.core_sampled_steps);
+          for (const auto& [item, t] : r.core_seconds) js["core_wall_time_s"][item] = t * scale;
+          js["core_wall_time_sampled_steps"] = r.core_sampled_steps;
+        }
         for (const auto& [m, n] : r.max_substeps)
           if (n > 1) js["max_substeps"][m] = n;
         if (sc.bond_law) {
