@@ -13,7 +13,11 @@ Sources (each optional; a missing file is reported and skipped):
   benchmarks/mechanics/results.csv   sparkdem against LAMMPS, pour and dense bed (median of repeats)
   benchmarks/threads/results.csv     1 against 2 threads, 2 to 1e5 particles, both wait policies
   benchmarks/memory/results.csv      peak memory per particle net of the executable
-  benchmarks/sps_nial/final/summary.json   the main scenario's stages (particle-steps/s)
+  benchmarks/sps_nial/profile_summary.json the main scenario run on one thread: its stages'
+                                           particle-steps/s and time split (summary.json of
+                                           `sparkdem run configs/sps_nial.json --threads 1`,
+                                           OMP_WAIT_POLICY=PASSIVE, on a machine otherwise idle
+                                           but for short compiles)
   benchmarks/electric_solvers/results.csv  the fastest method per network family at its largest size
                                            with a true error <= 1e-6 (and <= 1e-8)
 """
@@ -101,6 +105,30 @@ def sps_nial(path):
     return recs
 
 
+def sps_split(path):
+    """Where the main scenario's stepping stages spend their time: the core plan items
+    (core_wall_time_s, sampled) and the modules (module_wall_time_s), the rest being checks,
+    monitors and output; `ratio` is the share of the stage's wall time."""
+    recs, commit = [], _last_commit(path)
+    s = json.load(open(path))
+    for st in s["stages"]:
+        if not st.get("core_wall_time_s"):
+            continue
+        total = st["wall_time_s"]
+        items = dict(st["core_wall_time_s"])
+        items.update(st.get("module_wall_time_s", {}))
+        items["rest (checks, monitors, output)"] = total - sum(items.values())
+        for name, t in sorted(items.items(), key=lambda x: -x[1]):
+            if t < 0.01 * total:
+                continue
+            recs.append({"id": f"perf/sps_nial_split/{st['name']}/{name}", "scene": "configs/sps_nial.json",
+                         "variant": name, "threads": s.get("threads"), "particles": st.get("particles"),
+                         "steps": st.get("steps"), "figure": "wall time in this part of the stage", "value": t,
+                         "unit": "s", "ratio": t / total, "ratio_of": "share of the stage's wall time",
+                         "commit": commit})
+    return recs
+
+
 def networks(path):
     recs, commit = [], _last_commit(path)
     rows = [r for r in _rows(path) if r["status"].startswith("ok") and _num(r["V_max_err"]) is not None]
@@ -122,7 +150,8 @@ def networks(path):
 
 
 SOURCES = [("mechanics/results.csv", mechanics), ("threads/results.csv", threads), ("memory/results.csv", memory),
-           ("sps_nial/final/summary.json", sps_nial), ("electric_solvers/results.csv", networks)]
+           ("sps_nial/profile_summary.json", sps_nial), ("sps_nial/profile_summary.json", sps_split),
+           ("electric_solvers/results.csv", networks)]
 
 
 def collect():

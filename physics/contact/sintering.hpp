@@ -79,7 +79,9 @@
 /// | min_neck_fraction            | 1       | smallest neck of a sintering pair / r_min         |
 /// | neck_strength                | Pa      | a neck breaks when the tension exceeds it x pi a^2 (0: never) |
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <string_view>
@@ -112,6 +114,11 @@ inline double neck_viscosity(double a_m, double d_eff) { return kPi * a_m * a_m 
 ///   F_s = pi gamma_s [4 R (1 - cos(psi/2)) + a sin(psi/2)].
 inline double sintering_force(double gamma_s, double psi_rad, double R_m, double a_m) {
   return kPi * gamma_s * (4.0 * R_m * (1.0 - std::cos(0.5 * psi_rad)) + a_m * std::sin(0.5 * psi_rad));
+}
+/// The same with cos(psi/2) and sin(psi/2) given (a law's constant dihedral angle: no cos and sin
+/// per contact and step; the same values, so the same result).
+inline double sintering_force_half_angle(double gamma_s, double cos_half, double sin_half, double R_m, double a_m) {
+  return kPi * gamma_s * (4.0 * R_m * (1.0 - cos_half) + a_m * sin_half);
 }
 
 /// Kratos' neck radius [m]: a = 1.43 sqrt(r_min^2 - x^2), x = r_min - h/2 (0 for h <= 0).
@@ -227,7 +234,7 @@ struct Sintering {
   explicit Sintering(const Params& p)
       : p_(p), e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
         g_star_(kernel::effective_shear_modulus(p.youngs_modulus, p.poisson_ratio)),
-        sin_half_(std::sin(0.5 * p.dihedral_angle)),
+        sin_half_(std::sin(0.5 * p.dihedral_angle)), cos_half_(std::cos(0.5 * p.dihedral_angle)),
         neck_kind_(p.neck == "coble" ? NeckKind::Coble : p.neck == "cv" ? NeckKind::ConstantVolume : NeckKind::Kratos),
         radius_kind_(p.sintering_radius == "r_eff" ? RadiusKind::Reff
                      : p.sintering_radius == "two_r_eff" ? RadiusKind::TwoReff : RadiusKind::Rmin),
@@ -254,8 +261,22 @@ struct Sintering {
   /// Normal viscosity in physical time [N s/m] at temperature T (+inf below the start).
   double viscosity(double a, double t_K) const {
     if (!(t_K >= p_.sintering_start_temperature)) return std::numeric_limits<double>::infinity();
-    return kernel::neck_viscosity(a, kernel::gb_effective_diffusivity(p_.gb_diffusivity_prefactor, p_.gb_activation_energy,
-                                                                      p_.gb_width, p_.atomic_volume, t_K));
+    return kernel::neck_viscosity(a, effective_diffusivity(t_K));
+  }
+  /// D_eff(T) of this law, remembered per thread for the last temperature asked: a compact under a
+  /// prescribed temperature asks every contact for the same T, and exp(-Q/RT) was a tenth of the
+  /// contact pass. The cache is keyed by the law's identity (a number no other law object shares)
+  /// and T itself, so the value is the one the kernel returns.
+  double effective_diffusivity(double t_K) const {
+    thread_local std::uint64_t owner = 0;
+    thread_local double t_last = std::numeric_limits<double>::quiet_NaN(), d_last = 0.0;
+    if (owner != identity_ || !(t_K == t_last)) {
+      d_last = kernel::gb_effective_diffusivity(p_.gb_diffusivity_prefactor, p_.gb_activation_energy, p_.gb_width,
+                                                p_.atomic_volume, t_K);
+      t_last = t_K;
+      owner = identity_;
+    }
+    return d_last;
   }
   double driving_radius(const ContactGeometry& g) const {
     if (radius_kind_ == RadiusKind::Reff) return g.r_eff;
@@ -296,7 +317,7 @@ struct Sintering {
       fe = ms.force;
       us += ms.flow;
       us_rate = dt > 0.0 ? ms.flow / dt : 0.0;
-      if (sintering) fs = kernel::sintering_force(p_.surface_energy, p_.dihedral_angle, driving_radius(g), a);
+      if (sintering) fs = kernel::sintering_force_half_angle(p_.surface_energy, cos_half_, sin_half_, driving_radius(g), a);
       if (!hot && cold_contact_) fe = std::max(fe, 0.0);
     } else {
       // Cold contact without a neck: Hertz on the (elastic) overlap.
@@ -389,7 +410,13 @@ struct Sintering {
   enum class NeckKind { Kratos, Coble, ConstantVolume };
   enum class RadiusKind { Rmin, Reff, TwoReff };
   Params p_;
-  double e_star_, g_star_, sin_half_;
+  double e_star_, g_star_, sin_half_, cos_half_;
+  /// A number no other law object constructed in this process shares (copies share it, with the
+  /// same parameters): the key of effective_diffusivity's per-thread cache.
+  std::uint64_t identity_ = [] {
+    static std::atomic<std::uint64_t> next{0};
+    return ++next;
+  }();
   NeckKind neck_kind_;
   RadiusKind radius_kind_;
   bool cold_contact_;
