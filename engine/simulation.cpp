@@ -635,6 +635,7 @@ WatchdogConfig Simulation::stage_watchdog(const StageConfig& cfg) const {
 void Simulation::end_stage(const std::vector<std::string>& cols, const std::vector<double>& vals, StageResult& res) {
   auto& p = s_.particles;
   res.steps = s_.step - s_.stage_step0;
+  res.neighbor_rebuilds += s_.rebuilds;
   res.simulated_time = s_.time - s_.stage_t0;
   res.physical_time = s_.physical_time - s_.stage_phys_t0;
   for (std::size_t q = 0; q < cols.size(); ++q) res.final_values[cols[q]] = vals[q];
@@ -685,6 +686,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.initial_overlap = overlap0;
   res.plan = plan_.names();
   res.particles = p.size();
+  res.neighbor_rebuilds = -s_.rebuilds;  // completed in end_stage
   if (resume) check_resumed_clocks(cfg);
   const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
   s_.stage_dt = dt_used;

@@ -152,6 +152,7 @@ struct StageResult {
   /// few-particle scene several per cent. Modules are in module_seconds (every call timed).
   std::map<std::string, double> core_seconds;
   Step core_sampled_steps = 0;  ///< steps whose core items were timed
+  std::int64_t neighbor_rebuilds = 0;  ///< Verlet-list rebuilds in this run of the stage
   std::vector<ModuleStep> module_steps;  ///< per module at the stage start
   InitialOverlapReport initial_overlap;  ///< overlaps of the starting packing (not measured on resume)
 };

@@ -579,6 +579,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
           for (const auto& [item, t] : r.core_seconds) js["core_wall_time_s"][item] = t * scale;
           js["core_wall_time_sampled_steps"] = r.core_sampled_steps;
         }
+        js["neighbor_rebuilds"] = r.neighbor_rebuilds;
         for (const auto& [m, n] : r.max_substeps)
           if (n > 1) js["max_substeps"][m] = n;
         if (sc.bond_law) {
