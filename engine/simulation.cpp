@@ -558,8 +558,8 @@ void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_n
   const bool timed = stats_ && s_.step % kSplitEvery == 0;
   if (timed) ++stats_->core_sampled_steps;
   for (const PlanItem& it : plan_.items) {
-    const auto t0 = timed && it.kind != PlanItem::Kind::Module ? std::chrono::steady_clock::now()
-                                                               : std::chrono::steady_clock::time_point{};
+    const bool time_item = timed && it.kind != PlanItem::Kind::Module;  // modules time themselves (run_module)
+    const auto t0 = time_item ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point{};
     switch (it.kind) {
       case PlanItem::Kind::IntegrateFirstHalf:
         verlet_first_half(p, dt_used);
@@ -576,7 +576,7 @@ void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_n
       case PlanItem::Kind::Module: run_module(it, s_.step + 1, t_new, dt_used); break;
       case PlanItem::Kind::IntegrateSecondHalf: verlet_second_half(p, dt_used); break;
     }
-    if (timed && it.kind != PlanItem::Kind::Module)
+    if (time_item)
       stats_->core_seconds[it.name] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 }
@@ -635,7 +635,6 @@ WatchdogConfig Simulation::stage_watchdog(const StageConfig& cfg) const {
 void Simulation::end_stage(const std::vector<std::string>& cols, const std::vector<double>& vals, StageResult& res) {
   auto& p = s_.particles;
   res.steps = s_.step - s_.stage_step0;
-  res.neighbor_rebuilds += s_.rebuilds;
   res.simulated_time = s_.time - s_.stage_t0;
   res.physical_time = s_.physical_time - s_.stage_phys_t0;
   for (std::size_t q = 0; q < cols.size(); ++q) res.final_values[cols[q]] = vals[q];
@@ -686,7 +685,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.initial_overlap = overlap0;
   res.plan = plan_.names();
   res.particles = p.size();
-  res.neighbor_rebuilds = -s_.rebuilds;  // completed in end_stage
+  const std::int64_t rebuilds0 = s_.rebuilds;
   if (resume) check_resumed_clocks(cfg);
   const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
   s_.stage_dt = dt_used;
@@ -797,6 +796,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   obs.timeseries(cols, vals);
   obs.watch(s_, cols, vals);
   end_stage(cols, vals, res);
+  res.neighbor_rebuilds = s_.rebuilds - rebuilds0;
   res.wall_seconds = std::chrono::duration<double>(clock::now() - t_start).count();
   res.particle_steps_per_second =
       res.wall_seconds > 0 ? static_cast<double>(res.steps) * static_cast<double>(p.size()) / res.wall_seconds : 0.0;

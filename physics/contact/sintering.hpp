@@ -111,14 +111,10 @@ inline double gb_effective_diffusivity(double d0_m2_per_s, double q_J_per_mol, d
 inline double neck_viscosity(double a_m, double d_eff) { return kPi * a_m * a_m * a_m * a_m / (8.0 * d_eff); }
 
 /// Parhami-McMeeking sintering driving force [N] (attractive magnitude):
-///   F_s = pi gamma_s [4 R (1 - cos(psi/2)) + a sin(psi/2)].
-inline double sintering_force(double gamma_s, double psi_rad, double R_m, double a_m) {
-  return kPi * gamma_s * (4.0 * R_m * (1.0 - std::cos(0.5 * psi_rad)) + a_m * std::sin(0.5 * psi_rad));
-}
-/// The same with cos(psi/2) and sin(psi/2) given (a law's constant dihedral angle: no cos and sin
-/// per contact and step; the same values, so the same result).
-inline double sintering_force_half_angle(double gamma_s, double cos_half, double sin_half, double R_m, double a_m) {
-  return kPi * gamma_s * (4.0 * R_m * (1.0 - cos_half) + a_m * sin_half);
+///   F_s = pi gamma_s [4 R (1 - cos(psi/2)) + a sin(psi/2)],
+/// with cos(psi/2) and sin(psi/2) given (a law's dihedral angle is constant: computed once).
+inline double sintering_force(double gamma_s, double cos_half_psi, double sin_half_psi, double R_m, double a_m) {
+  return kPi * gamma_s * (4.0 * R_m * (1.0 - cos_half_psi) + a_m * sin_half_psi);
 }
 
 /// Kratos' neck radius [m]: a = 1.43 sqrt(r_min^2 - x^2), x = r_min - h/2 (0 for h <= 0).
@@ -317,7 +313,7 @@ struct Sintering {
       fe = ms.force;
       us += ms.flow;
       us_rate = dt > 0.0 ? ms.flow / dt : 0.0;
-      if (sintering) fs = kernel::sintering_force_half_angle(p_.surface_energy, cos_half_, sin_half_, driving_radius(g), a);
+      if (sintering) fs = kernel::sintering_force(p_.surface_energy, cos_half_, sin_half_, driving_radius(g), a);
       if (!hot && cold_contact_) fe = std::max(fe, 0.0);
     } else {
       // Cold contact without a neck: Hertz on the (elastic) overlap.
