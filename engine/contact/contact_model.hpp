@@ -14,6 +14,8 @@
 /// of a pair depends on its state (used for the stable step of the contact table's pairs), and
 /// damping(g, state) -> {c_n, c_t} [N s/m] when its dashpots are strong enough to limit the step
 /// (explicit damping: dt <= (2/w)(sqrt(1 + z^2) - z) per Gershgorin row, z the row's damping ratio).
+/// and optionally tangential_free() -> true when its tangential force is identically zero (a
+/// Coulomb-capped law at mu = 0): the stable step then leaves the tangential springs out;
 /// and optionally, for pairs whose life the law decides (a sintered neck outlives zero or
 /// negative overlap):
 ///   static constexpr bool kPersistent = true;
@@ -24,6 +26,7 @@
 /// module provides it) and g.time_scale (physical seconds per mechanical second of the stage).
 /// A persistent law is called with g.overlap <= 0 (a gap) while alive(state) holds; its row is
 /// kept by the contact table even when the pair leaves the neighbour candidates.
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -67,15 +70,31 @@ class ContactModel {
                               const std::vector<std::vector<Index>>& candidates, double dt,
                               double time_scale = 1.0) const = 0;
   /// Stable step estimate from the current state [s]: min of the law's a-priori step (Rayleigh
-  /// for Hertz laws) and 2/omega_max, with omega_max^2 bounded by Gershgorin on the mass-weighted
-  /// stiffness matrix of the current contacts:
-  ///   omega^2 <= max_i sum_j [ k_n (1/m_i + 1/sqrt(m_i m_j))
-  ///                          + k_t (1/m_i + r_i^2/I_i + 1/sqrt(m_i m_j) + r_i r_j/sqrt(I_i I_j)) ]
-  /// (normal springs couple translations; tangential springs couple translations and rotations).
+  /// for Hertz laws) and 2/omega_max, omega_max^2 the largest eigenvalue of the mass-weighted
+  /// stiffness matrix K~ = M^-1/2 K M^-1/2 of the current contacts, bounded by the tighter of two
+  /// bounds that both hold:
+  ///  (a) block Gershgorin over each particle's 6 x 6 blocks (spectral norms):
+  ///        omega^2 <= max_i sum_j [ k_n (1/m_i + 1/sqrt(m_i m_j))
+  ///                               + k_t (1/m_i + r_i^2/I_i + 1/sqrt(m_i m_j) + r_i r_j/sqrt(I_i I_j)) ]
+  ///      (for one contact between spheres the k_t term is the exact eigenvalue of its springs);
+  ///  (b) Weyl, lambda_max(K~_n + K~_t) <= lambda_max(K~_n) + lambda_max(K~_t), with the normal
+  ///      springs k_n n n^T (translations only) bounded by scalar Gershgorin rows, exact per axis c:
+  ///        lambda_max(K~_n) <= max_{i,c} sum_j k_n |n_c| |n|_1 (1/m_i + 1/sqrt(m_i m_j))
+  ///      (a contact along x adds nothing to the y and z rows: on a frictionless simple-cubic
+  ///      lattice this is the exact 4 k_n / m of the lattice's highest mode, where (a) gives
+  ///      12 k_n / m), and the tangential and extra rows by (a)'s k_t term.
+  /// The tangential springs drop out of both when the law's tangential force is identically
+  /// zero (optional Law::tangential_free(), a Coulomb cap at mu = 0).
   /// `extra_rows` (optional, per particle [1/s^2]) are other stiffness contributions to the same
-  /// Gershgorin rows, e.g. from bonds (BondModel::add_stiffness_rows).
+  /// block rows, e.g. from bonds (BondModel::add_stiffness_rows).
+  /// Laws with dashpots (damping(g, state) -> {c_n, c_t}): per row, dt <= (2/w)(sqrt(1 + z^2) - z),
+  /// z = beta_i / (2 w), beta_i the damping row of the same block structure as (a).
   virtual double stable_dt(const ParticleStore& p, const ContactTable& table, const std::vector<Wall>& walls,
                            const std::vector<double>* extra_rows = nullptr) const = 0;
+  /// The same estimate without the a-priori step: 2/omega_max of the current network alone [s]
+  /// (+inf without springs). stable_dt = min(a-priori step, network_stable_dt).
+  virtual double network_stable_dt(const ParticleStore& p, const ContactTable& table, const std::vector<Wall>& walls,
+                                   const std::vector<double>* extra_rows = nullptr) const = 0;
   /// The run watchdog's default bound on overlap / smaller radius (pairs) and overlap / radius
   /// (walls): kDefaultOverlapRatioBound, or the law's own `overlap_ratio_bound()` when it has one
   /// (a law whose healthy runs reach larger overlaps, e.g. sintering densification).
@@ -250,16 +269,69 @@ class ContactModelT final : public ContactModel {
   double stable_dt(const ParticleStore& p, const ContactTable& t, const std::vector<Wall>& walls,
                    const std::vector<double>* extra_rows = nullptr) const override {
     double dt = std::numeric_limits<double>::infinity();
-    const std::size_t n = p.size();
-    std::vector<double> row = extra_rows ? *extra_rows : std::vector<double>(n, 0.0);
-    // Damping rows [1/s] (laws that report their dashpots): the same Gershgorin structure as the
-    // stiffness rows, beta_i = sum_j [c_n (1/m_i + 1/sqrt(m_i m_j)) + c_t (... rotations ...)].
-    constexpr bool damped = requires(const Law& l, const ContactGeometry& g, const double* st) { l.damping(g, st); };
-    std::vector<double> beta(damped ? n : 0, 0.0);
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < p.size(); ++i) {
       const double vol = 4.0 / 3.0 * detail::kPi * p.radius[i] * p.radius[i] * p.radius[i];
       dt = std::min(dt, law_.rayleigh_dt(p.radius[i], p.mass[i] / vol));
     }
+    return std::min(dt, network_stable_dt(p, t, walls, extra_rows));
+  }
+
+  double network_stable_dt(const ParticleStore& p, const ContactTable& t, const std::vector<Wall>& walls,
+                           const std::vector<double>* extra_rows = nullptr) const override {
+    double dt = std::numeric_limits<double>::infinity();
+    StiffnessRows rows = stiffness_rows(p, t, walls, extra_rows);
+    // The tighter of the two bounds on omega_max^2 (both hold; see the declaration).
+    double split = 0.0, spring = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      split = std::max(split, std::max({rows.axis[3 * i], rows.axis[3 * i + 1], rows.axis[3 * i + 2]}));
+      spring = std::max(spring, rows.other[i]);
+    }
+    split += spring;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const double w2 = std::min(rows.block[i], split);
+      if (!(w2 > 0.0)) continue;
+      const double w = std::sqrt(w2);
+      if (rows.beta.empty()) {
+        dt = std::min(dt, 2.0 / w);
+      } else {
+        // Velocity Verlet with explicit damping: stable for dt <= (2/w)(sqrt(1 + z^2) - z),
+        // z = beta / (2 w) the damping ratio of the row (-> 2/beta when damping dominates).
+        const double z = 0.5 * rows.beta[i] / w;
+        dt = std::min(dt, 2.0 / w * (std::sqrt(1.0 + z * z) - z));
+      }
+    }
+    return dt;
+  }
+
+ private:
+  /// Per-particle Gershgorin rows of the mass-weighted stiffness [1/s^2] and damping [1/s]
+  /// matrices (stable_dt): block = every spring's block-norm row; axis (3 per particle) = the
+  /// normal springs' exact scalar rows per translation axis; other = the tangential springs'
+  /// and extra (bond) rows; beta = the damping rows (laws that report their dashpots).
+  struct StiffnessRows {
+    std::vector<double> block, axis, other, beta;
+  };
+  StiffnessRows stiffness_rows(const ParticleStore& p, const ContactTable& t, const std::vector<Wall>& walls,
+                               const std::vector<double>* extra_rows) const {
+    const std::size_t n = p.size();
+    StiffnessRows rows;
+    rows.other = extra_rows ? *extra_rows : std::vector<double>(n, 0.0);
+    rows.block = rows.other;
+    rows.axis.assign(3 * n, 0.0);
+    bool tangential = true;
+    if constexpr (requires(const Law& l) { l.tangential_free(); }) tangential = !law_.tangential_free();
+    constexpr bool damped = requires(const Law& l, const ContactGeometry& g, const double* st) { l.damping(g, st); };
+    if (damped) rows.beta.assign(n, 0.0);
+    // One spring pair (k_n, k_t) on particle i [N/m]; cross = 1/sqrt(m_i m_j) and
+    // rot = r_i r_j / sqrt(I_i I_j) for a pair, 0 for a wall; nrm the unit normal.
+    auto add = [&](std::size_t i, const Vec3& nrm, double kn, double kt, double cross, double rot) {
+      const double tr = 1.0 / p.mass[i] + cross;
+      const double tt = tangential ? kt * (tr + p.radius[i] * p.radius[i] / p.inertia[i] + rot) : 0.0;
+      const double l1 = std::abs(nrm[0]) + std::abs(nrm[1]) + std::abs(nrm[2]);
+      for (int c = 0; c < 3; ++c) rows.axis[3 * i + c] += kn * tr * std::abs(nrm[c]) * l1;
+      rows.other[i] += tt;
+      rows.block[i] += kn * tr + tt;
+    };
     for (std::size_t r = 0; r < t.size(); ++r) {
       const Index i = t.i(r), j = t.j(r);
       const double delta = p.radius[i] + p.radius[j] - (p.position[i] - p.position[j]).norm();
@@ -282,15 +354,16 @@ class ContactModelT final : public ContactModel {
       }
       const double mij = 1.0 / std::sqrt(p.mass[i] * p.mass[j]);
       const double iij = p.radius[i] * p.radius[j] / std::sqrt(p.inertia[i] * p.inertia[j]);
-      row[i] += kn * (1.0 / p.mass[i] + mij) + kt * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i] + mij + iij);
-      row[j] += kn * (1.0 / p.mass[j] + mij) + kt * (1.0 / p.mass[j] + p.radius[j] * p.radius[j] / p.inertia[j] + mij + iij);
+      const Vec3 nrm = (p.position[i] - p.position[j]).normalized();
+      add(i, nrm, kn, kt, mij, iij);
+      add(j, nrm, kn, kt, mij, iij);
       if constexpr (damped) {
         const auto [cn, ct] = law_.damping(g, t.state(r));
-        beta[i] += cn * (1.0 / p.mass[i] + mij) + ct * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i] + mij + iij);
-        beta[j] += cn * (1.0 / p.mass[j] + mij) + ct * (1.0 / p.mass[j] + p.radius[j] * p.radius[j] / p.inertia[j] + mij + iij);
+        rows.beta[i] += cn * (1.0 / p.mass[i] + mij) + ct * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i] + mij + iij);
+        rows.beta[j] += cn * (1.0 / p.mass[j] + mij) + ct * (1.0 / p.mass[j] + p.radius[j] * p.radius[j] / p.inertia[j] + mij + iij);
       }
     }
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t i = 0; i < n; ++i)
       for (const Wall& w : walls) {
         Vec3 nrm;
         double dist;
@@ -303,25 +376,10 @@ class ContactModelT final : public ContactModel {
         g.wall = true;
         g.r_i = p.radius[i];
         g.r_j = std::numeric_limits<double>::infinity();
-        row[i] += law_.normal_stiffness(g) / p.mass[i] +
-                  law_.tangential_stiffness(g) * (1.0 / p.mass[i] + p.radius[i] * p.radius[i] / p.inertia[i]);
+        add(i, nrm, law_.normal_stiffness(g), law_.tangential_stiffness(g), 0.0, 0.0);
       }
-      if (row[i] > 0.0) {
-        const double w = std::sqrt(row[i]);
-        if constexpr (damped) {
-          // Velocity Verlet with explicit damping: stable for dt <= (2/w)(sqrt(1 + z^2) - z),
-          // z = beta / (2 w) the damping ratio of the row (-> 2/beta when damping dominates).
-          const double z = 0.5 * beta[i] / w;
-          dt = std::min(dt, 2.0 / w * (std::sqrt(1.0 + z * z) - z));
-        } else {
-          dt = std::min(dt, 2.0 / w);
-        }
-      }
-    }
-    return dt;
+    return rows;
   }
-
- private:
   /// What every row of one pass reads besides the particles: the temperature field (thermal
   /// laws), the grain-boundary fractions (laws that ask for them) and the stage's time scale.
   struct PassInputs {

@@ -67,6 +67,8 @@ struct HertzMindlin {
   }
   double normal_stiffness(const ContactGeometry& g) const { return kernel::hertz_stiffness(e_star_, g.r_eff, g.overlap); }
   double tangential_stiffness(const ContactGeometry& g) const { return 8.0 * g_star_ * std::sqrt(g.r_eff * g.overlap); }
+  /// True at mu = 0: the Coulomb cap then zeroes the whole tangential force (stable step).
+  bool tangential_free() const { return p_.friction == 0.0; }
   double rayleigh_dt(double radius, double density) const {
     return kernel::rayleigh_step(radius, density, p_.youngs_modulus, p_.poisson_ratio);
   }

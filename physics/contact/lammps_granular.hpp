@@ -66,6 +66,8 @@ struct LammpsHertzTsuji {
     return kernel::hertz_stiffness(g.wall ? e_star_wall_ : e_star_, g.r_eff, g.overlap);
   }
   double tangential_stiffness(const ContactGeometry&) const { return p_.tangential_stiffness; }
+  /// True at mu = 0: the Coulomb cap then zeroes the whole tangential force (stable step).
+  bool tangential_free() const { return p_.friction == 0.0; }
   double rayleigh_dt(double radius, double density) const {
     return kernel::rayleigh_step(radius, density, p_.youngs_modulus, p_.poisson_ratio);
   }
