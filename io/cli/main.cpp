@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <filesystem>
+#include <algorithm>
 #include <iostream>
 #include <limits>
 
@@ -18,7 +19,9 @@
 #include "engine/state/particle_set.hpp"
 #include "io/scenario/calibrate_beams.hpp"
 #include "io/scenario/json_binder.hpp"
+#include "io/mpi/ranks.hpp"
 #include "io/scenario/pipeline.hpp"
+#include "io/scenario/sweep.hpp"
 #include "io/scenario/scenario.hpp"
 #include "physics/register_all.hpp"
 
@@ -109,7 +112,21 @@ constexpr const char* kRunFooter =
 
 }  // namespace
 
-int main(int argc, char** argv) {
+/// Errors go to stderr on rank 0 only (every rank of an MPI run meets the same input error).
+std::ostream& err() {
+  static std::ostream null(nullptr);
+  return sparkdem::io::ranks::rank() == 0 ? std::cerr : null;
+}
+
+/// OpenMP threads of each rank: `requested`, or with 0 on several ranks the cores shared out.
+int threads_per_rank(int requested) {
+  if (requested > 0 || sparkdem::io::ranks::size() == 1) return requested;
+  return std::max(1, omp_get_num_procs() / sparkdem::io::ranks::size());
+}
+
+/// The command line's work; `serving` is set on rank 0 of an MPI run once the other ranks wait
+/// for sweep items (main then sends them the stop signal with the exit code).
+int run_command(int argc, char** argv, bool& serving) {
   using namespace sparkdem;
   CLI::App app{"sparkdem: coupled thermo-electro-mechanical DEM"};
   app.set_version_flag("--version", std::string("sparkdem ") + SPARKDEM_VERSION);
@@ -137,9 +154,12 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
+    static std::ostream null(nullptr);
+    const int rc = io::ranks::rank() == 0 ? app.exit(e) : app.exit(e, null, null);
     return rc == 0 ? 0 : 2;
   }
+  // On several ranks only `run` has work for the ranks other than 0.
+  if (io::ranks::rank() != 0 && !run->parsed()) return 0;
 
   Registry reg;
   physics::register_all(reg);
@@ -159,14 +179,14 @@ int main(int argc, char** argv) {
       copt.threads = threads;
       if (!quiet)
         copt.on_iteration = [](const io::json& it) {
-          std::cerr << "iteration " << it["iteration"] << ": radius_ratio " << it["radius_ratio"] << ", E_mu "
+          err() << "iteration " << it["iteration"] << ": radius_ratio " << it["radius_ratio"] << ", E_mu "
                     << it["young_modulus_Pa"] << " Pa -> E_M " << it["measured_young_modulus_Pa"] << " Pa, nu_M "
                     << it["measured_poisson_ratio"] << " (errors " << it["error_young_modulus"] << ", "
                     << it["error_poisson_ratio"] << "), " << it["wall_time_s"] << " s\n";
         };
       const io::json rep = io::calibrate_beams(spec, reg, copt);
       if (!quiet)
-        std::cerr << "calibrated: " << rep["result"]["params"].dump() << " written to " << spec.write.string() << "; report "
+        err() << "calibrated: " << rep["result"]["params"].dump() << " written to " << spec.write.string() << "; report "
                   << (std::filesystem::path(outdir) / "calibration.json").string() << "\n";
       return 0;
     }
@@ -177,6 +197,12 @@ int main(int argc, char** argv) {
     }
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
+    threads = threads_per_rank(threads);
+    if (io::ranks::rank() != 0) {
+      if (threads > 0) omp_set_num_threads(threads);
+      return io::serve_sweep_items(sc);
+    }
+    serving = io::ranks::size() > 1;
     io::RunOptions opt;
     opt.outdir = outdir;
     opt.quiet = quiet;
@@ -184,23 +210,37 @@ int main(int argc, char** argv) {
     if (!restart.empty()) opt.restart = restart;
     const io::json summary = io::run_scenario(sc, opt);
     if (!quiet)
-      std::cerr << "done: " << summary["steps"] << " steps, " << summary["wall_time_s"] << " s wall, "
+      err() << "done: " << summary["steps"] << " steps, " << summary["wall_time_s"] << " s wall, "
                 << summary["particle_steps_per_s"] << " particle-steps/s; outputs in " << outdir << "\n";
     return checks_exit_code(summary, report_only);
   } catch (const ConfigError& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    err() << "error: " << e.what() << "\n";
     return 2;
   } catch (const Interrupted& e) {
-    std::cerr << "\n" << e.what() << "\n";
+    err() << "\n" << e.what() << "\n";
     return 130;
   } catch (const PhysicsError& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    err() << "error: " << e.what() << "\n";
     return 3;
   } catch (const SetupError& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    err() << "error: " << e.what() << "\n";
     return 4;
   } catch (const std::exception& e) {
-    std::cerr << "internal error: " << e.what() << "\n";
+    err() << "internal error: " << e.what() << "\n";
     return 1;
   }
+}
+
+int main(int argc, char** argv) {
+  try {
+    sparkdem::io::ranks::init(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 4;
+  }
+  bool serving = false;
+  const int rc = run_command(argc, argv, serving);
+  if (serving) sparkdem::io::stop_sweep_servers(rc);
+  sparkdem::io::ranks::finalize();
+  return rc;
 }

@@ -10,7 +10,9 @@
 
 #include "engine/core/error.hpp"
 #include "io/restart/hdf5_archive.hpp"
+#include "io/mpi/ranks.hpp"
 #include "io/scenario/pipeline.hpp"
+#include "io/scenario/sweep_items.hpp"
 
 namespace sparkdem::io {
 
@@ -43,6 +45,18 @@ void write_text_atomic(const fs::path& file, const std::string& text) {
 void write_state(const fs::path& file, State& s) {
   Hdf5Archive ar = Hdf5Archive::for_writing(file);
   s.visit(ar);
+  ar.commit();
+}
+
+/// A checkpoint inside a sweep stage at its input state, recording the sweep's progress in the
+/// pipeline record (the format of the pipeline's checkpoints, without module data).
+void write_progress_checkpoint(const fs::path& file, State& s, const json& record) {
+  Hdf5Archive ar = Hdf5Archive::for_writing(file);
+  s.visit(ar);
+  std::int64_t in_stage = 1;
+  ar.visit("pipeline/in_stage", in_stage);
+  std::string r = record.dump();
+  ar.visit("pipeline/record", r);
   ar.commit();
 }
 
@@ -140,13 +154,6 @@ json values_of(const json& entry) {
   return v;
 }
 
-/// One item of a sweep: which snapshot (Snapshots) and, when calibrating, which value and phase.
-struct Item {
-  std::size_t index = 0;       ///< snapshot / value / seed index
-  double value = std::nan(""); ///< calibrated parameter's value
-  std::string phase;           ///< scan | search | validate (calibration only)
-};
-
 /// The calibration's state from the rows so far: the evaluated (value, column) points on the
 /// calibration snapshot, and the calibrated value once one is within tolerance.
 struct CalibrationState {
@@ -192,33 +199,6 @@ double next_search_value(const SweepDef::Calibration& c, const CalibrationState&
   throw SetupError("stage '" + stage + "': the calibration target " + c.column + " = " + std::to_string(c.target) +
                      " is not bracketed by the scan (" + (seen.empty() ? std::string("no completed item") : seen) +
                      "); widen calibrate/scan");
-}
-
-/// Item j of the sweep given the rows of items 0..j-1, or nothing when the sweep is complete.
-/// `cal_pos`: position of the calibration snapshot among the n taken ones (-1: not taken).
-std::optional<Item> plan_item(const SweepDef& sw, std::size_t j, std::size_t n, const json& rows, const std::string& stage,
-                              std::int64_t cal_pos) {
-  if (!sw.calibrate) {
-    if (j >= n) return std::nullopt;
-    return Item{j, std::nan(""), ""};
-  }
-  const auto& c = *sw.calibrate;
-  if (cal_pos < 0)
-    throw SetupError("stage '" + stage + "': calibrate/snapshot " + std::to_string(c.snapshot) + " was not taken (" +
-                       std::to_string(n) + " snapshots taken)");
-  const auto ks = static_cast<std::size_t>(cal_pos);
-  if (j < c.scan.size()) return Item{ks, c.scan[j], "scan"};
-  const CalibrationState st = calibration_state(c, rows);
-  if (!std::isfinite(st.found)) {
-    if (st.searches >= static_cast<std::size_t>(c.max_iterations))
-      throw SetupError("stage '" + stage + "': the calibration did not reach " + c.column + " within " +
-                         std::to_string(c.tolerance) + " of the target in " + std::to_string(c.max_iterations) + " search items");
-    return Item{ks, next_search_value(c, st, stage), "search"};
-  }
-  std::size_t validated = 0;
-  for (const auto& r : rows) validated += r.value("phase", "") == "validate";
-  if (validated >= n) return std::nullopt;
-  return Item{validated, st.found, "validate"};
 }
 
 }  // namespace
@@ -369,152 +349,288 @@ json column_statistics(const json& rows, const std::vector<std::string>& columns
   return out;
 }
 
-// ------------------------------------------------------------------------------------ sweeps
-SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record, bool resuming, const RunOptions& opt) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const StageDef& st = sc.stages[k];
-  const SweepDef& sw = *st.sweep;
-  const std::int64_t stage_index = opt.stage_offset + static_cast<std::int64_t>(k);
-  const std::string name = file_name_of(st.cfg.name);
-  const fs::path dir = opt.outdir / ("sweep_" + name);
-  const fs::path table = opt.outdir / ("sweep_" + name + ".csv");
-  const fs::path checkpoint = opt.checkpoint_file.empty() ? opt.outdir / "checkpoint.h5" : opt.checkpoint_file;
-  fs::create_directories(dir);
+// ------------------------------------------------------------------------------------ items
+namespace sweep_detail {
 
-  // The input state: the state before the stage, kept in a file for a restart.
-  State input;
-  json rows = json::array();
-  std::size_t first = 0;
-  std::string input_file = fs::absolute(dir / "input_state.h5").lexically_normal().string();
+std::optional<Item> plan_item(const SweepContext& ctx, std::size_t j, const json& rows) {
+  const SweepDef& sw = *ctx.sw;
+  if (!sw.calibrate) {
+    if (j >= ctx.n) return std::nullopt;
+    return Item{j, std::nan(""), ""};
+  }
+  const auto& c = *sw.calibrate;
+  const std::string& stage = ctx.stage_name;
+  if (ctx.cal_pos < 0)
+    throw SetupError("stage '" + stage + "': calibrate/snapshot " + std::to_string(c.snapshot) + " was not taken (" +
+                     std::to_string(ctx.n) + " snapshots taken)");
+  const auto ks = static_cast<std::size_t>(ctx.cal_pos);
+  if (j < c.scan.size()) return Item{ks, c.scan[j], "scan"};
+  const CalibrationState st = calibration_state(c, rows);
+  if (!std::isfinite(st.found)) {
+    if (st.searches >= static_cast<std::size_t>(c.max_iterations))
+      throw SetupError("stage '" + stage + "': the calibration did not reach " + c.column + " within " +
+                       std::to_string(c.tolerance) + " of the target in " + std::to_string(c.max_iterations) + " search items");
+    return Item{ks, next_search_value(c, st, stage), "search"};
+  }
+  std::size_t validated = 0;
+  for (const auto& r : rows) validated += r.value("phase", "") == "validate";
+  if (validated >= ctx.n) return std::nullopt;
+  return Item{validated, st.found, "validate"};
+}
+
+json ItemJob::to_json() const {
+  return {{"stage", stage}, {"stage_index", stage_index}, {"j", j}, {"index", item.index},
+          {"value", number_or_null(item.value)}, {"phase", item.phase}, {"input_state", input_state},
+          {"snapshot", snapshot}, {"directory", directory}, {"quiet", quiet}};
+}
+
+ItemJob ItemJob::from_json(const json& x) {
+  ItemJob job;
+  job.stage = x.at("stage").get<std::size_t>();
+  job.stage_index = x.at("stage_index").get<std::int64_t>();
+  job.j = x.at("j").get<std::size_t>();
+  job.item = Item{x.at("index").get<std::size_t>(), number_of(x.at("value")), x.at("phase").get<std::string>()};
+  job.input_state = x.at("input_state").get<std::string>();
+  job.snapshot = x.at("snapshot");
+  job.directory = x.at("directory").get<std::string>();
+  job.quiet = x.value("quiet", true);
+  return job;
+}
+
+ItemJob job_of(const SweepContext& ctx, std::size_t j, const Item& item) {
+  ItemJob job;
+  job.stage = ctx.stage;
+  job.stage_index = ctx.stage_index;
+  job.j = j;
+  job.item = item;
+  job.input_state = ctx.input_file;
+  if (ctx.sw->kind == SweepDef::Kind::Snapshots) {
+    const SnapshotRecord& r = ctx.snaps.at(item.index);
+    job.snapshot = {{"file", r.file}, {"index", r.index}, {"step", r.step}, {"time", r.time}, {"value", number_or_null(r.value)}};
+  }
+  job.directory = fs::absolute(ctx.dir / std::to_string(j)).lexically_normal().string();
+  job.quiet = ctx.quiet;
+  return job;
+}
+
+namespace {
+
+/// The one-stage scenario of an item and the keys of its row (before its results).
+Scenario item_scenario(const Scenario& sc, const ItemJob& job, json& row) {
+  const SweepDef& sw = *sc.stages.at(job.stage).sweep;
+  const std::size_t i = job.item.index;
+  json resolved_stage;
+  Scenario sub;
+  sub.stages.push_back(sw.build(sw.calibrate ? sw.calibration_json(job.item.value) : sw.item_json(i), resolved_stage));
+  sub.name = sc.name;
+  sub.seed = sc.seed;
+  sub.materials = sc.materials;
+  sub.law = sc.law;
+  sub.bond_law = sc.bond_law;
+  sub.bond_contact_rule = sc.bond_contact_rule;
+  sub.walls = sc.walls;
+  sub.resolved = sc.resolved;
+  sub.resolved["stages"] = json::array({resolved_stage});
+  row["item"] = job.j;
+  if (sw.calibrate) {
+    row["phase"] = job.item.phase;
+    row["value"] = job.item.value;
+  }
+  switch (sw.kind) {
+    case SweepDef::Kind::Parameter: row["value"] = sw.values.at(i); break;
+    case SweepDef::Kind::Seeds: row["seed"] = sw.seeds.at(i); break;
+    case SweepDef::Kind::Snapshots:
+      row["snapshot"] = job.snapshot.at("file");
+      row["snapshot_index"] = job.snapshot.at("index");
+      row["snapshot_step"] = job.snapshot.at("step");
+      row["snapshot_time"] = job.snapshot.at("time");
+      row["snapshot_value"] = job.snapshot.at("value");
+      break;
+  }
+  row["directory"] = job.directory;
+  sub.resolved["sweep_item"] = row;
+  return sub;
+}
+
+/// The item's start state: its snapshot (with the input's materials and random generator), or
+/// the input state (reseeded for a seed ensemble).
+State item_start(const Scenario& sc, const ItemJob& job, const State& input) {
+  const SweepDef& sw = *sc.stages.at(job.stage).sweep;
+  State start;
+  if (sw.kind == SweepDef::Kind::Snapshots) {
+    read_checkpoint(job.snapshot.at("file").get<std::string>(), start);
+    start.materials = sc.materials;
+    start.rng = input.rng;
+  } else {
+    start = input;
+    if (sw.kind == SweepDef::Kind::Seeds) start.rng.seed(sw.seeds.at(job.item.index));
+  }
+  return start;
+}
+
+}  // namespace
+
+ItemResult run_item(Scenario& sc, const ItemJob& job, const State& input, RunOptions o) {
+  const SweepDef& sw = *sc.stages.at(job.stage).sweep;
+  ItemResult res;
+  json& row = res.row;
+  Scenario sub = item_scenario(sc, job, row);
+  State start;
+  if (!o.restart) start = item_start(sc, job, input);
+  o.outdir = job.directory;
+  o.quiet = job.quiet;
+  o.start = o.restart ? nullptr : &start;
+  o.stage_offset = job.stage_index;
+  try {
+    const json summary = run_scenario(sub, o);
+    const json& e = summary["stages"].at(0);
+    row["status"] = "completed";
+    row["steps"] = e.value("steps", std::int64_t{0});
+    if (e.contains("until_reached")) row["until_reached"] = e["until_reached"];
+    const json all = values_of(e);
+    if (sw.collect.empty()) {
+      row["values"] = all;
+    } else {
+      row["values"] = json::object();
+      for (const auto& c : sw.collect) {
+        row["values"][c] = all.value(c, json(nullptr));
+        if (!all.contains(c)) row["missing"].push_back(c);
+      }
+    }
+    res.steps = summary.value("steps", Step{0});
+    res.particle_steps = static_cast<double>(row["steps"].get<std::int64_t>()) * e.value("particles", 0.0);
+  } catch (const PhysicsError& e) {
+    row["status"] = "failed";
+    row["error"] = e.what();
+  }
+  return res;
+}
+
+json rows_in_order(const std::map<std::size_t, json>& rows) {
+  json out = json::array();
+  for (const auto& [j, r] : rows) out.push_back(r);
+  return out;
+}
+
+json rows_before(const std::map<std::size_t, json>& rows, std::size_t j) {
+  json out = json::array();
+  for (const auto& [q, r] : rows)
+    if (q < j) out.push_back(r);
+  return out;
+}
+
+void write_table(const SweepContext& ctx, const json& rows) {
+  write_text_atomic(ctx.table, table_csv(*ctx.sw, shown_rows(rows, ctx.outdir), table_columns(*ctx.sw, rows)));
+}
+
+}  // namespace sweep_detail
+
+// ------------------------------------------------------------------------------------ sweeps
+namespace {
+
+using namespace sweep_detail;
+
+/// The sweep's context: the input state (the state before the stage, kept in a file for a
+/// restart; on a restart read back from it), its items, and the rows a restart carries over.
+SweepContext sweep_context(Scenario& sc, std::size_t k, const State& s, const RunRecord& record, bool resuming,
+                           const RunOptions& opt) {
+  SweepContext ctx;
+  const StageDef& st = sc.stages[k];
+  ctx.stage = k;
+  ctx.sw = st.sweep.get();
+  ctx.stage_name = st.cfg.name;
+  ctx.stage_index = opt.stage_offset + static_cast<std::int64_t>(k);
+  ctx.quiet = opt.quiet;
+  const std::string name = file_name_of(st.cfg.name);
+  ctx.outdir = opt.outdir;
+  ctx.dir = opt.outdir / ("sweep_" + name);
+  ctx.table = opt.outdir / ("sweep_" + name + ".csv");
+  ctx.checkpoint = opt.checkpoint_file.empty() ? opt.outdir / "checkpoint.h5" : opt.checkpoint_file;
+  fs::create_directories(ctx.dir);
+  ctx.input_file = fs::absolute(ctx.dir / "input_state.h5").lexically_normal().string();
   if (resuming) {
     const json& p = record.sweep;
-    if (!p.is_object() || p.value("stage", std::int64_t{-1}) != stage_index || !p.contains("item") || !p.contains("rows"))
+    if (!p.is_object() || p.value("stage", std::int64_t{-1}) != ctx.stage_index || !p.contains("rows"))
       throw SetupError("the checkpoint lies inside sweep stage '" + st.cfg.name + "' but records no progress of it");
-    first = p["item"].get<std::size_t>();
-    rows = p["rows"];
-    input_file = p.value("input_state", input_file);
-    read_checkpoint(input_file, input);
-    input.materials = sc.materials;
+    for (const auto& r : p["rows"]) ctx.done[r.at("item").get<std::size_t>()] = r;
+    // A one-rank checkpoint lies inside item "item"; a checkpoint of a run on several ranks
+    // records finished rows only (its state is the input state).
+    if (p.contains("item") && p["item"].is_number()) ctx.resume_item = p["item"].get<std::size_t>();
+    ctx.input_file = p.value("input_state", ctx.input_file);
+    read_checkpoint(ctx.input_file, ctx.input);
+    ctx.input.materials = sc.materials;
   } else {
-    input = s;
-    write_state(input_file, input);
+    ctx.input = s;
+    write_state(ctx.input_file, ctx.input);
   }
-
-  std::vector<SnapshotRecord> snaps;
-  std::size_t n = 0;
-  if (sw.kind == SweepDef::Kind::Parameter) n = sw.values.size();
-  if (sw.kind == SweepDef::Kind::Seeds) n = sw.seeds.size();
+  const SweepDef& sw = *ctx.sw;
+  if (sw.kind == SweepDef::Kind::Parameter) ctx.n = sw.values.size();
+  if (sw.kind == SweepDef::Kind::Seeds) ctx.n = sw.seeds.size();
   if (sw.kind == SweepDef::Kind::Snapshots) {
-    snaps = record.of_stage(sw.snapshots_stage);
-    n = snaps.size();
+    ctx.snaps = record.of_stage(sw.snapshots_stage);
+    ctx.n = ctx.snaps.size();
   }
-
-  std::int64_t cal_pos = -1;
   if (sw.calibrate)
-    for (std::size_t q = 0; q < snaps.size(); ++q)
-      if (snaps[q].index == sw.calibrate->snapshot) cal_pos = static_cast<std::int64_t>(q);
+    for (std::size_t q = 0; q < ctx.snaps.size(); ++q)
+      if (ctx.snaps[q].index == sw.calibrate->snapshot) ctx.cal_pos = static_cast<std::int64_t>(q);
+  return ctx;
+}
 
-  SweepOutcome out;
-  auto write_table = [&] { write_text_atomic(table, table_csv(sw, shown_rows(rows, opt.outdir), table_columns(sw, rows))); };
-  for (std::size_t j = first;; ++j) {
+/// One rank: the items in order, each a nested run whose checkpoints go to the main checkpoint
+/// file with the sweep's progress in the pipeline record (a restart resumes inside the item).
+/// Rows finished before a restart are kept, not rerun.
+std::map<std::size_t, ItemResult> run_items_in_order(Scenario& sc, const SweepContext& ctx, RunRecord& record,
+                                                     const RunOptions& opt) {
+  std::map<std::size_t, ItemResult> ran;
+  std::map<std::size_t, json> rows = ctx.done;
+  for (std::size_t j = 0;; ++j) {
     std::optional<Item> item;
     try {
-      item = plan_item(sw, j, n, rows, st.cfg.name, cal_pos);
+      item = plan_item(ctx, j, rows_before(rows, j));
     } catch (...) {
-      write_table();
+      write_table(ctx, rows_in_order(rows));
       throw;
     }
     if (!item) break;
-    const std::size_t i = item->index;
-    const bool resume_item = resuming && j == first;
-    json resolved_stage;
-    Scenario sub;
-    sub.stages.push_back(sw.build(sw.calibrate ? sw.calibration_json(item->value) : sw.item_json(i), resolved_stage));
-    sub.name = sc.name;
-    sub.seed = sc.seed;
-    sub.materials = sc.materials;
-    sub.law = sc.law;
-    sub.bond_law = sc.bond_law;
-    sub.bond_contact_rule = sc.bond_contact_rule;
-    sub.walls = sc.walls;
-    sub.resolved = sc.resolved;
-    sub.resolved["stages"] = json::array({resolved_stage});
-
-    json row;
-    row["item"] = j;
-    if (sw.calibrate) {
-      row["phase"] = item->phase;
-      row["value"] = item->value;
-    }
-    switch (sw.kind) {
-      case SweepDef::Kind::Parameter: row["value"] = sw.values[i]; break;
-      case SweepDef::Kind::Seeds: row["seed"] = sw.seeds[i]; break;
-      case SweepDef::Kind::Snapshots:
-        row["snapshot"] = snaps[i].file;
-        row["snapshot_index"] = snaps[i].index;
-        row["snapshot_step"] = snaps[i].step;
-        row["snapshot_time"] = snaps[i].time;
-        row["snapshot_value"] = number_or_null(snaps[i].value);
-        break;
-    }
-    const fs::path item_dir = dir / std::to_string(j);
-    row["directory"] = fs::absolute(item_dir).lexically_normal().string();
-    sub.resolved["sweep_item"] = row;
-
-    State start;
-    if (!resume_item) {
-      if (sw.kind == SweepDef::Kind::Snapshots) {
-        read_checkpoint(snaps[i].file, start);
-        start.materials = sc.materials;
-        start.rng = input.rng;
-      } else {
-        start = input;
-        if (sw.kind == SweepDef::Kind::Seeds) start.rng.seed(sw.seeds[i]);
-      }
-    }
+    if (rows.count(j)) continue;  // finished before the restart
     RunOptions o;
-    o.outdir = item_dir;
-    o.quiet = opt.quiet;
-    o.start = resume_item ? nullptr : &start;
-    if (resume_item) o.restart = opt.restart;
-    o.stage_offset = stage_index;
-    o.checkpoint_file = checkpoint;
-    record.sweep = {{"stage", stage_index}, {"item", j}, {"rows", rows}, {"input_state", input_file}};
+    o.checkpoint_file = ctx.checkpoint;
+    if (ctx.resume_item == j) o.restart = opt.restart;
+    record.sweep = {{"stage", ctx.stage_index}, {"item", j}, {"rows", rows_in_order(rows)}, {"input_state", ctx.input_file}};
     o.record = [&record] { return record.to_json(); };
     try {
-      const json summary = run_scenario(sub, o);
-      const json& e = summary["stages"].at(0);
-      row["status"] = "completed";
-      row["steps"] = e.value("steps", std::int64_t{0});
-      if (e.contains("until_reached")) row["until_reached"] = e["until_reached"];
-      const json all = values_of(e);
-      if (sw.collect.empty()) {
-        row["values"] = all;
-      } else {
-        row["values"] = json::object();
-        for (const auto& c : sw.collect) {
-          row["values"][c] = all.value(c, json(nullptr));
-          if (!all.contains(c)) row["missing"].push_back(c);
-        }
-      }
-      const auto steps = summary.value("steps", Step{0});
-      out.steps += steps;
-      out.particle_steps += static_cast<double>(row["steps"].get<std::int64_t>()) * e.value("particles", 0.0);
-    } catch (const PhysicsError& e) {
-      row["status"] = "failed";
-      row["error"] = e.what();
+      ItemResult r = run_item(sc, job_of(ctx, j, *item), ctx.input, o);
+      rows[j] = r.row;
+      ran[j] = std::move(r);
     } catch (...) {
-      write_table();
+      write_table(ctx, rows_in_order(rows));
       throw;
     }
-    rows.push_back(row);
-    write_table();
+    write_table(ctx, rows_in_order(rows));
   }
-  record.sweep = nullptr;
+  return ran;
+}
 
+/// Several ranks: the items spread over them (sweep_ranks.cpp). After every finished item the
+/// table and a checkpoint at the stage's input state recording the finished rows are written;
+/// a restart (on any number of ranks) reruns only the items not finished.
+std::map<std::size_t, ItemResult> run_items_spread(Scenario& sc, const SweepContext& ctx, RunRecord& record) {
+  State progress_state = ctx.input;
+  progress_state.stage_index = ctx.stage_index;
+  auto progress = [&](const std::map<std::size_t, json>& rows) {
+    const json ordered = rows_in_order(rows);
+    write_table(ctx, ordered);
+    record.sweep = {{"stage", ctx.stage_index}, {"item", nullptr}, {"rows", ordered}, {"input_state", ctx.input_file}};
+    write_progress_checkpoint(ctx.checkpoint, progress_state, record.to_json());
+  };
+  return run_items_over_ranks(sc, ctx, progress);
+}
+
+/// The stage's summary entry from its rows.
+json sweep_entry(const SweepContext& ctx, const StageDef& st, const json& rows) {
+  const SweepDef& sw = *ctx.sw;
   const auto cols = table_columns(sw, rows);
-  write_table();
-  json& e = out.entry;
+  json e;
   e["name"] = st.cfg.name;
   e["type"] = st.type;
   json& x = e["sweep"];
@@ -531,20 +647,40 @@ SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record,
     cj["map"] = json::array();
     for (const auto& [v, y] : cs.points) cj["map"].push_back({v, y});
   }
-  x["table"] = table.filename().string();
-  x["directory"] = dir.filename().string();
-  x["input_state"] = shown(input_file, opt.outdir);
+  x["table"] = ctx.table.filename().string();
+  x["directory"] = ctx.dir.filename().string();
+  x["input_state"] = shown(ctx.input_file, ctx.outdir);
   x["items"] = rows.size();
   x["failed"] = std::count_if(rows.begin(), rows.end(), [](const json& r) { return r.value("status", "") != "completed"; });
   x["columns"] = cols;
-  x["rows"] = shown_rows(rows, opt.outdir);
+  x["rows"] = shown_rows(rows, ctx.outdir);
   if (sw.kind == SweepDef::Kind::Seeds) x["statistics"] = column_statistics(rows, cols);
   std::int64_t item_steps = 0;
   for (const auto& r : rows) item_steps += r.value("steps", std::int64_t{0});
   e["steps"] = item_steps;  // of every item, also those run before a restart
-  e["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  s = std::move(input);  // a sweep is a branch: the main state goes on from the state before it
-  s.stage_index = stage_index;
+  return e;
+}
+
+}  // namespace
+
+SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record, bool resuming, const RunOptions& opt) {
+  const auto t0 = std::chrono::steady_clock::now();
+  SweepContext ctx = sweep_context(sc, k, s, record, resuming, opt);
+  const auto ran = ranks::size() > 1 ? run_items_spread(sc, ctx, record) : run_items_in_order(sc, ctx, record, opt);
+  record.sweep = nullptr;
+  std::map<std::size_t, json> rows = ctx.done;
+  SweepOutcome out;
+  for (const auto& [j, r] : ran) {
+    rows[j] = r.row;
+    out.steps += r.steps;
+    out.particle_steps += r.particle_steps;
+  }
+  const json ordered = rows_in_order(rows);
+  write_table(ctx, ordered);
+  out.entry = sweep_entry(ctx, sc.stages[k], ordered);
+  out.entry["wall_time_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  s = std::move(ctx.input);  // a sweep is a branch: the main state goes on from the state before it
+  s.stage_index = ctx.stage_index;
   return out;
 }
 

@@ -112,4 +112,11 @@ struct SweepOutcome {
 /// goes on; Interrupted and SetupError propagate (after the table so far is written).
 SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record, bool resuming, const RunOptions& opt);
 
+/// On a run over several MPI ranks (io/mpi/ranks.hpp), every rank but 0 serves sweep items:
+/// waits (sleeping between probes) for an item from rank 0, runs it into its directory, sends
+/// back its row, until rank 0's stop signal; returns the exit code rank 0 sent with it.
+int serve_sweep_items(Scenario& sc);
+/// Rank 0: sends the stop signal with its exit code to every other rank (nothing on one rank).
+void stop_sweep_servers(int exit_code);
+
 }  // namespace sparkdem::io

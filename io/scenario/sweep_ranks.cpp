@@ -1,0 +1,254 @@
+/// Sweep items spread over MPI ranks (see sweep_items.hpp and io/mpi/ranks.hpp).
+///
+/// Rank 0 owns the plan, the table and the checkpoints. Its main thread runs items like any
+/// other rank; a second thread (the dispatcher) hands items to the other ranks as they come free
+/// and collects their rows. The plan is the one-rank plan: item j's row lands at place j whatever
+/// the order the items finish in, a calibration's search items wait for every earlier row (each
+/// depends on all of them), its scan and validation items do not. The other ranks wait in
+/// serve_sweep_items for an item or the stop signal, sleeping between probes.
+#include <algorithm>
+#include <condition_variable>
+#include <exception>
+#include <map>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "engine/core/error.hpp"
+#include "engine/core/interrupt.hpp"
+#include "io/mpi/ranks.hpp"
+#include "io/scenario/sweep_items.hpp"
+
+namespace sparkdem::io {
+
+namespace fs = std::filesystem;
+
+namespace sweep_detail {
+
+namespace {
+
+/// The plan of one sweep, shared by rank 0's two threads.
+class Scheduler {
+ public:
+  Scheduler(const SweepContext& ctx, std::function<void(const std::map<std::size_t, json>&)> progress)
+      : ctx_(ctx), progress_(std::move(progress)), rows_(ctx.done) {}
+
+  /// The next item to run; `wait`: block until one can be planned or the sweep is over (then
+  /// nothing); otherwise nothing when none can be planned now.
+  std::optional<ItemJob> take(bool wait) {
+    std::unique_lock lock(m_);
+    for (;;) {
+      if (error_) return std::nullopt;
+      if (auto job = plan_locked()) return job;
+      if (!wait || over_locked()) return std::nullopt;
+      cv_.wait(lock);
+    }
+  }
+  void complete(std::size_t j, ItemResult r) {
+    std::lock_guard lock(m_);
+    running_.erase(j);
+    rows_[j] = r.row;
+    ran_[j] = std::move(r);
+    try {
+      progress_(rows_);
+    } catch (...) {
+      if (!error_) error_ = std::current_exception();
+    }
+    cv_.notify_all();
+  }
+  void fail(std::size_t j, std::exception_ptr e) {
+    std::lock_guard lock(m_);
+    running_.erase(j);
+    if (!error_) error_ = e;
+    cv_.notify_all();
+  }
+  /// No item left to hand out and none running.
+  bool over() {
+    std::lock_guard lock(m_);
+    return over_locked();
+  }
+  std::exception_ptr error() {
+    std::lock_guard lock(m_);
+    return error_;
+  }
+  std::map<std::size_t, ItemResult> results() {
+    std::lock_guard lock(m_);
+    return ran_;
+  }
+
+ private:
+  bool over_locked() const { return running_.empty() && (exhausted_ || error_); }
+  /// The next item that can be planned now: any item of a plain sweep, a calibration's scan item
+  /// or its next validation item; a search item (or the first item after the scan) only when
+  /// every earlier row is in.
+  std::optional<ItemJob> plan_locked() {
+    const SweepDef& sw = *ctx_.sw;
+    while (!exhausted_) {
+      const std::size_t j = next_;
+      if (rows_.count(j)) {  // finished before a restart
+        ++next_;
+        if (!sw.calibrate && next_ >= ctx_.n) exhausted_ = true;
+        continue;
+      }
+      std::optional<Item> item;
+      const bool independent = !sw.calibrate || j < sw.calibrate->scan.size() || validating_;
+      if (!independent && !running_.empty()) return std::nullopt;
+      if (validating_) {
+        if (next_validation_ < ctx_.n) item = Item{next_validation_, calibrated_, "validate"};
+      } else {
+        try {
+          item = plan_item(ctx_, j, rows_before(rows_, j));
+        } catch (...) {
+          error_ = std::current_exception();
+          return std::nullopt;
+        }
+      }
+      if (!item) {
+        exhausted_ = true;
+        return std::nullopt;
+      }
+      if (item->phase == "validate") {
+        validating_ = true;
+        calibrated_ = item->value;
+        next_validation_ = item->index + 1;
+      }
+      ++next_;
+      running_.insert(j);
+      return job_of(ctx_, j, *item);
+    }
+    return std::nullopt;
+  }
+
+  const SweepContext& ctx_;
+  std::function<void(const std::map<std::size_t, json>&)> progress_;
+  std::mutex m_;
+  std::condition_variable cv_;
+  std::map<std::size_t, json> rows_;
+  std::map<std::size_t, ItemResult> ran_;
+  std::set<std::size_t> running_;
+  std::size_t next_ = 0;
+  bool exhausted_ = false;
+  bool validating_ = false;
+  double calibrated_ = 0.0;
+  std::size_t next_validation_ = 0;
+  std::exception_ptr error_;
+};
+
+/// Rank 0's second thread: keeps every other rank busy until the plan is over.
+void dispatch(Scheduler& sched) {
+  std::map<int, std::size_t> busy;  // rank -> item
+  std::vector<int> idle;
+  for (int r = ranks::size() - 1; r >= 1; --r) idle.push_back(r);
+  for (;;) {
+    while (!idle.empty()) {
+      auto job = sched.take(false);
+      if (!job) break;
+      const int r = idle.back();
+      idle.pop_back();
+      busy[r] = job->j;
+      ranks::send(r, ranks::kItem, job->to_json().dump());
+    }
+    if (busy.empty() && (sched.over() || sched.error())) return;
+    if (auto m = ranks::poll(ranks::kResult)) {
+      const json x = json::parse(m->text);
+      const std::size_t j = x.at("j").get<std::size_t>();
+      busy.erase(m->source);
+      idle.push_back(m->source);
+      if (x.contains("error")) {
+        const std::string what = "rank " + std::to_string(m->source) + ", sweep item " + std::to_string(j) + ": " +
+                                 x["error"].get<std::string>();
+        const std::string kind = x.value("kind", "");
+        std::exception_ptr e = kind == "interrupted" ? std::make_exception_ptr(Interrupted(what))
+                               : kind == "setup"     ? std::make_exception_ptr(SetupError(what))
+                                                     : std::make_exception_ptr(std::runtime_error(what));
+        sched.fail(j, e);
+      } else {
+        ItemResult r;
+        r.row = x.at("row");
+        r.steps = x.at("steps").get<Step>();
+        r.particle_steps = x.at("particle_steps").get<double>();
+        sched.complete(j, std::move(r));
+      }
+      continue;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+/// Item checkpoints of a run on several ranks go to the item's own directory (a restart reruns
+/// an unfinished item from its start, so they only serve the item's own crash outputs).
+RunOptions spread_item_options(const ItemJob& job) {
+  RunOptions o;
+  o.checkpoint_file = fs::path(job.directory) / "checkpoint.h5";
+  return o;
+}
+
+}  // namespace
+
+std::map<std::size_t, ItemResult> run_items_over_ranks(Scenario& sc, const SweepContext& ctx,
+                                                       const std::function<void(const std::map<std::size_t, json>&)>& progress) {
+  Scheduler sched(ctx, progress);
+  std::thread dispatcher([&sched] {
+    try {
+      dispatch(sched);
+    } catch (...) {
+      sched.fail(static_cast<std::size_t>(-1), std::current_exception());
+    }
+  });
+  while (auto job = sched.take(true)) {
+    try {
+      ItemResult r = run_item(sc, *job, ctx.input, spread_item_options(*job));
+      sched.complete(job->j, std::move(r));
+    } catch (...) {
+      sched.fail(job->j, std::current_exception());
+    }
+  }
+  dispatcher.join();
+  if (auto e = sched.error()) std::rethrow_exception(e);
+  return sched.results();
+}
+
+}  // namespace sweep_detail
+
+int serve_sweep_items(Scenario& sc) {
+  using namespace sweep_detail;
+  std::map<std::string, State> inputs;  // input state files read so far
+  for (;;) {
+    const ranks::Message m = ranks::wait(-1);
+    if (m.tag == ranks::kStop) return json::parse(m.text).value("exit_code", 0);
+    if (m.tag != ranks::kItem) continue;
+    json reply;
+    std::size_t j = 0;
+    try {
+      const ItemJob job = ItemJob::from_json(json::parse(m.text));
+      j = job.j;
+      reply["j"] = j;
+      auto it = inputs.find(job.input_state);
+      if (it == inputs.end()) {
+        State input;
+        read_checkpoint(job.input_state, input);
+        input.materials = sc.materials;
+        it = inputs.emplace(job.input_state, std::move(input)).first;
+      }
+      ItemResult r = run_item(sc, job, it->second, spread_item_options(job));
+      reply["row"] = r.row;
+      reply["steps"] = r.steps;
+      reply["particle_steps"] = r.particle_steps;
+    } catch (const Interrupted& e) {
+      reply = {{"j", j}, {"error", e.what()}, {"kind", "interrupted"}};
+    } catch (const SetupError& e) {
+      reply = {{"j", j}, {"error", e.what()}, {"kind", "setup"}};
+    } catch (const std::exception& e) {
+      reply = {{"j", j}, {"error", e.what()}, {"kind", "internal"}};
+    }
+    ranks::send(0, ranks::kResult, reply.dump());
+  }
+}
+
+void stop_sweep_servers(int exit_code) {
+  if (ranks::rank() != 0) return;
+  const std::string msg = json{{"exit_code", exit_code}}.dump();
+  for (int r = 1; r < ranks::size(); ++r) ranks::send(r, ranks::kStop, msg);
+}
+
+}  // namespace sparkdem::io
