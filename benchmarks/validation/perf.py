@@ -20,6 +20,7 @@ Sources (each optional; a missing file is reported and skipped):
                                            but for short compiles)
   benchmarks/electric_solvers/results.csv  the fastest method per network family at its largest size
                                            with a true error <= 1e-6 (and <= 1e-8)
+  benchmarks/ranks/results.csv       sweeps over MPI ranks: wall time at 1 and 2 ranks, efficiency
 """
 import csv
 import json
@@ -149,9 +150,23 @@ def networks(path):
     return recs
 
 
+def ranks(path):
+    recs = []
+    for r in _rows(path):
+        scene = os.path.splitext(os.path.basename(r["scene"]))[0]
+        recs.append({"id": f"perf/ranks/{scene}/{r['ranks']}", "scene": r["scene"],
+                     "variant": f"{r['ranks']} MPI rank(s) x {r['threads_per_rank']} thread", "threads": None,
+                     "ranks": int(r["ranks"]), "items": int(r["sweep_items"]), "figure": "whole-run wall time",
+                     "value": _num(r["wall_s"]), "unit": "s", "ratio": _num(r["sweep_efficiency"]),
+                     "ratio_of": "sweep stages' speed-up / ranks", "run_efficiency": _num(r["efficiency"]),
+                     "equal_to_1_rank": r["tables_equal_to_1_rank"] == "True", "commit": r["commit"],
+                     "load_average": _num(r["load_average_at_start"])})
+    return recs
+
+
 SOURCES = [("mechanics/results.csv", mechanics), ("threads/results.csv", threads), ("memory/results.csv", memory),
            ("sps_nial/profile_summary.json", sps_nial), ("sps_nial/profile_summary.json", sps_split),
-           ("electric_solvers/results.csv", networks)]
+           ("electric_solvers/results.csv", networks), ("ranks/results.csv", ranks)]
 
 
 def collect():

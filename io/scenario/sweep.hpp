@@ -9,7 +9,9 @@
 /// scenario) into OUTDIR/sweep_<stage>/<item>/ (its own results.h5, timeseries.csv, summary.json,
 /// final_state.h5), starting from the input state: the state before the stage (written to
 /// OUTDIR/sweep_<stage>/input_state.h5), reseeded for a seed ensemble, or a snapshot. The nested
-/// runs write their checkpoints to the main checkpoint file. The table of the items goes to
+/// runs write their checkpoints to the main checkpoint file (on several MPI ranks, see
+/// sweep_ranks.cpp: to their own directories, and rank 0 writes the main checkpoint with the
+/// finished rows after every item). The table of the items goes to
 /// OUTDIR/sweep_<stage>.csv (rewritten after every item) and to the stage's summary entry.
 ///
 /// RunRecord: what the pipeline keeps beside the state (snapshots taken, the first value of each
