@@ -8,6 +8,10 @@
 //
 // Usage: bench_electric [--sizes 1000,10000,100000] [--families packing,bonded,sintered]
 //                       [--csv FILE] [--pt-budget SECONDS] [--seed N]
+//
+// Spread solves (issue 24 item 2): `mpirun -np N bench_electric --spread ...` runs the benchmark on
+// rank 0, its reference on rank 0 alone, and every Amg solve spread over the N ranks
+// (engine/graph/hypre_amg.hpp; method "amg_spread<N>"), the other ranks serving rank 0's commands.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -24,7 +28,11 @@
 #include <vector>
 
 #include "engine/core/error.hpp"
+#include "engine/graph/hypre_amg.hpp"
 #include "engine/graph/laplacian.hpp"
+
+#include <mpi.h>
+#include <thread>
 
 using namespace sparkdem;
 
@@ -146,6 +154,7 @@ struct Run {
   std::string method, param, status = "ok";
   double wall = NAN, indicator = NAN, rel_residual = NAN, G = NAN, g_err = NAN, v_err = NAN;
   long iterations = -1;
+  int ranks = 1;  ///< Amg: ranks the solve was spread over
   LaplacianResult res;
 };
 
@@ -173,6 +182,7 @@ Run run(const Network& net, const LaplacianOptions& opt, const std::string& para
     r.rel_residual = r.res.relative_residual;
     r.indicator = opt.method == LaplacianMethod::PseudoTransient ? r.res.pseudo.change_indicator : r.res.relative_residual;
     r.G = r.res.dirichlet_flux[0] / 1.0;
+    r.ranks = r.res.amg_ranks;
   } catch (const std::exception& e) {
     r.wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const std::string msg = e.what();
@@ -202,9 +212,33 @@ std::string num(double v) {
   return buf;
 }
 
+/// --spread on a rank other than 0: carry out rank 0's solve commands until its stop (tag 99).
+constexpr int kStopTag = 99;
+
 }  // namespace
 
+int bench_main(int argc, char** argv, int ranks);
+
 int main(int argc, char** argv) {
+  bool spread = false;
+  for (int i = 1; i < argc; ++i) spread = spread || std::string(argv[i]) == "--spread";
+  if (!spread) return bench_main(argc, argv, 1);
+  int provided = 0, rank = 0, size = 1;
+  MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  int rc = 0;
+  if (rank == 0) {
+    rc = bench_main(argc, argv, size);
+    for (int r = 1; r < size; ++r) MPI_Send(nullptr, 0, MPI_CHAR, r, kStopTag, MPI_COMM_WORLD);
+  } else {
+    serve_amg_commands_until(kStopTag);
+  }
+  MPI_Finalize();
+  return rc;
+}
+
+int bench_main(int argc, char** argv, int ranks) {
   std::vector<std::size_t> sizes = {1000, 10000, 100000};
   std::vector<std::string> families = {"packing", "bonded", "sintered"};
   std::string csv = "results.csv";
@@ -228,6 +262,7 @@ int main(int argc, char** argv) {
     else if (a == "--tolerances") { tols.clear(); for (auto& s : split(next())) tols.push_back(std::stod(s)); }
     else if (a == "--amg-threshold") amg_defaults.amg_strong_threshold = std::stod(next());
     else if (a == "--amg-aggressive") amg_defaults.amg_aggressive_levels = std::stoi(next());
+    else if (a == "--spread") continue;
     else {
       std::cerr << "usage: bench_electric [--sizes N,..] [--families packing,bonded,sintered] [--csv FILE] [--pt-budget S]"
                    " [--seed N] [--solvers cg_ic,cg_jacobi,amg,pseudo_transient] [--tolerances 1e-4,..]"
@@ -262,7 +297,9 @@ int main(int argc, char** argv) {
       LaplacianOptions ro;
       ro.method = direct_ref ? LaplacianMethod::Direct : LaplacianMethod::Amg;
       ro.tolerance = 1e-13;
+      set_amg_spread_ranks(1);  // the reference on one process
       Run ref = run(net, ro, direct_ref ? "" : "1e-13");
+      set_amg_spread_ranks(ranks);
       if (ref.status != "ok") { std::cerr << "reference failed\n"; return 1; }
       const double G_ref = ref.G;
       std::cerr << "  reference " << ref.method << " " << ref.wall << " s, G = " << G_ref << std::endl;
@@ -277,6 +314,7 @@ int main(int argc, char** argv) {
           o.method = m;
           o.tolerance = t;
           rows.push_back(run(net, o, num(t)));
+          if (m == LaplacianMethod::Amg && ranks > 1) rows.back().method = "amg_spread" + std::to_string(rows.back().ranks);
           std::cerr << "  " << rows.back().method << " " << t << " " << rows.back().wall << " s" << std::endl;
         }
       // Pseudo-transient: iteration cap from a 50-iteration calibration run, so that one run

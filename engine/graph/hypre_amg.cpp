@@ -6,7 +6,14 @@
 #include <HYPRE_IJ_mv.h>
 #include <HYPRE_parcsr_ls.h>
 
+#include <algorithm>
+#include <atomic>
+#include <cstdint>
+#include <chrono>
 #include <cstdlib>
+#include <thread>
+#include <cstring>
+#include <map>
 #include <mutex>
 #include <string>
 #include <vector>
@@ -75,14 +82,61 @@ void ensure_mpi() {
   if (!failure.empty()) throw SetupError(failure);
 }
 
+// ----------------------------------------------------------------------------- spread solves
+namespace {
+
+std::atomic<int> g_spread_ranks{1};
+std::atomic<std::int64_t> g_next_id{1};
+
+/// MPI_COMM_WORLD duplicated for the spread solves (collective: created by every rank at the
+/// first spread setup, which every rank joins).
+MPI_Comm spread_comm() {
+  static MPI_Comm comm = MPI_COMM_NULL;
+  if (comm == MPI_COMM_NULL) MPI_Comm_dup(MPI_COMM_WORLD, &comm);
+  return comm;
+}
+
+/// A command from rank 0 to the others: fixed header (op, solver id, sizes) and parameters.
+enum Op : std::int64_t { kSetup = 1, kSolve = 2, kDestroy = 3 };
+struct Command {
+  std::int64_t op = 0, id = 0, n = 0, lo = 0, hi = 0, nnz = 0, max_iterations = 0, aggressive_levels = 0;
+  double tolerance = 0.0, strong_threshold = 0.0;
+};
+
+void send_command(int rank, const Command& c) {
+  MPI_Send(&c, static_cast<int>(sizeof c), MPI_CHAR, rank, kAmgCommandTag, MPI_COMM_WORLD);
+}
+template <class T>
+void send_data(int rank, const T* data, std::size_t count) {
+  MPI_Send(data, static_cast<int>(count * sizeof(T)), MPI_CHAR, rank, kAmgDataTag, MPI_COMM_WORLD);
+}
+template <class T>
+std::vector<T> receive_data(int rank, std::size_t count) {
+  std::vector<T> v(count);
+  MPI_Recv(v.data(), static_cast<int>(count * sizeof(T)), MPI_CHAR, rank, kAmgDataTag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+  return v;
+}
+
+/// First row of rank r's block when n rows are cut into p contiguous blocks.
+std::int64_t block_start(std::int64_t n, int p, int r) { return n * r / p; }
+
+}  // namespace
+
+void set_amg_spread_ranks(int ranks) { g_spread_ranks.store(std::max(1, ranks)); }
+int amg_spread_ranks() { return g_spread_ranks.load(); }
+
+// ------------------------------------------------------------------------------------ solver
 struct HypreAmgPcg::Impl {
   HYPRE_IJMatrix A = nullptr;
   HYPRE_IJVector b = nullptr, x = nullptr;
   HYPRE_ParCSRMatrix pA = nullptr;
   HYPRE_ParVector pb = nullptr, px = nullptr;
   HYPRE_Solver pcg = nullptr, amg = nullptr;
-  HYPRE_BigInt n = 0;
-  std::vector<HYPRE_BigInt> rows;
+  HYPRE_BigInt n = 0;                 ///< global rows
+  HYPRE_BigInt lo = 0, hi = 0;        ///< this rank's rows [lo, hi)
+  std::vector<HYPRE_BigInt> rows;     ///< lo .. hi-1
+  int ranks = 1;                      ///< ranks the matrix is spread over (1: MPI_COMM_SELF)
+  std::int64_t id = 0;                ///< spread solver's id on every rank
   bool ready = false;
 
   ~Impl() { clear(); }
@@ -94,6 +148,12 @@ struct HypreAmgPcg::Impl {
       b = x = nullptr;
       return;
     }
+    if (ranks > 1 && id != 0 && rank0()) {
+      Command c;
+      c.op = kDestroy;
+      c.id = id;
+      for (int r = 1; r < ranks; ++r) send_command(r, c);
+    }
     if (pcg) HYPRE_ParCSRPCGDestroy(pcg);
     if (amg) HYPRE_BoomerAMGDestroy(amg);
     if (A) HYPRE_IJMatrixDestroy(A);
@@ -102,6 +162,94 @@ struct HypreAmgPcg::Impl {
     pcg = amg = nullptr;
     A = nullptr;
     b = x = nullptr;
+    ranks = 1;
+    id = 0;
+  }
+  static bool rank0() {
+    int r = 0;
+    MPI_Comm_rank(MPI_COMM_WORLD, &r);
+    return r == 0;
+  }
+
+  /// Creates the matrix of rows [lo, hi) (CSR: ncols per row, global columns, values) on `comm`,
+  /// the vectors and the preconditioned CG with its AMG hierarchy. Collective over `comm`.
+  void build(MPI_Comm comm, const std::vector<HYPRE_Int>& ncols, const std::vector<HYPRE_BigInt>& cols,
+             const double* vals, const HypreAmgPcg::Settings& settings) {
+    const HYPRE_BigInt last = hi - 1;
+    rows.resize(static_cast<std::size_t>(hi - lo));
+    for (HYPRE_BigInt r = lo; r < hi; ++r) rows[static_cast<std::size_t>(r - lo)] = r;
+    // Rows whose columns lie in the block go to the diagonal part, the rest off-diagonal.
+    std::vector<HYPRE_Int> diag(rows.size(), 0), offd(rows.size(), 0);
+    for (std::size_t r = 0, k = 0; r < rows.size(); ++r)
+      for (HYPRE_Int q = 0; q < ncols[r]; ++q, ++k) (cols[k] >= lo && cols[k] < hi ? diag[r] : offd[r])++;
+    check(HYPRE_IJMatrixCreate(comm, lo, last, lo, last, &A), "IJMatrixCreate");
+    check(HYPRE_IJMatrixSetObjectType(A, HYPRE_PARCSR), "IJMatrixSetObjectType");
+    check(HYPRE_IJMatrixSetDiagOffdSizes(A, diag.data(), offd.data()), "IJMatrixSetDiagOffdSizes");
+    check(HYPRE_IJMatrixInitialize(A), "IJMatrixInitialize");
+    if (!rows.empty())
+      check(HYPRE_IJMatrixSetValues(A, static_cast<HYPRE_Int>(rows.size()), const_cast<HYPRE_Int*>(ncols.data()), rows.data(),
+                                    cols.data(), vals),
+            "IJMatrixSetValues");
+    check(HYPRE_IJMatrixAssemble(A), "IJMatrixAssemble");
+    check(HYPRE_IJMatrixGetObject(A, reinterpret_cast<void**>(&pA)), "IJMatrixGetObject");
+    for (HYPRE_IJVector* v : {&b, &x}) {
+      check(HYPRE_IJVectorCreate(comm, lo, last, v), "IJVectorCreate");
+      check(HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR), "IJVectorSetObjectType");
+      check(HYPRE_IJVectorInitialize(*v), "IJVectorInitialize");
+      check(HYPRE_IJVectorAssemble(*v), "IJVectorAssemble");
+    }
+    check(HYPRE_IJVectorGetObject(b, reinterpret_cast<void**>(&pb)), "IJVectorGetObject");
+    check(HYPRE_IJVectorGetObject(x, reinterpret_cast<void**>(&px)), "IJVectorGetObject");
+
+    // One V-cycle per PCG iteration. HMIS coarsening with extended+i interpolation (hypre's
+    // defaults, set explicitly), forward/backward hybrid Gauss-Seidel down/up (13/14: a symmetric
+    // cycle, as PCG needs), Gaussian elimination on the coarsest level.
+    check(HYPRE_BoomerAMGCreate(&amg), "BoomerAMGCreate");
+    HYPRE_BoomerAMGSetPrintLevel(amg, 0);
+    HYPRE_BoomerAMGSetMaxIter(amg, 1);
+    HYPRE_BoomerAMGSetTol(amg, 0.0);
+    HYPRE_BoomerAMGSetCoarsenType(amg, 10);
+    HYPRE_BoomerAMGSetInterpType(amg, 6);
+    HYPRE_BoomerAMGSetPMaxElmts(amg, 4);
+    HYPRE_BoomerAMGSetStrongThreshold(amg, settings.strong_threshold);
+    HYPRE_BoomerAMGSetCycleRelaxType(amg, 13, 1);
+    HYPRE_BoomerAMGSetCycleRelaxType(amg, 14, 2);
+    HYPRE_BoomerAMGSetCycleRelaxType(amg, 9, 3);
+    if (settings.aggressive_levels > 0) HYPRE_BoomerAMGSetAggNumLevels(amg, settings.aggressive_levels);
+    HYPRE_BoomerAMGSetKeepTranspose(amg, 1);  // store P^T: faster restriction, more memory
+
+    check(HYPRE_ParCSRPCGCreate(comm, &pcg), "ParCSRPCGCreate");
+    HYPRE_PCGSetTwoNorm(pcg, 1);
+    HYPRE_PCGSetPrintLevel(pcg, 0);
+    HYPRE_PCGSetLogging(pcg, 1);
+    check(HYPRE_ParCSRPCGSetPrecond(pcg, HYPRE_BoomerAMGSolve, HYPRE_BoomerAMGSetup, amg), "ParCSRPCGSetPrecond");
+    check(HYPRE_ParCSRPCGSetup(pcg, pA, pb, px), "ParCSRPCGSetup (BoomerAMG setup)");
+    ready = true;
+  }
+
+  /// PCG on the local blocks of b and x (x: initial guess in, iterate out). Collective.
+  HypreAmgPcg::Outcome run(const double* rhs, double* xv, double tol, int max_iterations) {
+    Outcome out;
+    const auto nl = static_cast<HYPRE_Int>(rows.size());
+    if (nl > 0) {
+      check(HYPRE_IJVectorSetValues(b, nl, rows.data(), rhs), "IJVectorSetValues");
+      check(HYPRE_IJVectorSetValues(x, nl, rows.data(), xv), "IJVectorSetValues");
+    }
+    HYPRE_PCGSetTol(pcg, tol);
+    HYPRE_PCGSetAbsoluteTol(pcg, 0.0);
+    HYPRE_PCGSetMaxIter(pcg, max_iterations);
+    // Non-convergence comes back as an error flag (HYPRE_ERROR_CONV): judged below, not thrown.
+    HYPRE_ParCSRPCGSolve(pcg, pA, pb, px);
+    HYPRE_ClearAllErrors();
+    HYPRE_Int it = 0;
+    HYPRE_Real rel = 0.0;
+    HYPRE_PCGGetNumIterations(pcg, &it);
+    HYPRE_PCGGetFinalRelativeResidualNorm(pcg, &rel);
+    if (nl > 0) check(HYPRE_IJVectorGetValues(x, nl, rows.data(), xv), "IJVectorGetValues");
+    out.iterations = static_cast<int>(it);
+    out.relative_residual = rel;
+    out.converged = rel <= tol;
+    return out;
   }
 };
 
@@ -110,6 +258,7 @@ HypreAmgPcg::HypreAmgPcg(Settings s) : settings_(s), impl_(std::make_unique<Impl
 HypreAmgPcg::~HypreAmgPcg() = default;
 
 bool HypreAmgPcg::ready() const { return impl_->ready; }
+int HypreAmgPcg::ranks() const { return impl_->ranks; }
 
 void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
   Impl& im = *impl_;
@@ -118,59 +267,41 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
   if (im.n == 0) { im.ready = true; return; }
   if (!M.isCompressed()) throw SetupError("HypreAmgPcg::setup: the matrix must be compressed");
   ensure_mpi();
-  const HYPRE_BigInt last = im.n - 1;
-  // The matrix is symmetric, so its compressed columns are its rows (CSR).
-  std::vector<HYPRE_Int> ncols(static_cast<std::size_t>(im.n)), offd(static_cast<std::size_t>(im.n), 0);
-  std::vector<HYPRE_BigInt> cols(static_cast<std::size_t>(M.nonZeros()));
-  im.rows.resize(static_cast<std::size_t>(im.n));
-  for (HYPRE_BigInt r = 0; r < im.n; ++r) {
-    im.rows[r] = r;
-    ncols[r] = static_cast<HYPRE_Int>(M.outerIndexPtr()[r + 1] - M.outerIndexPtr()[r]);
+  const int p = amg_spread_ranks();
+  const bool spread = p > 1 && M.rows() >= settings_.spread_min_rows;
+  im.ranks = spread ? p : 1;
+  // The matrix is symmetric, so its compressed columns are its rows (CSR); rank r gets the
+  // contiguous block of rows [n r / p, n (r + 1) / p).
+  auto block = [&](std::int64_t lo, std::int64_t hi, std::vector<HYPRE_Int>& ncols, std::vector<HYPRE_BigInt>& cols) {
+    ncols.resize(static_cast<std::size_t>(hi - lo));
+    for (std::int64_t r = lo; r < hi; ++r) ncols[r - lo] = static_cast<HYPRE_Int>(M.outerIndexPtr()[r + 1] - M.outerIndexPtr()[r]);
+    cols.assign(M.innerIndexPtr() + M.outerIndexPtr()[lo], M.innerIndexPtr() + M.outerIndexPtr()[hi]);
+  };
+  std::vector<HYPRE_Int> ncols;
+  std::vector<HYPRE_BigInt> cols;
+  if (spread) {
+    im.id = g_next_id++;
+    for (int r = 1; r < p; ++r) {
+      Command c;
+      c.op = kSetup;
+      c.id = im.id;
+      c.n = im.n;
+      c.lo = block_start(im.n, p, r);
+      c.hi = block_start(im.n, p, r + 1);
+      c.nnz = M.outerIndexPtr()[c.hi] - M.outerIndexPtr()[c.lo];
+      c.aggressive_levels = settings_.aggressive_levels;
+      c.strong_threshold = settings_.strong_threshold;
+      send_command(r, c);
+      block(c.lo, c.hi, ncols, cols);
+      send_data(r, ncols.data(), ncols.size());
+      send_data(r, cols.data(), cols.size());
+      send_data(r, M.valuePtr() + M.outerIndexPtr()[c.lo], static_cast<std::size_t>(c.nnz));
+    }
   }
-  for (std::size_t k = 0; k < cols.size(); ++k) cols[k] = static_cast<HYPRE_BigInt>(M.innerIndexPtr()[k]);
-
-  check(HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, last, 0, last, &im.A), "IJMatrixCreate");
-  check(HYPRE_IJMatrixSetObjectType(im.A, HYPRE_PARCSR), "IJMatrixSetObjectType");
-  check(HYPRE_IJMatrixSetDiagOffdSizes(im.A, ncols.data(), offd.data()), "IJMatrixSetDiagOffdSizes");
-  check(HYPRE_IJMatrixInitialize(im.A), "IJMatrixInitialize");
-  check(HYPRE_IJMatrixSetValues(im.A, static_cast<HYPRE_Int>(im.n), ncols.data(), im.rows.data(), cols.data(),
-                                M.valuePtr()),
-        "IJMatrixSetValues");
-  check(HYPRE_IJMatrixAssemble(im.A), "IJMatrixAssemble");
-  check(HYPRE_IJMatrixGetObject(im.A, reinterpret_cast<void**>(&im.pA)), "IJMatrixGetObject");
-  for (HYPRE_IJVector* v : {&im.b, &im.x}) {
-    check(HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, last, v), "IJVectorCreate");
-    check(HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR), "IJVectorSetObjectType");
-    check(HYPRE_IJVectorInitialize(*v), "IJVectorInitialize");
-    check(HYPRE_IJVectorAssemble(*v), "IJVectorAssemble");
-  }
-  check(HYPRE_IJVectorGetObject(im.b, reinterpret_cast<void**>(&im.pb)), "IJVectorGetObject");
-  check(HYPRE_IJVectorGetObject(im.x, reinterpret_cast<void**>(&im.px)), "IJVectorGetObject");
-
-  // One V-cycle per PCG iteration. HMIS coarsening with extended+i interpolation (hypre's
-  // defaults, set explicitly), forward/backward hybrid Gauss-Seidel down/up (13/14: a symmetric
-  // cycle, as PCG needs), Gaussian elimination on the coarsest level.
-  check(HYPRE_BoomerAMGCreate(&im.amg), "BoomerAMGCreate");
-  HYPRE_BoomerAMGSetPrintLevel(im.amg, 0);
-  HYPRE_BoomerAMGSetMaxIter(im.amg, 1);
-  HYPRE_BoomerAMGSetTol(im.amg, 0.0);
-  HYPRE_BoomerAMGSetCoarsenType(im.amg, 10);
-  HYPRE_BoomerAMGSetInterpType(im.amg, 6);
-  HYPRE_BoomerAMGSetPMaxElmts(im.amg, 4);
-  HYPRE_BoomerAMGSetStrongThreshold(im.amg, settings_.strong_threshold);
-  HYPRE_BoomerAMGSetCycleRelaxType(im.amg, 13, 1);
-  HYPRE_BoomerAMGSetCycleRelaxType(im.amg, 14, 2);
-  HYPRE_BoomerAMGSetCycleRelaxType(im.amg, 9, 3);
-  if (settings_.aggressive_levels > 0) HYPRE_BoomerAMGSetAggNumLevels(im.amg, settings_.aggressive_levels);
-  HYPRE_BoomerAMGSetKeepTranspose(im.amg, 1);  // store P^T: faster restriction, more memory
-
-  check(HYPRE_ParCSRPCGCreate(MPI_COMM_SELF, &im.pcg), "ParCSRPCGCreate");
-  HYPRE_PCGSetTwoNorm(im.pcg, 1);
-  HYPRE_PCGSetPrintLevel(im.pcg, 0);
-  HYPRE_PCGSetLogging(im.pcg, 1);
-  check(HYPRE_ParCSRPCGSetPrecond(im.pcg, HYPRE_BoomerAMGSolve, HYPRE_BoomerAMGSetup, im.amg), "ParCSRPCGSetPrecond");
-  check(HYPRE_ParCSRPCGSetup(im.pcg, im.pA, im.pb, im.px), "ParCSRPCGSetup (BoomerAMG setup)");
-  im.ready = true;
+  im.lo = 0;
+  im.hi = spread ? block_start(im.n, p, 1) : im.n;
+  block(im.lo, im.hi, ncols, cols);
+  im.build(spread ? spread_comm() : MPI_COMM_SELF, ncols, cols, M.valuePtr(), settings_);
 }
 
 HypreAmgPcg::Outcome HypreAmgPcg::solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, double tol, int max_iterations) {
@@ -178,26 +309,85 @@ HypreAmgPcg::Outcome HypreAmgPcg::solve(const Eigen::VectorXd& rhs, Eigen::Vecto
   if (!im.ready) throw SetupError("HypreAmgPcg::solve before setup");
   if (rhs.size() != static_cast<Eigen::Index>(im.n) || x.size() != rhs.size())
     throw SetupError("HypreAmgPcg::solve: vector sizes do not match the matrix");
-  Outcome out;
-  if (im.n == 0) { out.converged = true; return out; }
-  const auto n = static_cast<HYPRE_Int>(im.n);
-  check(HYPRE_IJVectorSetValues(im.b, n, im.rows.data(), rhs.data()), "IJVectorSetValues");
-  check(HYPRE_IJVectorSetValues(im.x, n, im.rows.data(), x.data()), "IJVectorSetValues");
-  HYPRE_PCGSetTol(im.pcg, tol);
-  HYPRE_PCGSetAbsoluteTol(im.pcg, 0.0);
-  HYPRE_PCGSetMaxIter(im.pcg, max_iterations);
-  // Non-convergence comes back as an error flag (HYPRE_ERROR_CONV): judged below, not thrown.
-  HYPRE_ParCSRPCGSolve(im.pcg, im.pA, im.pb, im.px);
-  HYPRE_ClearAllErrors();
-  HYPRE_Int it = 0;
-  HYPRE_Real rel = 0.0;
-  HYPRE_PCGGetNumIterations(im.pcg, &it);
-  HYPRE_PCGGetFinalRelativeResidualNorm(im.pcg, &rel);
-  check(HYPRE_IJVectorGetValues(im.x, n, im.rows.data(), x.data()), "IJVectorGetValues");
-  out.iterations = static_cast<int>(it);
-  out.relative_residual = rel;
-  out.converged = rel <= tol;
+  if (im.n == 0) {
+    Outcome out;
+    out.converged = true;
+    return out;
+  }
+  for (int r = 1; r < im.ranks; ++r) {
+    Command c;
+    c.op = kSolve;
+    c.id = im.id;
+    c.lo = block_start(im.n, im.ranks, r);
+    c.hi = block_start(im.n, im.ranks, r + 1);
+    c.tolerance = tol;
+    c.max_iterations = max_iterations;
+    send_command(r, c);
+    send_data(r, rhs.data() + c.lo, static_cast<std::size_t>(c.hi - c.lo));
+    send_data(r, x.data() + c.lo, static_cast<std::size_t>(c.hi - c.lo));
+  }
+  const Outcome out = im.run(rhs.data(), x.data(), tol, max_iterations);
+  for (int r = 1; r < im.ranks; ++r) {
+    const std::int64_t lo = block_start(im.n, im.ranks, r), hi = block_start(im.n, im.ranks, r + 1);
+    const auto part = receive_data<double>(r, static_cast<std::size_t>(hi - lo));
+    std::copy(part.begin(), part.end(), x.data() + lo);
+  }
   return out;
+}
+
+// ------------------------------------------------------------------------- the other ranks
+void serve_amg_command(const std::string& bytes) {
+  static std::map<std::int64_t, std::unique_ptr<HypreAmgPcg::Impl>> solvers;
+  Command c;
+  if (bytes.size() != sizeof c) throw SetupError("spread AMG: malformed command (" + std::to_string(bytes.size()) + " bytes)");
+  std::memcpy(&c, bytes.data(), sizeof c);
+  ensure_mpi();
+  if (c.op == kDestroy) {
+    solvers.erase(c.id);
+    return;
+  }
+  if (c.op == kSetup) {
+    const auto ncols = receive_data<HYPRE_Int>(0, static_cast<std::size_t>(c.hi - c.lo));
+    const auto cols = receive_data<HYPRE_BigInt>(0, static_cast<std::size_t>(c.nnz));
+    const auto vals = receive_data<double>(0, static_cast<std::size_t>(c.nnz));
+    auto im = std::make_unique<HypreAmgPcg::Impl>();
+    im->n = c.n;
+    im->lo = c.lo;
+    im->hi = c.hi;
+    im->build(spread_comm(), ncols, cols, vals.data(),
+              HypreAmgPcg::Settings{c.strong_threshold, static_cast<int>(c.aggressive_levels)});
+    solvers[c.id] = std::move(im);
+    return;
+  }
+  if (c.op == kSolve) {
+    auto it = solvers.find(c.id);
+    if (it == solvers.end()) throw SetupError("spread AMG: solve of unknown solver " + std::to_string(c.id));
+    const auto nl = static_cast<std::size_t>(c.hi - c.lo);
+    const auto rhs = receive_data<double>(0, nl);
+    auto xv = receive_data<double>(0, nl);
+    it->second->run(rhs.data(), xv.data(), c.tolerance, static_cast<int>(c.max_iterations));
+    send_data(0, xv.data(), nl);
+    return;
+  }
+  throw SetupError("spread AMG: unknown command " + std::to_string(c.op));
+}
+
+void serve_amg_commands_until(int stop_tag) {
+  for (;;) {
+    int flag = 0;
+    MPI_Status st;
+    MPI_Iprobe(0, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &st);
+    if (!flag) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      continue;
+    }
+    int count = 0;
+    MPI_Get_count(&st, MPI_CHAR, &count);
+    std::string bytes(static_cast<std::size_t>(count), '\0');
+    MPI_Recv(bytes.data(), count, MPI_CHAR, 0, st.MPI_TAG, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    if (st.MPI_TAG == stop_tag) return;
+    if (st.MPI_TAG == kAmgCommandTag) serve_amg_command(bytes);
+  }
 }
 
 }  // namespace sparkdem

@@ -13,6 +13,10 @@ namespace {
 }  // namespace
 
 void ensure_mpi() { unavailable(); }
+void set_amg_spread_ranks(int) {}
+int amg_spread_ranks() { return 1; }
+void serve_amg_command(const std::string&) { unavailable(); }
+void serve_amg_commands_until(int) { unavailable(); }
 
 struct HypreAmgPcg::Impl {};
 
@@ -20,6 +24,7 @@ HypreAmgPcg::HypreAmgPcg() : HypreAmgPcg(Settings{}) {}
 HypreAmgPcg::HypreAmgPcg(Settings s) : settings_(s), impl_(std::make_unique<Impl>()) {}
 HypreAmgPcg::~HypreAmgPcg() = default;
 bool HypreAmgPcg::ready() const { return false; }
+int HypreAmgPcg::ranks() const { return 1; }
 void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>&) { unavailable(); }
 HypreAmgPcg::Outcome HypreAmgPcg::solve(const Eigen::VectorXd&, Eigen::VectorXd&, double, int) { unavailable(); }
 

@@ -403,7 +403,7 @@ LaplacianSolver& LaplacianSolver::operator=(LaplacianSolver&&) noexcept = defaul
 
 void LaplacianSolver::set_options(const LaplacianOptions& opt) {
   if (opt.method != opt_.method || opt.amg_strong_threshold != opt_.amg_strong_threshold ||
-      opt.amg_aggressive_levels != opt_.amg_aggressive_levels || opt.pseudo.eigen_tolerance != opt_.pseudo.eigen_tolerance ||
+      opt.amg_aggressive_levels != opt_.amg_aggressive_levels || opt.amg_spread_min_rows != opt_.amg_spread_min_rows || opt.pseudo.eigen_tolerance != opt_.pseudo.eigen_tolerance ||
       opt.pseudo.eigen_max_iterations != opt_.pseudo.eigen_max_iterations)
     invalidate();
   opt_ = opt;
@@ -558,7 +558,8 @@ void LaplacianSolver::factorize_(const LaplacianProblem& p, const std::vector<do
     }
     case LaplacianMethod::Amg:
       if (!im.amg)
-        im.amg = std::make_unique<HypreAmgPcg>(HypreAmgPcg::Settings{opt_.amg_strong_threshold, opt_.amg_aggressive_levels});
+        im.amg = std::make_unique<HypreAmgPcg>(
+            HypreAmgPcg::Settings{opt_.amg_strong_threshold, opt_.amg_aggressive_levels, opt_.amg_spread_min_rows});
       im.amg->setup(im.A);
       break;
   }
@@ -608,6 +609,7 @@ Eigen::VectorXd LaplacianSolver::iterate_(const LaplacianProblem& p, const std::
     x = guess;
     const auto out = im.amg->solve(rhs, x, opt_.tolerance, max_it);
     res.iterations = out.iterations;
+    res.amg_ranks = im.amg->ranks();
     ok = out.converged;
   } else {
     const auto& po = opt_.pseudo;

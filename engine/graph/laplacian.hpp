@@ -187,6 +187,9 @@ struct LaplacianOptions {
   PseudoTransientOptions pseudo{};  ///< PseudoTransient only
   double amg_strong_threshold = 0.5;  ///< Amg: BoomerAMG strength threshold (0.5 suits 3-D networks)
   int amg_aggressive_levels = 1;      ///< Amg: levels of aggressive coarsening (1 halves the 1e6-node time)
+  /// Amg on several MPI ranks (set_amg_spread_ranks > 1): spread systems of at least this many
+  /// unknowns over the ranks (below, the messages cost more than the second rank saves).
+  std::int64_t amg_spread_min_rows = 200000;
 };
 
 /// What the pseudo-transient iteration reports besides the common fields.
@@ -213,6 +216,7 @@ struct LaplacianResult {
   bool analyzed = false;               ///< this call recomputed the symbolic analysis (structure changed)
   bool factorized = false;             ///< this call recomputed the numeric factorisation / preconditioner
   double solve_seconds = 0.0;          ///< wall time of the whole call
+  int amg_ranks = 1;                   ///< Amg: MPI ranks the solve was spread over (set_amg_spread_ranks)
   PseudoTransientReport pseudo;        ///< PseudoTransient only
 };
 

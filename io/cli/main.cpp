@@ -19,6 +19,7 @@
 #include "engine/state/particle_set.hpp"
 #include "io/scenario/calibrate_beams.hpp"
 #include "io/scenario/json_binder.hpp"
+#include "engine/graph/hypre_amg.hpp"
 #include "io/mpi/ranks.hpp"
 #include "io/scenario/pipeline.hpp"
 #include "io/scenario/sweep.hpp"
@@ -203,6 +204,7 @@ int run_command(int argc, char** argv, bool& serving) {
       return io::serve_sweep_items(sc);
     }
     serving = io::ranks::size() > 1;
+    set_amg_spread_ranks(io::ranks::size());  // large network solves outside sweeps use every rank
     io::RunOptions opt;
     opt.outdir = outdir;
     opt.quiet = quiet;

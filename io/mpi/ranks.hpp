@@ -9,7 +9,7 @@
 
 namespace sparkdem::io::ranks {
 
-/// Message tags.
+/// Message tags (10 and 11 are the engine's spread network solves: engine/graph/hypre_amg.hpp).
 enum Tag : int { kItem = 1, kResult = 2, kStop = 3 };
 
 struct Message {

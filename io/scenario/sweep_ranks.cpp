@@ -16,6 +16,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/interrupt.hpp"
+#include "engine/graph/hypre_amg.hpp"
 #include "io/mpi/ranks.hpp"
 #include "io/scenario/sweep_items.hpp"
 
@@ -187,6 +188,12 @@ RunOptions spread_item_options(const ItemJob& job) {
 
 std::map<std::size_t, ItemResult> run_items_over_ranks(Scenario& sc, const SweepContext& ctx,
                                                        const std::function<void(const std::map<std::size_t, json>&)>& progress) {
+  // The other ranks run items now: rank 0's network solves stay on rank 0 until the sweep ends.
+  struct SolveAlone {
+    int before = amg_spread_ranks();
+    SolveAlone() { set_amg_spread_ranks(1); }
+    ~SolveAlone() { set_amg_spread_ranks(before); }
+  } alone;
   Scheduler sched(ctx, progress);
   std::thread dispatcher([&sched] {
     try {
@@ -216,6 +223,10 @@ int serve_sweep_items(Scenario& sc) {
   for (;;) {
     const ranks::Message m = ranks::wait(-1);
     if (m.tag == ranks::kStop) return json::parse(m.text).value("exit_code", 0);
+    if (m.tag == kAmgCommandTag) {  // rank 0 spreads a network solve (engine/graph/hypre_amg.hpp)
+      serve_amg_command(m.text);
+      continue;
+    }
     if (m.tag != ranks::kItem) continue;
     json reply;
     std::size_t j = 0;

@@ -14,6 +14,8 @@ CASE:
   restart    a seed ensemble on 2 ranks killed (SIGKILL, every rank) after its second row,
              restarted with --restart on 1 rank; and a one-rank run killed inside an item,
              restarted on 2 ranks: both tables equal the uninterrupted run's.
+  spread_solve  the spread network solve (tests/mpi/mpi_spread_solve.cpp) under mpirun -np 2:
+             Amg over 2 ranks and on rank 0 alone against the direct solve, to 1e-7.
 Exit code 0 when every check holds; the failed checks are printed.
 """
 import argparse
@@ -238,9 +240,17 @@ def case_restart(a, tmp):
     check(table(out / "sweep_cook.csv", out) == table(ref / "sweep_cook.csv", ref), "1 rank killed, 2-rank restart: table equals the uninterrupted run's")
 
 
+def case_spread_solve(a, tmp):
+    r = subprocess.run(mpirun_cmd(a, 2) + [a.spread_solve], capture_output=True, text=True, timeout=120)
+    print("\n".join("      " + l for l in r.stdout.splitlines()))
+    check(r.returncode == 0 and "FAIL" not in r.stdout and r.stdout.count("ok") >= 8,
+          f"spread solve driver: exit {r.returncode}, every check ok {r.stderr[-300:]}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("case", choices=["equal", "bad_input", "restart"])
+    ap.add_argument("case", choices=["equal", "bad_input", "restart", "spread_solve"])
+    ap.add_argument("--spread-solve", help="the mpi_spread_solve driver (case spread_solve)")
     ap.add_argument("--sparkdem", required=True)
     ap.add_argument("--mpirun", default="mpirun")
     ap.add_argument("--workdir", default="mpi_tests")
@@ -248,7 +258,8 @@ def main():
     tmp = Path(a.workdir).resolve() / a.case
     subprocess.run(["rm", "-rf", str(tmp)], check=True)
     tmp.mkdir(parents=True)
-    {"equal": case_equal, "bad_input": case_bad_input, "restart": case_restart}[a.case](a, tmp)
+    {"equal": case_equal, "bad_input": case_bad_input, "restart": case_restart,
+     "spread_solve": case_spread_solve}[a.case](a, tmp)
     print(f"{a.case}: {len(FAILED)} check(s) failed" if FAILED else f"{a.case}: all checks hold")
     return 1 if FAILED else 0
 
