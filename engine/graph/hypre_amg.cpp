@@ -136,6 +136,7 @@ struct HypreAmgPcg::Impl {
   HYPRE_BigInt lo = 0, hi = 0;        ///< this rank's rows [lo, hi)
   std::vector<HYPRE_BigInt> rows;     ///< lo .. hi-1
   int ranks = 1;                      ///< ranks the matrix is spread over (1: MPI_COMM_SELF)
+  std::vector<HYPRE_BigInt> perm;     ///< spread: the solver's row order (new -> old)
   std::int64_t id = 0;                ///< spread solver's id on every rank
   bool ready = false;
 
@@ -260,59 +261,145 @@ HypreAmgPcg::~HypreAmgPcg() = default;
 bool HypreAmgPcg::ready() const { return impl_->ready; }
 int HypreAmgPcg::ranks() const { return impl_->ranks; }
 
+namespace {
+
+/// Rows in breadth-first order, each connected component from a pseudo-peripheral row (the last
+/// row reached by a first search from its lowest row): contiguous blocks of this order are thick
+/// layers of the graph, so a block's rows have few neighbours in other blocks whatever the
+/// original numbering. Returns new -> old.
+std::vector<HYPRE_BigInt> breadth_first_order(const Eigen::SparseMatrix<double>& M) {
+  const auto n = static_cast<std::size_t>(M.rows());
+  const int* start = M.outerIndexPtr();
+  const int* idx = M.innerIndexPtr();
+  std::vector<HYPRE_BigInt> order;
+  order.reserve(n);
+  std::vector<char> seen(n, 0), probe(n, 0);
+  std::vector<std::size_t> queue;
+  auto search = [&](std::size_t root, std::vector<char>& mark, bool keep) {
+    queue.assign(1, root);
+    mark[root] = 1;
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      const std::size_t r = queue[q];
+      if (keep) order.push_back(static_cast<HYPRE_BigInt>(r));
+      for (int k = start[r]; k < start[r + 1]; ++k) {
+        const auto c = static_cast<std::size_t>(idx[k]);
+        if (!mark[c]) {
+          mark[c] = 1;
+          queue.push_back(c);
+        }
+      }
+    }
+    return queue.back();
+  };
+  for (std::size_t r = 0; r < n; ++r) {
+    if (seen[r]) continue;
+    const std::size_t far = search(r, probe, false);
+    search(far, seen, true);
+  }
+  return order;
+}
+
+/// The rows of `M` in the order `perm` (new -> old; empty: as they are), columns renumbered:
+/// CSR as hypre's IJ interface takes it (entries per row, global columns, values), with the
+/// offset of each row's first entry.
+struct Rows {
+  std::vector<HYPRE_Int> ncols;
+  std::vector<HYPRE_BigInt> cols;
+  std::vector<double> vals;
+  std::vector<std::int64_t> first;
+};
+Rows permuted_rows(const Eigen::SparseMatrix<double>& M, const std::vector<HYPRE_BigInt>& perm) {
+  const auto n = static_cast<std::size_t>(M.rows());
+  std::vector<HYPRE_BigInt> inv(n);
+  for (std::size_t k = 0; k < n; ++k) inv[static_cast<std::size_t>(perm[k])] = static_cast<HYPRE_BigInt>(k);
+  Rows out;
+  out.ncols.resize(n);
+  out.first.resize(n + 1, 0);
+  out.cols.reserve(static_cast<std::size_t>(M.nonZeros()));
+  out.vals.reserve(static_cast<std::size_t>(M.nonZeros()));
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto r = static_cast<std::size_t>(perm[k]);
+    out.first[k] = static_cast<std::int64_t>(out.cols.size());
+    out.ncols[k] = static_cast<HYPRE_Int>(M.outerIndexPtr()[r + 1] - M.outerIndexPtr()[r]);
+    for (int q = M.outerIndexPtr()[r]; q < M.outerIndexPtr()[r + 1]; ++q) {
+      out.cols.push_back(inv[static_cast<std::size_t>(M.innerIndexPtr()[q])]);
+      out.vals.push_back(M.valuePtr()[q]);
+    }
+  }
+  out.first[n] = static_cast<std::int64_t>(out.cols.size());
+  return out;
+}
+
+}  // namespace
+
 void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
   Impl& im = *impl_;
   im.clear();
+  im.perm.clear();
   im.n = static_cast<HYPRE_BigInt>(M.rows());
   if (im.n == 0) { im.ready = true; return; }
   if (!M.isCompressed()) throw SetupError("HypreAmgPcg::setup: the matrix must be compressed");
   ensure_mpi();
   const int p = amg_spread_ranks();
-  const bool spread = p > 1 && M.rows() >= settings_.spread_min_rows;
-  im.ranks = spread ? p : 1;
-  // The matrix is symmetric, so its compressed columns are its rows (CSR); rank r gets the
-  // contiguous block of rows [n r / p, n (r + 1) / p).
-  auto block = [&](std::int64_t lo, std::int64_t hi, std::vector<HYPRE_Int>& ncols, std::vector<HYPRE_BigInt>& cols) {
-    ncols.resize(static_cast<std::size_t>(hi - lo));
-    for (std::int64_t r = lo; r < hi; ++r) ncols[r - lo] = static_cast<HYPRE_Int>(M.outerIndexPtr()[r + 1] - M.outerIndexPtr()[r]);
-    cols.assign(M.innerIndexPtr() + M.outerIndexPtr()[lo], M.innerIndexPtr() + M.outerIndexPtr()[hi]);
-  };
-  std::vector<HYPRE_Int> ncols;
-  std::vector<HYPRE_BigInt> cols;
-  if (spread) {
-    im.id = g_next_id++;
-    for (int r = 1; r < p; ++r) {
-      Command c;
-      c.op = kSetup;
-      c.id = im.id;
-      c.n = im.n;
-      c.lo = block_start(im.n, p, r);
-      c.hi = block_start(im.n, p, r + 1);
-      c.nnz = M.outerIndexPtr()[c.hi] - M.outerIndexPtr()[c.lo];
-      c.aggressive_levels = settings_.aggressive_levels;
-      c.strong_threshold = settings_.strong_threshold;
-      send_command(r, c);
-      block(c.lo, c.hi, ncols, cols);
-      send_data(r, ncols.data(), ncols.size());
-      send_data(r, cols.data(), cols.size());
-      send_data(r, M.valuePtr() + M.outerIndexPtr()[c.lo], static_cast<std::size_t>(c.nnz));
-    }
+  if (p < 2 || M.rows() < settings_.spread_min_rows) {
+    // One process: the matrix is symmetric, so its compressed columns are its rows (CSR).
+    std::vector<HYPRE_Int> ncols(static_cast<std::size_t>(im.n));
+    for (HYPRE_BigInt r = 0; r < im.n; ++r) ncols[r] = static_cast<HYPRE_Int>(M.outerIndexPtr()[r + 1] - M.outerIndexPtr()[r]);
+    const std::vector<HYPRE_BigInt> cols(M.innerIndexPtr(), M.innerIndexPtr() + M.nonZeros());
+    im.lo = 0;
+    im.hi = im.n;
+    im.build(MPI_COMM_SELF, ncols, cols, M.valuePtr(), settings_);
+    return;
   }
-  im.lo = 0;
-  im.hi = spread ? block_start(im.n, p, 1) : im.n;
-  block(im.lo, im.hi, ncols, cols);
-  im.build(spread ? spread_comm() : MPI_COMM_SELF, ncols, cols, M.valuePtr(), settings_);
+  // Spread: rows in breadth-first order, rank r gets the contiguous block [n r / p, n (r + 1) / p).
+  im.ranks = p;
+  im.id = g_next_id++;
+  im.perm = breadth_first_order(M);
+  Rows all = permuted_rows(M, im.perm);
+  for (int r = p - 1; r >= 0; --r) {
+    const std::int64_t lo = block_start(im.n, p, r), hi = block_start(im.n, p, r + 1);
+    const std::int64_t e0 = all.first[lo], e1 = all.first[hi];
+    std::vector<HYPRE_Int> ncols(all.ncols.begin() + lo, all.ncols.begin() + hi);
+    std::vector<HYPRE_BigInt> cols(all.cols.begin() + e0, all.cols.begin() + e1);
+    if (r == 0) {
+      im.lo = lo;
+      im.hi = hi;
+      im.build(spread_comm(), ncols, cols, all.vals.data() + e0, settings_);
+      break;
+    }
+    Command c;
+    c.op = kSetup;
+    c.id = im.id;
+    c.n = im.n;
+    c.lo = lo;
+    c.hi = hi;
+    c.nnz = e1 - e0;
+    c.aggressive_levels = settings_.aggressive_levels;
+    c.strong_threshold = settings_.strong_threshold;
+    send_command(r, c);
+    send_data(r, ncols.data(), ncols.size());
+    send_data(r, cols.data(), cols.size());
+    send_data(r, all.vals.data() + e0, static_cast<std::size_t>(c.nnz));
+  }
 }
 
-HypreAmgPcg::Outcome HypreAmgPcg::solve(const Eigen::VectorXd& rhs, Eigen::VectorXd& x, double tol, int max_iterations) {
+HypreAmgPcg::Outcome HypreAmgPcg::solve(const Eigen::VectorXd& rhs_in, Eigen::VectorXd& x_in, double tol, int max_iterations) {
   Impl& im = *impl_;
   if (!im.ready) throw SetupError("HypreAmgPcg::solve before setup");
-  if (rhs.size() != static_cast<Eigen::Index>(im.n) || x.size() != rhs.size())
+  if (rhs_in.size() != static_cast<Eigen::Index>(im.n) || x_in.size() != rhs_in.size())
     throw SetupError("HypreAmgPcg::solve: vector sizes do not match the matrix");
   if (im.n == 0) {
     Outcome out;
     out.converged = true;
     return out;
+  }
+  if (im.ranks == 1) return im.run(rhs_in.data(), x_in.data(), tol, max_iterations);
+  // Spread: the vectors in the solver's row order, blocks out, the solution's blocks back.
+  const auto n = static_cast<std::size_t>(im.n);
+  std::vector<double> rhs(n), x(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    rhs[k] = rhs_in[im.perm[k]];
+    x[k] = x_in[im.perm[k]];
   }
   for (int r = 1; r < im.ranks; ++r) {
     Command c;
@@ -330,8 +417,9 @@ HypreAmgPcg::Outcome HypreAmgPcg::solve(const Eigen::VectorXd& rhs, Eigen::Vecto
   for (int r = 1; r < im.ranks; ++r) {
     const std::int64_t lo = block_start(im.n, im.ranks, r), hi = block_start(im.n, im.ranks, r + 1);
     const auto part = receive_data<double>(r, static_cast<std::size_t>(hi - lo));
-    std::copy(part.begin(), part.end(), x.data() + lo);
+    std::copy(part.begin(), part.end(), x.begin() + lo);
   }
+  for (std::size_t k = 0; k < n; ++k) x_in[im.perm[k]] = x[k];
   return out;
 }
 
