@@ -340,9 +340,9 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
   if (im.n == 0) { im.ready = true; return; }
   if (!M.isCompressed()) throw SetupError("HypreAmgPcg::setup: the matrix must be compressed");
   ensure_mpi();
-  const int p = amg_spread_ranks();
-  if (p < 2 || M.rows() < settings_.spread_min_rows) {
-    // One process: the matrix is symmetric, so its compressed columns are its rows (CSR).
+  const int p = amg_spread_ranks() > 1 && M.rows() >= settings_.spread_min_rows ? amg_spread_ranks() : 1;
+  if (p == 1 && !settings_.breadth_first) {
+    // One process, rows as numbered: the matrix is symmetric, so its compressed columns are its rows (CSR).
     std::vector<HYPRE_Int> ncols(static_cast<std::size_t>(im.n));
     for (HYPRE_BigInt r = 0; r < im.n; ++r) ncols[r] = static_cast<HYPRE_Int>(M.outerIndexPtr()[r + 1] - M.outerIndexPtr()[r]);
     const std::vector<HYPRE_BigInt> cols(M.innerIndexPtr(), M.innerIndexPtr() + M.nonZeros());
@@ -351,9 +351,10 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
     im.build(MPI_COMM_SELF, ncols, cols, M.valuePtr(), settings_);
     return;
   }
-  // Spread: rows in breadth-first order, rank r gets the contiguous block [n r / p, n (r + 1) / p).
+  // Rows in breadth-first order (cache locality on one process, thin interfaces between the
+  // blocks of several); rank r gets the contiguous block [n r / p, n (r + 1) / p).
   im.ranks = p;
-  im.id = g_next_id++;
+  if (p > 1) im.id = g_next_id++;
   im.perm = breadth_first_order(M);
   Rows all = permuted_rows(M, im.perm);
   for (int r = p - 1; r >= 0; --r) {
@@ -364,7 +365,7 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
     if (r == 0) {
       im.lo = lo;
       im.hi = hi;
-      im.build(spread_comm(), ncols, cols, all.vals.data() + e0, settings_);
+      im.build(p > 1 ? spread_comm() : MPI_COMM_SELF, ncols, cols, all.vals.data() + e0, settings_);
       break;
     }
     Command c;
@@ -393,8 +394,8 @@ HypreAmgPcg::Outcome HypreAmgPcg::solve(const Eigen::VectorXd& rhs_in, Eigen::Ve
     out.converged = true;
     return out;
   }
-  if (im.ranks == 1) return im.run(rhs_in.data(), x_in.data(), tol, max_iterations);
-  // Spread: the vectors in the solver's row order, blocks out, the solution's blocks back.
+  if (im.perm.empty()) return im.run(rhs_in.data(), x_in.data(), tol, max_iterations);
+  // The vectors in the solver's row order; spread: blocks out, the solution's blocks back.
   const auto n = static_cast<std::size_t>(im.n);
   std::vector<double> rhs(n), x(n);
   for (std::size_t k = 0; k < n; ++k) {

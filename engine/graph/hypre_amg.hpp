@@ -47,6 +47,11 @@ class HypreAmgPcg {
     /// Spread over the ranks (amg_spread_ranks() > 1) only systems of at least this many rows:
     /// below it the messages cost more than the second rank saves.
     std::int64_t spread_min_rows = 200000;
+    /// Hand hypre the rows in breadth-first order (each connected component from a
+    /// pseudo-peripheral row) rather than as numbered: neighbours sit close in memory, and the
+    /// blocks of a spread solve share thin interfaces. Measured on one process (1e6 nodes, to
+    /// 1e-8): a random packing network 4.85 -> 3.54 s, a lattice numbered by layers 2.01 -> 1.85 s.
+    bool breadth_first = true;
   };
   struct Outcome {
     int iterations = 0;

@@ -403,7 +403,8 @@ LaplacianSolver& LaplacianSolver::operator=(LaplacianSolver&&) noexcept = defaul
 
 void LaplacianSolver::set_options(const LaplacianOptions& opt) {
   if (opt.method != opt_.method || opt.amg_strong_threshold != opt_.amg_strong_threshold ||
-      opt.amg_aggressive_levels != opt_.amg_aggressive_levels || opt.amg_spread_min_rows != opt_.amg_spread_min_rows || opt.pseudo.eigen_tolerance != opt_.pseudo.eigen_tolerance ||
+      opt.amg_aggressive_levels != opt_.amg_aggressive_levels || opt.amg_spread_min_rows != opt_.amg_spread_min_rows ||
+      opt.amg_breadth_first != opt_.amg_breadth_first || opt.pseudo.eigen_tolerance != opt_.pseudo.eigen_tolerance ||
       opt.pseudo.eigen_max_iterations != opt_.pseudo.eigen_max_iterations)
     invalidate();
   opt_ = opt;
@@ -559,7 +560,8 @@ void LaplacianSolver::factorize_(const LaplacianProblem& p, const std::vector<do
     case LaplacianMethod::Amg:
       if (!im.amg)
         im.amg = std::make_unique<HypreAmgPcg>(
-            HypreAmgPcg::Settings{opt_.amg_strong_threshold, opt_.amg_aggressive_levels, opt_.amg_spread_min_rows});
+            HypreAmgPcg::Settings{opt_.amg_strong_threshold, opt_.amg_aggressive_levels, opt_.amg_spread_min_rows,
+                                  opt_.amg_breadth_first});
       im.amg->setup(im.A);
       break;
   }

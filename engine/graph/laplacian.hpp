@@ -190,6 +190,9 @@ struct LaplacianOptions {
   /// Amg on several MPI ranks (set_amg_spread_ranks > 1): spread systems of at least this many
   /// unknowns over the ranks (below, the messages cost more than the second rank saves).
   std::int64_t amg_spread_min_rows = 200000;
+  /// Amg: hand hypre the rows in breadth-first order (HypreAmgPcg::Settings::breadth_first;
+  /// false: as numbered, the order of sparkdem before issue 23 item 5).
+  bool amg_breadth_first = true;
 };
 
 /// What the pseudo-transient iteration reports besides the common fields.
