@@ -21,6 +21,7 @@ Sources (each optional; a missing file is reported and skipped):
   benchmarks/electric_solvers/results.csv  the fastest method per network family at its largest size
                                            with a true error <= 1e-6 (and <= 1e-8)
   benchmarks/ranks/results.csv       sweeps over MPI ranks: wall time at 1 and 2 ranks, efficiency
+  benchmarks/electric_solvers/spread.csv  AMG to 1e-8 on 1 and 2 MPI ranks, 1e6 and 4e6 nodes
 """
 import csv
 import json
@@ -164,9 +165,26 @@ def ranks(path):
     return recs
 
 
+def spread(path):
+    recs = []
+    rows = _rows(path)
+    one = {(r["family"], r["nodes"]): _num(r["wall_s"]) for r in rows if r["method"] == "amg"}
+    for r in rows:
+        ranks = 1 if r["method"] == "amg" else int(r["method"].replace("amg_spread", ""))
+        base = one.get((r["family"], r["nodes"]))
+        recs.append({"id": f"perf/networks_ranks/{r['family']}/{r['nodes']}/{ranks}", "scene": f"{r['family']} network",
+                     "variant": f"amg ({r['tolerance_or_beta']}) on {ranks} MPI rank(s)", "threads": 1, "ranks": ranks,
+                     "particles": int(r["nodes"]), "figure": "solve wall time (set-up included)",
+                     "value": _num(r["wall_s"]), "unit": "s", "ratio": base / _num(r["wall_s"]) if base else None,
+                     "ratio_of": "1-rank time / this time", "G_rel_err": _num(r["G_rel_err"]),
+                     "V_max_err": _num(r["V_max_err"]), "reference": r["reference"], "commit": r["commit"]})
+    return recs
+
+
 SOURCES = [("mechanics/results.csv", mechanics), ("threads/results.csv", threads), ("memory/results.csv", memory),
            ("sps_nial/profile_summary.json", sps_nial), ("sps_nial/profile_summary.json", sps_split),
-           ("electric_solvers/results.csv", networks), ("ranks/results.csv", ranks)]
+           ("electric_solvers/results.csv", networks), ("ranks/results.csv", ranks),
+           ("electric_solvers/spread.csv", spread)]
 
 
 def collect():
