@@ -88,6 +88,7 @@ class Scheduler {
       const std::size_t j = next_;
       if (rows_.count(j)) {  // finished before a restart
         ++next_;
+        if (validating_) ++next_validation_;  // it validated the next snapshot
         if (!sw.calibrate && next_ >= ctx_.n) exhausted_ = true;
         continue;
       }

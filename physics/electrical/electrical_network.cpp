@@ -145,6 +145,8 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   s.add("solver", &P::solver).choices({"direct", "cg_ic", "cg_jacobi", "amg", "pseudo_transient"})
       .doc("sparse Cholesky; CG with incomplete-Cholesky / Jacobi preconditioner; hypre BoomerAMG-PCG (all iterative ones warm-started); seed 000's pseudo-transient iteration");
   s.add("tolerance", &P::tolerance).unit("1").positive().doc("CG / AMG relative residual");
+  s.add("amg_spread_min_rows", &P::amg_spread_min_rows).unit("1").positive()
+      .doc("amg on several MPI ranks: outside sweep stages, spread solves of at least this many unknowns over the ranks (README, network solves across MPI ranks)");
   s.add("specific_capacity", &P::specific_capacity).unit("F/kg").positive().doc("pseudo_transient: c in C_i = m_i c (numerical only)");
   s.add("pseudo_dt", &P::pseudo_dt).unit("s").nonnegative().doc("pseudo_transient: pseudo time step (0: pseudo_dt_fraction x the true limit 2/lambda_max)");
   s.add("pseudo_dt_fraction", &P::pseudo_dt_fraction).unit("1").positive().doc("pseudo_transient: fraction of the true stability limit");
@@ -204,6 +206,7 @@ ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
              : p.solver == "pseudo_transient" ? LaplacianMethod::PseudoTransient
                                               : LaplacianMethod::Direct;
   o.tolerance = p.tolerance;
+  o.amg_spread_min_rows = static_cast<std::int64_t>(p.amg_spread_min_rows);
   o.pseudo.dt = p.pseudo_dt;
   o.pseudo.dt_fraction = p.pseudo_dt_fraction;
   o.pseudo.beta = p.beta;
@@ -658,6 +661,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   r_.residual = res.relative_residual;
   r_.floating = static_cast<double>(floating);
   r_.iterations = res.iterations;
+  r_.amg_ranks = res.amg_ranks;
   // L and A of Eq. 28.
   double L = p_.length;
   if (!(L > 0.0) && !go.walls) {
@@ -679,6 +683,7 @@ std::vector<std::string> ElectricalNetwork::columns() const {
           "electrical_power", "electrical_power_particles", "electrical_power_mismatch", "electrical_residual", "electrical_floating_nodes",
           "electrical_iterations", "electrical_solve_time", "electrical_length", "electrical_solves"};
   if (p_.topology == "sphere_element") c.push_back("electrical_negative_share");
+  if (p_.solver == "amg") c.push_back("electrical_amg_ranks");
   return c;
 }
 
@@ -686,6 +691,7 @@ std::vector<double> ElectricalNetwork::column_values(const State&) const {
   std::vector<double> v = {r_.current, r_.voltage, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power, r_.power_particles, r_.power_mismatch,
                            r_.residual, r_.floating, r_.iterations, r_.seconds, r_.length, r_.solves};
   if (p_.topology == "sphere_element") v.push_back(r_.negative_share);
+  if (p_.solver == "amg") v.push_back(r_.amg_ranks);
   return v;
 }
 
@@ -698,6 +704,7 @@ void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
     if (held.size() != 13) throw SetupError("checkpoint electrical_network state has " + std::to_string(held.size()) + " values, expected 13");
     r_ = Result{held[0], held[1], held[2], held[3], held[4], held[5], held[6], held[7], held[8], 0.0, held[9], held[10], held[11], held[12]};
   }
+  if (p_.solver == "amg" && (!ar.reading() || ar.has(prefix + "/amg_ranks"))) ar.visit(prefix + "/amg_ranks", r_.amg_ranks);
   if (p_.topology == "sphere_element") ar.visit(prefix + "/negative_share", r_.negative_share);
   solver_.visit(ar, prefix + "/solver");
   // The resolved gap tolerance (touch_tolerance_relative: from the radii at the stage start).

@@ -104,6 +104,7 @@ class ElectricalNetwork final : public Module {
     double area = 0.0;
     std::string solver = "direct";
     double tolerance = 1e-10;
+    double amg_spread_min_rows = 200000;
     // pseudo_transient (seed 000's iteration, kept to reproduce the paper)
     double specific_capacity = 1.0;
     double pseudo_dt = 0.0;
@@ -169,6 +170,7 @@ class ElectricalNetwork final : public Module {
     double voltage = 0.0;            ///< potential of the high electrode [V] (given, or from the injected current)
     double power_particles = 0.0;    ///< part of `power` that heats particles (joule_power summed) [W]; the rest heats wall electrodes
     double negative_share = 0.0;     ///< sphere_element: sum of the negative element conductances over the positive ones [-]
+    double amg_ranks = 1.0;          ///< amg: MPI ranks the last solve was spread over
   };
   const Result& result() const { return r_; }
 

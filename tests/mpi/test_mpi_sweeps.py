@@ -15,7 +15,10 @@ CASE:
              restarted with --restart on 1 rank; and a one-rank run killed inside an item,
              restarted on 2 ranks: both tables equal the uninterrupted run's.
   spread_solve  the spread network solve (tests/mpi/mpi_spread_solve.cpp) under mpirun -np 2:
-             Amg over 2 ranks and on rank 0 alone against the direct solve, to 1e-7.
+             Amg over 2 ranks and on rank 0 alone against the direct solve, to 1e-7; and through
+             sparkdem: a 1000-sphere lattice's electrical_network (solver amg, spread threshold
+             100 rows) in a dynamics stage on 2 ranks reports electrical_amg_ranks 2 (1 on one
+             rank), its resistance within 1e-9 of the one-rank run's and of the direct solve's.
 Exit code 0 when every check holds; the failed checks are printed.
 """
 import argparse
@@ -107,27 +110,8 @@ def same_state(p, q):
 
 
 def calibration_scene(tmp):
-    scene = {
-        "name": "calibrate_chain", "materials": [{"name": "m", "density": 8000}],
-        "contact": {"law": "hertz_mindlin", "params": {"youngs_modulus": 1e9}},
-        "particle_sets": {"top": {"type": "top_layer", "thickness": 0.001},
-                          "bottom": {"type": "bottom_layer", "thickness": 0.001}},
-        "stages": [
-            {"name": "chain", "type": "lattice",
-             "generator": {"lo": [0, 0, 0], "hi": [0.0005, 0.0005, 0.0096], "spacing": 0.00199, "diameter": 0.002}},
-            {"name": "relax", "type": "dynamics", "dt_fraction": 0.1, "stop": {"steps": 30},
-             "snapshots": {"every_steps": 10}},
-            {"name": "fit", "type": "dynamics", "dt_fraction": 0.1, "sets": ["top", "bottom"],
-             "modules": {"electrical_network": {"model": "holm", "conductivity": 1e6, "high": "top", "low": "bottom",
-                                                "voltage": 0.5}},
-             "stop": {"steps": 0},
-             "sweep": {"snapshots_of": "relax",
-                       "calibrate": {"parameter": "/modules/electrical_network/conductivity",
-                                     "column": "electrical_resistance", "snapshot": 1, "target": 0.01,
-                                     "scan": [1e5, 1e6, 1e7, 1e8], "tolerance": 1e-9}}}]}
-    p = tmp / "calibrate_chain.json"
-    p.write_text(json.dumps(scene))
-    return p
+    """The calibrating sweep of tests/scenario/test_sweeps.cpp (scan, search, validation)."""
+    return ROOT / "tests" / "scenario" / "data" / "sweep_calibrate_chain.json"
 
 
 def compare_runs(one, two, label):
@@ -245,6 +229,42 @@ def case_spread_solve(a, tmp):
     print("\n".join("      " + l for l in r.stdout.splitlines()))
     check(r.returncode == 0 and "FAIL" not in r.stdout and r.stdout.count("ok") >= 8,
           f"spread solve driver: exit {r.returncode}, every check ok {r.stderr[-300:]}")
+    amg, direct = lattice_network_scene(tmp, "amg"), lattice_network_scene(tmp, "direct")
+    runs = {"amg_1": run(a, amg, tmp / "amg_1"), "amg_2": run(a, amg, tmp / "amg_2", ranks=2),
+            "direct": run(a, direct, tmp / "direct")}
+    check(all(r.returncode == 0 for r in runs.values()),
+          "lattice network runs exit 0 " + " ".join(r.stderr[-200:] for r in runs.values()))
+    rows = {k: final_row(tmp / k) for k in runs}
+    check(float(rows["amg_1"]["electrical_amg_ranks"]) == 1 and float(rows["amg_2"]["electrical_amg_ranks"]) == 2,
+          f"electrical_amg_ranks: {rows['amg_1']['electrical_amg_ranks']} on 1 rank, {rows['amg_2']['electrical_amg_ranks']} on 2")
+    r1, r2, rd = (float(rows[k]["electrical_resistance"]) for k in ("amg_1", "amg_2", "direct"))
+    check(abs(r2 / r1 - 1) <= 1e-9 and abs(r2 / rd - 1) <= 1e-9,
+          f"resistance on 2 ranks {r2!r} vs 1 rank {r1!r} and direct {rd!r} (1e-9)")
+
+
+def lattice_network_scene(tmp, solver):
+    scene = {
+        "name": "lattice_network", "materials": [{"name": "m", "density": 8000}],
+        "contact": {"law": "hertz_mindlin", "params": {"youngs_modulus": 1e9}},
+        "particle_sets": {"top": {"type": "top_layer", "thickness": 0.001},
+                          "bottom": {"type": "bottom_layer", "thickness": 0.001}},
+        "stages": [
+            {"name": "block", "type": "lattice",
+             "generator": {"lo": [0, 0, 0], "hi": [0.0199, 0.0199, 0.0199], "spacing": 0.00199, "diameter": 0.002}},
+            {"name": "measure", "type": "dynamics", "dt_fraction": 0.1, "sets": ["top", "bottom"],
+             "modules": {"electrical_network": {"model": "holm", "conductivity": 1e6, "high": "top", "low": "bottom",
+                                                "voltage": 0.5, "solver": solver, "tolerance": 1e-12,
+                                                **({"amg_spread_min_rows": 100} if solver == "amg" else {})}},
+             "stop": {"steps": 2}}]}
+    p = tmp / f"lattice_network_{solver}.json"
+    p.write_text(json.dumps(scene))
+    return p
+
+
+def final_row(out):
+    with open(out / "timeseries.csv") as f:
+        rows = list(csv.DictReader(f))
+    return rows[-1]
 
 
 def main():

@@ -534,24 +534,7 @@ TEST_CASE("sweep and snapshot configuration errors are all reported at once with
 /// (ln value, ln column) of the search lands on it in one item.
 TEST_CASE("a calibrating sweep over snapshots: scan, search to the closed form, validation on every snapshot", "[sweeps][scenario]") {
   ScratchDir tmp;
-  json scene = json::parse(R"({
-    "name": "calibrate_chain", "materials": [{"name": "m", "density": 8000}],
-    "contact": {"law": "hertz_mindlin", "params": {"youngs_modulus": 1e9}},
-    "particle_sets": {"top": {"type": "top_layer", "thickness": 0.001},
-                      "bottom": {"type": "bottom_layer", "thickness": 0.001}},
-    "stages": [
-      {"name": "chain", "type": "lattice",
-       "generator": {"lo": [0, 0, 0], "hi": [0.0005, 0.0005, 0.0096], "spacing": 0.00199, "diameter": 0.002}},
-      {"name": "relax", "type": "dynamics", "dt_fraction": 0.1, "stop": {"steps": 30},
-       "snapshots": {"every_steps": 10}},
-      {"name": "fit", "type": "dynamics", "dt_fraction": 0.1, "sets": ["top", "bottom"],
-       "modules": {"electrical_network": {"model": "holm", "conductivity": 1e6, "high": "top", "low": "bottom", "voltage": 0.5}},
-       "stop": {"steps": 0},
-       "sweep": {"snapshots_of": "relax",
-                 "calibrate": {"parameter": "/modules/electrical_network/conductivity",
-                               "column": "electrical_resistance", "snapshot": 1, "target": 0.01,
-                               "scan": [1e5, 1e6, 1e7, 1e8], "tolerance": 1e-9}}}
-    ]})");
+  json scene = load_data("sweep_calibrate_chain.json");
   const fs::path A = tmp.path / "A";
   run(write_scene(tmp.path, "cal.json", scene), A, tmp.path);
   const json sw = read_json(A / "summary.json")["stages"][2]["sweep"];
