@@ -8,14 +8,14 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cstdint>
 #include <chrono>
+#include <cstdint>
 #include <cstdlib>
-#include <thread>
 #include <cstring>
 #include <map>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "engine/core/error.hpp"
@@ -174,8 +174,8 @@ struct HypreAmgPcg::Impl {
 
   /// Creates the matrix of rows [lo, hi) (CSR: ncols per row, global columns, values) on `comm`,
   /// the vectors and the preconditioned CG with its AMG hierarchy. Collective over `comm`.
-  void build(MPI_Comm comm, const std::vector<HYPRE_Int>& ncols, const std::vector<HYPRE_BigInt>& cols,
-             const double* vals, const HypreAmgPcg::Settings& settings) {
+  void build(MPI_Comm comm, const HYPRE_Int* ncols, const HYPRE_BigInt* cols, const double* vals,
+             const HypreAmgPcg::Settings& settings) {
     const HYPRE_BigInt last = hi - 1;
     rows.resize(static_cast<std::size_t>(hi - lo));
     for (HYPRE_BigInt r = lo; r < hi; ++r) rows[static_cast<std::size_t>(r - lo)] = r;
@@ -188,8 +188,8 @@ struct HypreAmgPcg::Impl {
     check(HYPRE_IJMatrixSetDiagOffdSizes(A, diag.data(), offd.data()), "IJMatrixSetDiagOffdSizes");
     check(HYPRE_IJMatrixInitialize(A), "IJMatrixInitialize");
     if (!rows.empty())
-      check(HYPRE_IJMatrixSetValues(A, static_cast<HYPRE_Int>(rows.size()), const_cast<HYPRE_Int*>(ncols.data()), rows.data(),
-                                    cols.data(), vals),
+      check(HYPRE_IJMatrixSetValues(A, static_cast<HYPRE_Int>(rows.size()), const_cast<HYPRE_Int*>(ncols), rows.data(), cols,
+                                    vals),
             "IJMatrixSetValues");
     check(HYPRE_IJMatrixAssemble(A), "IJMatrixAssemble");
     check(HYPRE_IJMatrixGetObject(A, reinterpret_cast<void**>(&pA)), "IJMatrixGetObject");
@@ -348,7 +348,7 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
     const std::vector<HYPRE_BigInt> cols(M.innerIndexPtr(), M.innerIndexPtr() + M.nonZeros());
     im.lo = 0;
     im.hi = im.n;
-    im.build(MPI_COMM_SELF, ncols, cols, M.valuePtr(), settings_);
+    im.build(MPI_COMM_SELF, ncols.data(), cols.data(), M.valuePtr(), settings_);
     return;
   }
   // Rows in breadth-first order (cache locality on one process, thin interfaces between the
@@ -356,16 +356,15 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
   im.ranks = p;
   if (p > 1) im.id = g_next_id++;
   im.perm = breadth_first_order(M);
-  Rows all = permuted_rows(M, im.perm);
+  const Rows all = permuted_rows(M, im.perm);
   for (int r = p - 1; r >= 0; --r) {
     const std::int64_t lo = block_start(im.n, p, r), hi = block_start(im.n, p, r + 1);
     const std::int64_t e0 = all.first[lo], e1 = all.first[hi];
-    std::vector<HYPRE_Int> ncols(all.ncols.begin() + lo, all.ncols.begin() + hi);
-    std::vector<HYPRE_BigInt> cols(all.cols.begin() + e0, all.cols.begin() + e1);
     if (r == 0) {
       im.lo = lo;
       im.hi = hi;
-      im.build(p > 1 ? spread_comm() : MPI_COMM_SELF, ncols, cols, all.vals.data() + e0, settings_);
+      im.build(p > 1 ? spread_comm() : MPI_COMM_SELF, all.ncols.data() + lo, all.cols.data() + e0, all.vals.data() + e0,
+               settings_);
       break;
     }
     Command c;
@@ -378,8 +377,8 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
     c.aggressive_levels = settings_.aggressive_levels;
     c.strong_threshold = settings_.strong_threshold;
     send_command(r, c);
-    send_data(r, ncols.data(), ncols.size());
-    send_data(r, cols.data(), cols.size());
+    send_data(r, all.ncols.data() + lo, static_cast<std::size_t>(hi - lo));
+    send_data(r, all.cols.data() + e0, static_cast<std::size_t>(c.nnz));
     send_data(r, all.vals.data() + e0, static_cast<std::size_t>(c.nnz));
   }
 }
@@ -443,7 +442,7 @@ void serve_amg_command(const std::string& bytes) {
     im->n = c.n;
     im->lo = c.lo;
     im->hi = c.hi;
-    im->build(spread_comm(), ncols, cols, vals.data(),
+    im->build(spread_comm(), ncols.data(), cols.data(), vals.data(),
               HypreAmgPcg::Settings{c.strong_threshold, static_cast<int>(c.aggressive_levels)});
     solvers[c.id] = std::move(im);
     return;

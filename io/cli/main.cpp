@@ -8,19 +8,19 @@
 #include <omp.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <csignal>
 #include <filesystem>
-#include <algorithm>
 #include <iostream>
 #include <limits>
 
 #include "engine/core/error.hpp"
 #include "engine/core/interrupt.hpp"
+#include "engine/graph/hypre_amg.hpp"
 #include "engine/state/particle_set.hpp"
+#include "io/mpi/ranks.hpp"
 #include "io/scenario/calibrate_beams.hpp"
 #include "io/scenario/json_binder.hpp"
-#include "engine/graph/hypre_amg.hpp"
-#include "io/mpi/ranks.hpp"
 #include "io/scenario/pipeline.hpp"
 #include "io/scenario/sweep.hpp"
 #include "io/scenario/scenario.hpp"
@@ -155,8 +155,7 @@ int run_command(int argc, char** argv, bool& serving) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    static std::ostream null(nullptr);
-    const int rc = io::ranks::rank() == 0 ? app.exit(e) : app.exit(e, null, null);
+    const int rc = io::ranks::rank() == 0 ? app.exit(e) : app.exit(e, err(), err());
     return rc == 0 ? 0 : 2;
   }
   // On several ranks only `run` has work for the ranks other than 0.

@@ -352,7 +352,7 @@ json column_statistics(const json& rows, const std::vector<std::string>& columns
 // ------------------------------------------------------------------------------------ items
 namespace sweep_detail {
 
-std::optional<Item> plan_item(const SweepContext& ctx, std::size_t j, const json& rows) {
+std::optional<Item> plan_item(const SweepContext& ctx, std::size_t j, const std::map<std::size_t, json>& rows_by_item) {
   const SweepDef& sw = *ctx.sw;
   if (!sw.calibrate) {
     if (j >= ctx.n) return std::nullopt;
@@ -365,6 +365,7 @@ std::optional<Item> plan_item(const SweepContext& ctx, std::size_t j, const json
                      std::to_string(ctx.n) + " snapshots taken)");
   const auto ks = static_cast<std::size_t>(ctx.cal_pos);
   if (j < c.scan.size()) return Item{ks, c.scan[j], "scan"};
+  const json rows = rows_before(rows_by_item, j);
   const CalibrationState st = calibration_state(c, rows);
   if (!std::isfinite(st.found)) {
     if (st.searches >= static_cast<std::size_t>(c.max_iterations))
@@ -586,7 +587,7 @@ std::map<std::size_t, ItemResult> run_items_in_order(Scenario& sc, const SweepCo
   for (std::size_t j = 0;; ++j) {
     std::optional<Item> item;
     try {
-      item = plan_item(ctx, j, rows_before(rows, j));
+      item = plan_item(ctx, j, rows);
     } catch (...) {
       write_table(ctx, rows_in_order(rows));
       throw;

@@ -41,9 +41,10 @@ struct SweepContext {
   bool quiet = false;
 };
 
-/// Item j of the sweep given the rows of items 0..j-1 in order, or nothing when the sweep is
-/// complete (throws SetupError when a calibration cannot go on).
-std::optional<Item> plan_item(const SweepContext& ctx, std::size_t j, const json& rows);
+/// Item j of the sweep, or nothing when the sweep is complete (throws SetupError when a
+/// calibration cannot go on). A calibration plans it from the rows of items 0..j-1 among
+/// `rows_by_item` (rows of later items are ignored).
+std::optional<Item> plan_item(const SweepContext& ctx, std::size_t j, const std::map<std::size_t, json>& rows_by_item);
 
 /// One item as a message between ranks.
 struct ItemJob {
@@ -74,7 +75,7 @@ ItemResult run_item(Scenario& sc, const ItemJob& job, const State& input, RunOpt
 
 /// The rows by item number, in item order.
 json rows_in_order(const std::map<std::size_t, json>& rows);
-/// The rows of the items before item j, in item order (what plan_item(j) is planned from).
+/// The rows of the items before item j, in item order (what a calibration plans item j from).
 json rows_before(const std::map<std::size_t, json>& rows, std::size_t j);
 /// Rewrites the sweep table (sweep_<stage>.csv) from these rows.
 void write_table(const SweepContext& ctx, const json& rows);

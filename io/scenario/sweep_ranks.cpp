@@ -88,18 +88,18 @@ class Scheduler {
       const std::size_t j = next_;
       if (rows_.count(j)) {  // finished before a restart
         ++next_;
-        if (validating_) ++next_validation_;  // it validated the next snapshot
-        if (!sw.calibrate && next_ >= ctx_.n) exhausted_ = true;
         continue;
       }
-      std::optional<Item> item;
-      const bool independent = !sw.calibrate || j < sw.calibrate->scan.size() || validating_;
+      // Validation items follow one another: item j validates snapshot j - first_validation_.
+      const bool validating = first_validation_.has_value();
+      const bool independent = !sw.calibrate || j < sw.calibrate->scan.size() || validating;
       if (!independent && !running_.empty()) return std::nullopt;
-      if (validating_) {
-        if (next_validation_ < ctx_.n) item = Item{next_validation_, calibrated_, "validate"};
+      std::optional<Item> item;
+      if (validating) {
+        if (j - *first_validation_ < ctx_.n) item = Item{j - *first_validation_, calibrated_, "validate"};
       } else {
         try {
-          item = plan_item(ctx_, j, rows_before(rows_, j));
+          item = plan_item(ctx_, j, rows_);
         } catch (...) {
           error_ = std::current_exception();
           return std::nullopt;
@@ -109,10 +109,9 @@ class Scheduler {
         exhausted_ = true;
         return std::nullopt;
       }
-      if (item->phase == "validate") {
-        validating_ = true;
+      if (item->phase == "validate" && !validating) {
+        first_validation_ = j - item->index;
         calibrated_ = item->value;
-        next_validation_ = item->index + 1;
       }
       ++next_;
       running_.insert(j);
@@ -130,15 +129,14 @@ class Scheduler {
   std::set<std::size_t> running_;
   std::size_t next_ = 0;
   bool exhausted_ = false;
-  bool validating_ = false;
+  std::optional<std::size_t> first_validation_;  ///< item number of the (virtual) validation of snapshot 0
   double calibrated_ = 0.0;
-  std::size_t next_validation_ = 0;
   std::exception_ptr error_;
 };
 
 /// Rank 0's second thread: keeps every other rank busy until the plan is over.
 void dispatch(Scheduler& sched) {
-  std::map<int, std::size_t> busy;  // rank -> item
+  int busy = 0;  // ranks running an item
   std::vector<int> idle;
   for (int r = ranks::size() - 1; r >= 1; --r) idle.push_back(r);
   for (;;) {
@@ -147,14 +145,14 @@ void dispatch(Scheduler& sched) {
       if (!job) break;
       const int r = idle.back();
       idle.pop_back();
-      busy[r] = job->j;
+      ++busy;
       ranks::send(r, ranks::kItem, job->to_json().dump());
     }
-    if (busy.empty() && (sched.over() || sched.error())) return;
+    if (busy == 0 && (sched.over() || sched.error())) return;
     if (auto m = ranks::poll(ranks::kResult)) {
       const json x = json::parse(m->text);
       const std::size_t j = x.at("j").get<std::size_t>();
-      busy.erase(m->source);
+      --busy;
       idle.push_back(m->source);
       if (x.contains("error")) {
         const std::string what = "rank " + std::to_string(m->source) + ", sweep item " + std::to_string(j) + ": " +
@@ -220,7 +218,8 @@ std::map<std::size_t, ItemResult> run_items_over_ranks(Scenario& sc, const Sweep
 
 int serve_sweep_items(Scenario& sc) {
   using namespace sweep_detail;
-  std::map<std::string, State> inputs;  // input state files read so far
+  std::string input_file;  // the current sweep's input state, read once per sweep
+  State input;
   for (;;) {
     const ranks::Message m = ranks::wait(-1);
     if (m.tag == ranks::kStop) return json::parse(m.text).value("exit_code", 0);
@@ -235,14 +234,14 @@ int serve_sweep_items(Scenario& sc) {
       const ItemJob job = ItemJob::from_json(json::parse(m.text));
       j = job.j;
       reply["j"] = j;
-      auto it = inputs.find(job.input_state);
-      if (it == inputs.end()) {
-        State input;
+      if (job.input_state != input_file) {
+        input_file.clear();
+        input = State{};
         read_checkpoint(job.input_state, input);
         input.materials = sc.materials;
-        it = inputs.emplace(job.input_state, std::move(input)).first;
+        input_file = job.input_state;
       }
-      ItemResult r = run_item(sc, job, it->second, spread_item_options(job));
+      ItemResult r = run_item(sc, job, input, spread_item_options(job));
       reply["row"] = r.row;
       reply["steps"] = r.steps;
       reply["particle_steps"] = r.particle_steps;
