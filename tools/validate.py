@@ -4,8 +4,11 @@
     tools/validate.py list                                    the cases, their tiers, sizes and seeds
     tools/validate.py run --tier fast|full [--case GLOB ...] [--sizes N ...] [--seeds S ...]
                           [--jobs J] [--workdir DIR] [--ledger FILE] [--sparkdem PATH] [--build DIR]
-                          [--reuse] [--no-record] [--strict]
+                          [--reuse] [--no-record] [--provisional] [--strict]
     tools/validate.py report [--ledger FILE]                  ledger.md and error_vs_time.png
+    tools/validate.py recompute [--write]                     every record rebuilt from its run file (runs/)
+    tools/validate.py check-ledger                            fail on a dirty record, a cleared mark, a NaN
+    tools/validate.py rebase --case GLOB --why TEXT [--seen]  new first config values (marks never cleared)
     tools/validate.py check-hashes [--ledger FILE]            fail when a recorded config changed
     tools/validate.py check-docs FILE...                      fail when a quoted figure is not the ledger's
     tools/validate.py derive-bands --case GLOB --seeds S ...  fast-tier bands from measured scatter
@@ -40,6 +43,7 @@ FAST_BANDS = os.path.join(VALDIR, "fast_bands.json")
 sys.path.insert(0, VALDIR)
 import cases as case_table  # noqa: E402  (benchmarks/validation/cases.py)
 import perf as perf_records  # noqa: E402  (benchmarks/validation/perf.py: the perf section)
+import ledger as rules  # noqa: E402  (tools/ledger.py: kinds, verdicts, marks, the ledger's checks)
 
 
 # ---------------------------------------------------------------- configs and hashes
@@ -49,12 +53,7 @@ def load_json(path):
         return json.load(f)
 
 
-def write_json_atomic(path, obj):
-    tmp = f"{path}.{os.getpid()}.tmp"
-    with open(tmp, "w") as f:
-        json.dump(obj, f, indent=1, sort_keys=False)
-        f.write("\n")
-    os.replace(tmp, path)
+write_json_atomic = rules.write_json_atomic  # strict JSON (no NaN), temporary name then rename
 
 
 def included_files(path):
@@ -143,7 +142,8 @@ class Runner:
             self.binary_hash = hashlib.sha256(f.read()).hexdigest()[:16]
         helptext = subprocess.run([sparkdem, "run", "--help"], capture_output=True, text=True).stdout
         self.report_only = ["--report-only"] if "--report-only" in helptext else []
-        self.commit = git_commit()  # the code the runs use (taken before any of them starts)
+        # the code the runs use: the commit the binary was built from and whether its tree was clean
+        self.commit, self.clean = rules.binary_build(sparkdem)
 
     def tool(self, rel):
         p = os.path.join(self.build, rel)
@@ -242,6 +242,11 @@ def ensemble(runs, fig, absolute=False):
     have = [r for r in runs if fig in r["figures"]]
     if not have:
         return None
+    unevaluated = [r["seed"] for r in have if not is_finite(r["figures"][fig]["measured"])]
+    have = [r for r in have if r["seed"] not in unevaluated]
+    if not have:  # every run gave NaN or nothing: null with its reason, never a NaN in the ledger
+        return {"measured": None, "count": 0, "null_reason": f"the figure could not be evaluated in any run "
+                f"(seeds {unevaluated}: not finite or missing in the run's output)"}
     per_seed = [{"seed": r["seed"], "measured": r["figures"][fig]["measured"],
                  "reference": r["figures"][fig]["reference"]} for r in have]
     for p in per_seed:
@@ -252,10 +257,16 @@ def ensemble(runs, fig, absolute=False):
            "error": statistics.fmean(errs), "count": len(have), "per_seed": per_seed}
     out["mean"] = out["error"]
     out["std"] = statistics.stdev(errs) if len(errs) > 1 else None
+    if unevaluated:
+        out["null_reason"] = f"not evaluated in seeds {unevaluated} (left out of the statistics)"
     for r in have:
         for k, x in r["figures"][fig].get("extra", {}).items():
             out.setdefault("extra", {}).setdefault(k, []).append(x)
     return out
+
+
+def is_finite(x):
+    return isinstance(x, (int, float)) and math.isfinite(x)
 
 
 def tuned_by_config_change(case, first_values):
@@ -269,85 +280,196 @@ def tuned_by_config_change(case, first_values):
     return out
 
 
-def make_record(case, fig, tier, n, runs, runner, first_values, fast_bands):
+def run_meta(runner, provisional):
+    """What every record of one `run` invocation shares: the binary's provenance and the date."""
+    return {"threads": runner.threads, "commit": runner.commit, "clean": runner.clean, "binary": runner.binary_hash,
+            "provisional": bool(provisional), "date": time.strftime("%Y-%m-%d %H:%M:%S")}
+
+
+def make_record(case, fig, tier, n, runs, meta, first_values, fast_bands, marks=()):
+    """The record of figure `fig` from its runs (the same from a fresh run and from a run file:
+    `recompute`). meta: run_meta's fields (or a run file's); marks: the figure's permanent tuned marks."""
     st = ensemble(runs, fig.key, fig.absolute)
     failed = [r for r in runs if r["error"]]
+    tuned = list(fig.tuned) + tuned_by_config_change(case, first_values)
+    tuned += [m for m in marks if m not in tuned]
     rec = {"case": fig.id, "source": fig.source, "reference_origin": fig.reference_origin,
-           "kind": "validation" if tier == "full" else "regression", "tier": tier, "N": n,
+           "kind": rules.record_kind(fig, tier, n), "tier": tier, "N": n,
            "seeds": [r["seed"] for r in runs], "calibrated_on": fig.calibrated_on,
            "wall_s": round(sum(r["wall_s"] for r in runs), 2), "cpu_s": round(sum(r["cpu_s"] for r in runs), 2),
-           "threads": runner.threads, "commit": runner.commit, "date": time.strftime("%Y-%m-%d %H:%M:%S"),
-           "configs": config_hashes(case), "variants": fig.variants,
+           "threads": meta["threads"], "commit": meta["commit"], "clean": meta["clean"], "date": meta["date"],
+           "configs": meta["configs"], "variants": fig.variants,
            **({"error_kind": "absolute"} if fig.absolute else {}),
-           "tuned_after_seeing": list(fig.tuned) + tuned_by_config_change(case, first_values),
+           **({"provisional": True} if meta.get("provisional") else {}),
+           "tuned_after_seeing": tuned,
            "runs": [{"seed": r["seed"], "rundir": r["rundir"], "wall_s": round(r["wall_s"], 2),
                      "cpu_s": round(r["cpu_s"], 2), "load_average_start": round(r["load"], 2), "error": r["error"]}
                     for r in runs]}
     if failed:
         rec["failed_runs"] = len(failed)
-    if st is None:
-        rec.update({"measured": None, "error": None, "pass": False, "band": fig.band_at(n)})
+    if st is None or st["measured"] is None:
+        rec.update({"measured": None, "error": None, "pass": False, "band": fig.band_at(n),
+                    "null_reason": (st or {}).get("null_reason", "no run produced the figure")})
+        rec["verdict"] = rules.verdict(rec)
         return rec
     rec.update({k: st[k] for k in ("measured", "reference", "error", "mean", "std", "count", "per_seed")})
-    if "extra" in st:
-        rec["extra"] = st["extra"]
+    for k in ("extra", "null_reason"):
+        if k in st:
+            rec[k] = st[k]
     if tier == "full":
         judge_full(rec, fig)
     else:
-        fb = fast_bands.get(f"{fig.id}@N{n}")
-        if fb is None and fig.min_seeds == 1:  # deterministic (no packing): the closed form's own band
-            fb = {"center": 0.0, "halfwidth": fig.band_at(n),
-                  "derivation": "the validation band: a deterministic case has no scatter to derive one from"}
-        if fb is None:
-            rec.update({"band": None, "pass": False, "note": "no fast band derived for this size "
-                        "(tools/validate.py derive-bands)"})
-        else:
-            lo, hi = fb["center"] - fb["halfwidth"], fb["center"] + fb["halfwidth"]
-            rec["band"] = {"error_range": [lo, hi], "derivation": fb["derivation"]}
-            rec["pass"] = lo <= st["error"] <= hi and not failed
+        judge_fast(rec, fig, n, fast_bands, failed)
+    rec["verdict"] = rules.verdict(rec)
     return rec
 
 
+def judge_fast(rec, fig, n, fast_bands, failed):
+    """A fast-tier record: inside or outside its regression band (never a pass)."""
+    rec["pass"] = False
+    if rec["kind"] == "construction":
+        rec["band"] = None
+        return
+    fb = fast_bands.get(f"{fig.id}@N{n}")
+    if fb is None and fig.min_seeds == 1:  # deterministic (no packing): the closed form's own band
+        fb = {"center": 0.0, "halfwidth": fig.band_at(n),
+              "derivation": "the validation band: a deterministic case has no scatter to derive one from"}
+    if fb is None:
+        rec.update({"band": None, "inside_band": False, "note": "no fast band derived for this size "
+                    "(tools/validate.py derive-bands)"})
+        return
+    lo, hi = fb["center"] - fb["halfwidth"], fb["center"] + fb["halfwidth"]
+    rec["band"] = {"error_range": [lo, hi], "derivation": fb["derivation"]}
+    rec["inside_band"] = lo <= rec["error"] <= hi and not failed
+
+
 def judge_full(rec, fig):
-    """Band and verdict of a full-tier record from its figure's definition in cases.py."""
+    """Band and verdict of a full-tier record from its figure's definition in cases.py: only a
+    validation record passes; a calibration record reports its residual against the band."""
     band = fig.band_at(rec["N"])
     rec["band"] = band
-    rec["pass"] = (abs(rec["error"]) <= band and not rec["tuned_after_seeing"] and not rec.get("failed_runs")
-                   and rec["count"] >= fig.min_seeds)
     rec.pop("note", None)
+    if rec["kind"] == "construction":
+        rec["pass"] = False
+        return
+    inside = (abs(rec["error"]) <= band and not rec.get("failed_runs") and rec["count"] >= fig.min_seeds)
+    if rec["kind"] == "calibration":
+        rec["pass"], rec["inside_band"] = False, inside
+    else:
+        rec["pass"] = inside and not rec["tuned_after_seeing"] and not rec.get("provisional")
     if rec["count"] < fig.min_seeds:
         rec["note"] = f"{rec['count']} packing(s): a packing decides this figure, >= {fig.min_seeds} needed for a pass"
     rec["scatter_exceeds_band"] = rec["std"] is not None and rec["std"] > band
 
 
-def cmd_rejudge(a):
-    """Re-evaluates band and verdict of every full-tier record from cases.py without rerunning (for a
-    band encoded wrongly in cases.py: the correction is recorded in each record's `rejudged`)."""
-    lock = ledger_lock(a.ledger)
-    ledger = load_ledger(a.ledger)
-    figs = {f.id: f for c in case_table.CASES for f in c.figures}
-    for r in ledger["records"]:
-        f = figs.get(r["case"])
-        if r["tier"] != "full" or f is None or r.get("error") is None:
+RECOMPUTED_FIELDS = ("kind", "measured", "reference", "error", "mean", "std", "count", "per_seed", "extra", "band",
+                     "pass", "inside_band", "verdict", "tuned_after_seeing", "wall_s", "cpu_s", "commit", "clean",
+                     "provisional", "null_reason")
+
+
+def run_file_path(ledger_path, tier, case_id, n):
+    """Where a run's small result file lives: runs/ beside the ledger, one file per case, tier and N."""
+    return os.path.join(os.path.dirname(os.path.abspath(ledger_path)), "runs", tier, case_id.replace("/", "_"),
+                        f"N{n}.json")
+
+
+def write_run_file(path, case, tier, n, runs, meta):
+    """The inputs of every figure of one case, tier and N: per run its seed, figures (measured,
+    reference, side figures), error, wall and CPU seconds; with the binary's provenance and the
+    configs' hashes. `recompute` rebuilds the records from it without running sparkdem."""
+    body = {"case": case.id, "tier": tier, "N": n, **meta, "configs": config_hashes(case),
+            "runs": [{k: r[k] for k in ("seed", "figures", "error", "wall_s", "cpu_s", "load", "rundir")} for r in runs]}
+    write_json_atomic(path, body)
+
+
+def records_from_run_file(ledger, path, ledger_path):
+    """The records of every figure of a run file, made as `run` made them."""
+    rf = rules.load_strict(path)
+    case = next((c for c in case_table.CASES if c.id == rf["case"]), None)
+    if case is None:
+        raise ValueError(f"{path}: case {rf['case']} is not in benchmarks/validation/cases.py")
+    fast_bands = load_json(FAST_BANDS) if os.path.exists(FAST_BANDS) else {}
+    first = ledger.get("first_config_values", {}).get(case.id) or config_values(case)
+    runs = [dict(r, n=rf["N"]) for r in rf["runs"]]
+    out = []
+    for fig in case.figures:
+        if fig.tiers and rf["tier"] not in fig.tiers:
             continue
-        old = (r["band"], r["pass"])
-        judge_full(r, f)
-        if (r["band"], r["pass"]) != old:
-            r["rejudged"] = f"band {old[0]} -> {r['band']}, pass {old[1]} -> {r['pass']} ({time.strftime('%Y-%m-%d')})"
-            print(f"{r['case']} N={r['N']}: {r['rejudged']}")
-    write_json_atomic(a.ledger, ledger)
-    write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
-    lock.close()
-    return 0
+        rec = make_record(case, fig, rf["tier"], rf["N"], runs, rf, first, fast_bands,
+                          ledger.get("tuned_marks", {}).get(fig.id, []))
+        rec["run_file"] = os.path.relpath(path, os.path.dirname(os.path.abspath(ledger_path)))
+        out.append(rules.finite(rec))
+    return out
+
+
+def cmd_recompute(a):
+    """Rebuilds every record that has a run file from that file alone (no sparkdem run) and compares
+    it with the ledger; --write stores the recomputed records (after a new tuned mark, a corrected
+    band or fast band). Exit 1 when a record differs (without --write) or a run file is missing."""
+    lock = ledger_lock(a.ledger) if a.write else None
+    ledger = load_ledger(a.ledger)
+    recs = {(r["case"], r["tier"], r["N"]): r for r in ledger["records"]}
+    bad, n_same, files = [], 0, sorted({r["run_file"] for r in ledger["records"] if r.get("run_file")})
+    for rel in files:
+        path = os.path.join(os.path.dirname(os.path.abspath(a.ledger)), rel)
+        if not os.path.exists(path):
+            bad.append(f"{rel}: missing")
+            continue
+        for new in records_from_run_file(ledger, path, a.ledger):
+            old = recs.get((new["case"], new["tier"], new["N"]))
+            diff = [k for k in RECOMPUTED_FIELDS if (old or {}).get(k) != new.get(k)]
+            if old is None or diff:
+                bad.append(f"{new['case']} N={new['N']} ({new['tier']}): "
+                           + ("not in the ledger" if old is None else "differs in " + ", ".join(diff)))
+                if a.write:
+                    store(ledger, new)
+            else:
+                n_same += 1
+    legacy = sum(1 for r in ledger["records"] if r.get("legacy"))
+    print(f"recompute: {len(files)} run files, {n_same} records equal to the ledger, {len(bad)} differ; "
+          f"{legacy} legacy records without run files")
+    for line in bad:
+        print("  " + line, file=sys.stderr)
+    if a.write:
+        write_json_atomic(a.ledger, ledger)
+        write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
+        lock.close()
+        return 0
+    return 1 if bad else 0
+
+
+def cmd_check_ledger(a):
+    """The ledger's rules (tools/ledger.py: check_rules) on FILE, against the committed ledger's marks."""
+    ledger = rules.load_strict(a.ledger)
+    head = None
+    rel = os.path.relpath(os.path.abspath(a.ledger), REPO)
+    try:  # the committed ledger (no git, or not a checkout: the marks are checked against the file alone)
+        shown = subprocess.run(["git", "-C", REPO, "show", f"HEAD:{rel}"], capture_output=True, text=True)
+    except OSError:
+        shown = None
+    if shown is not None and shown.returncode == 0 and not a.no_head:
+        head = json.loads(shown.stdout, parse_constant=lambda t: None)
+    bad = rules.check_rules(ledger, head, os.path.dirname(os.path.abspath(a.ledger)))
+    for line in bad:
+        print(line, file=sys.stderr)
+    print(f"check-ledger: {len(ledger['records'])} records, {len(bad)} broken rules")
+    return 1 if bad else 0
 
 
 def cmd_rebase(a):
     """Takes the current configs of the selected cases as their new first values (the reference of the
     automatic tuned_after_seeing marks), for a model or protocol change decided from sources and from
     figures other than the case's own (an issue's build step), before the case's runs on it. Recorded
-    in the ledger's `rebases` with the date, the commit, the keys that changed and why."""
+    in the ledger's `rebases` with the date, the commit, the keys that changed and why.
+    A rebase never clears a mark: the marks its records carry become permanent first, and with --seen
+    (or a reason that says the change was decided after seeing a figure of the case) every changed
+    key becomes a permanent mark of each of the case's figures."""
     if not a.why.strip():
         raise SystemExit("rebase needs --why")
+    if not a.seen and rules.reason_says_seen(a.why):
+        print("validate: the reason says the change was decided after seeing a figure of the case; rebase "
+              "with --seen, which marks its figures tuned", file=sys.stderr)
+        return 2
     lock = ledger_lock(a.ledger)
     ledger = load_ledger(a.ledger)
     fv = ledger.setdefault("first_config_values", {})
@@ -355,10 +477,24 @@ def cmd_rebase(a):
         now = config_values(case)
         old = fv.get(case.id, {})
         changed = sorted(k for k in set(old) | set(now) if old.get(k) != now.get(k))
+        for fig in case.figures:
+            for r in ledger["records"]:
+                if r["case"] == fig.id:
+                    rules.add_marks(ledger, fig.id, r.get("tuned_after_seeing") or [])
+            if a.seen:
+                rules.add_marks(ledger, fig.id, [{"parameter": k, "why": f"changed after seeing a figure of the case "
+                                                  f"(rebase {time.strftime('%Y-%m-%d')}: {a.why})"} for k in changed])
         fv[case.id] = now
         ledger.setdefault("rebases", []).append({"case": case.id, "date": time.strftime("%Y-%m-%d %H:%M:%S"),
-                                                 "commit": git_commit(), "why": a.why, "changed": changed})
-        print(f"{case.id}: rebased ({len(changed)} config keys changed since the first values)")
+                                                 "commit": git_commit(), "why": a.why, "changed": changed,
+                                                 "seen": bool(a.seen)})
+        print(f"{case.id}: rebased ({len(changed)} config keys changed since the first values"
+              + (", marked tuned)" if a.seen else ")"))
+    for r in ledger["records"]:
+        r["tuned_after_seeing"] = rules.with_marks(ledger, r)
+        if r.get("pass") and r["tuned_after_seeing"]:
+            r["pass"] = False
+        r["verdict"] = rules.verdict(r)
     write_json_atomic(a.ledger, ledger)
     write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
     lock.close()
@@ -373,7 +509,16 @@ def first_values_of(ledger, case):
 
 
 def store(ledger, rec):
-    """Replace the record of the same case, tier and N (the ledger keeps the latest)."""
+    """Replace the record of the same case, tier and N (the ledger keeps the latest). The marks the
+    old record carried become permanent marks of the figure first: a rerun never clears one."""
+    for r in ledger["records"]:
+        if r["case"] == rec["case"]:
+            rules.add_marks(ledger, r["case"], r.get("tuned_after_seeing") or [])
+    rules.add_marks(ledger, rec["case"], rec.get("tuned_after_seeing") or [])
+    rec["tuned_after_seeing"] = rules.with_marks(ledger, rec)
+    if rec.get("pass") and rec["tuned_after_seeing"]:
+        rec["pass"] = False
+        rec["verdict"] = rules.verdict(rec)
     recs = [r for r in ledger["records"]
             if not (r["case"] == rec["case"] and r["tier"] == rec["tier"] and r["N"] == rec["N"])]
     recs.append(rec)
@@ -392,7 +537,7 @@ def ledger_lock(path):
 
 def load_ledger(path):
     if os.path.exists(path):
-        return load_json(path)
+        return rules.load_strict(path)
     return {"schema": "benchmarks/validation/README.md", "records": [], "first_config_values": {}}
 
 
@@ -421,44 +566,52 @@ def cmd_list(a):
     return 0
 
 
+def refuse_dirty(runner, a):
+    """A message when `run` would record from a binary not built from a clean commit, else None."""
+    if a.no_record or a.provisional or runner.clean:
+        return None
+    return (f"validate: refusing to record: {a.sparkdem} was built from commit {runner.commit} with a dirty work "
+            f"tree (`sparkdem --version`). Commit, rebuild (cmake --build build), then run; or pass --provisional "
+            f"(records marked so, never counted) or --no-record.")
+
+
 def cmd_run(a):
     cases = selected(a.case, a.tier)
     if not cases:
         print(f"validate: no case of tier {a.tier} matches {a.case}", file=sys.stderr)
         return 2
     runner = Runner(a.sparkdem, a.build, a.threads, a.reuse)
-    jobs = []
-    for c in cases:
-        spec = c.tiers[a.tier]
-        for n in (a.sizes or spec["sizes"]):
-            for s in (a.seeds or spec["seeds"]):
-                jobs.append((c, n, s))
+    refusal = refuse_dirty(runner, a)
+    if refusal:
+        print(refusal, file=sys.stderr)
+        return 2
+    jobs = [(c, n, s) for c in cases for n in (a.sizes or c.tiers[a.tier]["sizes"])
+            for s in (a.seeds or c.tiers[a.tier]["seeds"])]
     print(f"validate: tier {a.tier}, {len(jobs)} runs of {len(cases)} cases, {a.jobs} at a time, "
-          f"{a.threads} thread(s) each; load average {os.getloadavg()[0]:.2f}; workdir {a.workdir}", flush=True)
-    results = {}
-    with futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
-        fut = {pool.submit(run_one, runner, c, a.tier, n, s, a.workdir): (c, n, s) for c, n, s in jobs}
-        for f in futures.as_completed(fut):
-            c, n, s = fut[f]
-            r = f.result()
-            results.setdefault((c.id, n), []).append(r)
-            status = r["error"] or ", ".join(f"{k} {100 * (v['measured'] - v['reference']) / abs(v['reference']):+.2f} %"
-                                             for k, v in r["figures"].items())
-            print(f"  {c.id} N={n} seed={s}: {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU: {status}", flush=True)
+          f"{a.threads} thread(s) each; binary of commit {runner.commit} ({'clean' if runner.clean else 'dirty'}); "
+          f"load average {os.getloadavg()[0]:.2f}; workdir {a.workdir}", flush=True)
+    results = run_jobs(runner, jobs, a)
     lock = ledger_lock(a.ledger) if not a.no_record else None  # other runs may record into the same ledger
     ledger = load_ledger(a.ledger)
     fast_bands = load_json(FAST_BANDS) if os.path.exists(FAST_BANDS) else {}
+    meta = run_meta(runner, a.provisional)
     misses = 0
     for c in cases:
         first = first_values_of(ledger, c)
+        meta["configs"] = config_hashes(c)
         for n in (a.sizes or c.tiers[a.tier]["sizes"]):
             runs = sorted(results.get((c.id, n), []), key=lambda r: r["seed"])
+            rf = run_file_path(a.ledger, a.tier, c.id, n)
+            if not a.no_record:
+                write_run_file(rf, c, a.tier, n, runs, meta)
             for fig in c.figures:
                 if fig.tiers and a.tier not in fig.tiers:
                     continue
-                rec = make_record(c, fig, a.tier, n, runs, runner, first, fast_bands)
+                rec = rules.finite(make_record(c, fig, a.tier, n, runs, meta, first, fast_bands,
+                                               ledger.get("tuned_marks", {}).get(fig.id, [])))
+                rec["run_file"] = os.path.relpath(rf, os.path.dirname(os.path.abspath(a.ledger)))
                 print("  " + summary_line(rec))
-                if not rec["pass"]:
+                if rec["verdict"].split(", ")[-1] in ("miss", "failed", "outside band"):
                     misses += 1
                 if not a.no_record:
                     store(ledger, rec)
@@ -472,6 +625,22 @@ def cmd_run(a):
         print(f"validate: {misses} figure(s) outside their band", file=sys.stderr)
         return 1
     return 0
+
+
+def run_jobs(runner, jobs, a):
+    """Runs (case, N, seed) jobs, a.jobs at a time; returns {(case id, N): [run results]}."""
+    results = {}
+    with futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
+        fut = {pool.submit(run_one, runner, c, a.tier, n, s, a.workdir): (c, n, s) for c, n, s in jobs}
+        for f in futures.as_completed(fut):
+            c, n, s = fut[f]
+            r = f.result()
+            results.setdefault((c.id, n), []).append(r)
+            status = r["error"] or ", ".join(
+                f"{k} {100 * (v['measured'] - v['reference']) / abs(v['reference']):+.2f} %"
+                if is_finite(v["measured"]) else f"{k} not evaluated" for k, v in r["figures"].items())
+            print(f"  {c.id} N={n} seed={s}: {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU: {status}", flush=True)
+    return results
 
 
 def fmt_err(rec, x):
@@ -507,68 +676,146 @@ def band_text(rec):
 
 def summary_line(rec):
     std = f" ± {fmt_std(rec, rec['std'])}" if rec.get("std") is not None else ""
-    verdict = "PASS" if rec["pass"] else ("TUNED" if rec.get("tuned_after_seeing") and rec["kind"] == "validation"
-                                          else "MISS")
-    return (f"{verdict:5s} {rec['case']} N={rec['N']} ({rec['kind']}): error {fmt_err(rec, rec.get('error'))}{std} "
-            f"over {rec.get('count', 0)} run(s), band {band_text(rec)}, {rec['wall_s']:.1f} s wall")
+    return (f"{rec['verdict'].upper():12s} {rec['case']} N={rec['N']} ({rec['kind']}): error "
+            f"{fmt_err(rec, rec.get('error'))}{std} over {rec.get('count', 0)} run(s), band {band_text(rec)}, "
+            f"{rec['wall_s']:.1f} s wall")
 
 
-def verdict(rec):
-    if rec["pass"]:
-        return "pass"
-    if rec.get("tuned_after_seeing") and rec["kind"] == "validation":
-        return "tuned"
-    if rec.get("measured") is None:
-        return "failed"
-    return "miss"
+verdict = rules.verdict
 
 
 def write_reports(ledger, outdir):
     write_markdown(ledger, os.path.join(outdir, "ledger.md"))
     try:
-        write_plot(ledger, os.path.join(outdir, "error_vs_time.png"))
+        import plot as ledger_plot  # benchmarks/validation/plot.py (matplotlib)
+        ledger_plot.write_error_vs_time(ledger["records"], os.path.join(outdir, "error_vs_time.png"), verdict)
     except ImportError as e:
         print(f"validate: error_vs_time.png not drawn ({e}); install python3-matplotlib", file=sys.stderr)
 
 
-def ledger_table(ledger, kind):
+def table_rows(ledger, kind):
+    """The records a generated table of `kind` shows (legacy and provisional records apart)."""
+    recs = ledger["records"]
+    live = [r for r in recs if not r.get("legacy") and not r.get("provisional")]
+    if kind == "calibration":
+        return [r for r in live if r["kind"] in ("calibration", "construction")]
+    if kind in ("legacy", "provisional"):
+        return [r for r in recs if r.get(kind)]
+    return [r for r in live if r["kind"] == kind]
+
+
+def ledger_table(ledger, kind, changed=None):
+    """A generated markdown table: kind validation, calibration (with construction), regression,
+    legacy, provisional, headline, commits or perf. changed: {commit: "yes"/"no"/"unknown"} adds
+    the column "engine/ or physics/ changed since" (ledger.md only: it moves with every commit)."""
     if kind == "perf":
         return perf_records.table(ledger, full=False)
-    rows = [r for r in ledger["records"] if r["kind"] == kind]
-    lines = ["| case | N | seeds | reference | measured | error (mean ± std) | band | verdict | wall [s] | CPU [s] | commit |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
-    for r in rows:
-        std = f" ± {fmt_std(r, r['std'])} %" if r.get("std") is not None and r.get("error_kind") != "absolute" else \
-            f" ± {fmt_std(r, r['std'])}" if r.get("std") is not None else ""
+    if kind == "headline":
+        return headline_table(ledger)
+    if kind == "commits":
+        return commits_table(ledger)
+    cols = ["case", "N", "seeds", "reference", "measured", "error (mean ± std)", "band", "verdict", "wall [s]",
+            "CPU [s]", "commit"] + (["engine/physics changed since"] if changed is not None else [])
+    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    for r in table_rows(ledger, kind):
         ref = "n/a" if r.get("reference") is None else f"{r['reference']:.6g}"
         meas = "n/a" if r.get("measured") is None else f"{r['measured']:.6g}"
         flag = " (scatter > band)" if r.get("scatter_exceeds_band") else ""
-        lines.append(f"| {r['case']} | {r['N']} | {len(r['seeds'])} | {ref} | {meas} | {fmt_err(r, r.get('error'))}{std}{flag} | "
-                     f"{band_text(r)} | {verdict(r)} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['commit']} |")
+        cells = [r["case"], r["N"], len(r["seeds"]), ref, meas, f"{fmt_err(r, r.get('error'))}{std_text(r)}{flag}",
+                 band_text(r), verdict(r), f"{r['wall_s']:.1f}", f"{r['cpu_s']:.1f}", r["commit"]]
+        if changed is not None:
+            cells.append(changed.get(r["commit"], "unknown"))
+        lines.append("| " + " | ".join(str(c) for c in cells) + " |")
+    return "\n".join(lines)
+
+
+def std_text(r):
+    if r.get("std") is None:
+        return ""
+    return f" ± {fmt_std(r, r['std'])}" + ("" if r.get("error_kind") == "absolute" else " %")
+
+
+def headline_table(ledger):
+    """The headline figures of cases.HEADLINE: per figure its record at the listed N (full tier)."""
+    recs = {(r["case"], r["N"]): r for r in ledger["records"] if r["tier"] == "full"}
+    lines = ["| figure | N | error (mean ± std) | band | verdict | traceable |", "|---|---|---|---|---|---|"]
+    for fid, n in case_table.HEADLINE:
+        r = recs.get((fid, n))
+        if r is None:
+            lines.append(f"| {fid} | {n} | not run | | | |")
+            continue
+        trace = "legacy: no run file" if r.get("legacy") else ("provisional" if r.get("provisional") else "run file")
+        lines.append(f"| {fid} | {n} | {fmt_err(r, r.get('error'))}{std_text(r)} | {band_text(r)} | {verdict(r)} | "
+                     f"{trace} |")
+    return "\n".join(lines)
+
+
+def commits_table(ledger):
+    """Which binaries made the records: per commit (a "+dirty" suffix: a dirty tree), tiers, counts, dates."""
+    by = {}
+    for r in ledger["records"]:
+        by.setdefault(r["commit"], []).append(r)
+    lines = ["| commit | clean | tiers | records | legacy | first date | last date |", "|---|---|---|---|---|---|---|"]
+    for c, rs in sorted(by.items(), key=lambda kv: min(r["date"] for r in kv[1])):
+        clean = "no" if "+dirty" in c or any(r.get("clean") is False for r in rs) else "yes"
+        lines.append(f"| {c} | {clean} | {', '.join(sorted({r['tier'] for r in rs}))} | {len(rs)} | "
+                     f"{sum(1 for r in rs if r.get('legacy'))} | {min(r['date'] for r in rs)[:10]} | "
+                     f"{max(r['date'] for r in rs)[:10]} |")
     return "\n".join(lines)
 
 
 def ledger_counts(ledger):
-    recs = [r for r in ledger["records"] if r["kind"] == "validation"]
-    v = [verdict(r) for r in recs]
-    return {"validation_records": len(recs), "pass": v.count("pass"), "miss": v.count("miss"),
-            "tuned": v.count("tuned"), "failed": v.count("failed"),
-            "regression_records": sum(1 for r in ledger["records"] if r["kind"] == "regression")}
+    return rules.counts(ledger["records"])
+
+
+def changed_since(ledger):
+    """{commit: whether engine/ or physics/ changed since it} for the records' commits."""
+    return {c: rules.code_changed_since(c) for c in {r["commit"] for r in ledger["records"]}}
 
 
 def write_markdown(ledger, path):
     c = ledger_counts(ledger)
+    ch = changed_since(ledger)
     parts = ["# Validation ledger", "",
              "Generated by `tools/validate.py report` from `ledger.json`; do not edit by hand. Schema and rules: "
              "README.md in this directory.", "",
-             f"Validation records (full tier): {c['validation_records']}: {c['pass']} pass, {c['miss']} miss, "
-             f"{c['tuned']} tuned after seeing (never a pass), {c['failed']} failed. Regression records (fast tier): "
-             f"{c['regression_records']}.", "",
+             f"Validation records (full tier, traceable): {c['validation_records']}: {c['pass']} pass, {c['miss']} "
+             f"miss, {c['tuned']} tuned after seeing (never a pass), {c['failed']} failed. Apart: "
+             f"{c['calibration_records']} calibration and {c['construction_records']} construction records (not "
+             f"judged), {c['regression_records']} regression records (fast tier), {c['provisional_records']} "
+             f"provisional and {c['legacy_records']} legacy records (no run file: not counted).", "",
              "## Full tier (validations against a paper, a closed form or a reference tool)", "",
-             ledger_table(ledger, "validation"), "",
-             "## Fast tier (regression guards; bands from measured scatter, never a validation pass)", "",
-             ledger_table(ledger, "regression"), "", "## Sources, calibrations and marks", ""]
-    seen = set()
+             ledger_table(ledger, "validation", ch), "",
+             "## Calibration residuals and figures true by construction (reported, never judged)", "",
+             ledger_table(ledger, "calibration", ch), "",
+             "## Fast tier (regression guards; bands from measured scatter: inside or outside, never a pass)", "",
+             ledger_table(ledger, "regression", ch), "",
+             "## Provisional records (from a dirty tree; never counted)", "",
+             ledger_table(ledger, "provisional", ch), "",
+             "## Legacy records (made before run files were kept: cannot be recomputed; never counted)", "",
+             ledger_table(ledger, "legacy", ch), "",
+             "## Which binaries made the records", "", commits_table(ledger), "",
+             "## Sources, calibrations and marks", ""]
+    parts += sources_section(ledger)
+    if ledger.get("perf"):
+        parts += ["", "## Perf (speed and memory; `tools/validate.py perf` imports them from the benchmarks' files)", "",
+                  perf_records.table(ledger, full=True)]
+    if ledger.get("rebases"):
+        parts += ["", "## Rebases (new first config values after a documented model change)", ""]
+        for b in ledger["rebases"]:
+            parts.append(f"- **{b['case']}** ({b['date']}, {b['commit']}; {len(b['changed'])} config keys"
+                         f"{'; decided after seeing: marked tuned' if b.get('seen') else ''}): {b['why']}")
+    for b in ledger.get("removed", []):
+        parts.append(f"- removed record **{b['case']}** N={b['N']} ({b['tier']}, {b['date']}): {b['why']}")
+    parts += extras_section(ledger)
+    tmp = f"{path}.{os.getpid()}.tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(parts) + "\n")
+    os.replace(tmp, path)
+
+
+def sources_section(ledger):
+    parts, seen = [], set()
     for r in ledger["records"]:
         if r["case"] in seen:
             continue
@@ -579,69 +826,25 @@ def write_markdown(ledger, path):
             parts.append(f"  - tuned after seeing: `{t['parameter']}`: {t['why']}")
         for v in r.get("variants", []):
             parts.append(f"  - variant: {v}")
-    if ledger.get("perf"):
-        parts += ["", "## Perf (speed and memory; `tools/validate.py perf` imports them from the benchmarks' files)", "",
-                  perf_records.table(ledger, full=True)]
-    if ledger.get("rebases"):
-        parts += ["", "## Rebases (new first config values after a documented model change)", ""]
-        for b in ledger["rebases"]:
-            parts.append(f"- **{b['case']}** ({b['date']}, {b['commit']}; {len(b['changed'])} config keys): {b['why']}")
+        if r.get("null_reason"):
+            parts.append(f"  - not evaluated: {r['null_reason']}")
+    return parts
+
+
+def extras_section(ledger):
     extras = [r for r in ledger["records"] if r.get("extra")]
-    if extras:
-        parts += ["", "## Side figures and variants per record (mean over the runs)", "",
-                  "| case | tier | N | figure | mean | per run |", "|---|---|---|---|---|---|"]
-        for r in extras:
-            for k, xs in sorted(r["extra"].items()):
-                nums = [x for x in xs if isinstance(x, (int, float)) and x is not None]
-                if not nums:
-                    continue
-                parts.append(f"| {r['case']} | {r['tier']} | {r['N']} | {k} | {statistics.fmean(nums):.6g} | "
-                             + ", ".join(f"{x:.6g}" for x in nums) + " |")
-    tmp = f"{path}.{os.getpid()}.tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(parts) + "\n")
-    os.replace(tmp, path)
-
-
-def write_plot(ledger, path):
-    """|error| of each full-tier record against its run time (wall seconds summed over its runs and
-    reference tools), log-log: one marker shape and colour per source, filled for a pass, open
-    otherwise; a grey bar marks the record's band."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    style = {"seed000": ("o", "C0"), "seed001": ("s", "C1"), "seed002": ("^", "C2"), "closed": ("D", "C3")}
-    fig, ax = plt.subplots(figsize=(11, 7.5))
-    floor = 1e-3  # [%]: smaller errors (round-off of a conservation check) are drawn on the floor
-    done = set()
-    for r in ledger["records"]:
-        if r["kind"] != "validation" or r.get("error") is None or r["wall_s"] <= 0:
-            continue
-        paper = r["case"].split("/")[0]
-        marker, colour = style.get(paper, ("x", "k"))
-        x, y = r["wall_s"], max(abs(r["error"]) * 100, floor)
-        ax.scatter(x, y, marker=marker, s=50, label=None if paper in done else paper, edgecolors=colour,
-                   facecolors=colour if verdict(r) == "pass" else "none", linewidths=1.4, zorder=3)
-        done.add(paper)
-        if isinstance(r.get("band"), (int, float)):
-            ax.scatter(x, max(100 * r["band"], floor), marker="_", s=120, color="0.5", zorder=2)
-        k = sum(1 for q in ledger["records"] if q is not r and q["kind"] == "validation"
-                and q.get("wall_s") and abs(math.log10(q["wall_s"] / x)) < 0.05)
-        ax.annotate(f"{r['case'].split('/', 1)[1]}" + (f" N={r['N']}" if r["N"] else ""), (x, y), fontsize=5.5,
-                    xytext=(4, 3 - 7 * (k % 3)), textcoords="offset points")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("run time: wall seconds, all seeds and reference tools of the record (one thread each)")
-    ax.set_ylim(floor / 2, None)
-    ax.set_ylabel("|error| of the ensemble mean [%]  (absolute figures, e.g. porosity: x 100; grey bar: the band; floor 1e-3 %)")
-    ax.set_title("sparkdem validation ledger, full tier (filled: pass, open: miss or tuned)")
-    ax.grid(True, which="both", alpha=0.3)
-    if done:
-        ax.legend(title="source")
-    fig.tight_layout()
-    tmp = f"{path}.{os.getpid()}.tmp.png"
-    fig.savefig(tmp, dpi=130)
-    os.replace(tmp, path)
+    if not extras:
+        return []
+    parts = ["", "## Side figures and variants per record (mean over the runs)", "",
+             "| case | tier | N | figure | mean | per run |", "|---|---|---|---|---|---|"]
+    for r in extras:
+        for k, xs in sorted(r["extra"].items()):
+            nums = [x for x in xs if isinstance(x, (int, float)) and x is not None and math.isfinite(x)]
+            if not nums:
+                continue
+            parts.append(f"| {r['case']} | {r['tier']} | {r['N']} | {k} | {statistics.fmean(nums):.6g} | "
+                         + ", ".join(f"{x:.6g}" for x in nums) + " |")
+    return parts
 
 
 def cmd_report(a):
@@ -703,7 +906,8 @@ def cmd_derive_bands(a):
 
 
 # A generated table in a document: groups (opening marker, kind, table, closing marker).
-TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|regression|perf) -->\n)(.*?)(<!-- ledger:end -->)", re.S)
+TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|calibration|regression|legacy|provisional|headline|commits|perf) -->\n)"
+                         r"(.*?)(<!-- ledger:end -->)", re.S)
 
 
 def cmd_check_docs(a):
@@ -802,19 +1006,28 @@ def main(argv=None):
     p.add_argument("--sizes", nargs="*", type=int, default=[])
     p.add_argument("--seeds", nargs="*", type=int, default=[])
     p.add_argument("--no-record", action="store_true", help="write nothing to the ledger")
+    p.add_argument("--provisional", action="store_true",
+                   help="record from a binary of a dirty tree: records marked provisional, never counted")
     p.add_argument("--no-report", action="store_true", help="record, but do not redraw ledger.md and the plot")
     p.add_argument("--strict", action="store_true", help="exit 1 when a figure leaves its band")
     p.set_defaults(fn=cmd_run)
     p = sub.add_parser("report")
     common(p, runs=False)
     p.set_defaults(fn=cmd_report)
-    p = sub.add_parser("rejudge")
+    p = sub.add_parser("recompute", help="rebuild every record from its run file and compare with the ledger")
     common(p, runs=False)
-    p.set_defaults(fn=cmd_rejudge)
+    p.add_argument("--write", action="store_true", help="store the recomputed records")
+    p.set_defaults(fn=cmd_recompute)
+    p = sub.add_parser("check-ledger", help="fail on a dirty record, a cleared mark, a NaN, a missing run file")
+    common(p, runs=False)
+    p.add_argument("--no-head", action="store_true", help="do not compare the marks with the committed ledger")
+    p.set_defaults(fn=cmd_check_ledger)
     p = sub.add_parser("rebase", help="new first config values of cases after a documented model change")
     common(p, runs=False)
     p.add_argument("--case", nargs="+", required=True)
     p.add_argument("--why", required=True)
+    p.add_argument("--seen", action="store_true",
+                   help="the change was decided after seeing a figure of the case: its figures are marked tuned")
     p.set_defaults(fn=cmd_rebase)
     p = sub.add_parser("check-hashes")
     common(p, runs=False)

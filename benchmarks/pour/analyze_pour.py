@@ -21,9 +21,7 @@ import json
 import math
 import os
 import re
-import subprocess
 import sys
-import tempfile
 
 
 def percentile(values, q):
@@ -68,17 +66,17 @@ def coordination(pos, rad):
 
 
 def h5_numbers(h5file, dataset):
-    """All numbers of one dataset, via the h5dump tool (h5py is not required)."""
-    with tempfile.NamedTemporaryFile("r", suffix=".txt") as raw:
-        subprocess.run(["h5dump", "-y", "-w", "0", "-m", "%.17g", "-o", raw.name, "-d", dataset, h5file],
-                       check=True, stdout=subprocess.DEVNULL)
-        return [float(t) for t in raw.read().replace(",", " ").split()]
+    """All numbers of one dataset, flattened, as floats (h5py)."""
+    import h5py
+    with h5py.File(h5file, "r") as f:
+        return [float(x) for x in f[dataset][()].ravel()]
 
 
 def sparkdem_final_state(outdir):
+    import h5py
     h5 = os.path.join(outdir, "results.h5")
-    listing = subprocess.run(["h5ls", h5 + "/frames"], check=True, capture_output=True, text=True).stdout
-    frames = sorted(line.split()[0] for line in listing.splitlines() if line.strip())
+    with h5py.File(h5, "r") as f:
+        frames = sorted(f["frames"].keys())
     last = "/frames/" + frames[-1] + "/particles/"
     xyz = h5_numbers(h5, last + "position")
     rad = h5_numbers(h5, last + "radius")

@@ -58,9 +58,7 @@ done
 [[ "$steps" =~ ^[0-9]+$ && "$steps" -ge 500 && $((steps % 500)) -eq 0 ]] ||
   { echo "run_pour.sh: --steps must be a positive multiple of 500 (got $steps)" >&2; exit 2; }
 [[ -x "$sparkdem" ]] || { echo "run_pour.sh: sparkdem executable not found at $sparkdem (build it, or pass --sparkdem / set SPARKDEM_BIN)" >&2; exit 2; }
-if ! command -v h5dump >/dev/null || ! command -v h5ls >/dev/null; then
-  echo "run_pour.sh: needs h5dump and h5ls (Debian: hdf5-tools)" >&2; exit 2
-fi
+/usr/bin/python3 -c "import h5py" 2>/dev/null || { echo "run_pour.sh: needs h5py (Debian: python3-h5py)" >&2; exit 2; }
 [[ -z "$wait_policy" || "$wait_policy" == active || "$wait_policy" == passive ]] ||
   { echo "run_pour.sh: --wait-policy must be active or passive" >&2; exit 2; }
 if [[ $use_lammps -eq 1 ]] && ! command -v lmp >/dev/null; then
@@ -177,4 +175,4 @@ EOF
 fi
 
 # ---------------------------------------------------------------- analysis
-python3 "$here/analyze_pour.py" --workdir "$workdir" --csv "$csv" --dt "$dt" --ke-every "$ke_every"
+/usr/bin/python3 "$here/analyze_pour.py" --workdir "$workdir" --csv "$csv" --dt "$dt" --ke-every "$ke_every"

@@ -4,7 +4,7 @@
     analyze_cylinder.py tabulate WORKDIR OUTDIR     -> OUTDIR/results.csv, results.md (+ variants.csv)
     analyze_cylinder.py variant-scenario RUNDIR     -> prints a scenario re-solving RUNDIR's packing
 
-Python standard library only; HDF5 frames are read with h5dump (hdf5-tools).
+HDF5 frames are read with h5py (Debian's python3-h5py).
 
 The runs come from tools/validate.py (ledger case seed001/cylinder; the validation figure, R_DEM
 against R_th, is the ledger's seed001/cylinder_resistance, benchmarks/validation/ledger.md):
@@ -47,11 +47,9 @@ import glob
 import json
 import math
 import os
-import re
 import statistics
 import subprocess
 import sys
-import tempfile
 
 # GranOO (seed 001 Table III): error magnitudes in %, three generations per N. The PDF lost the
 # signs; all three at N = 20000 carry the same sign (their mean, 2.9 %, is quoted).
@@ -67,12 +65,10 @@ VARIANTS = [
 
 
 def h5_dataset(path, name):
-    """Values of dataset `name` in HDF5 file `path`, flattened, as floats (full precision)."""
-    with tempfile.NamedTemporaryFile("r", suffix=".txt") as tmp:
-        subprocess.run(["h5dump", "-y", "-w", "0", "-m", "%.17g", "-d", name, "-o", tmp.name, path],
-                       check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-        text = tmp.read()
-    return [float(x) for x in re.split(r"[,\s]+", text) if x]
+    """Values of dataset `name` in HDF5 file `path`, flattened, as floats (full precision; h5py)."""
+    import h5py
+    with h5py.File(path, "r") as f:
+        return [float(x) for x in f[name][()].ravel()]
 
 
 def last_frame(outdir):

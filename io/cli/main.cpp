@@ -19,6 +19,7 @@
 #include "engine/graph/hypre_amg.hpp"
 #include "engine/state/particle_set.hpp"
 #include "io/mpi/ranks.hpp"
+#include "io/version/build_info.hpp"
 #include "io/scenario/calibrate_beams.hpp"
 #include "io/scenario/json_binder.hpp"
 #include "io/scenario/pipeline.hpp"
@@ -130,7 +131,7 @@ int threads_per_rank(int requested) {
 int run_command(int argc, char** argv, bool& serving) {
   using namespace sparkdem;
   CLI::App app{"sparkdem: coupled thermo-electro-mechanical DEM"};
-  app.set_version_flag("--version", std::string("sparkdem ") + SPARKDEM_VERSION);
+  app.set_version_flag("--version", std::string("sparkdem ") + SPARKDEM_VERSION + ", " + io::build_info_text());
   app.require_subcommand(1);
   std::string scene, outdir = "out", restart;
   int threads = 0;

@@ -19,6 +19,7 @@
 #include "io/hdf5/results_writer.hpp"
 #include "io/restart/hdf5_archive.hpp"
 #include "io/scenario/sweep.hpp"
+#include "io/version/build_info.hpp"
 
 namespace sparkdem::io {
 
@@ -475,6 +476,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   json summary;
   summary["scenario"] = sc.name;
   summary["version"] = SPARKDEM_VERSION;
+  summary["build"] = {{"commit", build_info().commit}, {"clean", build_info().clean}};
   summary["threads"] = omp_get_max_threads();
   summary["stages"] = json::array();
   if (opt.restart) summary["restarted_from"] = opt.restart->string();

@@ -5,7 +5,7 @@
 
 Reads RUNDIR/summary.json (the `resistance` stage's final electrical_resistance, the fill and
 solve wall times, the `notch` stage's deleted_particles) and the last frame (radii, positions,
-electrode sets; via h5dump, Python standard library only), places the FV electrode planes at the
+electrode sets; read with h5py, Debian's python3-h5py), places the FV electrode planes at the
 mean centre heights of the end_low / end_high sets (the DEM holds those centres), runs fv_notch
 with r_mean of the frame (slab half-width 2 r_mean) and prints one JSON object:
   R_dem_ohm, R_fv_ohm (Richardson-extrapolated), error_pct = 100 (R_dem - R_fv) / R_fv,
@@ -20,17 +20,14 @@ import argparse
 import glob
 import json
 import os
-import re
 import subprocess
-import tempfile
 
 
 def h5_dataset(path, name):
-    with tempfile.NamedTemporaryFile("r", suffix=".txt") as tmp:
-        subprocess.run(["h5dump", "-y", "-w", "0", "-m", "%.17g", "-d", name, "-o", tmp.name, path],
-                       check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-        text = tmp.read()
-    return [float(x) for x in re.split(r"[,\s]+", text) if x]
+    """Every number of one dataset of an HDF5 file, flattened in row-major order, as Python floats."""
+    import h5py
+    with h5py.File(path, "r") as f:
+        return [float(x) for x in f[name][()].ravel()]
 
 
 def main():
