@@ -9,10 +9,14 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cctype>
 #include <csignal>
 #include <filesystem>
 #include <iostream>
 #include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
 
 #include "engine/core/error.hpp"
 #include "engine/core/interrupt.hpp"
@@ -106,6 +110,42 @@ int checks_exit_code(const sparkdem::io::json& summary, bool report_only) {
   return report_only ? 0 : 5;
 }
 
+/// `arg` as one shell word: as it is when it holds only safe characters, else in single quotes.
+std::string shell_word(const std::string& arg) {
+  const bool safe = !arg.empty() && std::all_of(arg.begin(), arg.end(), [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || std::string_view("/._-+=:,@%").find(c) != std::string_view::npos;
+  });
+  if (safe) return arg;
+  std::string out = "'";
+  for (const char c : arg) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+/// After a failed run (not an interrupt): when a stage completed in it, where its end state is and
+/// the command that continues the scenario from the stage after it (`--restart FINAL_STATE`, into
+/// a new directory so that the frames and index files of this run stay).
+void print_continue_hint(std::ostream& out, const sparkdem::io::RunProgress& p, std::vector<std::string> command,
+                         const std::filesystem::path& outdir) {
+  if (p.final_state.empty() || p.stage_number >= p.stages) return;  // nothing completed, or nothing left to run
+  std::filesystem::path next = outdir;
+  next += "_continued";
+  command.insert(command.begin() + 3, {"-o", next.string(), "--restart", p.final_state.string()});
+  std::string line;
+  for (const auto& a : command) line += (line.empty() ? "" : " ") + shell_word(a);
+  out << "stage '" << p.stage << "' (" << p.stage_number << " of " << p.stages << ") "
+      << (p.until_unmet ? "ended at its hard stop with its required 'until' conditions unmet"
+                        : "was the last stage to complete")
+      << "; its end state is " << p.final_state.string() << ". To continue the run from it with stage '" << p.next_stage
+      << "' (" << p.stage_number + 1 << " of " << p.stages << ")"
+      << (p.until_unmet ? ", accepting that state," : " once the cause is fixed") << ":\n  " << line
+      << "\n(a new output directory keeps this run's frames and index files in " << outdir.string()
+      << "; restarting into it replaces them";
+  if (sparkdem::io::ranks::size() > 1)
+    out << "; this run had " << sparkdem::io::ranks::size() << " MPI ranks: start it under the same launcher, e.g. mpirun -np "
+        << sparkdem::io::ranks::size();
+  out << ")\n";
+}
+
 constexpr const char* kRunFooter =
     "Exit codes: 0 success; 1 internal error; 2 invalid scenario; 3 physics failure; 4 set-up failure "
     "(checkpoint, snapshot, ...); 5 the run completed (all outputs written) but a top-level check with a "
@@ -164,6 +204,16 @@ int run_command(int argc, char** argv, bool& serving) {
 
   Registry reg;
   physics::register_all(reg);
+  // A failed run that completed a stage says how to continue from it (print_continue_hint).
+  io::RunProgress progress;
+  std::filesystem::path physical_outdir;
+  std::vector<std::string> again{argv[0], "run", scene};  // -o and --restart are inserted after these
+  if (threads != 0) again.insert(again.end(), {"--threads", std::to_string(threads)});
+  if (quiet) again.push_back("--quiet");
+  if (report_only) again.push_back("--report-only");
+  auto hint = [&] {
+    if (run->parsed()) print_continue_hint(err(), progress, again, physical_outdir);
+  };
   try {
     if (schema->parsed()) {
       std::cout << io::schema_json(reg).dump(2) << "\n";
@@ -176,7 +226,7 @@ int run_command(int argc, char** argv, bool& serving) {
       std::signal(SIGTERM, on_signal);
       const io::CalibrationSpec spec = io::parse_calibration(j, file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
       io::CalibrationOptions copt;
-      copt.outdir = outdir;
+      copt.outdir = io::resolve_output_directory(outdir);
       copt.threads = threads;
       if (!quiet)
         copt.on_iteration = [](const io::json& it) {
@@ -206,29 +256,40 @@ int run_command(int argc, char** argv, bool& serving) {
     serving = io::ranks::size() > 1;
     set_amg_spread_ranks(io::ranks::size());  // large network solves outside sweeps use every rank
     io::RunOptions opt;
-    opt.outdir = outdir;
+    // Resolved once: every file goes to the physical path ("LINK/../out" as the OS takes it);
+    // messages show the path as given, and the physical one where it differs.
+    opt.outdir = io::resolve_output_directory(outdir);
     opt.quiet = quiet;
     opt.threads = threads;
+    opt.progress = &progress;
     if (!restart.empty()) opt.restart = restart;
+    physical_outdir = opt.outdir;
     const io::json summary = io::run_scenario(sc, opt);
     if (!quiet)
       err() << "done: " << summary["steps"] << " steps, " << summary["wall_time_s"] << " s wall, "
-                << summary["particle_steps_per_s"] << " particle-steps/s; outputs in " << outdir << "\n";
+                << summary["particle_steps_per_s"] << " particle-steps/s; outputs in " << outdir
+                << ((std::filesystem::absolute(outdir) / "").lexically_normal() != (opt.outdir / "").lexically_normal()
+                        ? " (" + opt.outdir.string() + ")" : std::string())
+                << "\n";
     return checks_exit_code(summary, report_only);
   } catch (const ConfigError& e) {
     err() << "error: " << e.what() << "\n";
+    hint();
     return 2;
   } catch (const Interrupted& e) {
     err() << "\n" << e.what() << "\n";
     return 130;
   } catch (const PhysicsError& e) {
     err() << "error: " << e.what() << "\n";
+    hint();
     return 3;
   } catch (const SetupError& e) {
     err() << "error: " << e.what() << "\n";
+    hint();
     return 4;
   } catch (const std::exception& e) {
     err() << "internal error: " << e.what() << "\n";
+    hint();
     return 1;
   }
 }

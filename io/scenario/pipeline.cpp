@@ -153,10 +153,12 @@ class OutputObserver final : public Observer {
     return file;
   }
   Step healthy_step() const { return healthy_step_; }
-  /// The state after a stage: final_state.h5, then the index files.
-  void final_state(State& s) {
+  /// The state after a stage: final_state.h5, then the index files. `committed` is called as
+  /// soon as final_state.h5 is in place (before the log line and the index files, which may fail).
+  void final_state(State& s, const std::function<void(const std::filesystem::path&)>& committed = {}) {
     healthy_.clear();  // a later failure is not this stage's
     write_checkpoint(outdir_ / "final_state.h5", s, false);
+    if (committed) committed(outdir_ / "final_state.h5");
     log_.line("final state written: final_state.h5 (step " + std::to_string(s.step) + ", after stage '" + stage_ + "')");
     publish();
   }
@@ -485,6 +487,19 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   std::string status = "completed";
   std::string error;
   std::optional<PhysicsError> failure;
+  // Stage k's end state is committed as OUTDIR/final_state.h5: what a --restart from it continues with.
+  auto completed = [&](std::size_t k, bool until_unmet) {
+    return [&opt, &sc, k, until_unmet](const std::filesystem::path& file) {
+      if (!opt.progress) return;
+      RunProgress& p = *opt.progress;
+      p.final_state = file;
+      p.stage = sc.stages[k].cfg.name;
+      p.stage_number = k + 1;
+      p.stages = sc.stages.size();
+      p.next_stage = k + 1 < sc.stages.size() ? sc.stages[k + 1].cfg.name : std::string();
+      p.until_unmet = until_unmet;
+    };
+  };
   try {
     for (std::size_t k = first; k < sc.stages.size(); ++k) {
       StageDef& st = sc.stages[k];
@@ -496,7 +511,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         summary["stages"].push_back(r.entry);
         total_steps += r.steps;
         particle_steps += r.particle_steps;
-        obs.final_state(s);
+        obs.final_state(s, completed(k, false));
         continue;
       }
       if (!resuming) {
@@ -629,8 +644,9 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         for (const auto& [key, v] : st.generator->report_arrays(s)) js["packing"][key] = v;
       }
       summary["stages"].push_back(js);
-      obs.final_state(s);
-      if (st.dynamics && st.cfg.require_until && !js["until_reached"].get<bool>())
+      const bool until_unmet = st.dynamics && st.cfg.require_until && !js["until_reached"].get<bool>();
+      obs.final_state(s, completed(k, until_unmet));
+      if (until_unmet)
         throw PhysicsError(s.step, {}, "stop condition",
                            "stage '" + st.cfg.name + "' reached its hard stop before its 'until' conditions held "
                            "(see the stage's \"final\" values in summary.json)");
@@ -687,13 +703,23 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
 
 }  // namespace
 
-json run_scenario(Scenario& sc, const RunOptions& opt) {
-  if (opt.threads > 0) omp_set_num_threads(opt.threads);
+std::filesystem::path resolve_output_directory(const std::filesystem::path& outdir) {
+  std::error_code ec;
+  std::filesystem::create_directories(outdir, ec);
+  if (ec) throw SetupError("output directory '" + outdir.string() + "': cannot create it: " + ec.message());
+  std::filesystem::path physical = std::filesystem::canonical(outdir, ec);
+  if (ec) throw SetupError("output directory '" + outdir.string() + "': cannot resolve it: " + ec.message());
+  if (!std::filesystem::is_directory(physical, ec))
+    throw SetupError("output directory '" + outdir.string() + "' (" + physical.string() + "): not a directory");
+  return physical;
+}
+
+json run_scenario(Scenario& sc, const RunOptions& given) {
+  if (given.threads > 0) omp_set_num_threads(given.threads);
   const auto t0 = steady::now();
-  std::error_code dir_error;
-  std::filesystem::create_directories(opt.outdir, dir_error);
-  if (dir_error)
-    throw SetupError("output directory '" + opt.outdir.string() + "': cannot create it: " + dir_error.message());
+  // One physical output path for everything below (files, snapshots, sweep items, checkpoints).
+  RunOptions opt = given;
+  opt.outdir = resolve_output_directory(given.outdir);
   RunLog log(opt.outdir / "run.log");
   log.line("run started: scenario '" + sc.name + "', sparkdem " + SPARKDEM_VERSION + ", pid " +
            std::to_string(::getpid()) + ", " + std::to_string(omp_get_max_threads()) + " thread(s)" +

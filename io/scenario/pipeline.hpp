@@ -32,7 +32,21 @@
 
 namespace sparkdem::io {
 
+/// What a run has completed so far (RunOptions::progress), for the advice after a failure: the
+/// last state file OUTDIR/final_state.h5 written in this run and the stage it holds the end of.
+/// `--restart final_state` continues the scenario with the stage after that one.
+struct RunProgress {
+  std::filesystem::path final_state;  ///< empty until a stage completed (and its final state was committed) in this run
+  std::string stage;                  ///< the name of that stage
+  std::size_t stage_number = 0;       ///< its position in the scenario, 1-based
+  std::size_t stages = 0;             ///< the scenario's number of stages
+  std::string next_stage;             ///< the name of the stage after it (empty: it was the last)
+  bool until_unmet = false;           ///< the stage ended at its hard stop with a required `until` unmet (the run fails)
+};
+
 struct RunOptions {
+  /// The output directory. run_scenario creates it and then uses its physical path (see
+  /// resolve_output_directory) for every file, nested sweep items and checkpoints included.
   std::filesystem::path outdir = "out";
   std::optional<std::filesystem::path> restart;  ///< continue from this checkpoint
   bool quiet = false;
@@ -42,7 +56,15 @@ struct RunOptions {
   std::int64_t stage_offset = 0;          ///< index of the first stage in the enclosing run
   std::filesystem::path checkpoint_file;  ///< where checkpoints go; empty: outdir/checkpoint.h5
   std::function<json()> record;           ///< pipeline record stored in checkpoints; empty: the run's own
+  RunProgress* progress = nullptr;        ///< when set, filled in as stages complete (sweep items leave it)
 };
+
+/// The output directory as a run uses it: `outdir` created with its parents, then resolved to its
+/// absolute physical path (std::filesystem::canonical: symbolic links followed and ".." taken
+/// after them, as the OS resolves "LINK/../out"), so that no later lexical recombination of the
+/// path (e.g. lexically_normal() turning "LINK/../out" into "out" beside LINK) can point elsewhere.
+/// Throws SetupError when it cannot be created or resolved or is not a directory.
+std::filesystem::path resolve_output_directory(const std::filesystem::path& outdir);
 
 /// Run and return the summary (also written to summary.json). Throws PhysicsError,
 /// SetupError or Interrupted (after writing a checkpoint and the outputs so far).

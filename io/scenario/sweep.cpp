@@ -274,8 +274,12 @@ bool SnapshotObserver::taken(std::int64_t index) const {
 }
 
 void SnapshotObserver::take(State& s, std::int64_t index, double target, double value) {
-  const fs::path file = fs::absolute(outdir_ / "snapshots" / (file_name_of(stage_) + "_" + std::to_string(index) + ".h5")).lexically_normal();
-  fs::create_directories(file.parent_path());
+  // outdir_ is the run's physical output directory (resolve_output_directory): no lexical
+  // normalisation here, which would take "LINK/.." to LINK's parent instead of its target's.
+  const fs::path file = fs::absolute(outdir_ / "snapshots" / (file_name_of(stage_) + "_" + std::to_string(index) + ".h5"));
+  std::error_code ec;
+  fs::create_directories(file.parent_path(), ec);
+  if (ec) throw SetupError("snapshot directory '" + file.parent_path().string() + "': cannot create it: " + ec.message());
   record_.snapshots.push_back({stage_index_, stage_, index, spec_.column, target, value, s.step, s.time, file.string()});
   save_(file, s);
 }
@@ -409,7 +413,7 @@ ItemJob job_of(const SweepContext& ctx, std::size_t j, const Item& item) {
     const SnapshotRecord& r = ctx.snaps.at(item.index);
     job.snapshot = {{"file", r.file}, {"index", r.index}, {"step", r.step}, {"time", r.time}, {"value", number_or_null(r.value)}};
   }
-  job.directory = fs::absolute(ctx.dir / std::to_string(j)).lexically_normal().string();
+  job.directory = fs::absolute(ctx.dir / std::to_string(j)).string();  // ctx.dir: physical (see sweep_context)
   job.quiet = ctx.quiet;
   return job;
 }
@@ -543,12 +547,17 @@ SweepContext sweep_context(Scenario& sc, std::size_t k, const State& s, const Ru
   ctx.stage_index = opt.stage_offset + static_cast<std::int64_t>(k);
   ctx.quiet = opt.quiet;
   const std::string name = file_name_of(st.cfg.name);
+  // opt.outdir is the run's physical output directory (run_scenario resolves it): every path of
+  // the sweep is built on it as is. (A lexical normalisation of "LINK/../out" gave "out" beside
+  // LINK while the directories were made in LINK's target's parent: issue 34 item 5.)
   ctx.outdir = opt.outdir;
   ctx.dir = opt.outdir / ("sweep_" + name);
   ctx.table = opt.outdir / ("sweep_" + name + ".csv");
   ctx.checkpoint = opt.checkpoint_file.empty() ? opt.outdir / "checkpoint.h5" : opt.checkpoint_file;
-  fs::create_directories(ctx.dir);
-  ctx.input_file = fs::absolute(ctx.dir / "input_state.h5").lexically_normal().string();
+  std::error_code ec;
+  fs::create_directories(ctx.dir, ec);
+  if (ec) throw SetupError("sweep directory '" + ctx.dir.string() + "': cannot create it: " + ec.message());
+  ctx.input_file = fs::absolute(ctx.dir / "input_state.h5").string();
   if (resuming) {
     const json& p = record.sweep;
     if (!p.is_object() || p.value("stage", std::int64_t{-1}) != ctx.stage_index || !p.contains("rows"))
