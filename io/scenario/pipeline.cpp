@@ -441,36 +441,249 @@ void evaluate_checks(const std::vector<CheckDef>& checks, json& summary, RunLog&
   }
 }
 
+/// Where a run starts: the first stage to run, whether it resumes inside that stage, and the
+/// verified checkpoint image (kept until the resumed stage's modules have read their state).
+struct RestartPoint {
+  std::size_t first = 0;
+  bool resume = false;
+  std::unique_ptr<Hdf5Archive> archive;
+};
+
+/// The restart checkpoint of `opt` read into `s` and `record` (one verified read: the state and
+/// the module states come from the same bytes); without one the run starts at stage 0.
+RestartPoint read_restart(const Scenario& sc, const RunOptions& opt, State& s, RunRecord& record, RunLog& log) {
+  RestartPoint rp;
+  if (!opt.restart) return rp;
+  rp.archive = std::make_unique<Hdf5Archive>(Hdf5Archive::for_reading(*opt.restart));
+  auto [kc, in_stage] = read_state(*rp.archive, s);
+  const std::int64_t k = kc - opt.stage_offset;
+  if (k < 0 || k >= static_cast<std::int64_t>(sc.stages.size()))
+    throw SetupError("checkpoint '" + opt.restart->string() + "' is at stage " + std::to_string(k) + ", but the scenario has " +
+                     std::to_string(sc.stages.size()) + " stages");
+  rp.first = static_cast<std::size_t>(in_stage ? k : k + 1);
+  rp.resume = in_stage;
+  if (!opt.record && rp.archive->has("pipeline/record")) {
+    std::string r;
+    rp.archive->visit("pipeline/record", r);
+    record = RunRecord::from_json(json::parse(r, nullptr, false));
+  }
+  log.line("restart: checkpoint '" + opt.restart->string() + "' verified, step " + std::to_string(s.step) + ", stage " +
+           std::to_string(kc) + (in_stage ? " (inside it)" : " (after it)"));
+  return rp;
+}
+
+/// What preparing a stage made, for its summary entry.
+struct StagePrep {
+  std::size_t bonds_made = 0;
+  double bond_gap = -1.0;  ///< [m] the gap bonds were created within (create_bonds)
+  json set_counts;         ///< particles per named set
+};
+
+/// A stage's changes to the state before it runs; on a resume only the bond contact rule (the
+/// rest is in the checkpoint): the snapshot it starts from, walls removed and added, the
+/// generator, deleted sets, bonds created within the gap, the particle sets.
+StagePrep prepare_stage(State& s, StageDef& st, const Scenario& sc, bool resuming, std::int64_t stage_index) {
+  StagePrep p;
+  if (!resuming) {
+    if (!st.from_snapshot.empty()) {
+      State snap;
+      read_checkpoint(st.from_snapshot, snap);
+      snap.materials = s.materials;
+      check_materials(snap, st.from_snapshot);
+      snap.rng = s.rng;
+      snap.step = s.step;
+      snap.time = s.time;
+      s = std::move(snap);
+    }
+    for (const auto& n : st.remove_walls)
+      std::erase_if(s.walls, [&](const Wall& w) { return w.name == n; });
+    for (std::size_t k = 0; k < st.add_walls.size(); ++k) {
+      Wall w = st.add_walls[k];
+      const double gap = k < st.add_wall_clearance.size() ? st.add_wall_clearance[k] : -1.0;
+      if (gap >= 0.0) place_plane_at_clearance(w, s.particles.position, s.particles.radius, gap);
+      s.walls.push_back(std::move(w));
+    }
+    if (st.generator) st.generator->generate(s);
+    s.stage_index = stage_index;
+    delete_stage_sets(s, st.delete_sets);
+  }
+  p.bond_gap = st.create_bonds_gap >= 0.0 && st.create_bonds_gap_relative ? st.create_bonds_gap * s.particles.mean_radius()
+                                                                          : st.create_bonds_gap;
+  if (!resuming && st.create_bonds_gap >= 0.0) {
+    if (s.bonds.state_columns() != sc.bond_law->state_columns()) s.bonds.set_state_columns(sc.bond_law->state_columns());
+    p.bonds_made = bond_within_gap(s, p.bond_gap);
+  }
+  s.bonds.contact_rule = sc.bond_contact_rule;
+  if (!resuming) {
+    for (const auto& [name, sel] : st.sets) p.set_counts[name] = assign_set(s, name, sel);
+  }
+  return p;
+}
+
+/// The summary entries of a stepping stage's result (steps, times, timers, step plan, final values).
+void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool resuming) {
+  js["steps"] = r.steps;
+  js["simulated_time_s"] = r.simulated_time;
+  js["mechanical_time_s"] = r.simulated_time;
+  js["physical_time_s"] = r.physical_time;
+  js["time_scale"] = st.cfg.time_scale;
+  for (const auto& [m, n] : r.module_calls) js["module_calls"][m] = n;
+  for (const auto& [m, t] : r.module_seconds) js["module_wall_time_s"][m] = t;
+  if (r.core_sampled_steps > 0) {
+    // Estimated from the timed steps (one in kSplitEvery), scaled by the steps taken.
+    const double scale = static_cast<double>(r.steps) / static_cast<double>(r.core_sampled_steps);
+    for (const auto& [item, t] : r.core_seconds) js["core_wall_time_s"][item] = t * scale;
+    js["core_wall_time_sampled_steps"] = r.core_sampled_steps;
+  }
+  js["neighbor_rebuilds"] = r.neighbor_rebuilds;
+  for (const auto& [m, n] : r.max_substeps)
+    if (n > 1) js["max_substeps"][m] = n;
+  js["wall_time_s"] = r.wall_seconds;
+  js["dt_s"] = r.dt;
+  js["stable_dt_at_start_s"] = finite_or_null(r.stable_dt_at_start);
+  js["dt_fraction_of_stable"] = finite_or_null(r.dt_fraction_used);
+  js["until_reached"] = r.until_reached;
+  js["particles"] = r.particles;
+  js["particle_steps_per_s"] = r.particle_steps_per_second;
+  js["mass_scaling"] = st.cfg.mass_scaling;
+  js["mass_floor_radius"] = st.cfg.mass_floor_radius;
+  if (!resuming) {
+    const auto& o = r.initial_overlap;
+    js["initial_overlap"] = {{"policy", o.policy}, {"limit", o.limit}, {"max_ratio", o.max_ratio},
+                             {"pairs_over_limit", o.pairs_over_limit}, {"walls_over_limit", o.walls_over_limit},
+                             {"worst_ids", {o.worst_i, o.worst_j}}, {"worst_wall", o.worst_wall},
+                             {"relax_sweeps", o.sweeps}, {"max_ratio_after", o.max_ratio_after},
+                             {"particles_moved", o.moved}, {"max_displacement_m", o.max_displacement}};
+  }
+  js["step_plan"] = r.plan;
+  js["mechanics"] = st.cfg.mechanics ? "on" : "frozen";
+  for (const auto& m : r.module_steps)
+    js["module_steps"][m.name] = {{"stable_dt_s", finite_or_null(m.stable_dt)}, {"dt_s", m.dt},
+                                  {"calls_per_step", m.calls_per_step}, {"clock", m.clock}};
+  for (const auto& [c, v] : r.final_values) js["final"][c] = finite_or_null(v);
+}
+
+/// summary["failure"] of a physics failure: where, what, the first 100 particle ids and the
+/// checkpoint of the last healthy state when one was written.
+json failure_entry(const PhysicsError& e) {
+  const PhysicsErrorDetail& d = e.detail();
+  json f = {{"step", e.step()}, {"quantity", e.quantity()}, {"reason", e.reason()},
+            {"particles", e.ids().size()}, {"time_s", finite_or_null(d.time)}, {"value", finite_or_null(d.value)},
+            {"bound", finite_or_null(d.bound)}, {"hint", d.hint}};
+  f["ids"] = std::vector<Id>(e.ids().begin(), e.ids().begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(e.ids().size(), 100)));
+  if (!d.checkpoint.empty()) f["checkpoint_before_failure"] = {{"file", "checkpoint_before_failure.h5"}, {"step", d.checkpoint_step}};
+  return f;
+}
+
+/// The physics error with the checkpoint of the last state that passed the watchdog (a failure
+/// to write it must not hide the physics error).
+PhysicsError with_healthy_checkpoint(const PhysicsError& e, OutputObserver& obs, RunLog& log) {
+  PhysicsErrorDetail d = e.detail();
+  try {
+    const std::filesystem::path f = obs.write_last_healthy();
+    if (!f.empty()) {
+      d.checkpoint = f.string();
+      d.checkpoint_step = obs.healthy_step();
+    }
+  } catch (const std::exception& w) {
+    note(log, std::string("checkpoint before failure not written: ") + w.what());
+  }
+  return PhysicsError(e.step(), e.ids(), e.quantity(), e.reason(), d);
+}
+
+/// Counters a run adds up over its stages.
+struct RunTotals {
+  Step steps = 0;
+  double particle_steps = 0.0;
+};
+
+/// Stage k (not a sweep) from preparation to its summary entry, its final state committed.
+/// `rp` holds the checkpoint image while the stage resumes from it.
+void run_plain_stage(Scenario& sc, std::size_t k, State& s, OutputObserver& obs, RunRecord& record, RestartPoint& rp,
+                     const RunOptions& opt, RunLog& log, json& summary, RunTotals& totals,
+                     const std::function<void(const std::filesystem::path&)>& committed_ok,
+                     const std::function<void(const std::filesystem::path&)>& committed_unmet) {
+  StageDef& st = sc.stages[k];
+  const bool resuming = rp.resume && k == rp.first;
+  const auto ts = steady::now();
+  const std::int64_t stage_index = opt.stage_offset + static_cast<std::int64_t>(k);
+  const StagePrep prep = prepare_stage(s, st, sc, resuming, stage_index);
+  const ContactModel& law = sc.law_of(st);
+  Simulation sim(s, law, sc.bond_law.get());
+  std::vector<Module*> mods;
+  for (auto& m : st.modules) { sim.add_module(m.get()); mods.push_back(m.get()); }
+  std::vector<std::unique_ptr<Monitor>> mons;
+  if (st.generator) mons = st.generator->monitors();
+  for (auto& m : mons) sim.add_monitor(m.get());
+  for (const auto& m : st.monitors) sim.add_monitor(m.get());
+  if (resuming) {
+    for (Module* m : mods) m->visit(*rp.archive, "modules/" + m->name());
+    rp.archive.reset();  // everything is restored: release the in-memory checkpoint image
+  }
+  obs.set_stage(st.cfg.name, mods, st.cfg);
+  log.line("stage '" + st.cfg.name + "' (" + std::to_string(k + 1) + " of " + std::to_string(sc.stages.size()) + ") " +
+           (resuming ? "resumed" : "started") + " at step " + std::to_string(s.step));
+  obs.set_k0(resuming ? s.step - s.stage_step0 : 0);
+  json js;
+  js["name"] = st.cfg.name;
+  js["type"] = st.type;
+  if (!prep.set_counts.is_null()) js["particle_sets"] = prep.set_counts;
+  if (!st.delete_sets.empty()) js["deleted_particles"] = deletion_summary(s, st.delete_sets);
+  if (st.create_bonds_gap >= 0.0) {
+    js["bonds_created"] = prep.bonds_made;
+    js["bonds_created_gap_m"] = prep.bond_gap;
+  }
+  if (st.dynamics) {
+    std::optional<SnapshotObserver> snap;
+    if (st.snapshots) {
+      if (!resuming) record.forget_stage(stage_index);
+      snap.emplace(obs, *st.snapshots, stage_index, st.cfg.name, opt.outdir, record,
+                   [&obs](const std::filesystem::path& f, State& x) { obs.write_checkpoint(f, x, true); });
+    }
+    const StageResult r = sim.run_stage(st.cfg, snap ? static_cast<Observer&>(*snap) : obs, resuming);
+    obs.end_stage_line();
+    describe_dynamics(js, r, st, resuming);
+    if (sc.bond_law) {
+      js["bonds"] = {{"intact", s.bonds.intact_count()}, {"broken", s.bonds.broken_count()}};
+      if (s.bonds.broken_count() > 0) js["bonds"]["broken_by_mode"] = write_broken_bonds(s, *sc.bond_law, opt.outdir);
+    }
+    if (st.snapshots) js["snapshots"] = snapshots_summary(record, stage_index, *st.snapshots, opt.outdir);
+    totals.steps += r.steps;
+    totals.particle_steps += static_cast<double>(r.steps) * static_cast<double>(r.particles);
+  } else {
+    sim.prepare(st.cfg);
+    s.stage_step0 = s.step;
+    s.stage_t0 = s.time;
+    s.contacts.rebuild(find_pairs(s.particles.position, s.particles.radius, 0.0), s.particles.id, s.particles.size());
+    js["particles"] = s.particles.size();
+    js["wall_time_s"] = std::chrono::duration<double>(steady::now() - ts).count();
+    obs.frame(s);
+  }
+  if (st.generator) {
+    for (const auto& [key, v] : st.generator->report(s)) js["packing"][key] = finite_or_null(v);
+    js["packing"]["coordination_histogram"] = st.generator->coordination_histogram(s);
+    for (const auto& [key, v] : st.generator->report_arrays(s)) js["packing"][key] = v;
+  }
+  summary["stages"].push_back(js);
+  const bool until_unmet = st.dynamics && st.cfg.require_until && !js["until_reached"].get<bool>();
+  obs.final_state(s, until_unmet ? committed_unmet : committed_ok);
+  if (until_unmet)
+    throw PhysicsError(s.step, {}, "stop condition",
+                       "stage '" + st.cfg.name + "' reached its hard stop before its 'until' conditions held "
+                       "(see the stage's \"final\" values in summary.json)");
+}
+
+/// The stages of the scenario from the restart point (or the first) to the last; summary.json
+/// and the run's status whatever happens (a failure or interrupt is rethrown after writing them).
 json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_point t0) {
   write_json_atomic(opt.outdir / "resolved.json", sc.resolved);
-
   State s;
   s.materials = sc.materials;
   s.walls = sc.walls;
   s.rng.seed(sc.seed);
   if (opt.start) s = *opt.start;
   RunRecord record;  // snapshots taken and sweep progress (see sweep.hpp)
-  std::size_t first = 0;
-  bool resume = false;
-  std::unique_ptr<Hdf5Archive> restart_ar;
-  if (opt.restart) {
-    // One verified read: the state and the module states come from the same bytes.
-    restart_ar = std::make_unique<Hdf5Archive>(Hdf5Archive::for_reading(*opt.restart));
-    auto [kc, in_stage] = read_state(*restart_ar, s);
-    const std::int64_t k = kc - opt.stage_offset;
-    if (k < 0 || k >= static_cast<std::int64_t>(sc.stages.size()))
-      throw SetupError("checkpoint '" + opt.restart->string() + "' is at stage " + std::to_string(k) + ", but the scenario has " +
-                       std::to_string(sc.stages.size()) + " stages");
-    first = static_cast<std::size_t>(in_stage ? k : k + 1);
-    resume = in_stage;
-    if (!opt.record && restart_ar->has("pipeline/record")) {
-      std::string r;
-      restart_ar->visit("pipeline/record", r);
-      record = RunRecord::from_json(json::parse(r, nullptr, false));
-    }
-    log.line("restart: checkpoint '" + opt.restart->string() + "' verified, step " + std::to_string(s.step) + ", stage " +
-             std::to_string(kc) + (in_stage ? " (inside it)" : " (after it)"));
-  }
+  RestartPoint rp = read_restart(sc, opt, s, record, log);
 
   OutputObserver obs(opt.outdir, opt.quiet, log);
   if (!opt.checkpoint_file.empty()) obs.set_checkpoint_file(opt.checkpoint_file);
@@ -482,8 +695,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   summary["threads"] = omp_get_max_threads();
   summary["stages"] = json::array();
   if (opt.restart) summary["restarted_from"] = opt.restart->string();
-  Step total_steps = 0;
-  double particle_steps = 0.0;
+  RunTotals totals;
   std::string status = "completed";
   std::string error;
   std::optional<PhysicsError> failure;
@@ -501,174 +713,23 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
     };
   };
   try {
-    for (std::size_t k = first; k < sc.stages.size(); ++k) {
-      StageDef& st = sc.stages[k];
-      const bool resuming = resume && k == first;
-      const auto ts = steady::now();
-      const std::int64_t stage_index = opt.stage_offset + static_cast<std::int64_t>(k);
-      if (st.sweep) {
-        const SweepOutcome r = run_sweep(sc, k, s, record, resuming, opt);
+    for (std::size_t k = rp.first; k < sc.stages.size(); ++k) {
+      if (sc.stages[k].sweep) {
+        const SweepOutcome r = run_sweep(sc, k, s, record, rp.resume && k == rp.first, opt);
         summary["stages"].push_back(r.entry);
-        total_steps += r.steps;
-        particle_steps += r.particle_steps;
+        totals.steps += r.steps;
+        totals.particle_steps += r.particle_steps;
         obs.final_state(s, completed(k, false));
         continue;
       }
-      if (!resuming) {
-        if (!st.from_snapshot.empty()) {
-          State snap;
-          read_checkpoint(st.from_snapshot, snap);
-          snap.materials = s.materials;
-          check_materials(snap, st.from_snapshot);
-          snap.rng = s.rng;
-          snap.step = s.step;
-          snap.time = s.time;
-          s = std::move(snap);
-        }
-        for (const auto& n : st.remove_walls)
-          std::erase_if(s.walls, [&](const Wall& w) { return w.name == n; });
-        for (std::size_t k = 0; k < st.add_walls.size(); ++k) {
-          Wall w = st.add_walls[k];
-          const double gap = k < st.add_wall_clearance.size() ? st.add_wall_clearance[k] : -1.0;
-          if (gap >= 0.0) place_plane_at_clearance(w, s.particles.position, s.particles.radius, gap);
-          s.walls.push_back(std::move(w));
-        }
-        if (st.generator) st.generator->generate(s);
-        s.stage_index = stage_index;
-      }
-      if (!resuming) delete_stage_sets(s, st.delete_sets);
-      std::size_t bonds_made = 0;
-      const double bond_gap = st.create_bonds_gap >= 0.0 && st.create_bonds_gap_relative
-                                  ? st.create_bonds_gap * s.particles.mean_radius() : st.create_bonds_gap;
-      if (!resuming && st.create_bonds_gap >= 0.0) {
-        if (s.bonds.state_columns() != sc.bond_law->state_columns()) s.bonds.set_state_columns(sc.bond_law->state_columns());
-        bonds_made = bond_within_gap(s, bond_gap);
-      }
-      s.bonds.contact_rule = sc.bond_contact_rule;
-      json set_counts;
-      if (!resuming) {
-        for (const auto& [name, sel] : st.sets) set_counts[name] = assign_set(s, name, sel);
-      }
-      const ContactModel& law = sc.law_of(st);
-      Simulation sim(s, law, sc.bond_law.get());
-      std::vector<Module*> mods;
-      for (auto& m : st.modules) { sim.add_module(m.get()); mods.push_back(m.get()); }
-      std::vector<std::unique_ptr<Monitor>> mons;
-      if (st.generator) mons = st.generator->monitors();
-      for (auto& m : mons) sim.add_monitor(m.get());
-      for (const auto& m : st.monitors) sim.add_monitor(m.get());
-      if (resuming) {
-        for (Module* m : mods) m->visit(*restart_ar, "modules/" + m->name());
-        restart_ar.reset();  // everything is restored: release the in-memory checkpoint image
-      }
-      obs.set_stage(st.cfg.name, mods, st.cfg);
-      log.line("stage '" + st.cfg.name + "' (" + std::to_string(k + 1) + " of " + std::to_string(sc.stages.size()) + ") " +
-               (resuming ? "resumed" : "started") + " at step " + std::to_string(s.step));
-      obs.set_k0(resuming ? s.step - s.stage_step0 : 0);
-      json js;
-      js["name"] = st.cfg.name;
-      js["type"] = st.type;
-      if (!set_counts.is_null()) js["particle_sets"] = set_counts;
-      if (!st.delete_sets.empty()) js["deleted_particles"] = deletion_summary(s, st.delete_sets);
-      if (st.create_bonds_gap >= 0.0) {
-        js["bonds_created"] = bonds_made;
-        js["bonds_created_gap_m"] = bond_gap;
-      }
-      if (st.dynamics) {
-        std::optional<SnapshotObserver> snap;
-        if (st.snapshots) {
-          if (!resuming) record.forget_stage(stage_index);
-          snap.emplace(obs, *st.snapshots, stage_index, st.cfg.name, opt.outdir, record,
-                       [&obs](const std::filesystem::path& f, State& x) { obs.write_checkpoint(f, x, true); });
-        }
-        const StageResult r = sim.run_stage(st.cfg, snap ? static_cast<Observer&>(*snap) : obs, resuming);
-        obs.end_stage_line();
-        js["steps"] = r.steps;
-        js["simulated_time_s"] = r.simulated_time;
-        js["mechanical_time_s"] = r.simulated_time;
-        js["physical_time_s"] = r.physical_time;
-        js["time_scale"] = st.cfg.time_scale;
-        for (const auto& [m, n] : r.module_calls) js["module_calls"][m] = n;
-        for (const auto& [m, t] : r.module_seconds) js["module_wall_time_s"][m] = t;
-        if (r.core_sampled_steps > 0) {
-          // Estimated from the timed steps (one in kSplitEvery), scaled by the steps taken.
-          const double scale = static_cast<double>(r.steps) / static_cast<double>(r.core_sampled_steps);
-          for (const auto& [item, t] : r.core_seconds) js["core_wall_time_s"][item] = t * scale;
-          js["core_wall_time_sampled_steps"] = r.core_sampled_steps;
-        }
-        js["neighbor_rebuilds"] = r.neighbor_rebuilds;
-        for (const auto& [m, n] : r.max_substeps)
-          if (n > 1) js["max_substeps"][m] = n;
-        if (sc.bond_law) {
-          js["bonds"] = {{"intact", s.bonds.intact_count()}, {"broken", s.bonds.broken_count()}};
-          if (s.bonds.broken_count() > 0) js["bonds"]["broken_by_mode"] = write_broken_bonds(s, *sc.bond_law, opt.outdir);
-        }
-        js["wall_time_s"] = r.wall_seconds;
-        js["dt_s"] = r.dt;
-        js["stable_dt_at_start_s"] = finite_or_null(r.stable_dt_at_start);
-        js["dt_fraction_of_stable"] = finite_or_null(r.dt_fraction_used);
-        js["until_reached"] = r.until_reached;
-        js["particles"] = r.particles;
-        js["particle_steps_per_s"] = r.particle_steps_per_second;
-        js["mass_scaling"] = st.cfg.mass_scaling;
-        js["mass_floor_radius"] = st.cfg.mass_floor_radius;
-        if (!resuming) {
-          const auto& o = r.initial_overlap;
-          js["initial_overlap"] = {{"policy", o.policy}, {"limit", o.limit}, {"max_ratio", o.max_ratio},
-                                   {"pairs_over_limit", o.pairs_over_limit}, {"walls_over_limit", o.walls_over_limit},
-                                   {"worst_ids", {o.worst_i, o.worst_j}}, {"worst_wall", o.worst_wall},
-                                   {"relax_sweeps", o.sweeps}, {"max_ratio_after", o.max_ratio_after},
-                                   {"particles_moved", o.moved}, {"max_displacement_m", o.max_displacement}};
-        }
-        js["step_plan"] = r.plan;
-        js["mechanics"] = st.cfg.mechanics ? "on" : "frozen";
-        for (const auto& m : r.module_steps)
-          js["module_steps"][m.name] = {{"stable_dt_s", finite_or_null(m.stable_dt)}, {"dt_s", m.dt},
-                                        {"calls_per_step", m.calls_per_step}, {"clock", m.clock}};
-        for (const auto& [c, v] : r.final_values) js["final"][c] = finite_or_null(v);
-        if (st.snapshots) js["snapshots"] = snapshots_summary(record, stage_index, *st.snapshots, opt.outdir);
-        total_steps += r.steps;
-        particle_steps += static_cast<double>(r.steps) * static_cast<double>(r.particles);
-      } else {
-        sim.prepare(st.cfg);
-        s.stage_step0 = s.step;
-        s.stage_t0 = s.time;
-        s.contacts.rebuild(find_pairs(s.particles.position, s.particles.radius, 0.0), s.particles.id, s.particles.size());
-        js["particles"] = s.particles.size();
-        js["wall_time_s"] = std::chrono::duration<double>(steady::now() - ts).count();
-        obs.frame(s);
-      }
-      if (st.generator) {
-        for (const auto& [key, v] : st.generator->report(s)) js["packing"][key] = finite_or_null(v);
-        js["packing"]["coordination_histogram"] = st.generator->coordination_histogram(s);
-        for (const auto& [key, v] : st.generator->report_arrays(s)) js["packing"][key] = v;
-      }
-      summary["stages"].push_back(js);
-      const bool until_unmet = st.dynamics && st.cfg.require_until && !js["until_reached"].get<bool>();
-      obs.final_state(s, completed(k, until_unmet));
-      if (until_unmet)
-        throw PhysicsError(s.step, {}, "stop condition",
-                           "stage '" + st.cfg.name + "' reached its hard stop before its 'until' conditions held "
-                           "(see the stage's \"final\" values in summary.json)");
+      run_plain_stage(sc, k, s, obs, record, rp, opt, log, summary, totals, completed(k, false), completed(k, true));
     }
   } catch (const Interrupted& e) {
     status = "interrupted";
     error = e.what();
   } catch (const PhysicsError& e) {
     status = "failed";
-    // The last state that passed the watchdog, as a checkpoint (a failure to write it must not
-    // hide the physics error).
-    PhysicsErrorDetail d = e.detail();
-    try {
-      const std::filesystem::path f = obs.write_last_healthy();
-      if (!f.empty()) {
-        d.checkpoint = f.string();
-        d.checkpoint_step = obs.healthy_step();
-      }
-    } catch (const std::exception& w) {
-      note(log, std::string("checkpoint before failure not written: ") + w.what());
-    }
-    failure.emplace(e.step(), e.ids(), e.quantity(), e.reason(), d);
+    failure.emplace(with_healthy_checkpoint(e, obs, log));
     error = failure->what();
   }
   obs.end_stage_line();
@@ -676,31 +737,22 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   const double wall = std::chrono::duration<double>(steady::now() - t0).count();
   summary["status"] = status;
   if (!error.empty()) summary["error"] = error;
-  if (failure) {
-    const PhysicsErrorDetail& d = failure->detail();
-    json f = {{"step", failure->step()}, {"quantity", failure->quantity()}, {"reason", failure->reason()},
-              {"particles", failure->ids().size()}, {"time_s", finite_or_null(d.time)}, {"value", finite_or_null(d.value)},
-              {"bound", finite_or_null(d.bound)}, {"hint", d.hint}};
-    f["ids"] = std::vector<Id>(failure->ids().begin(), failure->ids().begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(failure->ids().size(), 100)));
-    if (!d.checkpoint.empty()) f["checkpoint_before_failure"] = {{"file", "checkpoint_before_failure.h5"}, {"step", d.checkpoint_step}};
-    summary["failure"] = f;
-  }
+  if (failure) summary["failure"] = failure_entry(*failure);
   summary["wall_time_s"] = wall;
-  summary["steps"] = total_steps;
+  summary["steps"] = totals.steps;
   summary["mechanical_time_s"] = s.time;
   summary["physical_time_s"] = s.physical_time;
   summary["particles"] = s.particles.size();
-  summary["particle_steps_per_s"] = wall > 0 ? particle_steps / wall : 0.0;
+  summary["particle_steps_per_s"] = wall > 0 ? totals.particle_steps / wall : 0.0;
   obs.finalize();
   write_json_atomic(opt.outdir / "summary.json", summary);
   if (status == "interrupted") throw Interrupted(error);
   if (status == "failed")
     throw PhysicsError(failure->step(), failure->ids(), failure->quantity(),
                        failure->reason() + " (outputs up to the failure were written)", failure->detail());
-  log.line("run completed: " + std::to_string(total_steps) + " steps, " + short_number(wall) + " s wall");
+  log.line("run completed: " + std::to_string(totals.steps) + " steps, " + short_number(wall) + " s wall");
   return summary;
 }
-
 }  // namespace
 
 std::filesystem::path resolve_output_directory(const std::filesystem::path& outdir) {
