@@ -166,6 +166,70 @@ int threads_per_rank(int requested) {
   return std::max(1, omp_get_num_procs() / sparkdem::io::ranks::size());
 }
 
+/// The command line's options (one set for every subcommand).
+struct CliArgs {
+  std::string scene, outdir = "out", restart;
+  int threads = 0;
+  bool quiet = false, report_only = false;
+};
+
+/// `sparkdem calibrate`: fit cohesive-beam parameters on the tension test of calibration file `file`.
+int calibrate_command(const sparkdem::io::json& j, const std::filesystem::path& file, const CliArgs& a,
+                      const sparkdem::Registry& reg) {
+  using namespace sparkdem;
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  const io::CalibrationSpec spec = io::parse_calibration(j, file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
+  io::CalibrationOptions copt;
+  copt.outdir = io::resolve_output_directory(a.outdir);
+  copt.threads = a.threads;
+  if (!a.quiet)
+    copt.on_iteration = [](const io::json& it) {
+      err() << "iteration " << it["iteration"] << ": radius_ratio " << it["radius_ratio"] << ", E_mu "
+            << it["young_modulus_Pa"] << " Pa -> E_M " << it["measured_young_modulus_Pa"] << " Pa, nu_M "
+            << it["measured_poisson_ratio"] << " (errors " << it["error_young_modulus"] << ", "
+            << it["error_poisson_ratio"] << "), " << it["wall_time_s"] << " s\n";
+    };
+  const io::json rep = io::calibrate_beams(spec, reg, copt);
+  if (!a.quiet)
+    err() << "calibrated: " << rep["result"]["params"].dump() << " written to " << spec.write.string() << "; report "
+          << (std::filesystem::path(a.outdir) / "calibration.json").string() << "\n";
+  return 0;
+}
+
+/// `sparkdem run` of a loaded scenario: rank 0 runs it (the other ranks serve its sweep items);
+/// `progress` and `physical_outdir` say how far it got, for the advice after a failure.
+int run_scene(sparkdem::io::Scenario& sc, CliArgs a, sparkdem::io::RunProgress& progress,
+              std::filesystem::path& physical_outdir, bool& serving) {
+  using namespace sparkdem;
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  a.threads = threads_per_rank(a.threads);
+  if (io::ranks::rank() != 0) {
+    if (a.threads > 0) omp_set_num_threads(a.threads);
+    return io::serve_sweep_items(sc);
+  }
+  serving = io::ranks::size() > 1;
+  set_amg_spread_ranks(io::ranks::size());  // large network solves outside sweeps use every rank
+  io::RunOptions opt;
+  // Resolved once: every file goes to the physical path ("LINK/../out" as the OS takes it);
+  // messages show the path as given, and the physical one where it differs.
+  opt.outdir = io::resolve_output_directory(a.outdir);
+  opt.quiet = a.quiet;
+  opt.threads = a.threads;
+  opt.progress = &progress;
+  if (!a.restart.empty()) opt.restart = a.restart;
+  physical_outdir = opt.outdir;
+  const io::json summary = io::run_scenario(sc, opt);
+  if (!a.quiet)
+    err() << "done: " << summary["steps"] << " steps, " << summary["wall_time_s"] << " s wall, "
+          << summary["particle_steps_per_s"] << " particle-steps/s; outputs in " << a.outdir
+          << ((std::filesystem::absolute(a.outdir) / "").lexically_normal() != (opt.outdir / "").lexically_normal()
+                  ? " (" + opt.outdir.string() + ")" : std::string())
+          << "\n";
+  return checks_exit_code(summary, a.report_only);
+}
+
 /// The command line's work; `serving` is set on rank 0 of an MPI run once the other ranks wait
 /// for sweep items (main then sends them the stop signal with the exit code).
 int run_command(int argc, char** argv, bool& serving) {
@@ -173,26 +237,24 @@ int run_command(int argc, char** argv, bool& serving) {
   CLI::App app{"sparkdem: coupled thermo-electro-mechanical DEM"};
   app.set_version_flag("--version", std::string("sparkdem ") + SPARKDEM_VERSION + ", " + io::build_info_text());
   app.require_subcommand(1);
-  std::string scene, outdir = "out", restart;
-  int threads = 0;
-  bool quiet = false, report_only = false;
+  CliArgs a;
   auto* run = app.add_subcommand("run", "run a scenario");
   run->footer(kRunFooter);
-  run->add_option("scene", scene, "scenario JSON file")->required();
-  run->add_option("-o,--output", outdir, "output directory");
-  run->add_option("--threads", threads, "OpenMP threads (0 = default)");
-  run->add_option("--restart", restart, "continue from this checkpoint");
-  run->add_flag("--quiet", quiet, "no progress output");
-  run->add_flag("--report-only", report_only,
+  run->add_option("scene", a.scene, "scenario JSON file")->required();
+  run->add_option("-o,--output", a.outdir, "output directory");
+  run->add_option("--threads", a.threads, "OpenMP threads (0 = default)");
+  run->add_option("--restart", a.restart, "continue from this checkpoint");
+  run->add_flag("--quiet", a.quiet, "no progress output");
+  run->add_flag("--report-only", a.report_only,
                 "checks with a tolerance band only report (summary.json, run.log, stderr): exit 0 when one fails");
   auto* check = app.add_subcommand("check", "validate a scenario and print it resolved");
-  check->add_option("scene", scene, "scenario JSON file")->required();
+  check->add_option("scene", a.scene, "scenario JSON file")->required();
   auto* schema = app.add_subcommand("schema", "print every stage, law, module and generator with its parameters");
   auto* calibrate = app.add_subcommand("calibrate", "calibrate cohesive_beam parameters on a tension test (see io/scenario/calibrate_beams.hpp)");
-  calibrate->add_option("calibration", scene, "calibration JSON file")->required();
-  calibrate->add_option("-o,--output", outdir, "output directory (one run per iteration, calibration.json)");
-  calibrate->add_option("--threads", threads, "OpenMP threads (0 = default)");
-  calibrate->add_flag("--quiet", quiet, "no progress output");
+  calibrate->add_option("calibration", a.scene, "calibration JSON file")->required();
+  calibrate->add_option("-o,--output", a.outdir, "output directory (one run per iteration, calibration.json)");
+  calibrate->add_option("--threads", a.threads, "OpenMP threads (0 = default)");
+  calibrate->add_flag("--quiet", a.quiet, "no progress output");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -207,10 +269,10 @@ int run_command(int argc, char** argv, bool& serving) {
   // A failed run that completed a stage says how to continue from it (print_continue_hint).
   io::RunProgress progress;
   std::filesystem::path physical_outdir;
-  std::vector<std::string> again{argv[0], "run", scene};  // -o and --restart are inserted after these
-  if (threads != 0) again.insert(again.end(), {"--threads", std::to_string(threads)});
-  if (quiet) again.push_back("--quiet");
-  if (report_only) again.push_back("--report-only");
+  std::vector<std::string> again{argv[0], "run", a.scene};  // -o and --restart are inserted after these
+  if (a.threads != 0) again.insert(again.end(), {"--threads", std::to_string(a.threads)});
+  if (a.quiet) again.push_back("--quiet");
+  if (a.report_only) again.push_back("--report-only");
   auto hint = [&] {
     if (run->parsed()) print_continue_hint(err(), progress, again, physical_outdir);
   };
@@ -219,59 +281,15 @@ int run_command(int argc, char** argv, bool& serving) {
       std::cout << io::schema_json(reg).dump(2) << "\n";
       return 0;
     }
-    const std::filesystem::path file(scene);
+    const std::filesystem::path file(a.scene);
     const io::json j = io::read_json_file(file);
-    if (calibrate->parsed()) {
-      std::signal(SIGINT, on_signal);
-      std::signal(SIGTERM, on_signal);
-      const io::CalibrationSpec spec = io::parse_calibration(j, file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
-      io::CalibrationOptions copt;
-      copt.outdir = io::resolve_output_directory(outdir);
-      copt.threads = threads;
-      if (!quiet)
-        copt.on_iteration = [](const io::json& it) {
-          err() << "iteration " << it["iteration"] << ": radius_ratio " << it["radius_ratio"] << ", E_mu "
-                    << it["young_modulus_Pa"] << " Pa -> E_M " << it["measured_young_modulus_Pa"] << " Pa, nu_M "
-                    << it["measured_poisson_ratio"] << " (errors " << it["error_young_modulus"] << ", "
-                    << it["error_poisson_ratio"] << "), " << it["wall_time_s"] << " s\n";
-        };
-      const io::json rep = io::calibrate_beams(spec, reg, copt);
-      if (!quiet)
-        err() << "calibrated: " << rep["result"]["params"].dump() << " written to " << spec.write.string() << "; report "
-                  << (std::filesystem::path(outdir) / "calibration.json").string() << "\n";
-      return 0;
-    }
+    if (calibrate->parsed()) return calibrate_command(j, file, a, reg);
     io::Scenario sc = io::load_scenario(j, reg, file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
     if (check->parsed()) {
       std::cout << check_report(sc).dump(2) << "\n";
       return 0;
     }
-    std::signal(SIGINT, on_signal);
-    std::signal(SIGTERM, on_signal);
-    threads = threads_per_rank(threads);
-    if (io::ranks::rank() != 0) {
-      if (threads > 0) omp_set_num_threads(threads);
-      return io::serve_sweep_items(sc);
-    }
-    serving = io::ranks::size() > 1;
-    set_amg_spread_ranks(io::ranks::size());  // large network solves outside sweeps use every rank
-    io::RunOptions opt;
-    // Resolved once: every file goes to the physical path ("LINK/../out" as the OS takes it);
-    // messages show the path as given, and the physical one where it differs.
-    opt.outdir = io::resolve_output_directory(outdir);
-    opt.quiet = quiet;
-    opt.threads = threads;
-    opt.progress = &progress;
-    if (!restart.empty()) opt.restart = restart;
-    physical_outdir = opt.outdir;
-    const io::json summary = io::run_scenario(sc, opt);
-    if (!quiet)
-      err() << "done: " << summary["steps"] << " steps, " << summary["wall_time_s"] << " s wall, "
-                << summary["particle_steps_per_s"] << " particle-steps/s; outputs in " << outdir
-                << ((std::filesystem::absolute(outdir) / "").lexically_normal() != (opt.outdir / "").lexically_normal()
-                        ? " (" + opt.outdir.string() + ")" : std::string())
-                << "\n";
-    return checks_exit_code(summary, report_only);
+    return run_scene(sc, a, progress, physical_outdir, serving);
   } catch (const ConfigError& e) {
     err() << "error: " << e.what() << "\n";
     hint();
