@@ -7,7 +7,7 @@
     python3 tools/check_xdmf_paraview.py --xdmf OUTDIR/results.xdmf
         checks the results.xdmf of an existing run.
 
-Checks (io/hdf5/results_writer.hpp; README "Outputs"):
+Checks (io/hdf5/results_writer.hpp; docs/running.md, "Outputs"):
   - ParaView's time steps are the times of the XDMF grids, one per grid (one per frame file, every
     file in OUTDIR/frames referenced by exactly one grid);
   - at every time step the reader gives one unstructured grid (not a multiblock: two grids within

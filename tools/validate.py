@@ -898,7 +898,8 @@ def cmd_derive_bands(a):
                     "center": st["error"], "halfwidth": half,
                     "derivation": f"mean ± max({a.k:g} std, {100 * a.floor:g} %) of the relative error over seeds "
                                   f"{[r['seed'] for r in runs]} at N = {n} ({100 * st['error']:+.3f} ± "
-                                  f"{100 * st['std']:.3f} %), commit {git_commit()}, {time.strftime('%Y-%m-%d')}",
+                                  f"{100 * st['std']:.3f} %), binary of commit {runner.commit}"
+                                  f"{'' if runner.clean else ' (dirty tree)'}, {time.strftime('%Y-%m-%d')}",
                     "per_seed": [p["error"] for p in st["per_seed"]]}
                 print(f"  {fig.id} N={n}: {bands[f'{fig.id}@N{n}']['derivation']}")
     write_json_atomic(FAST_BANDS, dict(sorted(bands.items())))

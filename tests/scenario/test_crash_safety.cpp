@@ -1,6 +1,6 @@
 /// Crash safety of a run's outputs, through the `sparkdem` executable, on every scenario type.
 ///
-/// Invariants under test (README, "Outputs"; io/scenario/pipeline.hpp; the checks themselves are
+/// Invariants under test (docs/running.md, "Outputs"; io/scenario/pipeline.hpp; the checks themselves are
 /// in tests/support/crash_harness.hpp):
 ///  - after a SIGKILL at any moment, every frame that run.log reports as written is a complete,
 ///    readable frame file, identical bit for bit to the same frame of an uninterrupted run;

@@ -13,7 +13,7 @@
 ///    (kappa_eff < kappa_0 is NOT asserted: without the layer, the sintered-neck network of a
 ///    compact with necks a/r_min ~ 0.8 reaches the bulk value, 9.77e6 against 9.8e6 S/m at
 ///    porosity 0.216 in this run, and exceeded it in earlier runs — the hemisphere law ignores how
-///    overlaps shorten the particles; see README);
+///    overlaps shorten the particles; see docs/physics.md);
 ///  - the denser snapshot conducts better (with and without the layer).
 #include <catch2/catch.hpp>
 

@@ -201,7 +201,7 @@ TEST_CASE("pin torsion (configs/torsion_crack.json at N = 1000): elastic torque,
   // The shipped scenario at N = 1000 (pin_1000) to separation, 0.09 rad. Measured
   // (benchmarks/torsion_crack/results.md as of commit 81fc62f): stiffness ratio 1.134 / 0.993 / 0.913 and first-break
   // twist +1.2 / -4.0 / -13.0 % at N = 1000 / 2500 / 5000 - the elastic response drifts with the
-  // element size because the packing protocol does (see README). The bands here are regression
+  // element size because the packing protocol does (see docs/physics.md). The bands here are regression
   // guards around the N = 1000 figures, not the issue's 3 % / 5 %: stiffness within 20 % of
   // G J / L, first break within 15 % of 0.0416 rad, the pin still conducting like an intact one
   // at 0.03 rad (R/R0 < 1.01; since issue 20 the crack runs before 0.05 rad) and more than 1.5 R0

@@ -4,7 +4,7 @@
 /// index files against an uninterrupted reference run, verify the checkpoint left behind and
 /// restart from it, and compare the final state bit for bit.
 ///
-/// The invariants (README, "Outputs"; io/scenario/pipeline.hpp):
+/// The invariants (docs/running.md, "Outputs"; io/scenario/pipeline.hpp):
 ///  - every frame that run.log reports as written is a complete, readable frame file, identical
 ///    bit for bit to the frame of the same stage and step of the uninterrupted run;
 ///  - checkpoint.h5, if present, passes its checksum, holds a step at which the uninterrupted
