@@ -162,6 +162,14 @@ def with_marks(ledger, rec):
     return out
 
 
+def carry_marks(ledger, rec):
+    """Gives `rec` every permanent mark of its figure; a record so marked no longer passes."""
+    rec["tuned_after_seeing"] = with_marks(ledger, rec)
+    if rec.get("pass") and rec["tuned_after_seeing"]:
+        rec["pass"] = False
+    rec["verdict"] = verdict(rec)
+
+
 # ---------------------------------------------------------------- the checks of check-ledger
 
 def check_rules(ledger, head_ledger=None, ledger_dir="."):

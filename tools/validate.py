@@ -382,13 +382,12 @@ def write_run_file(path, case, tier, n, runs, meta):
     write_json_atomic(path, body)
 
 
-def records_from_run_file(ledger, path, ledger_path):
+def records_from_run_file(ledger, path, ledger_path, fast_bands):
     """The records of every figure of a run file, made as `run` made them."""
     rf = rules.load_strict(path)
     case = next((c for c in case_table.CASES if c.id == rf["case"]), None)
     if case is None:
         raise ValueError(f"{path}: case {rf['case']} is not in benchmarks/validation/cases.py")
-    fast_bands = load_json(FAST_BANDS) if os.path.exists(FAST_BANDS) else {}
     first = ledger.get("first_config_values", {}).get(case.id) or config_values(case)
     runs = [dict(r, n=rf["N"]) for r in rf["runs"]]
     out = []
@@ -410,12 +409,13 @@ def cmd_recompute(a):
     ledger = load_ledger(a.ledger)
     recs = {(r["case"], r["tier"], r["N"]): r for r in ledger["records"]}
     bad, n_same, files = [], 0, sorted({r["run_file"] for r in ledger["records"] if r.get("run_file")})
+    fast_bands = load_json(FAST_BANDS) if os.path.exists(FAST_BANDS) else {}
     for rel in files:
         path = os.path.join(os.path.dirname(os.path.abspath(a.ledger)), rel)
         if not os.path.exists(path):
             bad.append(f"{rel}: missing")
             continue
-        for new in records_from_run_file(ledger, path, a.ledger):
+        for new in records_from_run_file(ledger, path, a.ledger, fast_bands):
             old = recs.get((new["case"], new["tier"], new["N"]))
             diff = [k for k in RECOMPUTED_FIELDS if (old or {}).get(k) != new.get(k)]
             if old is None or diff:
@@ -491,10 +491,7 @@ def cmd_rebase(a):
         print(f"{case.id}: rebased ({len(changed)} config keys changed since the first values"
               + (", marked tuned)" if a.seen else ")"))
     for r in ledger["records"]:
-        r["tuned_after_seeing"] = rules.with_marks(ledger, r)
-        if r.get("pass") and r["tuned_after_seeing"]:
-            r["pass"] = False
-        r["verdict"] = rules.verdict(r)
+        rules.carry_marks(ledger, r)
     write_json_atomic(a.ledger, ledger)
     write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
     lock.close()
@@ -515,10 +512,7 @@ def store(ledger, rec):
         if r["case"] == rec["case"]:
             rules.add_marks(ledger, r["case"], r.get("tuned_after_seeing") or [])
     rules.add_marks(ledger, rec["case"], rec.get("tuned_after_seeing") or [])
-    rec["tuned_after_seeing"] = rules.with_marks(ledger, rec)
-    if rec.get("pass") and rec["tuned_after_seeing"]:
-        rec["pass"] = False
-        rec["verdict"] = rules.verdict(rec)
+    rules.carry_marks(ledger, rec)
     recs = [r for r in ledger["records"]
             if not (r["case"] == rec["case"] and r["tier"] == rec["tier"] and r["N"] == rec["N"])]
     recs.append(rec)
