@@ -1,0 +1,206 @@
+#!/usr/bin/env python3
+"""Bit-identity guard for refactors: each shipped config's short variant, run, digested.
+
+For every scenario file configs/*.json this tool writes a *short variant* (the same stages, keys,
+laws, modules, walls and sets, with every stepping stage capped at STEPS steps, every generator
+capped at PARTICLES particles and RELAX_ITERATIONS relaxation iterations, every sweep cut to its
+first two items), runs it with `sparkdem run --threads 1`, and digests
+
+  * the resolved scenario that `sparkdem check` prints for the *full* config (every key as parsed),
+  * every HDF5 dataset of every *.h5 file the short run wrote (final state, results, snapshots,
+    sweep items; datasets read with h5py, raw bytes and shape), and
+  * every sweep table (sweep_*.csv) without its timing columns.
+
+Wall-clock timings are left out: they are not results (summary.json, the run records of
+`pipeline/record`, every dataset or column named *wall_time* or *solve_time*).
+
+    config_digest.py make  --sparkdem BUILD/sparkdem   # writes tests/scenario/data/config_digests.json
+    config_digest.py check --sparkdem BUILD/sparkdem [--config NAME]   # exit 1 on any difference
+
+`make` is run on a clean commit whose results are the reference (the file records the commit);
+`check` (ctest `configs_bit_identical/<name>`) compares a build against it. A change that alters
+results on purpose regenerates the file with `make` and says so in its commit.
+"""
+import argparse
+import csv
+import glob
+import hashlib
+import io
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+CONFIGS = os.path.join(REPO, "configs")
+REFERENCE = os.path.join(REPO, "tests", "scenario", "data", "config_digests.json")
+STEPS = 40
+PARTICLES = 300
+RELAX_ITERATIONS = 200
+SWEEP_ITEMS = 2
+TIMEOUT_S = 30  # a short variant slower than this (on one thread) is recorded as skipped, not run by `check`
+
+
+def short_variant(scene):
+    """The short variant of a scenario (a dict); rules in the module docstring."""
+    for stage in scene.get("stages", []):
+        stop = stage.setdefault("stop", {})
+        if stop.get("steps", STEPS + 1) > STEPS:
+            stop["steps"] = STEPS
+        gen = stage.get("generator")
+        if isinstance(gen, dict):
+            if isinstance(gen.get("particles"), int):
+                gen["particles"] = min(gen["particles"], PARTICLES)
+            if isinstance(gen.get("max_iterations"), int):
+                gen["max_iterations"] = min(gen["max_iterations"], RELAX_ITERATIONS)
+        sweep = stage.get("sweep")
+        if isinstance(sweep, dict):
+            for key in ("values", "seeds"):
+                if isinstance(sweep.get(key), list):
+                    sweep[key] = sweep[key][:SWEEP_ITEMS]
+            cal = sweep.get("calibrate")
+            if isinstance(cal, dict) and isinstance(cal.get("max_iterations"), int):
+                cal["max_iterations"] = min(cal["max_iterations"], 1)
+    return scene
+
+
+def is_timing(name):
+    """Does a dataset or column hold wall-clock timings (which differ run to run)?"""
+    return name == "pipeline/record" or "wall_time" in name or "solve_time" in name
+
+
+def h5_digest(path, h):
+    import h5py
+    import numpy as np
+
+    def visit(name, obj):
+        if isinstance(obj, h5py.Dataset) and not is_timing(name):
+            data = obj[()]
+            arr = np.asarray(data)
+            h.update(name.encode())
+            h.update(str(arr.shape).encode())
+            if arr.dtype.kind in "OSU":
+                h.update(repr(arr.tolist()).encode())
+            else:
+                h.update(np.ascontiguousarray(arr).tobytes())
+
+    with h5py.File(path, "r") as f:
+        f.visititems(visit)
+
+
+def csv_digest(path, h):
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    if not rows:
+        return
+    keep = [k for k, c in enumerate(rows[0]) if not is_timing(c)]
+    for row in rows:
+        h.update(("|".join(row[k] for k in keep if k < len(row)) + "\n").encode())
+
+
+def output_digest(outdir):
+    h = hashlib.sha256()
+    for path in sorted(glob.glob(os.path.join(outdir, "**", "*"), recursive=True)):
+        rel = os.path.relpath(path, outdir)
+        if path.endswith(".h5"):
+            h.update(rel.encode())
+            h5_digest(path, h)
+        elif os.path.basename(path).startswith("sweep_") and path.endswith(".csv"):
+            h.update(rel.encode())
+            csv_digest(path, h)
+    return h.hexdigest()
+
+
+def resolved_digest(sparkdem, config):
+    p = subprocess.run([sparkdem, "check", config], capture_output=True, text=True, cwd=REPO)
+    return hashlib.sha256((str(p.returncode) + "\n" + p.stdout).encode()).hexdigest()
+
+
+def digest_config(sparkdem, name, workdir):
+    """{'check': digest of the resolved full config, 'run': digest of the short run, 'exit': code}."""
+    config = os.path.join(CONFIGS, name)
+    # The variant sits in a copy of configs/ so that includes and CSV paths resolve as in the original.
+    tree = os.path.join(workdir, "configs")
+    if not os.path.isdir(tree):
+        shutil.copytree(CONFIGS, tree)
+    with open(config) as f:
+        scene = json.load(f)
+    variant = os.path.join(tree, "short_" + name)
+    with open(variant, "w") as f:
+        json.dump(short_variant(scene), f, indent=1)
+    outdir = os.path.join(workdir, "out_" + name[:-5])
+    shutil.rmtree(outdir, ignore_errors=True)
+    env = dict(os.environ, OMP_NUM_THREADS="1", OMP_WAIT_POLICY="PASSIVE")
+    try:
+        p = subprocess.run([sparkdem, "run", "--threads", "1", "--quiet", "--report-only", "-o", outdir, variant],
+                           capture_output=True, text=True, env=env, cwd=workdir, timeout=TIMEOUT_S)
+    except subprocess.TimeoutExpired:
+        return {"skipped": f"the short variant runs over {TIMEOUT_S} s on one thread"}
+    return {"check": resolved_digest(sparkdem, config), "exit": p.returncode,
+            "run": output_digest(outdir) if os.path.isdir(outdir) else "",
+            "stderr_tail": p.stderr.strip().splitlines()[-1:] if p.returncode else []}
+
+
+def shipped_configs():
+    return sorted(os.path.basename(p) for p in glob.glob(os.path.join(CONFIGS, "*.json")))
+
+
+def commit_of(sparkdem):
+    p = subprocess.run([sparkdem, "--version"], capture_output=True, text=True)
+    return p.stdout.strip()
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("command", choices=["make", "check"])
+    ap.add_argument("--sparkdem", required=True)
+    ap.add_argument("--config", action="append", help="configs/NAME.json (default: every shipped config)")
+    ap.add_argument("--workdir", help="scratch directory (default: a temporary one)")
+    a = ap.parse_args(argv)
+    names = a.config or shipped_configs()
+    workdir = a.workdir or tempfile.mkdtemp(prefix="config_digest_")
+    os.makedirs(workdir, exist_ok=True)
+    got = {}
+    ref = None
+    if a.command == "check":
+        with open(REFERENCE) as f:
+            ref = json.load(f)["configs"]
+    for name in names:
+        if ref is not None and "skipped" in ref.get(name, {}):
+            print(f"{name}: skipped ({ref[name]['skipped']})", flush=True)
+            continue
+        got[name] = digest_config(a.sparkdem, name, workdir)
+        g = got[name]
+        print(f"{name}: " + (g["skipped"] if "skipped" in g else
+                             f"exit {g['exit']} run {g['run'][:12]} check {g['check'][:12]}"), flush=True)
+    if a.command == "make":
+        ref = {"made_by": "tools/config_digest.py make", "binary": commit_of(a.sparkdem),
+               "rules": {"steps": STEPS, "particles": PARTICLES, "relax_iterations": RELAX_ITERATIONS,
+                         "sweep_items": SWEEP_ITEMS}, "configs": got}
+        tmp = REFERENCE + ".tmp"
+        with open(tmp, "w") as f:
+            json.dump(ref, f, indent=1, sort_keys=True)
+            f.write("\n")
+        os.replace(tmp, REFERENCE)
+        print("wrote", os.path.relpath(REFERENCE, REPO))
+        return 0
+    bad = 0
+    for name, g in got.items():
+        r = ref.get(name)
+        if r is None:
+            print(f"{name}: no reference (run `config_digest.py make` on a clean commit)")
+            bad += 1
+            continue
+        for key in ("exit", "run", "check", "skipped"):
+            if g.get(key) != r.get(key):
+                print(f"{name}: {key} differs from the reference ({r.get(key)!r} -> {g.get(key)!r}); stderr: {g.get('stderr_tail')}")
+                bad += 1
+    if not a.workdir:
+        shutil.rmtree(workdir, ignore_errors=True)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
