@@ -19,12 +19,21 @@
 namespace sparkdem {
 
 /// A named scalar (or several) computed from the state: time-series columns and stop criteria.
+/// A wall a monitor reads: the parameter that names it, the name, and the shape it must have.
+struct WallUse {
+  std::string key;     ///< parameter of the monitor naming the wall (e.g. "die")
+  std::string name;    ///< wall name
+  bool plane = true;   ///< true: a plane wall is expected, false: a cylinder
+};
+
 class Monitor {
  public:
   virtual ~Monitor() = default;
   /// Column names, fixed for the stage.
   virtual std::vector<std::string> columns(const State& s) const = 0;
   virtual std::vector<double> values(const State& s) const = 0;
+  /// Walls the monitor reads, checked by the loader against the stage's walls. Default: none.
+  virtual std::vector<WallUse> wall_uses() const { return {}; }
 };
 
 struct StopCondition {

@@ -1,5 +1,5 @@
 /// The single checked-in registry table (LAMMPS gran_sub_mod_register.cpp style).
-/// How to add a law, module or generator:
+/// How to add a law, module, generator or monitor (docs/ARCHITECTURE.md, "Recipes"):
 ///   1. write it with a `Params` aggregate and `static ParamSpec<Params> spec()` (and, for a
 ///      contact law, the Law interface documented in engine/contact/contact_model.hpp);
 ///   2. add one row below;
@@ -21,6 +21,8 @@
 #include "physics/electrical/ptc_self_heating.hpp"
 #include "physics/mechanics/torsion_test.hpp"
 #include "physics/mechanics/tension_test.hpp"
+#include "physics/packing/box_density.hpp"
+#include "physics/packing/compact.hpp"
 #include "physics/packing/cpc_fillers.hpp"
 #include "physics/packing/generators.hpp"
 #include "physics/thermal/heat_conduction.hpp"
@@ -54,6 +56,8 @@ void register_all(Registry& r) {
   r.generator<FillGenerator>();
   r.generator<RelaxGenerator>();
   r.generator<CpcFillersGenerator>();
+  r.monitor<CompactMonitor>();
+  r.monitor<BoxDensityMonitor>();
 }
 
 }  // namespace sparkdem::physics

@@ -14,7 +14,7 @@ first two items), runs it with `sparkdem run --threads 1`, and digests
 Wall-clock timings are left out: they are not results (summary.json, the run records of
 `pipeline/record`, every dataset or column named *wall_time* or *solve_time*).
 
-    config_digest.py make  --sparkdem BUILD/sparkdem   # writes tests/scenario/data/config_digests.json
+    config_digest.py make  --sparkdem BUILD/sparkdem   # writes tests/reference/config_digests.json
     config_digest.py check --sparkdem BUILD/sparkdem [--config NAME]   # exit 1 on any difference
 
 `make` is run on a clean commit whose results are the reference (the file records the commit);
@@ -35,7 +35,7 @@ import tempfile
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CONFIGS = os.path.join(REPO, "configs")
-REFERENCE = os.path.join(REPO, "tests", "scenario", "data", "config_digests.json")
+REFERENCE = os.path.join(REPO, "tests", "reference", "config_digests.json")
 STEPS = 40
 PARTICLES = 300
 RELAX_ITERATIONS = 200

@@ -35,66 +35,6 @@ namespace {
 
 void on_signal(int) { sparkdem::interrupt_flag().store(true); }
 
-sparkdem::io::json check_report(sparkdem::io::Scenario& sc) {
-  using namespace sparkdem;
-  io::json j = sc.resolved;
-  // Derived values: each stage's step against the stable steps, from a scratch set-up of the
-  // particles (generator stages except relax, whose packing is an optimisation).
-  State s;
-  s.materials = sc.materials;
-  s.walls = sc.walls;
-  s.rng.seed(sc.seed);
-  bool known = true;
-  for (std::size_t k = 0; k < sc.stages.size(); ++k) {
-    auto& st = sc.stages[k];
-    auto& js = j["stages"][k];
-    if (st.sweep) {  // a branch: items start from the state before it, which goes on unchanged
-      js["derived"]["note"] = "sweep stage: each item starts from its own input state; not set up here";
-      continue;
-    }
-    if (!st.from_snapshot.empty()) {
-      State snap;
-      io::read_checkpoint(st.from_snapshot, snap);
-      snap.materials = s.materials;
-      s = std::move(snap);
-      known = true;
-    }
-    for (const auto& n : st.remove_walls) std::erase_if(s.walls, [&](const Wall& w) { return w.name == n; });
-    for (const auto& w : st.add_walls) s.walls.push_back(w);
-    if (st.generator) {
-      js["estimated_particles"] = st.generator->estimated_particles();
-      if (st.type == "relax") { known = false; continue; }
-      st.generator->generate(s);
-    }
-    if (!known || !st.dynamics) continue;
-    for (const auto& [name, sel] : st.sets) assign_set(s, name, sel);  // as the run does (modules bind to them)
-    Simulation sim(s, sc.law_of(st));
-    for (auto& m : st.modules) sim.add_module(m.get());
-    sim.prepare(st.cfg);
-    s.contacts.rebuild(find_pairs(s.particles.position, s.particles.radius, 0.0), s.particles.id, s.particles.size());
-    // A frozen stage (mechanics off) has no mechanical step limit, as in the run.
-    const double stable = st.cfg.mechanics ? sim.mechanical_stable_dt() : std::numeric_limits<double>::infinity();
-    js["derived"]["particles_at_start"] = s.particles.size();
-    js["derived"]["mechanical_stable_dt_s"] = stable;
-    try {
-      const double dt = sim.resolve_dt(st.cfg);
-      js["derived"]["dt_s"] = dt;
-      js["derived"]["dt_fraction_of_stable"] = dt / stable;
-      if (dt > stable && !st.cfg.allow_unstable_dt)
-        throw ConfigError(st.path + "/dt", "dt = " + std::to_string(dt) + " s exceeds the stable step " + std::to_string(stable) +
-                                               " s (set allow_unstable_dt to override)");
-    } catch (const SetupError& e) {
-      js["derived"]["dt_note"] = e.what();
-    }
-    for (const auto& [name, sdt] : sim.module_stable_dts()) js["derived"]["module_stable_dt_s"][name] = std::isfinite(sdt) ? io::json(sdt) : io::json("unconditionally stable");
-    io::json plan = io::json::array();
-    for (const auto& n : sim.plan().names()) plan.push_back(n);
-    js["derived"]["step_plan"] = plan;
-    known = false;  // later stages start from a state that only the run produces
-  }
-  return j;
-}
-
 /// Prints the banded checks of a completed run that failed (summary["checks_failed"]); returns
 /// the exit code: 0 when none failed or `report_only`, else 5.
 int checks_exit_code(const sparkdem::io::json& summary, bool report_only) {
@@ -286,7 +226,7 @@ int run_command(int argc, char** argv, bool& serving) {
     if (calibrate->parsed()) return calibrate_command(j, file, a, reg);
     io::Scenario sc = io::load_scenario(j, reg, file.has_parent_path() ? file.parent_path() : std::filesystem::path("."));
     if (check->parsed()) {
-      std::cout << check_report(sc).dump(2) << "\n";
+      std::cout << io::dry_run(sc).dump(2) << "\n";
       return 0;
     }
     return run_scene(sc, a, progress, physical_outdir, serving);

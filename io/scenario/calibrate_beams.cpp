@@ -185,33 +185,80 @@ CalibrationSpec parse_calibration(const json& j, const fs::path& base_dir) {
   return c;
 }
 
+namespace {
+
+/// The scene must bond with cohesive_beam under a failure criterion (its stress is measured) and
+/// have the calibrated stage; throws ConfigError naming what is missing.
+void check_calibration_scene(const json& scene, const CalibrationSpec& spec) {
+  std::vector<Diagnostic> errors;
+  const std::string where = "(scenario '" + spec.scenario.string() + "') ";
+  if (!scene.is_object() || !scene.contains("bonds") || !scene["bonds"].is_object() || scene["bonds"].value("law", "") != "cohesive_beam")
+    errors.push_back({"/bonds/law", where + "expected \"cohesive_beam\", found another law or none"});
+  else if (!scene["bonds"].contains("params") || !scene["bonds"]["params"].is_object())
+    errors.push_back({"/bonds/params", where + "expected an object of cohesive_beam parameters, found none"});
+  else {
+    const json& bp = scene["bonds"]["params"];
+    const std::string failure = bp.value("failure", "none");
+    if (failure == "none")
+      errors.push_back({"/bonds/params/failure", where + "expected a failure criterion (max_normal, von_mises, tresca) whose "
+                                                         "stress is calibrated, found none"});
+  }
+  bool has_stage = false;
+  if (scene.is_object() && scene.contains("stages") && scene["stages"].is_array())
+    for (const auto& st : scene["stages"])
+      if (st.is_object() && st.value("name", "") == spec.stage) has_stage = true;
+  if (!has_stage) errors.push_back({"/stages", where + "expected a stage named '" + spec.stage + "', found none"});
+  if (!errors.empty()) throw ConfigError(std::move(errors));
+}
+
+/// `check_break`: the scene run with the calibrated beams (radius ratio r, modulus E [Pa],
+/// strength [Pa]) up to the first break in stage spec.check_break; that break should come at the
+/// macroscopic stress sigma_t.
+json run_check_break(const json& scene, const fs::path& scene_dir, const CalibrationSpec& spec, const Registry& reg,
+                     const CalibrationOptions& opt, double r, double E, double strength) {
+  using clock = std::chrono::steady_clock;
+  json run = scene;
+  run["bonds"]["params"]["radius_ratio"] = r;
+  run["bonds"]["params"]["young_modulus"] = E;
+  run["bonds"]["params"]["strength"] = strength;
+  json stages = json::array();
+  for (const auto& st : run["stages"]) {
+    stages.push_back(st);
+    if (st.is_object() && st.value("name", "") == spec.check_break) {
+      stages.back()["until"] = {{"bonds_broken", {{"above", 0.5}}}};
+      break;
+    }
+  }
+  if (stages.size() == run["stages"].size() && !(stages.back().is_object() && stages.back().value("name", "") == spec.check_break))
+    throw ConfigError("/check_break", "expected a stage of '" + spec.scenario.string() + "', found no stage '" + spec.check_break + "'");
+  run["stages"] = stages;
+  const auto t0 = clock::now();
+  const json summary = run_scene(run, scene_dir, reg, opt.outdir / "check_break", opt.threads);
+  const json* st = stage_entry(summary, spec.check_break);
+  json chk = {{"stage", spec.check_break}, {"output", "check_break"},
+              {"wall_time_s", std::chrono::duration<double>(clock::now() - t0).count()}};
+  if (st) {
+    chk["broke"] = final_value(*st, "bonds_broken") > 0.5;
+    chk["stress_at_first_break_Pa"] = final_value(*st, "tension_stress");
+    // During the pull the end forces differ by the sample's inertia (the pulled end leads);
+    // their mean is the stress at mid-length, where the strains are measured.
+    const double mean = 0.5 * (final_value(*st, "tension_force") + final_value(*st, "tension_force_fixed")) *
+                        final_value(*st, "tension_stress") / final_value(*st, "tension_force");
+    chk["mean_end_stress_at_first_break_Pa"] = mean;
+    chk["relative_to_tensile_strength"] = mean / spec.target_tensile_strength;
+    chk["axial_strain_at_first_break"] = final_value(*st, "tension_axial_strain");
+  }
+  return chk;
+}
+
+}  // namespace
+
 json calibrate_beams(const CalibrationSpec& spec, const Registry& reg, const CalibrationOptions& opt) {
   using clock = std::chrono::steady_clock;
   const auto t_start = clock::now();
   json scene = read_json_file(spec.scenario);
   const fs::path scene_dir = spec.scenario.has_parent_path() ? spec.scenario.parent_path() : fs::path(".");
-  // The scene must bond with cohesive_beam under a failure criterion (its stress is measured).
-  {
-    std::vector<Diagnostic> errors;
-    const std::string where = "(scenario '" + spec.scenario.string() + "') ";
-    if (!scene.is_object() || !scene.contains("bonds") || !scene["bonds"].is_object() || scene["bonds"].value("law", "") != "cohesive_beam")
-      errors.push_back({"/bonds/law", where + "expected \"cohesive_beam\", found another law or none"});
-    else if (!scene["bonds"].contains("params") || !scene["bonds"]["params"].is_object())
-      errors.push_back({"/bonds/params", where + "expected an object of cohesive_beam parameters, found none"});
-    else {
-      const json& bp = scene["bonds"]["params"];
-      const std::string failure = bp.value("failure", "none");
-      if (failure == "none")
-        errors.push_back({"/bonds/params/failure", where + "expected a failure criterion (max_normal, von_mises, tresca) whose "
-                                                           "stress is calibrated, found none"});
-    }
-    bool has_stage = false;
-    if (scene.is_object() && scene.contains("stages") && scene["stages"].is_array())
-      for (const auto& st : scene["stages"])
-        if (st.is_object() && st.value("name", "") == spec.stage) has_stage = true;
-    if (!has_stage) errors.push_back({"/stages", where + "expected a stage named '" + spec.stage + "', found none"});
-    if (!errors.empty()) throw ConfigError(std::move(errors));
-  }
+  check_calibration_scene(scene, spec);
   // Parameters as the scene resolves them (failure, poisson_ratio defaults filled in).
   const json resolved_bonds = load_scenario(scene, reg, scene_dir).resolved["bonds"]["params"];
   const std::string failure = resolved_bonds["failure"].get<std::string>();
@@ -296,41 +343,7 @@ json calibrate_beams(const CalibrationSpec& spec, const Registry& reg, const Cal
                       {"measured_poisson_ratio", nu_M},
                       {"criterion_to_macro_stress_ratio", crit / stress},
                       {"params_file", spec.write.string()}};
-  if (!spec.check_break.empty()) {
-    // Elastic up to the first break: that break should come at macroscopic stress sigma_t.
-    json run = scene;
-    run["bonds"]["params"]["radius_ratio"] = r;
-    run["bonds"]["params"]["young_modulus"] = E;
-    run["bonds"]["params"]["strength"] = strength;
-    json stages = json::array();
-    for (const auto& st : run["stages"]) {
-      stages.push_back(st);
-      if (st.is_object() && st.value("name", "") == spec.check_break) {
-        stages.back()["until"] = {{"bonds_broken", {{"above", 0.5}}}};
-        break;
-      }
-    }
-    if (stages.size() == run["stages"].size() && !(stages.back().is_object() && stages.back().value("name", "") == spec.check_break))
-      throw ConfigError("/check_break", "expected a stage of '" + spec.scenario.string() + "', found no stage '" + spec.check_break + "'");
-    run["stages"] = stages;
-    const auto t0 = clock::now();
-    const json summary = run_scene(run, scene_dir, reg, opt.outdir / "check_break", opt.threads);
-    const json* st = stage_entry(summary, spec.check_break);
-    json chk = {{"stage", spec.check_break}, {"output", "check_break"},
-                {"wall_time_s", std::chrono::duration<double>(clock::now() - t0).count()}};
-    if (st) {
-      chk["broke"] = final_value(*st, "bonds_broken") > 0.5;
-      chk["stress_at_first_break_Pa"] = final_value(*st, "tension_stress");
-      // During the pull the end forces differ by the sample's inertia (the pulled end leads);
-      // their mean is the stress at mid-length, where the strains are measured.
-      const double mean = 0.5 * (final_value(*st, "tension_force") + final_value(*st, "tension_force_fixed")) *
-                          final_value(*st, "tension_stress") / final_value(*st, "tension_force");
-      chk["mean_end_stress_at_first_break_Pa"] = mean;
-      chk["relative_to_tensile_strength"] = mean / spec.target_tensile_strength;
-      chk["axial_strain_at_first_break"] = final_value(*st, "tension_axial_strain");
-    }
-    report["check_break"] = chk;
-  }
+  if (!spec.check_break.empty()) report["check_break"] = run_check_break(scene, scene_dir, spec, reg, opt, r, E, strength);
   report["wall_time_s"] = std::chrono::duration<double>(clock::now() - t_start).count();
   fs::create_directories(spec.write.parent_path().empty() ? fs::path(".") : spec.write.parent_path());
   write_json_atomic(spec.write, params);

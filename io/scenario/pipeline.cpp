@@ -15,6 +15,7 @@
 #include "engine/core/memory_archive.hpp"
 #include "engine/state/delete_particles.hpp"
 #include "engine/state/pair_transfer.hpp"
+#include "engine/state/particle_set.hpp"
 #include "io/files/durable_file.hpp"
 #include "io/hdf5/results_writer.hpp"
 #include "io/restart/hdf5_archive.hpp"
@@ -318,26 +319,6 @@ void write_json_atomic(const std::filesystem::path& file, const json& j) { write
 
 namespace {
 
-/// Every particle's material index names one of the scenario's materials (checked once the
-/// materials are known: a checkpoint does not store them).
-void check_materials(const State& s, const std::filesystem::path& file) {
-  if (s.materials.empty()) return;
-  for (std::size_t i = 0; i < s.particles.size(); ++i)
-    if (static_cast<std::size_t>(s.particles.material[i]) >= s.materials.size())
-      throw SetupError("checkpoint '" + file.string() + "': particle " + std::to_string(s.particles.id[i]) + " has material " +
-                       std::to_string(s.particles.material[i]) + ", but the scenario has " + std::to_string(s.materials.size()) +
-                       " materials");
-}
-
-/// The state of an open checkpoint: its stage index and whether it was taken inside that stage.
-std::pair<std::int64_t, bool> read_state(Hdf5Archive& ar, State& s) {
-  s.visit(ar);
-  check_materials(s, ar.path());
-  std::int64_t flag = 0;
-  if (ar.has("pipeline/in_stage")) ar.visit("pipeline/in_stage", flag);
-  return {s.stage_index, flag != 0};
-}
-
 }  // namespace
 
 namespace {
@@ -378,11 +359,6 @@ json deletion_summary(const State& s, const std::vector<std::pair<std::string, S
 }
 
 }  // namespace
-
-std::pair<std::int64_t, bool> read_checkpoint(const std::filesystem::path& file, State& s) {
-  Hdf5Archive ar = Hdf5Archive::for_reading(file);
-  return read_state(ar, s);
-}
 
 namespace {
 
@@ -474,6 +450,7 @@ RestartPoint read_restart(const Scenario& sc, const RunOptions& opt, State& s, R
 
 /// What preparing a stage made, for its summary entry.
 struct StagePrep {
+  bool generated = true;   ///< false: a dry run left out the stage's generator (see Generator::cheap_to_generate)
   std::size_t bonds_made = 0;
   double bond_gap = -1.0;  ///< [m] the gap bonds were created within (create_bonds)
   json set_counts;         ///< particles per named set
@@ -481,8 +458,10 @@ struct StagePrep {
 
 /// A stage's changes to the state before it runs; on a resume only the bond contact rule (the
 /// rest is in the checkpoint): the snapshot it starts from, walls removed and added, the
-/// generator, deleted sets, bonds created within the gap, the particle sets.
-StagePrep prepare_stage(State& s, StageDef& st, const Scenario& sc, bool resuming, std::int64_t stage_index) {
+/// generator, deleted sets, bonds created within the gap, the particle sets. A dry run
+/// (`sparkdem check`) leaves out a generator that is not cheap to run (StagePrep::generated).
+StagePrep prepare_stage(State& s, StageDef& st, const Scenario& sc, bool resuming, std::int64_t stage_index,
+                        bool dry_run = false) {
   StagePrep p;
   if (!resuming) {
     if (!st.from_snapshot.empty()) {
@@ -503,7 +482,8 @@ StagePrep prepare_stage(State& s, StageDef& st, const Scenario& sc, bool resumin
       if (gap >= 0.0) place_plane_at_clearance(w, s.particles.position, s.particles.radius, gap);
       s.walls.push_back(std::move(w));
     }
-    if (st.generator) st.generator->generate(s);
+    if (st.generator && (!dry_run || st.generator->cheap_to_generate())) st.generator->generate(s);
+    else if (st.generator) p.generated = false;
     s.stage_index = stage_index;
     delete_stage_sets(s, st.delete_sets);
   }
@@ -672,6 +652,65 @@ void run_plain_stage(Scenario& sc, std::size_t k, State& s, OutputObserver& obs,
                        "stage '" + st.cfg.name + "' reached its hard stop before its 'until' conditions held "
                        "(see the stage's \"final\" values in summary.json)");
 }
+
+/// `check`'s view of stage k, prepared exactly as the run prepares it: the particles at its start,
+/// the stable steps and the time step it would take, the module steps and the step plan.
+json derive_stage(const Scenario& sc, StageDef& st, State& s) {
+  json d;
+  Simulation sim(s, sc.law_of(st), sc.bond_law.get());
+  for (auto& m : st.modules) sim.add_module(m.get());
+  sim.prepare(st.cfg);
+  s.contacts.rebuild(find_pairs(s.particles.position, s.particles.radius, 0.0), s.particles.id, s.particles.size());
+  // A frozen stage (mechanics off) has no mechanical step limit, as in the run.
+  const double stable = st.cfg.mechanics ? sim.mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+  d["particles_at_start"] = s.particles.size();
+  d["mechanical_stable_dt_s"] = stable;
+  try {
+    const double dt = sim.resolve_dt(st.cfg);
+    d["dt_s"] = dt;
+    d["dt_fraction_of_stable"] = dt / stable;
+    if (dt > stable && !st.cfg.allow_unstable_dt)
+      throw ConfigError(st.path + "/dt", "dt = " + std::to_string(dt) + " s exceeds the stable step " + std::to_string(stable) +
+                                             " s (set allow_unstable_dt to override)");
+  } catch (const SetupError& e) {
+    d["dt_note"] = e.what();
+  }
+  for (const auto& [name, sdt] : sim.module_stable_dts())
+    d["module_stable_dt_s"][name] = std::isfinite(sdt) ? json(sdt) : json("unconditionally stable");
+  d["step_plan"] = json::array();
+  for (const auto& n : sim.plan().names()) d["step_plan"].push_back(n);
+  return d;
+}
+
+}  // namespace
+
+json dry_run(Scenario& sc) {
+  json j = sc.resolved;
+  State s;
+  s.materials = sc.materials;
+  s.walls = sc.walls;
+  s.rng.seed(sc.seed);
+  bool known = true;  // the state at the stage start is the run's (no stage has stepped yet)
+  for (std::size_t k = 0; k < sc.stages.size(); ++k) {
+    StageDef& st = sc.stages[k];
+    json& js = j["stages"][k];
+    if (st.sweep) {  // a branch: items start from the state before it, which goes on unchanged
+      js["derived"]["note"] = "sweep stage: each item starts from its own input state; not set up here";
+      continue;
+    }
+    if (!st.from_snapshot.empty()) known = true;
+    if (st.generator) js["estimated_particles"] = st.generator->estimated_particles();
+    if (!known) continue;
+    const StagePrep prep = prepare_stage(s, st, sc, false, static_cast<std::int64_t>(k), true);
+    if (!prep.generated) { known = false; continue; }
+    if (!st.dynamics) continue;
+    js["derived"] = derive_stage(sc, st, s);
+    known = false;  // later stages start from a state that only the run produces
+  }
+  return j;
+}
+
+namespace {
 
 /// The stages of the scenario from the restart point (or the first) to the last; summary.json
 /// and the run's status whatever happens (a failure or interrupt is rethrown after writing them).

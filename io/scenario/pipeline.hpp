@@ -28,6 +28,7 @@
 #include <optional>
 #include <string>
 
+#include "io/restart/state_file.hpp"  // read_checkpoint: continuing a run
 #include "io/scenario/scenario.hpp"
 
 namespace sparkdem::io {
@@ -70,9 +71,12 @@ std::filesystem::path resolve_output_directory(const std::filesystem::path& outd
 /// SetupError or Interrupted (after writing a checkpoint and the outputs so far).
 json run_scenario(Scenario& sc, const RunOptions& opt);
 
-/// Read a checkpoint into `s` (state only); returns its stage index and whether it was taken
-/// inside that stage.
-std::pair<std::int64_t, bool> read_checkpoint(const std::filesystem::path& file, State& s);
+/// `sparkdem check`: the resolved scenario, with each stage's derived values ("derived": particles
+/// at its start, stable steps, the time step and its fraction of the stable one, module steps, the
+/// step plan) from the run's own stage preparation, as long as the state at the stage start is
+/// known without stepping: up to and including the first stage that steps (or after a
+/// from_snapshot). Generators that are not cheap to run (relax) end it. Writes nothing.
+json dry_run(Scenario& sc);
 
 /// Write OUTDIR/broken_bonds.csv atomically: every broken bond of the state in the order they
 /// broke (step, time [s], the two ids, the midpoint x, y, z [m] at the break, the law's failure

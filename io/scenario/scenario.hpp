@@ -35,7 +35,7 @@ struct SnapshotSpec {
 struct SweepDef;
 
 struct StageDef {
-  std::string type;  ///< dynamics | <generator name> (lattice, deposit, fill, relax)
+  std::string type;  ///< dynamics | a registered generator's name
   std::string path;  ///< JSON pointer of the stage
   StageConfig cfg;
   std::unique_ptr<Generator> generator;
@@ -52,7 +52,7 @@ struct StageDef {
   /// generator), resolved there: `{"gap_tolerance_relative": g}`, as the networks'
   /// touch_tolerance_relative, so a bond set follows the packing's element size.
   bool create_bonds_gap_relative = false;
-  bool dynamics = true;               ///< false: a generator stage with nothing to settle (lattice, relax)
+  bool dynamics = true;               ///< false: a generator stage with nothing to settle (Generator::steps)
   std::vector<std::pair<std::string, SetSelector>> sets;  ///< particle sets (re)evaluated at the stage start
   /// `"delete_sets"`: particle sets evaluated at the stage start (after the generator, before
   /// `sets`) whose members are deleted (LAMMPS `delete_atoms region`); see delete_particles.

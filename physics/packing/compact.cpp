@@ -43,6 +43,11 @@ double compact_solid_volume(const std::vector<Vec3>& positions, const std::vecto
   return v;
 }
 
+CompactMonitor::CompactMonitor(CompactParams p) : p_(std::move(p)) {
+  if (p_.bottom == p_.top)
+    throw ConfigError("/top", "expected a wall other than the bottom punch, found \"" + p_.top + "\"");
+}
+
 ParamSpec<CompactParams> compact_spec() {
   using P = CompactParams;
   ParamSpec<P> s("compact", "object",

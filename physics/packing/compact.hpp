@@ -88,11 +88,19 @@ double envelope_volume(const std::vector<Vec3>& positions, const std::vector<dou
 /// from the die wall on cooling is measured on its own size, as a sample taken out of the die
 /// (issue 21 item 7). Overlapping pairs are found afresh from the current positions
 /// (cell-grid search, O(N); deterministic order), so bonded pairs and pairs of any law count.
+/// Registered as the monitor (stage key) "compact" in physics/register_all.cpp.
 class CompactMonitor final : public Monitor {
  public:
-  explicit CompactMonitor(CompactParams p) : p_(std::move(p)) {}
+  using Params = CompactParams;
+  static ParamSpec<Params> spec() { return compact_spec(); }
+  /// Throws ConfigError ("/top") when both punches are the same wall.
+  explicit CompactMonitor(CompactParams p);
   std::vector<std::string> columns(const State& s) const override;
   std::vector<double> values(const State& s) const override;
+  /// The die (a cylinder) and the two punches (planes).
+  std::vector<WallUse> wall_uses() const override {
+    return {{"die", p_.die, false}, {"bottom", p_.bottom, true}, {"top", p_.top, true}};
+  }
 
  private:
   CompactParams p_;

@@ -117,6 +117,7 @@ class CpcFillersGenerator final : public Generator {
   explicit CpcFillersGenerator(const Params& p) : p_(p) {}
   std::string name() const override { return "cpc_fillers"; }
   void generate(State& s) override;
+  static std::vector<std::string> created_walls() { return {"bottom", "top", "xlo", "xhi", "ylo", "yhi"}; }
   void configure_stage(StageConfig& cfg) const override;
   bool steps() const override { return true; }
   double estimated_particles() const override;

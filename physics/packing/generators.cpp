@@ -1,5 +1,7 @@
 #include "physics/packing/generators.hpp"
 
+#include <sstream>
+
 #include <algorithm>
 #include <cmath>
 
@@ -119,6 +121,38 @@ double LatticeGenerator::estimated_particles() const {
     n *= std::max(0.0, std::floor(p_.hi[d] / p_.spacing + 1e-9) - std::ceil(p_.lo[d] / p_.spacing - 1e-9) + 1.0);
   return n;
 }
+void LatticeGenerator::validate(const State& scene, std::vector<Diagnostic>& errors) const {
+  const double n = estimated_particles();
+  if (!(n <= 1e9)) {
+    errors.push_back({"", "the lattice would create " + std::to_string(n) + " particles (more than 1e9); check spacing, lo and hi"});
+    return;
+  }
+  if (n > 1e6) return;  // cheap only up to ~1e6 particles: a larger lattice is not generated just to check it
+  State scratch;
+  scratch.materials = scene.materials;
+  scratch.walls = scene.walls;
+  try {
+    LatticeGenerator(p_).generate(scratch);
+  } catch (const ConfigError& e) {
+    errors.insert(errors.end(), e.diagnostics().begin(), e.diagnostics().end());
+    return;
+  }
+  // Every particle centre inside every wall.
+  for (const auto& w : scratch.walls) {
+    std::size_t outside = 0;
+    Id first = -1;
+    for (std::size_t i = 0; i < scratch.particles.size(); ++i) {
+      Vec3 normal;
+      double d;
+      w.distance(scratch.particles.position[i], normal, d);
+      if (d < 0.0) { if (!outside) first = scratch.particles.id[i]; ++outside; }
+    }
+    if (outside)
+      errors.push_back({"", std::to_string(outside) + " of " + std::to_string(scratch.particles.size()) +
+                                " particles (first id " + std::to_string(first) + ") lie outside wall '" + w.name +
+                                "': the walls do not enclose the particles"});
+  }
+}
 void LatticeGenerator::generate(State& s) {
   const double rho = material_density(s, p_.material);
   const double r = 0.5 * p_.diameter;
@@ -165,8 +199,15 @@ ParamSpec<DepositGenerator::Params> DepositGenerator::spec() {
 }
 double DepositGenerator::estimated_particles() const {
   // Builds the distribution, so that the loader validates it even when `particles` is given.
-  return expected_count(p_.size_distribution, p_.particles,
-                        p_.target_density * kPi * p_.container_radius * p_.container_radius * p_.container_height);
+  try {
+    return expected_count(p_.size_distribution, p_.particles,
+                          p_.target_density * kPi * p_.container_radius * p_.container_radius * p_.container_height);
+  } catch (const ConfigError& e) {  // paths relative to the distribution object
+    std::vector<Diagnostic> d = e.diagnostics();
+    for (auto& x : d)
+      if (x.path.rfind("/", 0) == 0) x.path = "/size_distribution" + x.path;
+    throw ConfigError(d);
+  }
 }
 void DepositGenerator::generate(State& s) {
   const double rho = material_density(s, p_.material);
@@ -245,6 +286,21 @@ ParamSpec<FillGenerator::Params> FillGenerator::spec() {
       .doc("report seed 001's microstructure with neighbours at gaps <= this * r_mean: neighbour and eccentricity "
            "histograms (Figs. 2, 4), eccentric shares, the wall density profile (< 0: off)");
   return s;
+}
+FillGenerator::FillGenerator(const Params& p) : p_(p) {
+  // With a given mean radius, N radii uniform in r(1 +- spread) have <r^3> = r^3 (1 + spread^2),
+  // so their solid fraction N 4/3 pi r^3 (1 + spread^2) / V must not exceed 0.74 (densest sphere
+  // packing). (Without mean_radius, Eq. 1 sizes the radii to exactly target_density <= 0.7.)
+  if (!(p_.mean_radius > 0.0)) return;
+  const double volume = container_volume(), phi = expected_density();
+  if (!(volume > 0.0) || !(phi <= 0.74)) {
+    std::ostringstream msg;
+    msg.precision(4);
+    msg << p_.particles << " particles of mean radius " << p_.mean_radius << " m (spread " << p_.spread
+        << ") do not fit the container of volume " << volume << " m^3: solid fraction " << phi
+        << " > 0.74; use fewer particles, a smaller mean_radius or a larger container";
+    throw ConfigError("/particles", msg.str());
+  }
 }
 double FillGenerator::container_volume() const {
   return p_.shape == "cylinder" ? kPi * p_.radius * p_.radius * p_.length : (p_.hi - p_.lo).prod();

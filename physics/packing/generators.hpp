@@ -22,6 +22,10 @@
 
 namespace sparkdem::physics {
 
+/// Walls a fill or relax container may have: "die", "bottom", "top" (cylinder) or "xlo", "xhi",
+/// "ylo", "yhi", "bottom", "top" (box); the union, as the shape is known only after binding.
+inline std::vector<std::string> container_wall_names() { return {"die", "bottom", "top", "xlo", "xhi", "ylo", "yhi"}; }
+
 class LatticeGenerator final : public Generator {
  public:
   struct Params {
@@ -33,9 +37,13 @@ class LatticeGenerator final : public Generator {
   };
   static ParamSpec<Params> spec();
   explicit LatticeGenerator(const Params& p) : p_(p) {}
+  static std::vector<std::string> created_walls() { return {}; }
   std::string name() const override { return "lattice"; }
   void generate(State& s) override;
   double estimated_particles() const override;
+  /// At most 1e9 particles; up to 1e6, a scratch generation in the scene's walls must have every
+  /// centre inside every wall.
+  void validate(const State& scene, std::vector<Diagnostic>& errors) const override;
   std::map<std::string, double> report(const State& s) const override;
 
  private:
@@ -65,6 +73,7 @@ class DepositGenerator final : public Generator {
   explicit DepositGenerator(const Params& p) : p_(p) {}
   std::string name() const override { return "deposit"; }
   void generate(State& s) override;
+  static std::vector<std::string> created_walls() { return {"die", "bottom"}; }
   bool steps() const override { return true; }
   void configure_stage(StageConfig& cfg) const override;
   std::vector<std::unique_ptr<Module>> modules() const override;
@@ -99,9 +108,12 @@ class FillGenerator final : public Generator {
     std::int64_t material = 0;
   };
   static ParamSpec<Params> spec();
-  explicit FillGenerator(const Params& p) : p_(p) {}
+  /// Throws ConfigError ("/particles") when a given mean_radius makes the radii overfill the
+  /// container (solid fraction above 0.74, the densest sphere packing).
+  explicit FillGenerator(const Params& p);
   std::string name() const override { return "fill"; }
   void generate(State& s) override;
+  static std::vector<std::string> created_walls() { return container_wall_names(); }
   bool steps() const override { return true; }
   void configure_stage(StageConfig& cfg) const override;
   std::vector<std::unique_ptr<Module>> modules() const override;
@@ -147,7 +159,9 @@ class RelaxGenerator final : public Generator {
   static ParamSpec<Params> spec();
   explicit RelaxGenerator(const Params& p) : p_(p) {}
   std::string name() const override { return "relax"; }
+  bool cheap_to_generate() const override { return false; }  // FIRE minimisation
   void generate(State& s) override;
+  static std::vector<std::string> created_walls() { return container_wall_names(); }
   double estimated_particles() const override;
   double container_volume() const;
   std::map<std::string, double> report(const State& s) const override;

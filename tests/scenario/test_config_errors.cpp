@@ -286,7 +286,7 @@ TEST_CASE("bond, clock and create_bonds errors are reported together with their 
   j["stages"][1]["modules"]["gravity"]["clock"] = {{"kind", "on_event"}};
   expect_rejected(j, {{"/bonds/law", "did you mean \"spring_bond\""},
                       {"/bonds/contact_rule", "found \"sometimes\""},
-                      {"/stages/1/create_bonds", "gap_tolerance"},
+                      {"/stages/1/create_bonds/gap_tolerance", "expected a value >= 0 [m], found -1"},
                       {"/stages/1/modules/gravity/clock", "needs a condition"}});
   json k = valid_scene();
   k["stages"][1]["create_bonds"] = {{"gap_tolerance", 0.0}};  // no bond law in the scenario

@@ -124,7 +124,8 @@ TEST_CASE("hot press configuration errors carry their JSON paths", "[thermal][co
 TEST_CASE("sparkdem schema lists temperature_history and the compact stage key", "[thermal][compact][scenario]") {
   const json j = io::schema_json(test::registry());
   REQUIRE(j["modules"].contains("temperature_history"));
-  REQUIRE(j["stage"].contains("compact"));
+  REQUIRE(j["stage"]["keys"].contains("compact"));
+  REQUIRE(j["monitors"].contains("compact"));
   bool unit_ok = false;
   for (const auto& p : j["modules"]["temperature_history"]["params"])
     if (p["name"] == "expansion_coefficient") unit_ok = p["unit"] == "1/K";

@@ -157,8 +157,8 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   // The die axis may point either way; the punches must face each other across it.
   std::get<CylinderShape>(s.walls[0].shape).axis = -Vec3::UnitZ();
   CHECK(std::abs(mon.values(s)[0] - porosity) <= 1e-12);
-  cp.top = "bottom";
-  CHECK_THROWS_AS(CompactMonitor(cp).values(s), SetupError);
+  cp.top = "bottom";  // both punches the same wall: refused when the monitor is built (the loader's check)
+  CHECK_THROWS_AS(CompactMonitor(cp), ConfigError);
   cp.top = "die";
   CHECK_THROWS_AS(CompactMonitor(cp).values(s), SetupError);
   cp.top = "lid";
