@@ -10,7 +10,7 @@ rests on, as pure functions over the ledger's JSON:
   tier: inside or outside its band, never a pass); a `provisional` record never counts;
 - tuned marks: added, never removed (`tuned_marks` is append-only; every record of a figure carries
   every mark of that figure);
-- the checks `tools/validate.py check-ledger` runs: no record from a dirty tree unless provisional
+- the checks `python3 -m tools.validate check-ledger` runs: no record from a dirty tree unless provisional
   or legacy, no NaN, no cleared mark, one record per run and figure, a run file behind every record
   that is not legacy.
 """

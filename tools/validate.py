@@ -1,18 +1,20 @@
 #!/usr/bin/python3
 """sparkdem's validation runner and ledger (benchmarks/validation/README.md).
+Run from the repository root as `/usr/bin/python3 -m tools.validate CMD` (`validate CMD` below;
+tools/ and benchmarks/ are packages, docs/running.md, "Python tools"):
 
-    tools/validate.py list                                    the cases, their tiers, sizes and seeds
-    tools/validate.py run --tier fast|full [--case GLOB ...] [--sizes N ...] [--seeds S ...]
-                          [--jobs J] [--workdir DIR] [--ledger FILE] [--sparkdem PATH] [--build DIR]
-                          [--reuse] [--no-record] [--provisional] [--strict]
-    tools/validate.py report [--ledger FILE]                  ledger.md and error_vs_time.png
-    tools/validate.py recompute [--write]                     every record rebuilt from its run file (runs/)
-    tools/validate.py check-ledger                            fail on a dirty record, a cleared mark, a NaN
-    tools/validate.py rebase --case GLOB --why TEXT [--seen]  new first config values (marks never cleared)
-    tools/validate.py check-hashes [--ledger FILE]            fail when a recorded config changed
-    tools/validate.py check-docs FILE...                      fail when a quoted figure is not the ledger's
-    tools/validate.py derive-bands --case GLOB --seeds S ...  fast-tier bands from measured scatter
-    tools/validate.py perf [DOC ...]                          the perf section from the benchmarks' files
+    validate list                           the cases, their tiers, sizes and seeds
+    validate run --tier fast|full [--case GLOB ...] [--sizes N ...] [--seeds S ...]
+            [--jobs J] [--workdir DIR] [--ledger FILE] [--sparkdem PATH] [--build DIR]
+            [--reuse] [--no-record] [--provisional] [--strict]
+    validate report [--ledger FILE]         ledger.md and error_vs_time.png
+    validate recompute [--write]            every record rebuilt from its run file (runs/)
+    validate check-ledger                   fail on a dirty record, a cleared mark, a NaN
+    validate rebase --case GLOB --why TEXT [--seen]  new first config values (marks never cleared)
+    validate check-hashes [--ledger FILE]   fail when a recorded config changed
+    validate check-docs FILE...             fail when a quoted figure is not the ledger's
+    validate derive-bands --case GLOB --seeds S ...  fast-tier bands from measured scatter
+    validate perf [DOC ...]                 the perf section from the benchmarks' files
 
 The table of cases is benchmarks/validation/cases.py: each case names its configs, how a run's
 scenario is made from them (N and the packing seed patched), and the figures it yields with their
@@ -40,10 +42,9 @@ REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 VALDIR = os.path.join(REPO, "benchmarks", "validation")
 LEDGER = os.path.join(VALDIR, "ledger.json")
 FAST_BANDS = os.path.join(VALDIR, "fast_bands.json")
-sys.path.insert(0, VALDIR)
-import cases as case_table  # noqa: E402  (benchmarks/validation/cases.py)
-import perf as perf_records  # noqa: E402  (benchmarks/validation/perf.py: the perf section)
-import ledger as rules  # noqa: E402  (tools/ledger.py: kinds, verdicts, marks, the ledger's checks)
+from benchmarks.validation import cases as case_table  # noqa: E402
+from benchmarks.validation import perf as perf_records  # noqa: E402  (the perf section)
+from tools import ledger as rules  # noqa: E402  (kinds, verdicts, marks, the ledger's checks)
 
 
 # ---------------------------------------------------------------- configs and hashes
@@ -196,7 +197,7 @@ class RunContext:
 
     def config(self, rel):
         """A config with its $include paths made absolute, so the copy runs from anywhere."""
-        from sps_outputs import absolute_includes  # tools/sps_outputs.py (numpy: imported only when running)
+        from tools.sps_outputs import absolute_includes  # numpy: imported only when running
         path = os.path.join(REPO, rel)
         c = load_json(path)
         absolute_includes(c, os.path.dirname(path))
@@ -336,7 +337,7 @@ def judge_fast(rec, fig, n, fast_bands, failed):
               "derivation": "the validation band: a deterministic case has no scatter to derive one from"}
     if fb is None:
         rec.update({"band": None, "inside_band": False, "note": "no fast band derived for this size "
-                    "(tools/validate.py derive-bands)"})
+                    "(python3 -m tools.validate derive-bands)"})
         return
     lo, hi = fb["center"] - fb["halfwidth"], fb["center"] + fb["halfwidth"]
     rec["band"] = {"error_range": [lo, hi], "derivation": fb["derivation"]}
@@ -681,7 +682,7 @@ verdict = rules.verdict
 def write_reports(ledger, outdir):
     write_markdown(ledger, os.path.join(outdir, "ledger.md"))
     try:
-        import plot as ledger_plot  # benchmarks/validation/plot.py (matplotlib)
+        from benchmarks.validation import plot as ledger_plot  # matplotlib
         ledger_plot.write_error_vs_time(ledger["records"], os.path.join(outdir, "error_vs_time.png"), verdict)
     except ImportError as e:
         print(f"validate: error_vs_time.png not drawn ({e}); install python3-matplotlib", file=sys.stderr)
@@ -771,7 +772,7 @@ def write_markdown(ledger, path):
     c = ledger_counts(ledger)
     ch = changed_since(ledger)
     parts = ["# Validation ledger", "",
-             "Generated by `tools/validate.py report` from `ledger.json`; do not edit by hand. Schema and rules: "
+             "Generated by `python3 -m tools.validate report` from `ledger.json`; do not edit by hand. Schema and rules: "
              "README.md in this directory.", "",
              f"Validation records (full tier, traceable): {c['validation_records']}: {c['pass']} pass, {c['miss']} "
              f"miss, {c['tuned']} tuned after seeing (never a pass), {c['failed']} failed. Apart: "
@@ -792,7 +793,7 @@ def write_markdown(ledger, path):
              "## Sources, calibrations and marks", ""]
     parts += sources_section(ledger)
     if ledger.get("perf"):
-        parts += ["", "## Perf (speed and memory; `tools/validate.py perf` imports them from the benchmarks' files)", "",
+        parts += ["", "## Perf (speed and memory; `python3 -m tools.validate perf` imports them from the benchmarks' files)", "",
                   perf_records.table(ledger, full=True)]
     if ledger.get("rebases"):
         parts += ["", "## Rebases (new first config values after a documented model change)", ""]
@@ -860,7 +861,7 @@ def cmd_check_hashes(a):
         for f, h in sorted(r["configs"].items()):
             if now.get(f) != h:
                 bad.append(f"{r['case']} N={r['N']} ({r['tier']}): {f} changed since the record of {r['commit']} "
-                           f"({h} -> {now.get(f, 'missing')}); rerun: tools/validate.py run --tier {r['tier']} "
+                           f"({h} -> {now.get(f, 'missing')}); rerun: python3 -m tools.validate run --tier {r['tier']} "
                            f"--case {r['case']} --sizes {r['N']}")
         for f in sorted(set(now) - set(r["configs"])):
             bad.append(f"{r['case']} N={r['N']} ({r['tier']}): uses {f}, not in its record; rerun it")
@@ -941,7 +942,7 @@ def cmd_check_docs(a):
             n_checked += 1
             if m.group(3).strip() != ledger_table(ledger, m.group(2)).strip():
                 bad.append(f"{path}: the generated {m.group(2)} table differs from the ledger "
-                           f"(regenerate: tools/validate.py update-docs {path})")
+                           f"(regenerate: python3 -m tools.validate update-docs {path})")
     for line in bad:
         print(line, file=sys.stderr)
     print(f"check-docs: {n_checked} quoted figures and tables checked, {len(bad)} wrong")

@@ -28,14 +28,12 @@ import math
 import os
 import statistics
 import subprocess
-import sys
 import tempfile
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(REPO, "benchmarks", "pour"))
-import analyze_pour  # noqa: E402  (KE, final state and coordination readers shared with the pour benchmark)
+from benchmarks.pour import analyze_pour  # (KE, final state and coordination readers shared with the pour benchmark)
 
 SCENES = {
     "pour": {"config": os.path.join(REPO, "configs", "pour.json"),

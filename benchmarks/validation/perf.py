@@ -1,7 +1,7 @@
 """The ledger's perf section (issue 23 item 7): one `perf/...` record per speed or memory figure,
 imported from the CSV files the benchmarks write, and the table the README files quote.
 
-    tools/validate.py perf [--ledger FILE] [DOC ...]
+    python3 -m tools.validate perf [--ledger FILE] [DOC ...]
 
 replaces ledger["perf"] by the records read from the files below, redraws ledger.md, and rewrites
 every `<!-- ledger:table perf -->` block of the DOC files (default: benchmarks/README.md). A record
