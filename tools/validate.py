@@ -14,7 +14,8 @@ tools/ and benchmarks/ are packages, docs/running.md, "Python tools"):
     validate check-hashes [--ledger FILE]   fail when a recorded config changed
     validate check-docs FILE...             fail when a quoted figure is not the ledger's
     validate derive-bands --case GLOB --seeds S ...  fast-tier bands from measured scatter
-    validate perf [DOC ...]                 the perf section from the benchmarks' files
+
+The ledger's perf section (speed and memory) is made by its twin, tools/perf.py.
 
 The table of cases is benchmarks/validation/cases.py: each case names its configs, how a run's
 scenario is made from them (N and the packing seed patched), and the figures it yields with their
@@ -43,7 +44,6 @@ VALDIR = os.path.join(REPO, "benchmarks", "validation")
 LEDGER = os.path.join(VALDIR, "ledger.json")
 FAST_BANDS = os.path.join(VALDIR, "fast_bands.json")
 from benchmarks.validation import cases as case_table  # noqa: E402
-from benchmarks.validation import perf as perf_records  # noqa: E402  (the perf section)
 from tools import ledger as rules  # noqa: E402  (kinds, verdicts, marks, the ledger's checks)
 
 
@@ -704,7 +704,7 @@ def ledger_table(ledger, kind, changed=None):
     legacy, provisional, headline, commits or perf. changed: {commit: "yes"/"no"/"unknown"} adds
     the column "engine/ or physics/ changed since" (ledger.md only: it moves with every commit)."""
     if kind == "perf":
-        return perf_records.table(ledger, full=False)
+        return rules.perf_table(ledger, full=False)
     if kind == "headline":
         return headline_table(ledger)
     if kind == "commits":
@@ -793,8 +793,8 @@ def write_markdown(ledger, path):
              "## Sources, calibrations and marks", ""]
     parts += sources_section(ledger)
     if ledger.get("perf"):
-        parts += ["", "## Perf (speed and memory; `python3 -m tools.validate perf` imports them from the benchmarks' files)", "",
-                  perf_records.table(ledger, full=True)]
+        parts += ["", "## Perf (speed and memory; `python3 -m tools.perf report` makes them from the perf cases' result "
+                  "files, benchmarks/perf/)", "", rules.perf_table(ledger, full=True)]
     if ledger.get("rebases"):
         parts += ["", "## Rebases (new first config values after a documented model change)", ""]
         for b in ledger["rebases"]:
@@ -963,22 +963,6 @@ def cmd_update_docs(a):
     return 0
 
 
-def cmd_perf(a):
-    """Replaces the ledger's perf records by those of the benchmarks' files, redraws the reports and
-    rewrites the perf tables of the DOC files."""
-    recs, notes = perf_records.collect()
-    for n in notes:
-        print(n, file=sys.stderr)
-    with ledger_lock(a.ledger):
-        ledger = load_ledger(a.ledger)
-        ledger["perf"] = recs
-        write_json_atomic(a.ledger, ledger)
-    write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
-    print(f"perf: {len(recs)} records")
-    a.files = a.files or [os.path.join(REPO, "benchmarks", "README.md")]
-    return cmd_update_docs(a)
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -1033,10 +1017,6 @@ def main(argv=None):
         common(p, runs=False)
         p.add_argument("files", nargs="+")
         p.set_defaults(fn=fn)
-    p = sub.add_parser("perf", help="the perf section from the benchmarks' result files")
-    common(p, runs=False)
-    p.add_argument("files", nargs="*", help="docs whose perf tables to rewrite (default benchmarks/README.md)")
-    p.set_defaults(fn=cmd_perf)
     p = sub.add_parser("derive-bands")
     common(p)
     p.add_argument("--seeds", nargs="+", type=int, required=True)
