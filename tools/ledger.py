@@ -241,14 +241,17 @@ def _load_text(r):
     return fmt_number(r.get("load_average"), 3)
 
 
-def perf_table(ledger, full=True):
-    """The perf records (tools/perf.py) as one markdown table; without `full` (the docs), the thread
-    records of scenes under 1e4 particles are left to ledger.md and the origin column is left out."""
+def perf_table(ledger, full=True, case=None):
+    """The perf records (tools/perf.py) as one markdown table, all or those of one case; without
+    `full` (the docs), the thread records of scenes under 1e4 particles are left to ledger.md (unless
+    the table is the threads case's own) and the origin column is left out."""
     cols = ["record", "particles / nodes", "threads", "value", "min / max", "ratio", "ratio of", "load", "commit"]
     cols += ["origin"] if full else []
     lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
     for r in ledger.get("perf", []):
-        if not full and r["id"].startswith("perf/threads/") and (r.get("particles") or 0) < 10000:
+        if case and r.get("case") != case:
+            continue
+        if not full and not case and r["id"].startswith("perf/threads/") and (r.get("particles") or 0) < 10000:
             continue
         spread = f"{fmt_number(r['min'])} / {fmt_number(r['max'])}" if r.get("min") is not None else ""
         cells = [r["id"], fmt_number(r.get("particles")), fmt_number(r.get("threads")), f"{fmt_number(r.get('value'))} {r.get('unit', '')}",

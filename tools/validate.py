@@ -703,8 +703,8 @@ def ledger_table(ledger, kind, changed=None):
     """A generated markdown table: kind validation, calibration (with construction), regression,
     legacy, provisional, headline, commits or perf. changed: {commit: "yes"/"no"/"unknown"} adds
     the column "engine/ or physics/ changed since" (ledger.md only: it moves with every commit)."""
-    if kind == "perf":
-        return rules.perf_table(ledger, full=False)
+    if kind.startswith("perf"):  # "perf" (every perf case) or "perf CASE" (tools/perf.py list)
+        return rules.perf_table(ledger, full=False, case=kind[5:] or None)
     if kind == "headline":
         return headline_table(ledger)
     if kind == "commits":
@@ -902,7 +902,7 @@ def cmd_derive_bands(a):
 
 
 # A generated table in a document: groups (opening marker, kind, table, closing marker).
-TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|calibration|regression|legacy|provisional|headline|commits|perf) -->\n)"
+TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|calibration|regression|legacy|provisional|headline|commits|perf(?: [a-z_]+)?) -->\n)"
                          r"(.*?)(<!-- ledger:end -->)", re.S)
 
 

@@ -143,22 +143,28 @@ class Context:
     def launch(self, cmd, name, threads=1, policy="passive", env=None, cwd=None, sample_rss=False, stdout=None):
         """Runs cmd (its output to NAME.log, or `stdout`, and NAME.err in the work directory) with OMP_NUM_THREADS =
         threads and OMP_WAIT_POLICY = policy (None: the runtime's default); returns its meta dict:
-        rc, wall_s, cpu_s, max_rss_kb (the child's own, os.wait4), load before/after and, with
-        sample_rss, the line of run.log current when the sampled VmRSS peaked. Raises on rc != 0."""
+        rc, wall_s, cpu_s (the child's own, os.wait4), load before/after and, with sample_rss,
+        max_rss_kb and the line of run.log current when the sampled VmRSS peaked. The peak RSS is
+        GNU time's (%M): a child forked from this Python would inherit its resident set in
+        ru_maxrss. Raises on rc != 0."""
         e = dict(os.environ, OMP_NUM_THREADS=str(threads))
         e.pop("OMP_WAIT_POLICY", None)
         e.pop("SPARKDEM_PARALLEL_MIN_ITEMS", None)
         if policy:
             e["OMP_WAIT_POLICY"] = policy.upper()
         e.update(env or {})
+        rss_file = self.path(name + ".maxrss")
+        run = ["/usr/bin/time", "-f", "%M", "-o", rss_file] + cmd if sample_rss else cmd
         load0, t0 = os.getloadavg()[0], time.monotonic()
         with open(stdout or self.path(name + ".log"), "w") as out, open(self.path(name + ".err"), "w") as err:
-            p = subprocess.Popen(cmd, stdout=out, stderr=err, env=e, cwd=cwd or self.workdir)
+            p = subprocess.Popen(run, stdout=out, stderr=err, env=e, cwd=cwd or self.workdir)
             status, usage, peak_at = self._wait(p, sample_rss and self._run_log(cmd))
         meta = {"name": name, "command": " ".join(cmd), "rc": os.waitstatus_to_exitcode(status),
                 "wall_s": time.monotonic() - t0, "cpu_s": usage.ru_utime + usage.ru_stime,
-                "max_rss_kb": usage.ru_maxrss, "load_before": load0, "load_after": os.getloadavg()[0],
-                "threads": threads, "wait_policy": policy or "default", **({"peak_during": peak_at} if sample_rss else {})}
+                "load_before": load0, "load_after": os.getloadavg()[0], "threads": threads,
+                "wait_policy": policy or "default"}
+        if sample_rss:
+            meta.update(max_rss_kb=int(open(rss_file).read().split()[-1]), peak_during=peak_at)
         self.launches.append(meta)
         if meta["rc"] != 0:
             raise RuntimeError(f"{cmd[0]} exited with {meta['rc']}: see {self.path(name + '.err')}")
@@ -170,7 +176,8 @@ class Context:
 
     @staticmethod
     def _wait(p, log):
-        """os.wait4 of the child (its own rusage); with `log`, VmRSS sampled every 0.2 s."""
+        """os.wait4 of the child (its own rusage); with `log`, the VmRSS of its child (the command
+        under GNU time) sampled every 0.2 s, and the line of `log` current at its highest."""
         if not log:
             _, status, usage = os.wait4(p.pid, 0)
             return status, usage, ""
@@ -180,10 +187,11 @@ class Context:
             if pid:
                 return status, usage, where
             try:
-                rss = next(int(l.split()[1]) for l in open(f"/proc/{p.pid}/status") if l.startswith("VmRSS:"))
+                kid = open(f"/proc/{p.pid}/task/{p.pid}/children").read().split()[0]
+                rss = next(int(l.split()[1]) for l in open(f"/proc/{kid}/status") if l.startswith("VmRSS:"))
                 if rss > best:
                     best, where = rss, (open(log).read().splitlines() or [""])[-1].strip() if os.path.exists(log) else ""
-            except (OSError, StopIteration):
+            except (OSError, StopIteration, IndexError):
                 pass
             time.sleep(0.2)
 
