@@ -138,7 +138,9 @@ class Runner:
     with --reuse."""
 
     def __init__(self, sparkdem, build, threads, reuse):
-        self.sparkdem, self.build, self.threads, self.reuse = sparkdem, build, threads, reuse
+        # absolute: tools run with their run directory as working directory
+        self.sparkdem, self.build = os.path.abspath(sparkdem), os.path.abspath(build)
+        self.threads, self.reuse = threads, reuse
         with open(sparkdem, "rb") as f:
             self.binary_hash = hashlib.sha256(f.read()).hexdigest()[:16]
         helptext = subprocess.run([sparkdem, "run", "--help"], capture_output=True, text=True).stdout
