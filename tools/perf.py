@@ -7,6 +7,8 @@ Run from the repository root as `/usr/bin/python3 -m tools.perf CMD` (docs/runni
              [--workdir DIR] [--record]
     perf report [DOC ...]                   the ledger's perf section, ledger.md and the perf tables of DOC
                                             (default docs/performance.md) from the cases' result files
+    perf check                              fail when the ledger's perf section is not what the result
+                                            files give (a record typed or edited by hand; ctest perf_records)
 
 The table of cases is benchmarks/perf/cases.py, the plumbing they share (launching, timing, load,
 atomic writes) benchmarks/perf/harness.py. `run` runs each selected case in WORKDIR/CASE (default
@@ -74,8 +76,9 @@ def records_of(case, path):
     for r in recs:
         r["case"] = case.id
         r["source"] = os.path.relpath(path, REPO) if path.startswith(REPO) else path
-        if meta:
-            r.update({"origin": "harness", "load_before": meta["load_before"][0], "load_after": meta["load_after"][0],
+        if meta:  # the commit is the measured binary's (a case's own commit column says the same)
+            r.update({"origin": "harness", "commit": meta["versions"]["sparkdem"],
+                      "load_before": meta["load_before"][0], "load_after": meta["load_after"][0],
                       "load_max": meta["load_max"], "versions": meta["versions"], "measured_at": meta["finished"]})
             r.setdefault("repeats", meta["repeats"])
         else:
@@ -131,8 +134,8 @@ def cmd_run(a):
     return 1 if failed else 0
 
 
-def cmd_report(a):
-    """ledger["perf"] from the committed result files; ledger.md; the perf tables of the docs."""
+def committed_records():
+    """The perf records of every case's committed result file."""
     recs = []
     for case in case_table.CASES:
         path = os.path.join(REPO, case.result)
@@ -140,6 +143,30 @@ def cmd_report(a):
             print(f"perf: {case.result} not found: case {case.id} has no records", file=sys.stderr)
             continue
         recs += records_of(case, path)
+    return recs
+
+
+def cmd_check(a):
+    """Every perf record of the ledger equals the one its result file gives, and no record is missing."""
+    ledger = validate.load_ledger(a.ledger)
+    want = {r["id"]: r for r in json.loads(json.dumps(rules.finite(committed_records())))}
+    have = {r["id"]: r for r in ledger.get("perf", [])}
+    if harness.git_shallow():  # a shallow clone cannot name the commit that last changed an imported file
+        for r in list(want.values()) + list(have.values()):
+            if r.get("origin", "").startswith("imported"):
+                r.pop("commit", None)
+    bad = [f"{i}: not made by any result file" for i in have if i not in want]
+    bad += [f"{i}: missing from the ledger" for i in want if i not in have]
+    bad += [f"{i}: differs from its result file ({want[i]['source']})" for i in want if i in have and have[i] != want[i]]
+    for line in bad:
+        print(line, file=sys.stderr)
+    print(f"perf check: {len(have)} records, {len(bad)} wrong" + (" (python3 -m tools.perf report)" if bad else ""))
+    return 1 if bad else 0
+
+
+def cmd_report(a):
+    """ledger["perf"] from the committed result files; ledger.md; the perf tables of the docs."""
+    recs = committed_records()
     with validate.ledger_lock(a.ledger):
         ledger = validate.load_ledger(a.ledger)
         ledger["perf"] = recs
@@ -170,6 +197,9 @@ def main(argv=None):
     p.add_argument("--ledger", default=validate.LEDGER)
     p.add_argument("files", nargs="*", help="docs whose perf tables to rewrite (default docs/performance.md)")
     p.set_defaults(fn=cmd_report)
+    p = sub.add_parser("check")
+    p.add_argument("--ledger", default=validate.LEDGER)
+    p.set_defaults(fn=cmd_check)
     a = ap.parse_args(argv)
     try:
         return a.fn(a)

@@ -81,6 +81,11 @@ def git_head():
     return out.stdout.strip() or "unknown"
 
 
+def git_shallow():
+    out = subprocess.run(["git", "-C", REPO, "rev-parse", "--is-shallow-repository"], capture_output=True, text=True)
+    return out.stdout.strip() == "true"
+
+
 def lammps_version(lmp="lmp"):
     """'29 Sep 2021 - Update 2 Compiler: ...' from `lmp -h`, or None without LAMMPS."""
     if not shutil.which(lmp):
