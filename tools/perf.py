@@ -184,7 +184,7 @@ def main(argv=None):
     p = sub.add_parser("run")
     p.add_argument("--case", nargs="+", required=True, help="case ids or globs (python3 -m tools.perf list)")
     p.add_argument("--repeats", type=int, default=0, help="interleaved rounds (default: the case's)")
-    p.add_argument("--threads", type=int, nargs="+", default=[], help="sparkdem thread counts (default: the case's)")
+    p.add_argument("--threads", type=int, nargs="+", default=[], help="the sparkdem thread counts of the case mechanics (default 1 2)")
     p.add_argument("--quick", action="store_true", help="the smallest scale that runs every step (never recorded)")
     p.add_argument("--sparkdem", default=os.environ.get("SPARKDEM_BIN", os.path.join(REPO, "build", "sparkdem")))
     p.add_argument("--build", default=os.path.join(REPO, "build"), help="build directory (benchmark executables)")

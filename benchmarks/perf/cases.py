@@ -76,9 +76,11 @@ MECH_VARIANTS = [("sparkdem_t1", 1, None), ("lammps_serial", 1, None), ("sparkde
 def check_peer_input(spec):
     """Like for like: the benchmark's LAMMPS input must be the shared peer input plus lines tagged
     `bench-output` only (checked when the peer file is on this machine)."""
-    peer = os.environ.get("LAMMPS_PEER_INPUT", spec["peer"] or "")
-    if not peer or not os.path.exists(peer):
-        return "peer input not on this machine: not checked"
+    if not spec["peer"]:
+        return "is the benchmark's own scene (no shared peer input)"
+    peer = os.environ.get("LAMMPS_PEER_INPUT", spec["peer"])
+    if not os.path.exists(peer):
+        return f"not checked ({peer} is not on this machine)"
     mine = [l for l in open(os.path.join(REPO, spec["lammps"])).read().splitlines() if "bench-output" not in l]
     if mine != open(peer).read().splitlines():
         raise RuntimeError(f"{spec['lammps']} is no longer {peer} plus `bench-output` lines")
