@@ -254,7 +254,8 @@ def perf_table(ledger, full=True, case=None):
         if not full and not case and r["id"].startswith("perf/threads/") and (r.get("particles") or 0) < 10000:
             continue
         spread = f"{fmt_number(r['min'])} / {fmt_number(r['max'])}" if r.get("min") is not None else ""
-        cells = [r["id"], fmt_number(r.get("particles")), fmt_number(r.get("threads")), f"{fmt_number(r.get('value'))} {r.get('unit', '')}",
+        value = f"{fmt_number(r.get('value'))} {r.get('unit', '')}"
+        cells = [r["id"], fmt_number(r.get("particles")), fmt_number(r.get("threads")), value,
                  spread, fmt_number(r.get("ratio"), 3), r.get("ratio_of", ""), _load_text(r), r.get("commit", "")]
         cells += [r.get("origin", "")] if full else []
         lines.append("| " + " | ".join(str(c) for c in cells) + " |")

@@ -102,8 +102,8 @@ def run_case(case, a):
     harness.write_json_atomic(ctx.result + ".meta.json", meta)
     recs = records_of(case, ctx.result)
     for r in recs:
-        print(f"  {r['id']}: {rules.fmt_number(r.get('value'))} {r.get('unit', '')}  ratio {rules.fmt_number(r.get('ratio'), 3)}"
-              f" ({r.get('ratio_of', '')})")
+        print(f"  {r['id']}: {rules.fmt_number(r.get('value'))} {r.get('unit', '')}  "
+              f"ratio {rules.fmt_number(r.get('ratio'), 3)} ({r.get('ratio_of', '')})")
     print(f"{case.id}: {len(recs)} records; load {load0[0]:.2f} -> {load1[0]:.2f} (max {meta['load_max']:.2f}); "
           f"wrote {ctx.result}", flush=True)
     if meta["load_max"] > (os.cpu_count() or 1):
@@ -184,7 +184,8 @@ def main(argv=None):
     p = sub.add_parser("run")
     p.add_argument("--case", nargs="+", required=True, help="case ids or globs (python3 -m tools.perf list)")
     p.add_argument("--repeats", type=int, default=0, help="interleaved rounds (default: the case's)")
-    p.add_argument("--threads", type=int, nargs="+", default=[], help="the sparkdem thread counts of the case mechanics (default 1 2)")
+    p.add_argument("--threads", type=int, nargs="+", default=[],
+                   help="the sparkdem thread counts of the case mechanics (default 1 2)")
     p.add_argument("--quick", action="store_true", help="the smallest scale that runs every step (never recorded)")
     p.add_argument("--sparkdem", default=os.environ.get("SPARKDEM_BIN", os.path.join(REPO, "build", "sparkdem")))
     p.add_argument("--build", default=os.path.join(REPO, "build"), help="build directory (benchmark executables)")
