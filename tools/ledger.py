@@ -10,7 +10,7 @@ rests on, as pure functions over the ledger's JSON:
   tier: inside or outside its band, never a pass); a `provisional` record never counts;
 - tuned marks: added, never removed (`tuned_marks` is append-only; every record of a figure carries
   every mark of that figure);
-- the checks `tools/validate.py check-ledger` runs: no record from a dirty tree unless provisional
+- the checks `python3 -m tools.validate check-ledger` runs: no record from a dirty tree unless provisional
   or legacy, no NaN, no cleared mark, one record per run and figure, a run file behind every record
   that is not legacy.
 """
@@ -221,3 +221,42 @@ def duplicate_figures(recs):
         if len(ids) > 1:
             bad.append(f"{', '.join(ids)} N={n} ({tier}): identical values in every run, one run counted twice")
     return bad
+
+
+# ---------------------------------------------------------------- the perf section
+
+def fmt_number(x, digits=4):
+    if x is None:
+        return ""
+    if isinstance(x, float):
+        return f"{x:.{digits}g}"
+    return str(x)
+
+
+def _load_text(r):
+    """The load average a perf record was measured under: before/after the case's run (harness), or
+    at its start (records imported from the scripts that came before the harness)."""
+    if r.get("load_before") is not None:
+        return f"{r['load_before']:.2f} / {r['load_after']:.2f}"
+    return fmt_number(r.get("load_average"), 3)
+
+
+def perf_table(ledger, full=True, case=None):
+    """The perf records (tools/perf.py) as one markdown table, all or those of one case; without
+    `full` (the docs), the thread records of scenes under 1e4 particles are left to ledger.md (unless
+    the table is the threads case's own) and the origin column is left out."""
+    cols = ["record", "particles / nodes", "threads", "value", "min / max", "ratio", "ratio of", "load", "commit"]
+    cols += ["origin"] if full else []
+    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    for r in ledger.get("perf", []):
+        if case and r.get("case") != case:
+            continue
+        if not full and not case and r["id"].startswith("perf/threads/") and (r.get("particles") or 0) < 10000:
+            continue
+        spread = f"{fmt_number(r['min'])} / {fmt_number(r['max'])}" if r.get("min") is not None else ""
+        value = f"{fmt_number(r.get('value'))} {r.get('unit', '')}"
+        cells = [r["id"], fmt_number(r.get("particles")), fmt_number(r.get("threads")), value,
+                 spread, fmt_number(r.get("ratio"), 3), r.get("ratio_of", ""), _load_text(r), r.get("commit", "")]
+        cells += [r.get("origin", "")] if full else []
+        lines.append("| " + " | ".join(str(c) for c in cells) + " |")
+    return "\n".join(lines)

@@ -43,7 +43,7 @@ def main():
     ecc = records(a.ledger, "seed001/packing_eccentric")
     nb = {r["N"]: r for r in records(a.ledger, "seed001/packing_neighbours")}
     if not ecc:
-        raise SystemExit("no full-tier record of seed001/packing in the ledger (tools/validate.py run --tier full "
+        raise SystemExit("no full-tier record of seed001/packing in the ledger (python3 -m tools.validate run --tier full "
                          "--case seed001/packing)")
     rows = []
     import matplotlib

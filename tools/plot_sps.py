@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Plots and validation table of an SPS pipeline run (e.g. configs/sps_nial_small.json).
 
-    /usr/bin/python3 tools/plot_sps.py RUN_DIR [-o OUT_DIR] [--press-stage hot_press]
+    /usr/bin/python3 -m tools.plot_sps RUN_DIR [-o OUT_DIR] [--press-stage hot_press]
         [--gb-stage conductivity_gb] [--no-gb-stage conductivity_no_gb] [--stages a,b,c]
 
 RUN_DIR is the output directory of `sparkdem run` (summary.json, timeseries.csv, the snapshot
@@ -47,7 +47,7 @@ import sys
 
 import numpy as np
 
-from sps_outputs import NECK_BINS, calibration, find_stage, neck_histogram, neck_ratios, sweep_values
+from tools.sps_outputs import NECK_BINS, calibration, find_stage, neck_histogram, neck_ratios, sweep_values
 
 KAPPA_COLUMN = "electrical_conductivity_eff"
 KAPPA_BULK = 9.8e6  # S/m, NiAl

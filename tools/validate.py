@@ -1,18 +1,21 @@
 #!/usr/bin/python3
 """sparkdem's validation runner and ledger (benchmarks/validation/README.md).
+Run from the repository root as `/usr/bin/python3 -m tools.validate CMD` (`validate CMD` below;
+tools/ and benchmarks/ are packages, docs/running.md, "Python tools"):
 
-    tools/validate.py list                                    the cases, their tiers, sizes and seeds
-    tools/validate.py run --tier fast|full [--case GLOB ...] [--sizes N ...] [--seeds S ...]
-                          [--jobs J] [--workdir DIR] [--ledger FILE] [--sparkdem PATH] [--build DIR]
-                          [--reuse] [--no-record] [--provisional] [--strict]
-    tools/validate.py report [--ledger FILE]                  ledger.md and error_vs_time.png
-    tools/validate.py recompute [--write]                     every record rebuilt from its run file (runs/)
-    tools/validate.py check-ledger                            fail on a dirty record, a cleared mark, a NaN
-    tools/validate.py rebase --case GLOB --why TEXT [--seen]  new first config values (marks never cleared)
-    tools/validate.py check-hashes [--ledger FILE]            fail when a recorded config changed
-    tools/validate.py check-docs FILE...                      fail when a quoted figure is not the ledger's
-    tools/validate.py derive-bands --case GLOB --seeds S ...  fast-tier bands from measured scatter
-    tools/validate.py perf [DOC ...]                          the perf section from the benchmarks' files
+    validate list                           the cases, their tiers, sizes and seeds
+    validate run --tier fast|full [--case GLOB ...] [--sizes N ...] [--seeds S ...]
+            [--jobs J] [--workdir DIR] [--ledger FILE] [--sparkdem PATH] [--build DIR]
+            [--reuse] [--no-record] [--provisional] [--strict]
+    validate report [--ledger FILE]         ledger.md and error_vs_time.png
+    validate recompute [--write]            every record rebuilt from its run file (runs/)
+    validate check-ledger                   fail on a dirty record, a cleared mark, a NaN
+    validate rebase --case GLOB --why TEXT [--seen]  new first config values (marks never cleared)
+    validate check-hashes [--ledger FILE]   fail when a recorded config changed
+    validate check-docs FILE...             fail when a quoted figure is not the ledger's
+    validate derive-bands --case GLOB --seeds S ...  fast-tier bands from measured scatter
+
+The ledger's perf section (speed and memory) is made by its twin, tools/perf.py.
 
 The table of cases is benchmarks/validation/cases.py: each case names its configs, how a run's
 scenario is made from them (N and the packing seed patched), and the figures it yields with their
@@ -40,10 +43,8 @@ REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 VALDIR = os.path.join(REPO, "benchmarks", "validation")
 LEDGER = os.path.join(VALDIR, "ledger.json")
 FAST_BANDS = os.path.join(VALDIR, "fast_bands.json")
-sys.path.insert(0, VALDIR)
-import cases as case_table  # noqa: E402  (benchmarks/validation/cases.py)
-import perf as perf_records  # noqa: E402  (benchmarks/validation/perf.py: the perf section)
-import ledger as rules  # noqa: E402  (tools/ledger.py: kinds, verdicts, marks, the ledger's checks)
+from benchmarks.validation import cases as case_table  # noqa: E402
+from tools import ledger as rules  # noqa: E402  (kinds, verdicts, marks, the ledger's checks)
 
 
 # ---------------------------------------------------------------- configs and hashes
@@ -137,7 +138,9 @@ class Runner:
     with --reuse."""
 
     def __init__(self, sparkdem, build, threads, reuse):
-        self.sparkdem, self.build, self.threads, self.reuse = sparkdem, build, threads, reuse
+        # absolute: tools run with their run directory as working directory
+        self.sparkdem, self.build = os.path.abspath(sparkdem), os.path.abspath(build)
+        self.threads, self.reuse = threads, reuse
         with open(sparkdem, "rb") as f:
             self.binary_hash = hashlib.sha256(f.read()).hexdigest()[:16]
         helptext = subprocess.run([sparkdem, "run", "--help"], capture_output=True, text=True).stdout
@@ -196,7 +199,7 @@ class RunContext:
 
     def config(self, rel):
         """A config with its $include paths made absolute, so the copy runs from anywhere."""
-        from sps_outputs import absolute_includes  # tools/sps_outputs.py (numpy: imported only when running)
+        from tools.sps_outputs import absolute_includes  # numpy: imported only when running
         path = os.path.join(REPO, rel)
         c = load_json(path)
         absolute_includes(c, os.path.dirname(path))
@@ -336,7 +339,7 @@ def judge_fast(rec, fig, n, fast_bands, failed):
               "derivation": "the validation band: a deterministic case has no scatter to derive one from"}
     if fb is None:
         rec.update({"band": None, "inside_band": False, "note": "no fast band derived for this size "
-                    "(tools/validate.py derive-bands)"})
+                    "(python3 -m tools.validate derive-bands)"})
         return
     lo, hi = fb["center"] - fb["halfwidth"], fb["center"] + fb["halfwidth"]
     rec["band"] = {"error_range": [lo, hi], "derivation": fb["derivation"]}
@@ -681,7 +684,7 @@ verdict = rules.verdict
 def write_reports(ledger, outdir):
     write_markdown(ledger, os.path.join(outdir, "ledger.md"))
     try:
-        import plot as ledger_plot  # benchmarks/validation/plot.py (matplotlib)
+        from benchmarks.validation import plot as ledger_plot  # matplotlib
         ledger_plot.write_error_vs_time(ledger["records"], os.path.join(outdir, "error_vs_time.png"), verdict)
     except ImportError as e:
         print(f"validate: error_vs_time.png not drawn ({e}); install python3-matplotlib", file=sys.stderr)
@@ -702,8 +705,8 @@ def ledger_table(ledger, kind, changed=None):
     """A generated markdown table: kind validation, calibration (with construction), regression,
     legacy, provisional, headline, commits or perf. changed: {commit: "yes"/"no"/"unknown"} adds
     the column "engine/ or physics/ changed since" (ledger.md only: it moves with every commit)."""
-    if kind == "perf":
-        return perf_records.table(ledger, full=False)
+    if kind.startswith("perf"):  # "perf" (every perf case) or "perf CASE" (tools/perf.py list)
+        return rules.perf_table(ledger, full=False, case=kind[5:] or None)
     if kind == "headline":
         return headline_table(ledger)
     if kind == "commits":
@@ -771,7 +774,7 @@ def write_markdown(ledger, path):
     c = ledger_counts(ledger)
     ch = changed_since(ledger)
     parts = ["# Validation ledger", "",
-             "Generated by `tools/validate.py report` from `ledger.json`; do not edit by hand. Schema and rules: "
+             "Generated by `python3 -m tools.validate report` from `ledger.json`; do not edit by hand. Schema and rules: "
              "README.md in this directory.", "",
              f"Validation records (full tier, traceable): {c['validation_records']}: {c['pass']} pass, {c['miss']} "
              f"miss, {c['tuned']} tuned after seeing (never a pass), {c['failed']} failed. Apart: "
@@ -792,8 +795,8 @@ def write_markdown(ledger, path):
              "## Sources, calibrations and marks", ""]
     parts += sources_section(ledger)
     if ledger.get("perf"):
-        parts += ["", "## Perf (speed and memory; `tools/validate.py perf` imports them from the benchmarks' files)", "",
-                  perf_records.table(ledger, full=True)]
+        parts += ["", "## Perf (speed and memory; `python3 -m tools.perf report` makes them from the perf cases' result "
+                  "files, benchmarks/perf/)", "", rules.perf_table(ledger, full=True)]
     if ledger.get("rebases"):
         parts += ["", "## Rebases (new first config values after a documented model change)", ""]
         for b in ledger["rebases"]:
@@ -860,7 +863,7 @@ def cmd_check_hashes(a):
         for f, h in sorted(r["configs"].items()):
             if now.get(f) != h:
                 bad.append(f"{r['case']} N={r['N']} ({r['tier']}): {f} changed since the record of {r['commit']} "
-                           f"({h} -> {now.get(f, 'missing')}); rerun: tools/validate.py run --tier {r['tier']} "
+                           f"({h} -> {now.get(f, 'missing')}); rerun: python3 -m tools.validate run --tier {r['tier']} "
                            f"--case {r['case']} --sizes {r['N']}")
         for f in sorted(set(now) - set(r["configs"])):
             bad.append(f"{r['case']} N={r['N']} ({r['tier']}): uses {f}, not in its record; rerun it")
@@ -901,7 +904,7 @@ def cmd_derive_bands(a):
 
 
 # A generated table in a document: groups (opening marker, kind, table, closing marker).
-TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|calibration|regression|legacy|provisional|headline|commits|perf) -->\n)"
+TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|calibration|regression|legacy|provisional|headline|commits|perf(?: [a-z_]+)?) -->\n)"
                          r"(.*?)(<!-- ledger:end -->)", re.S)
 
 
@@ -941,7 +944,7 @@ def cmd_check_docs(a):
             n_checked += 1
             if m.group(3).strip() != ledger_table(ledger, m.group(2)).strip():
                 bad.append(f"{path}: the generated {m.group(2)} table differs from the ledger "
-                           f"(regenerate: tools/validate.py update-docs {path})")
+                           f"(regenerate: python3 -m tools.validate update-docs {path})")
     for line in bad:
         print(line, file=sys.stderr)
     print(f"check-docs: {n_checked} quoted figures and tables checked, {len(bad)} wrong")
@@ -960,22 +963,6 @@ def cmd_update_docs(a):
             os.replace(path + ".tmp", path)
             print(f"update-docs: {path} rewritten")
     return 0
-
-
-def cmd_perf(a):
-    """Replaces the ledger's perf records by those of the benchmarks' files, redraws the reports and
-    rewrites the perf tables of the DOC files."""
-    recs, notes = perf_records.collect()
-    for n in notes:
-        print(n, file=sys.stderr)
-    with ledger_lock(a.ledger):
-        ledger = load_ledger(a.ledger)
-        ledger["perf"] = recs
-        write_json_atomic(a.ledger, ledger)
-    write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
-    print(f"perf: {len(recs)} records")
-    a.files = a.files or [os.path.join(REPO, "benchmarks", "README.md")]
-    return cmd_update_docs(a)
 
 
 def main(argv=None):
@@ -1032,10 +1019,6 @@ def main(argv=None):
         common(p, runs=False)
         p.add_argument("files", nargs="+")
         p.set_defaults(fn=fn)
-    p = sub.add_parser("perf", help="the perf section from the benchmarks' result files")
-    common(p, runs=False)
-    p.add_argument("files", nargs="*", help="docs whose perf tables to rewrite (default benchmarks/README.md)")
-    p.set_defaults(fn=cmd_perf)
     p = sub.add_parser("derive-bands")
     common(p)
     p.add_argument("--seeds", nargs="+", type=int, required=True)

@@ -23,12 +23,10 @@ Strain histograms (Fig. 4): max principal strain at eps0 = 1 %, 0.01 % bins from
 """
 import json
 import os
-import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tools"))
-from plot_cpc import scenario  # noqa: E402  (the scenario shell of every cpc_fillers config)
+from tools.plot_cpc import scenario  # the scenario shell of every cpc_fillers config
 
 EPS0 = [0.0, 0.0025, 0.005, 0.0075, 0.01, 0.015, 0.02, 0.025, 0.0285, 0.03, 0.0315, 0.035, 0.04, 0.05]
 OPEN_EDGES = [round(-0.002 + 0.0002 * k, 6) for k in range(61)]  # -0.2 % .. 1 % of D

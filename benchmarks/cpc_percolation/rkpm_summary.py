@@ -27,8 +27,7 @@ import math
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from make_rkpm_configs import OPEN_EDGES, STRAIN_EDGES  # noqa: E402
+from benchmarks.cpc_percolation.make_rkpm_configs import OPEN_EDGES, STRAIN_EDGES
 
 
 def read(path):

@@ -1,27 +1,23 @@
-#!/usr/bin/env python3
-"""Summarise the pour benchmark runs written by run_pour.sh (standard library only).
+"""Readers of a pour or dense-bed run of both codes, for the perf case `mechanics`
+(benchmarks/perf/cases.py; standard library, and h5py for sparkdem's final frame).
 
-Input: WORKDIR/runs.tsv, one line per run, tab-separated:
-    code  variant  threads  mpi_ranks  wall_s  path
-  code = sparkdem: path is the output directory (summary.json, timeseries.csv, results.h5)
-  code = lammps:   path is the run directory (screen.out with thermo + "Loop time", lammps_final.dump)
+  sparkdem_run(outdir, dt)  summary.json, timeseries.csv and the last frame of results.h5
+  lammps_run(rundir)        screen.out (thermo + "Loop time") and lammps_final.dump
 
 Figures (defined once, the same for both codes):
-  particle_steps_per_s  N x steps / wall time of the run loop
-                        (sparkdem: stage "pour" wall_time_s of summary.json; LAMMPS: "Loop time")
-  ke_at_<step>_J        kinetic energy, translational + rotational [J]
+  loop_s                the wall time of the run loop (sparkdem: the last dynamics stage's
+                        wall_time_s in summary.json; LAMMPS: "Loop time")
+  ke                    kinetic energy per step, translational + rotational [J]
                         (sparkdem: timeseries column kinetic_energy; LAMMPS: thermo ke + c_erot)
-  bed_height_m          95th percentile of z + r over all particles of the final state [m]
-  mean_coordination     2 x (particle pairs with |x_i - x_j| < r_i + r_j) / N, final state
+  coordination()        2 x (particle pairs with |x_i - x_j| < r_i + r_j) / N, final state
                         (particle-particle contacts only, walls not counted)
+  percentile()          e.g. the bed height, the 95th percentile of z + r
 """
-import argparse
 import csv
 import json
 import math
 import os
 import re
-import sys
 
 
 def percentile(values, q):
@@ -140,99 +136,3 @@ def pct(a, b):
     if b == 0 or a is None or b is None or not math.isfinite(a) or not math.isfinite(b):
         return float("nan")
     return 100.0 * (a - b) / abs(b)
-
-
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--workdir", required=True)
-    ap.add_argument("--csv", required=True, help="results file (written to a temporary file, then renamed)")
-    ap.add_argument("--dt", type=float, default=1e-5)
-    ap.add_argument("--ke-every", type=int, default=5000, help="steps between the compared KE samples")
-    args = ap.parse_args()
-
-    runs = []
-    with open(os.path.join(args.workdir, "runs.tsv")) as f:
-        for line in f:
-            if not line.strip() or line.startswith("#"):
-                continue
-            code, variant, threads, ranks, wall, path = line.rstrip("\n").split("\t")
-            r = sparkdem_run(path, args.dt) if code == "sparkdem" else lammps_run(path)
-            r.update(code=code, variant=variant, threads=int(threads), mpi_ranks=int(ranks), wall_s=float(wall))
-            r["particle_steps_per_s"] = r["particles"] * r["steps"] / r["loop_s"] if r["loop_s"] > 0 else float("nan")
-            r["bed_height_m"] = percentile([p[2] + q for p, q in zip(r["pos"], r["rad"])], 95.0)
-            r["mean_coordination"] = coordination(r["pos"], r["rad"])
-            runs.append(r)
-    if not runs:
-        sys.exit("no runs in runs.tsv")
-
-    steps = max(r["steps"] for r in runs)
-    ke_steps = list(range(args.ke_every, steps + 1, args.ke_every))
-    header = ["code", "variant", "threads", "mpi_ranks", "particles", "steps", "wall_s", "loop_s",
-              "particle_steps_per_s"] + [f"ke_at_{s}_J" for s in ke_steps] + ["bed_height_m", "mean_coordination"]
-    tmp = args.csv + ".tmp"
-    with open(tmp, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(header)
-        for r in runs:
-            w.writerow([r["code"], r["variant"], r["threads"], r["mpi_ranks"], r["particles"], r["steps"],
-                        f"{r['wall_s']:.3f}", f"{r['loop_s']:.3f}", f"{r['particle_steps_per_s']:.6g}"] +
-                       [f"{r['ke'].get(s, float('nan')):.8g}" for s in ke_steps] +
-                       [f"{r['bed_height_m']:.6g}", f"{r['mean_coordination']:.5g}"])
-    os.replace(tmp, args.csv)
-
-    # ---- report ----
-    print(f"\n== pour benchmark: {runs[0]['particles']} particles, {steps} steps (dt {args.dt:g} s) ==")
-    print(f"{'code':9s} {'variant':12s} {'thr':>3s} {'mpi':>3s} {'wall_s':>9s} {'loop_s':>9s} {'part-steps/s':>13s}"
-          f" {'bed_h [mm]':>10s} {'coord':>6s}")
-    for r in runs:
-        print(f"{r['code']:9s} {r['variant']:12s} {r['threads']:3d} {r['mpi_ranks']:3d} {r['wall_s']:9.2f} "
-              f"{r['loop_s']:9.2f} {r['particle_steps_per_s']:13.4g} {1e3 * r['bed_height_m']:10.3f} "
-              f"{r['mean_coordination']:6.3f}")
-    ref = next((r for r in runs if r["code"] == "lammps" and r["variant"] == "serial"), None)
-    spk = {r["threads"]: r for r in runs if r["code"] == "sparkdem"}
-    if 1 in spk:
-        for t, r in sorted(spk.items()):
-            if t != 1:
-                print(f"sparkdem speed-up {t} threads / 1 thread: {r['particle_steps_per_s'] / spk[1]['particle_steps_per_s']:.3f}"
-                      f" (ideal {t})")
-        base = spk[1]
-        for t, r in sorted(spk.items()):
-            if t == 1:
-                continue
-            same = all(r["ke"].get(s) == base["ke"].get(s) for s in base["ke"])
-            print(f"sparkdem {t} threads vs 1 thread: kinetic-energy series "
-                  f"{'bit-identical' if same else 'differs'}; bed height {pct(r['bed_height_m'], base['bed_height_m']):+.3f} %, "
-                  f"coordination {pct(r['mean_coordination'], base['mean_coordination']):+.3f} %")
-    if ref is None:
-        print("no LAMMPS reference run: speed ratio and physics comparison skipped")
-        return
-    for r in runs:
-        if r is ref:
-            continue
-        print(f"speed ratio {r['code']}/{r['variant']}/{r['threads']}thr/{r['mpi_ranks']}mpi vs LAMMPS serial: "
-              f"{r['particle_steps_per_s'] / ref['particle_steps_per_s']:.3f}")
-    # Physics: sparkdem (fewest threads; the other thread counts are compared with it above) against
-    # every LAMMPS run, on every KE sample of the run (every 500 steps) and on the final state.
-    spk_ref = spk[min(spk)] if spk else None
-    for lr in (r for r in runs if r["code"] == "lammps") if spk_ref else ():
-        print(f"\nphysics, sparkdem {spk_ref['threads']} thread(s) against LAMMPS {lr['variant']} "
-              f"(difference in percent of LAMMPS):")
-        for s in ke_steps:
-            a, b = spk_ref["ke"].get(s), lr["ke"].get(s)
-            if a is not None and b is not None:
-                print(f"  KE at step {s:6d} (t = {s * args.dt:.3f} s): sparkdem {a:.6g} J, LAMMPS {b:.6g} J, "
-                      f"{pct(a, b):+.3f} %")
-        common = [s for s in lr["ke"] if s in spk_ref["ke"] and lr["ke"][s] > 0]
-        if common:
-            worst = max(common, key=lambda s: abs(pct(spk_ref["ke"][s], lr["ke"][s])))
-            print(f"  largest KE difference over all {len(common)} samples: {pct(spk_ref['ke'][worst], lr['ke'][worst]):+.3g} % "
-                  f"at step {worst} (KE {lr['ke'][worst]:.3g} J)")
-        print(f"  bed height (p95 of z+r): sparkdem {1e3 * spk_ref['bed_height_m']:.3f} mm, LAMMPS "
-              f"{1e3 * lr['bed_height_m']:.3f} mm, {pct(spk_ref['bed_height_m'], lr['bed_height_m']):+.3f} %")
-        print(f"  mean coordination: sparkdem {spk_ref['mean_coordination']:.4f}, LAMMPS {lr['mean_coordination']:.4f}, "
-              f"{pct(spk_ref['mean_coordination'], lr['mean_coordination']):+.3f} %")
-    print(f"\nwrote {args.csv}")
-
-
-if __name__ == "__main__":
-    main()

@@ -9,7 +9,7 @@ HDF5 frames are read with h5py (Debian's python3-h5py).
 The runs come from tools/validate.py (ledger case seed001/cylinder; the validation figure, R_DEM
 against R_th, is the ledger's seed001/cylinder_resistance, benchmarks/validation/ledger.md):
 
-    /usr/bin/python3 tools/validate.py run --tier full --case seed001/cylinder [--sizes N ...] [--seeds S ...]
+    /usr/bin/python3 -m tools.validate run --tier full --case seed001/cylinder [--sizes N ...] [--seeds S ...]
 
 writes one directory per run, <workdir>/<tier>/seed001_cylinder/N<n>_seed<s>/ (<workdir> defaults
 to build/validation), holding scenario.json (configs/resistance_cylinder.json with only the fill's

@@ -11,10 +11,8 @@ Usage: sc_lattice.py   (about 1 min)
 """
 import csv
 import os
-import sys
 import numpy as np
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), 'tools'))
-import voxel_conductivity as vc
+from tools import voxel_conductivity as vc
 from scipy.special import eval_legendre
 # SC cell: spacing 1, sphere radius r at centre (0.5,0.5,0.5); neighbours' spheres reach in too (periodic)
 def voxel_sc(r, n=120):

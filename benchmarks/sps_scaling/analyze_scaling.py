@@ -16,8 +16,7 @@ Needs h5py (Debian python3-h5py); the snapshot and sweep readers are in tools/sp
 import argparse, csv, json, os, sys
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
-from sps_outputs import find_stage, snapshots, sweep_values  # noqa: E402
+from tools.sps_outputs import find_stage, snapshots, sweep_values
 
 T_GRID = [1100.0, 1200.0, 1300.0, 1400.0, 1500.0, 1573.0]
 

@@ -14,11 +14,10 @@ for s in $scales; do
   mkdir -p "$dir"
   # Same scenario, only the hot press's time_scale and (so that the same physical cycle is
   # simulated) its mechanical stop time change.
-  /usr/bin/python3 - "$root/configs/sps_nial_small.json" "$dir/scene.json" "$s" "$root/configs" "$root/tools" <<'PY'
+  (cd "$root" && /usr/bin/python3 - "$root/configs/sps_nial_small.json" "$dir/scene.json" "$s" "$root/configs") <<'PY'
 import json, sys
 src, dst, ts, cfgdir = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4]
-sys.path.insert(0, sys.argv[5])
-from sps_outputs import absolute_includes
+from tools.sps_outputs import absolute_includes  # run from the repository root
 j = json.load(open(src))
 absolute_includes(j, cfgdir)  # the scene is written elsewhere
 for st in j["stages"]:
@@ -31,4 +30,4 @@ PY
   sps_run "$dir/scene.json" "$dir"
   runs+=("$dir")
 done
-/usr/bin/python3 "$here/analyze_scaling.py" --csv "$csv" "${runs[@]}"
+cd "$root" && /usr/bin/python3 -m benchmarks.sps_scaling.analyze_scaling --csv "$csv" "${runs[@]}"

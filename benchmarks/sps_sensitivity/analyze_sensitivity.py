@@ -13,8 +13,7 @@ Needs h5py (Debian python3-h5py); the readers are in tools/sps_outputs.py.
 import argparse, csv, json, math, os, sys
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
-from sps_outputs import find_stage, snapshots, sweep_values, timeseries  # noqa: E402
+from tools.sps_outputs import find_stage, snapshots, sweep_values, timeseries
 
 # (quantity, change column): relative change in %, except the time's shift in s
 QUANTITIES = [("mean_a_over_rmin", "d_mean_a_pct"), ("kappa_gb", "d_kappa_gb_pct"), ("kappa_no_gb", "d_kappa_no_gb_pct"),

@@ -25,11 +25,10 @@ sps_setup sps_sensitivity "$0 --sparkdem BIN [--variants \"P=V ...\"] [--workdir
 run() {
   local dir="$workdir/${1//=/_}"
   mkdir -p "$dir"
-  /usr/bin/python3 - "$root/configs" "$dir/scene.new.json" "$1" "${2:-}" "$root/tools" <<'PY'
+  (cd "$root" && /usr/bin/python3 - "$root/configs" "$dir/scene.new.json" "$1" "${2:-}") <<'PY'
 import json, os, sys
-cfgdir, dst, variant, gb, tools = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5]
-sys.path.insert(0, tools)
-from sps_outputs import absolute_includes
+cfgdir, dst, variant, gb = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
+from tools.sps_outputs import absolute_includes  # run from the repository root
 j = json.load(open(os.path.join(cfgdir, "sps_nial_small.json")))
 absolute_includes(j, cfgdir)  # the scene is written elsewhere
 stages = {s["name"]: s for s in j["stages"]}
@@ -64,4 +63,4 @@ echo "baseline calibrated gb_thickness = $gb m (fixed in the variants)"
 for v in $variants; do
   [ "$v" = baseline ] || run "$v" "$gb"
 done
-/usr/bin/python3 "$here/analyze_sensitivity.py" --csv "$csv" "${runs[@]}"
+cd "$root" && /usr/bin/python3 -m benchmarks.sps_sensitivity.analyze_sensitivity --csv "$csv" "${runs[@]}"

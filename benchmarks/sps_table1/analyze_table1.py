@@ -14,8 +14,7 @@ stay empty.
 import argparse, csv, json, os, sys
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tools"))
-from sps_outputs import timeseries  # noqa: E402
+from tools.sps_outputs import timeseries
 
 MEASURED = {1: 0.216, 2: 0.164, 3: 0.106, 4: 0.050}  # seed 000, Table 1
 

@@ -25,12 +25,10 @@ import json
 import math
 import os
 import subprocess
-import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(REPO, "tools"))
-from sps_outputs import absolute_includes, timeseries  # noqa: E402
+from tools.sps_outputs import absolute_includes, timeseries
 
 MEASURED = {1: 0.216, 2: 0.164, 3: 0.106, 4: 0.050}  # seed 000, Table 1
 CALIBRATION_SAMPLE = 2

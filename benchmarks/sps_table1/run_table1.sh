@@ -22,11 +22,10 @@ for k in $samples; do
   grep -q '"status": "completed"' "$dir/out/summary.json" 2>/dev/null || [ -z "$retry_dt_fraction" ] || {
     dir="$workdir/sample${k}_dt$retry_dt_fraction"
     mkdir -p "$dir"
-    /usr/bin/python3 - "$root/configs/sps_table1_sample$k.json" "$dir/scene.json" "$retry_dt_fraction" "$root/tools" <<'PY'
+    (cd "$root" && /usr/bin/python3 - "$root/configs/sps_table1_sample$k.json" "$dir/scene.json" "$retry_dt_fraction") <<'PY'
 import json, os, sys
 src, dst, dt_fraction = sys.argv[1], sys.argv[2], float(sys.argv[3])
-sys.path.insert(0, sys.argv[4])
-from sps_outputs import absolute_includes
+from tools.sps_outputs import absolute_includes  # run from the repository root
 j = json.load(open(src))
 absolute_includes(j, os.path.dirname(src))  # the copy is written elsewhere
 next(s for s in j["stages"] if s["name"] == "hot_press")["dt_fraction"] = dt_fraction
@@ -37,4 +36,4 @@ PY
     runs+=("$k:$dir")
   }
 done
-/usr/bin/python3 "$here/analyze_table1.py" --csv "$csv" "${runs[@]}"
+cd "$root" && /usr/bin/python3 -m benchmarks.sps_table1.analyze_table1 --csv "$csv" "${runs[@]}"

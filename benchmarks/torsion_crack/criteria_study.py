@@ -33,12 +33,10 @@ import math
 import os
 import statistics
 import subprocess
-import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, HERE)
-import run_torsion  # noqa: E402
+from benchmarks.torsion_crack import run_torsion
 
 CRITERIA = ["max_normal", "von_mises", "tresca", "virial_hydrostatic", "virial_von_mises"]
 SIGMA_T = math.sqrt(3.0) * 400e6  # configs/calibration/cast_iron.json target (von Mises reading of tau_y)

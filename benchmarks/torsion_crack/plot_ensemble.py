@@ -3,7 +3,7 @@
 
 usage: benchmarks/torsion_crack/plot_ensemble.py WORKDIR [-o OUT_DIR]
 
-WORKDIR is the --workdir of `tools/validate.py run --tier full --case seed001/torsion`; its runs
+WORKDIR is the --workdir of `python3 -m tools.validate run --tier full --case seed001/torsion`; its runs
 are WORKDIR/full/seed001_torsion/N<n>_seed<s>/out. Writes to OUT_DIR (default: this directory):
   ensemble.png  per N (columns): torque / (G J / L) with the elastic line, R/R0 (log; a separated
                 pin, R infinite, is drawn at the top edge) and the broken-bond count against twist,

@@ -19,11 +19,6 @@ import os
 import sys
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(REPO, "benchmarks", "joule_rod"))
-sys.path.insert(0, os.path.join(REPO, "benchmarks", "torsion_crack"))
-sys.path.insert(0, os.path.join(REPO, "benchmarks", "sps_nial"))
-sys.path.insert(0, os.path.join(REPO, "benchmarks", "sps_table1"))
-sys.path.insert(0, os.path.join(REPO, "tools"))
 
 
 class Figure:
@@ -172,7 +167,7 @@ PACKING = Case(
 # ---------------------------------------------------------------- seed 001: Joule-heated rod
 
 def run_joule_rod(ctx):
-    import analyze_joule_rod as ajr
+    from benchmarks.joule_rod import analyze_joule_rod as ajr
     c = ctx.config("configs/joule_rod.json")
     scene = ajr.make_scenario(c, ctx.n, ctx.seed, None, None)
     s = summary(ctx.sparkdem(scene))
@@ -199,7 +194,7 @@ JOULE_ROD = Case(
 # ---------------------------------------------------------------- seed 001: pin torsion
 
 def run_torsion(ctx):
-    import run_torsion as rt
+    from benchmarks.torsion_crack import run_torsion as rt
     scene = rt.scene_for(os.path.join(REPO, "configs", "torsion_crack.json"), ctx.n, ctx.seed)
     s = summary(ctx.sparkdem(scene))
     out = {}
@@ -403,7 +398,7 @@ def element_figures(ctx, scene, out, at, target_index):
     snaps = [sn if os.path.exists(sn) else None for sn in snaps]
     if any(sn is None for sn in snaps):
         return {}, {}, None
-    from networks import calibrate_thickness  # benchmarks/sps_nial/networks.py
+    from benchmarks.sps_nial.networks import calibrate_thickness
     bare = element_kappa(ctx, scene, snaps, 0.0, "element_no_layer")
     delta, _ = calibrate_thickness(
         lambda d: element_kappa(ctx, scene, [snaps[target_index]], d, f"element_cal_{math.log(d):.6f}")[0], TABLE1[at[target_index]])
@@ -413,7 +408,7 @@ def element_figures(ctx, scene, out, at, target_index):
 
 def run_nial(config, element=False):
     def run(ctx):
-        import sps_outputs as so
+        from tools import sps_outputs as so
         c = ctx.config(config)
         c["seed"] = ctx.seed
         # The reduced pipeline's last stage (cooled_conductivity, 100,000 steps) comes after the
@@ -481,7 +476,7 @@ NIAL_SMALL = Case(
 
 def run_table1_densification(ctx):
     """benchmarks/sps_table1/predict.py: D_0 calibrated on sample 2, samples 1, 3, 4 predicted."""
-    import predict
+    from benchmarks.sps_table1 import predict
     result, d0, history = predict.predict(lambda sc, name: ctx.sparkdem(sc, name), ctx.seed, log=lambda m: None)
     out = {}
     for k, r in result.items():

@@ -6,15 +6,12 @@ a rerun keeps every mark; only validation records pass. ctest: ledger/rules (lab
 import argparse
 import os
 import stat
-import sys
 import tempfile
 import types
 import unittest
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "..", "tools"))
-import ledger as rules  # noqa: E402
-import validate  # noqa: E402
+from tools import ledger as rules
+from tools import validate
 
 MARK = {"parameter": "configs/x.json#/strength", "why": "chosen after one run (test)"}
 
