@@ -40,7 +40,7 @@ void undo_mass_factors(ParticleStore& p) {
   p.fields.remove(kMassFactorField);
 }
 
-const std::vector<std::string> kCoreFields = {"position", "velocity", "orientation", "omega", "force",
+const std::vector<std::string> kCoreFields = {"position", "velocity", "orientation", "omega",  "force",
                                               "torque",   "radius",   "mass",        "inertia"};
 
 /// Area a pressure-controlled plane acts on when none is given: the cross-section of the first
@@ -60,8 +60,9 @@ std::vector<std::string> prescribed_set_columns(const std::string& name) {
 }
 
 std::vector<std::string> builtin_columns(const State& s) {
-  std::vector<std::string> c = {"step", "time", "physical_time", "stage", "particles", "kinetic_energy",
-                                "kinetic_energy_per_mass", "max_speed", "contacts", "coordination", "max_overlap_ratio"};
+  std::vector<std::string> c = {"step",      "time",           "physical_time",           "stage",
+                                "particles", "kinetic_energy", "kinetic_energy_per_mass", "max_speed",
+                                "contacts",  "coordination",   "max_overlap_ratio"};
   if (s.bonds_active) c.insert(c.end(), {"bonds", "bonds_broken", "bonds_elastic_energy", "bonds_max_failure_stress"});
   for (const auto& w : s.walls) {
     c.push_back("wall_" + w.name + "_offset");
@@ -96,10 +97,17 @@ std::vector<double> builtin_values(const State& s, const BondModel* bonds) {
       w.distance(p.position[i], n, d);
       if (d < p.radius[i]) ovr = std::max(ovr, (p.radius[i] - d) / p.radius[i]);
     }
-  std::vector<double> v = {static_cast<double>(s.step), s.time, s.physical_time, static_cast<double>(s.stage_index),
-                           static_cast<double>(p.size()), ke, m > 0.0 ? ke / m : 0.0, std::sqrt(vmax2),
+  std::vector<double> v = {static_cast<double>(s.step),
+                           s.time,
+                           s.physical_time,
+                           static_cast<double>(s.stage_index),
+                           static_cast<double>(p.size()),
+                           ke,
+                           m > 0.0 ? ke / m : 0.0,
+                           std::sqrt(vmax2),
                            static_cast<double>(touching),
-                           p.size() ? 2.0 * static_cast<double>(touching) / static_cast<double>(p.size()) : 0.0, ovr};
+                           p.size() ? 2.0 * static_cast<double>(touching) / static_cast<double>(p.size()) : 0.0,
+                           ovr};
   if (s.bonds_active) {
     v.push_back(static_cast<double>(s.bonds.intact_count()));
     v.push_back(static_cast<double>(s.bonds.broken_count()));
@@ -146,8 +154,8 @@ void Simulation::sample(std::vector<std::string>& cols, std::vector<double>& val
     auto c = m->columns();
     auto v = m->column_values(s_);
     if (c.size() != v.size())
-      throw SetupError("module '" + m->name() + "' reports " + std::to_string(v.size()) + " values for " +
-                       std::to_string(c.size()) + " columns");
+      throw SetupError("module '" + m->name() + "' reports " + std::to_string(v.size()) + " values for " + std::to_string(c.size()) +
+                       " columns");
     cols.insert(cols.end(), c.begin(), c.end());
     vals.insert(vals.end(), v.begin(), v.end());
   }
@@ -189,8 +197,7 @@ StepPlan Simulation::prepare(const StageConfig& cfg) {
     if (std::isfinite(t.moved_beyond)) s_.particles.fields.declare({base + "x0", 3, "m", 0.0, false}, s_.particles.size());
     if (!t.field.empty()) {
       const int comps = s_.particles.fields.info(t.field).components;
-      s_.particles.fields.declare({base + "field0", comps, s_.particles.fields.info(t.field).unit, 0.0, false},
-                                  s_.particles.size());
+      s_.particles.fields.declare({base + "field0", comps, s_.particles.fields.info(t.field).unit, 0.0, false}, s_.particles.size());
     }
   }
   return plan_;
@@ -232,15 +239,17 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
   std::vector<double> wall_u;
   for (const auto& w : s_.walls) wall_u.push_back(w.u);
   const bool stale = s_.marks.count("neighbors_stale") > 0 || s_.contacts.has_pending_hand_over();
-  if (!stale && s_.wall_candidates.size() == s_.walls.size() && !s_.verlet.needs_rebuild(p.position, p.radius, skin, wall_u))
-    return;
+  if (!stale && s_.wall_candidates.size() == s_.walls.size() && !s_.verlet.needs_rebuild(p.position, p.radius, skin, wall_u)) return;
   s_.marks.erase("neighbors_stale");
   ++s_.rebuilds;
   if (sort_every > 0 && s_.rebuilds % sort_every == 0 && p.size() > 1) {
     // Spatial sort (cells of one mean diameter, z-y-x order) for cache locality.
     double rsum = 0.0;
     Vec3 lo = p.position[0];
-    for (std::size_t i = 0; i < p.size(); ++i) { rsum += p.radius[i]; lo = lo.cwiseMin(p.position[i]); }
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      rsum += p.radius[i];
+      lo = lo.cwiseMin(p.position[i]);
+    }
     const double h = 2.0 * rsum / static_cast<double>(p.size());
     std::vector<std::array<std::int64_t, 3>> key(p.size());
     for (std::size_t i = 0; i < p.size(); ++i)
@@ -256,8 +265,7 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
   }
   ContactRebuildRules rules;
   rules.alive = alive_rule_;
-  if (s_.bonds.contact_rule == BondTable::ContactRule::Exclude && s_.bonds.intact_count() > 0)
-    rules.excluded = &s_.bonds.intact_keys();
+  if (s_.bonds.contact_rule == BondTable::ContactRule::Exclude && s_.bonds.intact_count() > 0) rules.excluded = &s_.bonds.intact_keys();
   s_.contacts.rebuild(find_pairs(p.position, p.radius, skin), p.id, p.size(), rules);
   s_.wall_candidates.assign(s_.walls.size(), {});
   for (std::size_t k = 0; k < s_.walls.size(); ++k)
@@ -293,12 +301,13 @@ void Simulation::zero_forces() {
   auto& p = s_.particles;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
 #pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-  for (std::int64_t i = 0; i < n; ++i) { p.force[i].setZero(); p.torque[i].setZero(); }
+  for (std::int64_t i = 0; i < n; ++i) {
+    p.force[i].setZero();
+    p.torque[i].setZero();
+  }
 }
 
-void Simulation::pair_forces(double dt) {
-  law_.pair_forces(s_.particles, s_.contacts, dt, time_scale_);
-}
+void Simulation::pair_forces(double dt) { law_.pair_forces(s_.particles, s_.contacts, dt, time_scale_); }
 
 void Simulation::bond_forces(double dt, Step step) {
   if (!bond_law_) return;
@@ -381,7 +390,7 @@ void Simulation::run_module(const PlanItem& it, Step step, double t_stage, doubl
   const bool physical = it.module->time_domain() == TimeDomain::Physical;
   const double scale = physical ? time_scale_ : 1.0;
   const double t0 = physical ? s_.stage_phys_t0 : s_.stage_t0;  // domain time at the stage start
-  const double t_end = t0 + scale * t_stage;                      // domain time at the end of this step
+  const double t_end = t0 + scale * t_stage;                    // domain time at the end of this step
   const double dt = scale * dt_m;
   Step calls = 0, substeps = 1;
   switch (c.kind) {
@@ -390,14 +399,18 @@ void Simulation::run_module(const PlanItem& it, Step step, double t_stage, doubl
       calls = 1;
       break;
     case Clock::Kind::EveryNSteps:
-      if (step % c.n == 0) { it.module->advance(s_, StepInfo{step, t_end, static_cast<double>(c.n) * dt, 0}); calls = 1; }
+      if (step % c.n == 0) {
+        it.module->advance(s_, StepInfo{step, t_end, static_cast<double>(c.n) * dt, 0});
+        calls = 1;
+      }
       break;
     case Clock::Kind::SubstepsPerStep:
     case Clock::Kind::AdaptiveSubsteps: {
       substeps = c.n;
       if (c.kind == Clock::Kind::AdaptiveSubsteps) {
         const double sdt = it.module->stable_dt(s_);
-        if (!(sdt > 0.0)) throw PhysicsError(step, {}, "time step", "module '" + it.name + "' reports a stable step of " + std::to_string(sdt) + " s");
+        if (!(sdt > 0.0))
+          throw PhysicsError(step, {}, "time step", "module '" + it.name + "' reports a stable step of " + std::to_string(sdt) + " s");
         if (std::isfinite(sdt)) substeps = std::max<Step>(c.n, static_cast<Step>(std::ceil(dt / sdt * (1.0 - 1e-12))));
       }
       const double h = dt / static_cast<double>(substeps);
@@ -434,19 +447,22 @@ void Simulation::bind_walls_and_sets(const StageConfig& cfg, bool resume) {
   for (auto& w : s_.walls) {
     auto it = cfg.motions.find(w.name);
     w.motion = it != cfg.motions.end() ? it->second : WallMotion{};
-    if (!resume) { w.u_start = w.u; w.halted = false; }
+    if (!resume) {
+      w.u_start = w.u;
+      w.halted = false;
+    }
   }
   // Prescribed-velocity sets: not integrated, moved with their velocity (see verlet_first_half).
   prescribed_ = cfg.prescribed_sets;
   std::vector<std::uint8_t> claimed(p.size(), 0);
   for (const auto& [name, m] : cfg.prescribed_sets) {
-    if (!s_.particles.fields.has("set/" + name))
-      throw SetupError("stage '" + cfg.name + "': particle set '" + name + "' is not defined");
+    if (!s_.particles.fields.has("set/" + name)) throw SetupError("stage '" + cfg.name + "': particle set '" + name + "' is not defined");
     const auto& f = s_.particles.fields.data("set/" + name);
     for (std::size_t i = 0; i < p.size(); ++i)
       if (f[i] > 0.5) {
-        if (claimed[i]++) throw SetupError("stage '" + cfg.name + "': particle id " + std::to_string(p.id[i]) +
-                                         " belongs to two prescribed sets (" + name + " and another)");
+        if (claimed[i]++)
+          throw SetupError("stage '" + cfg.name + "': particle id " + std::to_string(p.id[i]) + " belongs to two prescribed sets (" + name +
+                           " and another)");
         p.fixed[i] = m.rotates() ? 2 : 1;
         if (!resume) {
           p.velocity[i] = m.velocity + m.angular_velocity.cross(p.position[i] - m.center);
@@ -506,11 +522,10 @@ void Simulation::choose_skin(const StageConfig& cfg, bool resume) {
 /// not written by a run (and a wrong dt could make the stage run for ever).
 void Simulation::check_resumed_clocks(const StageConfig& cfg) const {
   const double t_stage = static_cast<double>(s_.step - s_.stage_step0) * s_.stage_dt;
-  if (!(s_.stage_dt > 0.0) || s_.time != s_.stage_t0 + t_stage ||
-      s_.physical_time != s_.stage_phys_t0 + time_scale_ * t_stage)
+  if (!(s_.stage_dt > 0.0) || s_.time != s_.stage_t0 + t_stage || s_.physical_time != s_.stage_phys_t0 + time_scale_ * t_stage)
     throw SetupError("stage '" + cfg.name + "': the checkpoint's clocks are inconsistent (step " + std::to_string(s_.step) +
-                     ", stage start step " + std::to_string(s_.stage_step0) + ", dt " + fmt_g(s_.stage_dt) + " s, time " +
-                     fmt_g(s_.time) + " s, stage start time " + fmt_g(s_.stage_t0) + " s)");
+                     ", stage start step " + std::to_string(s_.stage_step0) + ", dt " + fmt_g(s_.stage_dt) + " s, time " + fmt_g(s_.time) +
+                     " s, stage start time " + fmt_g(s_.stage_t0) + " s)");
 }
 
 /// What each module will do at step dt_used [s] (printed at the stage start by the I/O layer).
@@ -525,7 +540,10 @@ std::vector<ModuleStep> Simulation::module_steps(double dt_used) const {
     const Clock& c = it.clock;
     const double dtm = dt_used * scale;
     switch (c.kind) {
-      case Clock::Kind::EveryStep: ms.dt = dtm; ms.clock = "every step"; break;
+      case Clock::Kind::EveryStep:
+        ms.dt = dtm;
+        ms.clock = "every step";
+        break;
       case Clock::Kind::EveryNSteps:
         ms.dt = static_cast<double>(c.n) * dtm;
         ms.calls_per_step = 1.0 / static_cast<double>(c.n);
@@ -545,7 +563,11 @@ std::vector<ModuleStep> Simulation::module_steps(double dt_used) const {
         ms.clock = "adaptive substeps (now " + std::to_string(k) + ")";
         break;
       }
-      case Clock::Kind::OnEvent: ms.dt = 0.0; ms.calls_per_step = 0.0; ms.clock = "on event (quasi-static)"; break;
+      case Clock::Kind::OnEvent:
+        ms.dt = 0.0;
+        ms.calls_per_step = 0.0;
+        ms.clock = "on event (quasi-static)";
+        break;
     }
     out.push_back(ms);
   }
@@ -568,16 +590,29 @@ void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_n
       case PlanItem::Kind::Walls:
         for (auto& w : s_.walls) advance_wall(w, t_new, dt_used, t_area, time_scale_);
         break;
-      case PlanItem::Kind::Neighbors: update_neighbors(skin_, cfg.sort_every_rebuilds); break;
-      case PlanItem::Kind::ZeroForces: zero_forces(); break;
-      case PlanItem::Kind::ContactPairs: pair_forces(dt_used); break;
-      case PlanItem::Kind::Bonds: bond_forces(dt_used, s_.step + 1); break;
-      case PlanItem::Kind::ContactWalls: wall_forces(dt_used); break;
-      case PlanItem::Kind::Module: run_module(it, s_.step + 1, t_new, dt_used); break;
-      case PlanItem::Kind::IntegrateSecondHalf: verlet_second_half(p, dt_used); break;
+      case PlanItem::Kind::Neighbors:
+        update_neighbors(skin_, cfg.sort_every_rebuilds);
+        break;
+      case PlanItem::Kind::ZeroForces:
+        zero_forces();
+        break;
+      case PlanItem::Kind::ContactPairs:
+        pair_forces(dt_used);
+        break;
+      case PlanItem::Kind::Bonds:
+        bond_forces(dt_used, s_.step + 1);
+        break;
+      case PlanItem::Kind::ContactWalls:
+        wall_forces(dt_used);
+        break;
+      case PlanItem::Kind::Module:
+        run_module(it, s_.step + 1, t_new, dt_used);
+        break;
+      case PlanItem::Kind::IntegrateSecondHalf:
+        verlet_second_half(p, dt_used);
+        break;
     }
-    if (time_item)
-      stats_->core_seconds[it.name] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (time_item) stats_->core_seconds[it.name] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
 }
 
@@ -597,8 +632,7 @@ void Simulation::check_module_steps(const StageConfig& cfg, double dt_used, bool
     const double scale = it.module->time_domain() == TimeDomain::Physical ? time_scale_ : 1.0;
     const double mdt = it.clock.dt(dt_used) * scale, sdt = it.module->stable_dt(s_);
     if (!(mdt > sdt) || cfg.allow_unstable_dt) continue;
-    const std::string msg = "module '" + it.name + "' runs with dt = " + fmt_g(mdt) + " s above its stable step " +
-                            fmt_g(sdt) + " s";
+    const std::string msg = "module '" + it.name + "' runs with dt = " + fmt_g(mdt) + " s above its stable step " + fmt_g(sdt) + " s";
     if (at_start) throw SetupError("stage '" + cfg.name + "': " + msg);
     throw PhysicsError(s_.step, {}, "time step", msg + " of the current state; use an adaptive clock or a smaller step");
   }
@@ -649,7 +683,10 @@ void Simulation::halt_walls(std::vector<std::string>& cols, std::vector<double>&
   bool sampled = false;
   for (auto& w : s_.walls) {
     if (w.halted || w.motion.halt_quantity.empty()) continue;
-    if (!sampled) { sample(cols, vals); sampled = true; }
+    if (!sampled) {
+      sample(cols, vals);
+      sampled = true;
+    }
     auto it = std::find(cols.begin(), cols.end(), w.motion.halt_quantity);
     if (it == cols.end()) throw SetupError("wall '" + w.name + "': halt quantity '" + w.motion.halt_quantity + "' is not monitored");
     if (vals[it - cols.begin()] >= w.motion.halt_value) w.halted = true;
@@ -693,9 +730,8 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.stable_dt_at_start = cfg.mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
   res.dt_fraction_used = dt_used / res.stable_dt_at_start;
   if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt)
-    throw SetupError("stage '" + cfg.name + "': dt = " + fmt_g(dt_used) + " s is " + fmt_g(res.dt_fraction_used) +
-                     " of the stable step " + fmt_g(res.stable_dt_at_start) +
-                     " s of the contact law; lower dt or set allow_unstable_dt");
+    throw SetupError("stage '" + cfg.name + "': dt = " + fmt_g(dt_used) + " s is " + fmt_g(res.dt_fraction_used) + " of the stable step " +
+                     fmt_g(res.stable_dt_at_start) + " s of the contact law; lower dt or set allow_unstable_dt");
   // Fixed-clock modules: their step against their own stable step (in their time domain).
   // Adaptive clocks choose their substeps from it; event clocks run quasi-static solves.
   check_module_steps(cfg, dt_used, true);
@@ -739,8 +775,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     watchdog_check(s_, wd, wctx, !resume || (s_.step - s_.stage_step0) % wd.check_every == 0);
   } catch (const PhysicsError& e) {
     throw PhysicsError(e.step(), e.ids(), e.quantity(),
-                       "stage '" + cfg.name + "' refused before its first step: its initial state fails the " + e.reason(),
-                       e.detail());
+                       "stage '" + cfg.name + "' refused before its first step: its initial state fails the " + e.reason(), e.detail());
   }
   if (wd.snapshot_every_checks > 0) obs.healthy(s_);
 
@@ -751,7 +786,10 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     if (k >= cfg.max_steps || static_cast<double>(k) * dt_used >= cfg.duration * (1.0 - 1e-12)) break;
     if (k > 0 && k % cfg.check_every == 0) {
       halt_walls(cols, vals);
-      if (until_holds()) { reached = true; break; }
+      if (until_holds()) {
+        reached = true;
+        break;
+      }
     }
 
     // ---- one step: execute the plan ----
@@ -798,8 +836,8 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   end_stage(cols, vals, res);
   res.neighbor_rebuilds = s_.rebuilds - rebuilds0;
   res.wall_seconds = std::chrono::duration<double>(clock::now() - t_start).count();
-  res.particle_steps_per_second =
-      res.wall_seconds > 0 ? static_cast<double>(res.steps) * static_cast<double>(p.size()) / res.wall_seconds : 0.0;
+  res.particle_steps_per_second = res.wall_seconds > 0 ? static_cast<double>(res.steps) * static_cast<double>(p.size()) / res.wall_seconds
+                                                       : 0.0;
   stats_ = nullptr;
   return res;
 }

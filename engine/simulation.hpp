@@ -21,9 +21,9 @@ namespace sparkdem {
 /// A named scalar (or several) computed from the state: time-series columns and stop criteria.
 /// A wall a monitor reads: the parameter that names it, the name, and the shape it must have.
 struct WallUse {
-  std::string key;     ///< parameter of the monitor naming the wall (e.g. "die")
-  std::string name;    ///< wall name
-  bool plane = true;   ///< true: a plane wall is expected, false: a cylinder
+  std::string key;    ///< parameter of the monitor naming the wall (e.g. "die")
+  std::string name;   ///< wall name
+  bool plane = true;  ///< true: a plane wall is expected, false: a cylinder
 };
 
 class Monitor {
@@ -60,32 +60,32 @@ std::vector<std::string> prescribed_set_columns(const std::string& name);
 
 struct StageConfig {
   std::string name = "stage";
-  double dt = 0.0;                 ///< [s] fixed step; 0 = dt_fraction * stable step at stage start
-  double dt_fraction = 0.0;        ///< fraction of the stable step (used when dt == 0)
+  double dt = 0.0;           ///< [s] fixed step; 0 = dt_fraction * stable step at stage start
+  double dt_fraction = 0.0;  ///< fraction of the stable step (used when dt == 0)
   /// false: frozen stage, no mechanical step (scheduler.hpp); dt is then `dt`, or dt_fraction x
   /// the smallest stable step of the modules (in mechanical time).
   bool mechanics = true;
-  bool allow_unstable_dt = false;  ///< run above the stable step (blow-ups are still caught)
+  bool allow_unstable_dt = false;                             ///< run above the stable step (blow-ups are still caught)
   double duration = std::numeric_limits<double>::infinity();  ///< [s] hard stop
-  Step max_steps = std::numeric_limits<Step>::max();           ///< hard stop
-  std::vector<StopCondition> until;  ///< stop early when all hold (checked every check_every)
+  Step max_steps = std::numeric_limits<Step>::max();          ///< hard stop
+  std::vector<StopCondition> until;                           ///< stop early when all hold (checked every check_every)
   Step check_every = 100;
-  bool require_until = false;      ///< a hard stop before `until` holds is an error
-  double skin = 0.0;               ///< [m] Verlet skin; 0 = 0.3 * smallest radius
-  double mass_scaling = 1.0;       ///< multiplies masses and inertias during the stage (reported)
+  bool require_until = false;  ///< a hard stop before `until` holds is an error
+  double skin = 0.0;           ///< [m] Verlet skin; 0 = 0.3 * smallest radius
+  double mass_scaling = 1.0;   ///< multiplies masses and inertias during the stage (reported)
   /// > 0: during the stage a particle smaller than this radius [m] also takes the mass of a
   /// sphere of this radius and its own density (inertia likewise): density scaling of the fines,
   /// whose stable step limits dt (quasi-static stages only; reported).
   double mass_floor_radius = 0.0;
-  double time_scale = 1.0;         ///< physical seconds per mechanical second (TimeDomain::Physical modules)
+  double time_scale = 1.0;  ///< physical seconds per mechanical second (TimeDomain::Physical modules)
   Step stability_check_every = 1000;
-  double blowup_speed = 0.0;       ///< [m/s] a speed above this is a blow-up; 0 = radius/dt rule (= watchdog.max_speed when that is 0)
-  WatchdogConfig watchdog;         ///< the run watchdog's checks (engine/watchdog.hpp)
-  Step sort_every_rebuilds = 50;   ///< spatial sort of the particles for cache locality
-  Step frame_every = 0;            ///< 0 = only the final frame
+  double blowup_speed = 0.0;      ///< [m/s] a speed above this is a blow-up; 0 = radius/dt rule (= watchdog.max_speed when that is 0)
+  WatchdogConfig watchdog;        ///< the run watchdog's checks (engine/watchdog.hpp)
+  Step sort_every_rebuilds = 50;  ///< spatial sort of the particles for cache locality
+  Step frame_every = 0;           ///< 0 = only the final frame
   Step timeseries_every = 100;
   Step checkpoint_every = 0;
-  Step log_every = 0;              ///< progress callback cadence; 0 = auto
+  Step log_every = 0;                         ///< progress callback cadence; 0 = auto
   std::map<std::string, WallMotion> motions;  ///< motions of named walls during this stage
   /// Particle sets (field "set/<name>") moved rigidly during the stage (PrescribedMotion; zero =
   /// clamped); their total force and torque about their centre are in the time series
@@ -113,12 +113,21 @@ class Observer {
  public:
   virtual ~Observer() = default;
   virtual void frame(const State&) {}
-  virtual void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) { (void)cols; (void)vals; }
+  virtual void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) {
+    (void)cols;
+    (void)vals;
+  }
   virtual void checkpoint(State&) {}
-  virtual void progress(const State&, Step stage_steps, double stage_time, double dt) { (void)stage_steps; (void)stage_time; (void)dt; }
+  virtual void progress(const State&, Step stage_steps, double stage_time, double dt) {
+    (void)stage_steps;
+    (void)stage_time;
+    (void)dt;
+  }
   /// At the stage start (also on resume): the mechanical step and each module's step.
   virtual void steps_planned(double dt_mechanical, double stable_mechanical, const std::vector<ModuleStep>& modules) {
-    (void)dt_mechanical; (void)stable_mechanical; (void)modules;
+    (void)dt_mechanical;
+    (void)stable_mechanical;
+    (void)modules;
   }
   /// The state passed the run watchdog (engine/watchdog.hpp): at the stage start (before step 0,
   /// also on resume) and every watchdog.snapshot_every_checks checks, at the point of the step
@@ -132,7 +141,10 @@ class Observer {
   /// step loop, before that step's frame and checkpoint) and at the stage end. Lets the I/O
   /// layer act on a column (e.g. save a snapshot when it crosses a value); the state must not be
   /// modified (non-const only so that it can be written through an Archive).
-  virtual void watch(State&, const std::vector<std::string>& cols, const std::vector<double>& vals) { (void)cols; (void)vals; }
+  virtual void watch(State&, const std::vector<std::string>& cols, const std::vector<double>& vals) {
+    (void)cols;
+    (void)vals;
+  }
 };
 
 /// Every kSplitEvery-th step has its core plan items timed (StageResult::core_seconds).
@@ -149,19 +161,19 @@ struct StageResult {
   bool until_reached = true;
   std::size_t particles = 0;
   double particle_steps_per_second = 0.0;
-  double physical_time = 0.0;      ///< [s] physical time simulated in the stage (time_scale * mechanical)
+  double physical_time = 0.0;  ///< [s] physical time simulated in the stage (time_scale * mechanical)
   std::vector<std::string> plan;
-  std::map<std::string, double> final_values;  ///< last monitor values
-  std::map<std::string, Step> module_calls;    ///< calls per module in this stage (substeps counted)
-  std::map<std::string, Step> max_substeps;    ///< largest per-step substep count (adaptive clocks)
+  std::map<std::string, double> final_values;    ///< last monitor values
+  std::map<std::string, Step> module_calls;      ///< calls per module in this stage (substeps counted)
+  std::map<std::string, Step> max_substeps;      ///< largest per-step substep count (adaptive clocks)
   std::map<std::string, double> module_seconds;  ///< wall time inside each module's calls [s] (the rest is mechanics and I/O)
   /// Wall time of each core item of the step plan [s] (integration halves, walls, neighbours,
   /// zeroing, contact pairs, bonds, wall contacts), estimated from every kSplitEvery-th step
   /// (timed) scaled by the steps taken: two clock reads per item on every step would cost a
   /// few-particle scene several per cent. Modules are in module_seconds (every call timed).
   std::map<std::string, double> core_seconds;
-  Step core_sampled_steps = 0;  ///< steps whose core items were timed
-  std::int64_t neighbor_rebuilds = 0;  ///< Verlet-list rebuilds in this run of the stage
+  Step core_sampled_steps = 0;           ///< steps whose core items were timed
+  std::int64_t neighbor_rebuilds = 0;    ///< Verlet-list rebuilds in this run of the stage
   std::vector<ModuleStep> module_steps;  ///< per module at the stage start
   InitialOverlapReport initial_overlap;  ///< overlaps of the starting packing (not measured on resume)
 };
@@ -169,8 +181,7 @@ struct StageResult {
 class Simulation {
  public:
   /// `bonds` is the bond law of the scenario, or null when it has none (no bond pass is planned).
-  Simulation(State& state, const ContactModel& law, const BondModel* bonds = nullptr)
-      : s_(state), law_(law), bond_law_(bonds) {}
+  Simulation(State& state, const ContactModel& law, const BondModel* bonds = nullptr) : s_(state), law_(law), bond_law_(bonds) {}
   void add_module(Module* m) { modules_.push_back(m); }
   void add_monitor(const Monitor* m) { monitors_.push_back(m); }
 
@@ -194,11 +205,11 @@ class Simulation {
  private:
   void compute_forces(double dt, double t_stage);
   void zero_forces();
-  void pair_forces(double dt);   ///< pair pass + per-particle gather
+  void pair_forces(double dt);  ///< pair pass + per-particle gather
   /// Bond pass + gather; bonds that break are marked at `step` (the step being computed) and
   /// hand their state to the contact table.
   void bond_forces(double dt, Step step);
-  void wall_forces(double dt);   ///< wall pass; stores the wall loads
+  void wall_forces(double dt);  ///< wall pass; stores the wall loads
   void update_neighbors(double skin, Step sort_every);
   /// Run one plan item of kind Module at the end of mechanical step `step` (global index of the
   /// step being completed), `t_stage` = stage time at its end, on the item's clock.

@@ -75,10 +75,9 @@ void scan(const State& s, double limit, InitialOverlapReport& rep, double target
 
 std::string worst_text(const InitialOverlapReport& r) {
   if (r.worst_j >= 0)
-    return "particles " + std::to_string(r.worst_i) + " and " + std::to_string(r.worst_j) + " overlap by " +
-           fmt(r.max_ratio) + " of the smaller radius";
-  return "particle " + std::to_string(r.worst_i) + " overlaps wall '" + r.worst_wall + "' by " + fmt(r.max_ratio) +
-         " of its radius";
+    return "particles " + std::to_string(r.worst_i) + " and " + std::to_string(r.worst_j) + " overlap by " + fmt(r.max_ratio) +
+           " of the smaller radius";
+  return "particle " + std::to_string(r.worst_i) + " overlaps wall '" + r.worst_wall + "' by " + fmt(r.max_ratio) + " of its radius";
 }
 
 }  // namespace
@@ -91,18 +90,18 @@ InitialOverlapReport measure_initial_overlap(const State& s, double limit) {
   return r;
 }
 
-InitialOverlapReport apply_initial_overlap_policy(State& s, const std::string& stage, const std::string& policy,
-                                                  double limit, int max_sweeps) {
+InitialOverlapReport apply_initial_overlap_policy(State& s, const std::string& stage, const std::string& policy, double limit,
+                                                  int max_sweeps) {
   InitialOverlapReport r = measure_initial_overlap(s, limit);
   r.policy = policy;
   if (policy == "allow" || r.max_ratio <= limit) return r;
   const std::size_t over = r.pairs_over_limit + r.walls_over_limit;
   const std::string where = "stage '" + stage + "': " + std::to_string(over) +
-                            " initial overlap(s) above initial_overlap_limit = " + fmt(limit) + "; worst: " +
-                            worst_text(r);
+                            " initial overlap(s) above initial_overlap_limit = " + fmt(limit) + "; worst: " + worst_text(r);
   if (policy == "refuse")
-    throw SetupError(where + ". Separate the particles (a `relax` generator stage or a looser packing), set the stage's "
-                             "\"initial_overlap\": \"relax\", or raise \"initial_overlap_limit\" (\"allow\" runs as is)");
+    throw SetupError(where +
+                     ". Separate the particles (a `relax` generator stage or a looser packing), set the stage's "
+                     "\"initial_overlap\": \"relax\", or raise \"initial_overlap_limit\" (\"allow\" runs as is)");
   if (policy != "relax") throw SetupError("stage '" + stage + "': unknown initial_overlap policy '" + policy + "'");
   auto& p = s.particles;
   const std::vector<Vec3> x0 = p.position;
@@ -111,8 +110,8 @@ InitialOverlapReport apply_initial_overlap_policy(State& s, const std::string& s
   const double target = 0.5 * limit;
   while (cur.max_ratio > limit) {
     if (r.sweeps >= max_sweeps)
-      throw SetupError("stage '" + stage + "': initial_overlap \"relax\" did not bring the overlaps below " + fmt(limit) +
-                       " in " + std::to_string(max_sweeps) + " sweeps (worst now: " + worst_text(cur) +
+      throw SetupError("stage '" + stage + "': initial_overlap \"relax\" did not bring the overlaps below " + fmt(limit) + " in " +
+                       std::to_string(max_sweeps) + " sweeps (worst now: " + worst_text(cur) +
                        "); the packing is too dense to be separated in place: start from a looser packing");
     std::fill(corr.begin(), corr.end(), Vec3::Zero());
     scan(s, limit, cur, target, &corr);
@@ -146,8 +145,7 @@ void check_pressure_walls(const State& s, const std::string& stage, const std::m
       if (d > -s.particles.radius[i]) ++ahead;
     }
     if (ahead == 0)
-      throw SetupError("stage '" + stage + "': wall '" + name +
-                       "' is pressure-controlled but no particle lies on its inward side (" +
+      throw SetupError("stage '" + stage + "': wall '" + name + "' is pressure-controlled but no particle lies on its inward side (" +
                        std::to_string(s.particles.size()) +
                        " particles, all behind it): the servo would drive it at its max_speed without ever meeting a "
                        "load. Put particles under the wall, move the wall, or give it a displacement motion "

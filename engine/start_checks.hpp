@@ -35,17 +35,17 @@ namespace sparkdem {
 
 /// What the stage start found (and did) about overlaps.
 struct InitialOverlapReport {
-  double max_ratio = 0.0;             ///< largest delta / r_min over pairs and walls at the start
-  std::size_t pairs_over_limit = 0;   ///< pairs above the limit at the start
-  std::size_t walls_over_limit = 0;   ///< particle-wall contacts above the limit at the start
-  Id worst_i = -1, worst_j = -1;      ///< ids of the worst pair (worst_j = -1: a wall contact)
-  std::string worst_wall;             ///< name of the wall of the worst contact, if it is one
+  double max_ratio = 0.0;            ///< largest delta / r_min over pairs and walls at the start
+  std::size_t pairs_over_limit = 0;  ///< pairs above the limit at the start
+  std::size_t walls_over_limit = 0;  ///< particle-wall contacts above the limit at the start
+  Id worst_i = -1, worst_j = -1;     ///< ids of the worst pair (worst_j = -1: a wall contact)
+  std::string worst_wall;            ///< name of the wall of the worst contact, if it is one
   std::string policy = "allow";
   double limit = 0.0;
-  int sweeps = 0;                     ///< relax: sweeps made
-  double max_ratio_after = 0.0;       ///< relax: largest ratio afterwards (= max_ratio otherwise)
-  double max_displacement = 0.0;      ///< relax: largest distance a particle was moved [m]
-  std::size_t moved = 0;              ///< relax: particles moved
+  int sweeps = 0;                 ///< relax: sweeps made
+  double max_ratio_after = 0.0;   ///< relax: largest ratio afterwards (= max_ratio otherwise)
+  double max_displacement = 0.0;  ///< relax: largest distance a particle was moved [m]
+  std::size_t moved = 0;          ///< relax: particles moved
 };
 
 /// Largest initial overlap ratio and the counts above `limit` (no change to the state).
@@ -53,8 +53,8 @@ InitialOverlapReport measure_initial_overlap(const State& s, double limit);
 
 /// Apply a stage's policy ("allow", "refuse", "relax") with its limit. Throws SetupError for
 /// "refuse" above the limit and for a relaxation that does not reach the limit in max_sweeps.
-InitialOverlapReport apply_initial_overlap_policy(State& s, const std::string& stage, const std::string& policy,
-                                                  double limit, int max_sweeps = 2000);
+InitialOverlapReport apply_initial_overlap_policy(State& s, const std::string& stage, const std::string& policy, double limit,
+                                                  int max_sweeps = 2000);
 
 /// Throws SetupError if a wall with a pressure motion in `motions` has no particle centre on its
 /// inward side (signed distance > -radius).

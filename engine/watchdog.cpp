@@ -29,14 +29,14 @@ std::string step_advice(const WatchdogContext& ctx) {
   if (!std::isfinite(ctx.stable_dt) || !(ctx.stable_dt > 0.0)) return "lower dt (now " + num(ctx.dt) + " s)";
   const double f = ctx.dt / ctx.stable_dt;
   if (f > 1.0)
-    return "reduce dt below the stable step " + num(ctx.stable_dt) + " s (dt = " + num(ctx.dt) + " s is " + num(f) +
-           " times it" + (ctx.allow_unstable_dt ? ", run with allow_unstable_dt" : "") + ")";
+    return "reduce dt below the stable step " + num(ctx.stable_dt) + " s (dt = " + num(ctx.dt) + " s is " + num(f) + " times it" +
+           (ctx.allow_unstable_dt ? ", run with allow_unstable_dt" : "") + ")";
   return "lower dt or dt_fraction (dt = " + num(ctx.dt) + " s is " + num(f) + " of the stable step " + num(ctx.stable_dt) +
          " s at the stage start; stiffer contacts since then lower the stable step)";
 }
 
-[[noreturn]] void fail(const State& s, std::vector<Id> ids, const std::string& quantity, const std::string& what,
-                       double value, double bound, std::string hint) {
+[[noreturn]] void fail(const State& s, std::vector<Id> ids, const std::string& quantity, const std::string& what, double value,
+                       double bound, std::string hint) {
   PhysicsErrorDetail d;
   d.time = s.time;
   d.value = value;
@@ -47,9 +47,7 @@ std::string step_advice(const WatchdogContext& ctx) {
 
 bool finite3(const Vec3& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
 
-bool field_ok(double x, FieldCheck c) {
-  return c == FieldCheck::Finite ? std::isfinite(x) : !std::isinf(x);
-}
+bool field_ok(double x, FieldCheck c) { return c == FieldCheck::Finite ? std::isfinite(x) : !std::isinf(x); }
 
 /// Check 1: NaN/Inf. Parallel screen first; the detailed serial pass runs only on a failure.
 void check_finite(const State& s, const WatchdogContext& ctx) {
@@ -58,9 +56,7 @@ void check_finite(const State& s, const WatchdogContext& ctx) {
   int bad = 0;
 #pragma omp parallel for schedule(static) reduction(max : bad) if (par::worth(n, par::kLight))
   for (std::int64_t i = 0; i < n; ++i)
-    if (!(finite3(p.position[i]) && finite3(p.velocity[i]) && finite3(p.omega[i]) && finite3(p.force[i]) &&
-          finite3(p.torque[i])))
-      bad = 1;
+    if (!(finite3(p.position[i]) && finite3(p.velocity[i]) && finite3(p.omega[i]) && finite3(p.force[i]) && finite3(p.torque[i]))) bad = 1;
   std::vector<std::string> fields;
   for (const auto& name : p.fields.names()) {
     const FieldCheck c = p.fields.info(name).check;
@@ -84,7 +80,10 @@ void check_finite(const State& s, const WatchdogContext& ctx) {
     std::vector<Id> ids;
     for (std::size_t i = 0; i < p.size(); ++i)
       for (std::size_t q = 0; q < comps; ++q)
-        if (!field_ok(f[i * comps + q], c)) { ids.push_back(p.id[i]); break; }
+        if (!field_ok(f[i * comps + q], c)) {
+          ids.push_back(p.id[i]);
+          break;
+        }
     if (!ids.empty()) found.emplace_back(name, std::move(ids));
   }
   const std::pair<const char*, const std::vector<Vec3>*> core[] = {
@@ -97,12 +96,10 @@ void check_finite(const State& s, const WatchdogContext& ctx) {
   }
   if (found.empty()) return;  // (cannot happen: the screen saw something)
   std::string list;
-  for (const auto& [name, ids] : found)
-    list += (list.empty() ? "" : ", ") + name + " of " + std::to_string(ids.size()) + " particle(s)";
+  for (const auto& [name, ids] : found) list += (list.empty() ? "" : ", ") + name + " of " + std::to_string(ids.size()) + " particle(s)";
   const std::string& q = found.front().first;
-  fail(s, found.front().second, q, "non-finite (NaN or infinite) values in " + list,
-       std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
-       step_advice(ctx) + "; or check the parameters of the module or law that writes " + q);
+  fail(s, found.front().second, q, "non-finite (NaN or infinite) values in " + list, std::numeric_limits<double>::quiet_NaN(),
+       std::numeric_limits<double>::quiet_NaN(), step_advice(ctx) + "; or check the parameters of the module or law that writes " + q);
 }
 
 /// Check 2: speed above max_speed (or r_i / dt).
@@ -117,7 +114,10 @@ void check_speed(const State& s, const WatchdogConfig& c, const WatchdogContext&
     if (p.velocity[i].squaredNorm() > vmax * vmax) bad = 1;
   }
   if (!bad) return;
-  struct Hit { double ratio, speed, bound; Id id; };
+  struct Hit {
+    double ratio, speed, bound;
+    Id id;
+  };
   std::vector<Hit> hits;
   for (std::size_t i = 0; i < p.size(); ++i) {
     const double vmax = c.max_speed > 0.0 ? c.max_speed : p.radius[i] / ctx.dt;
@@ -130,8 +130,8 @@ void check_speed(const State& s, const WatchdogConfig& c, const WatchdogContext&
   const Hit& w = hits.front();
   const std::string rule = c.max_speed > 0.0 ? "watchdog.max_speed" : "its radius per step, r/dt";
   fail(s, ids, "velocity",
-       "speed " + num(w.speed) + " m/s of particle " + std::to_string(w.id) + " exceeds the blow-up bound " + num(w.bound) +
-           " m/s (" + rule + "); " + std::to_string(hits.size()) + " particle(s) above their bound",
+       "speed " + num(w.speed) + " m/s of particle " + std::to_string(w.id) + " exceeds the blow-up bound " + num(w.bound) + " m/s (" +
+           rule + "); " + std::to_string(hits.size()) + " particle(s) above their bound",
        w.speed, w.bound, step_advice(ctx) + "; if such speeds are physical, raise watchdog.max_speed [m/s]");
 }
 
@@ -149,7 +149,10 @@ void check_overlap(const State& s, const WatchdogConfig& c, const WatchdogContex
   for (std::int64_t r = 0; r < rows; ++r)
     if (ov[r] > bound * std::min(p.radius[t.i(r)], p.radius[t.j(r)])) bad = 1;
   if (!bad) return;
-  struct Hit { double ratio; Id a, b; };
+  struct Hit {
+    double ratio;
+    Id a, b;
+  };
   std::vector<Hit> hits;
   for (std::size_t r = 0; r < t.size(); ++r) {
     const double ratio = ov[r] / std::min(p.radius[t.i(r)], p.radius[t.j(r)]);
@@ -170,8 +173,7 @@ void check_overlap(const State& s, const WatchdogConfig& c, const WatchdogContex
        w.ratio, bound,
        "the particles were pushed together harder or faster than the contact law holds them: lower the loading "
        "(wall speed or pressure, prescribed motion, body force) or raise the contact stiffness, or " +
-           step_advice(ctx) + "; if overlaps of this size are intended, raise watchdog.max_overlap_ratio (now " +
-           num(bound) + ")");
+           step_advice(ctx) + "; if overlaps of this size are intended, raise watchdog.max_overlap_ratio (now " + num(bound) + ")");
 }
 
 /// Check 4: kinetic-energy growth over the last energy_window checks.
@@ -219,8 +221,7 @@ void check_energy(State& s, const WatchdogConfig& c, const WatchdogContext& ctx)
            std::to_string(W * c.check_every) + " steps, above the growth bound x" + num(c.energy_growth_factor) +
            " (watchdog.energy_growth_factor), growing at every check, with an rms speed above " + num(c.energy_floor_fraction) +
            " of the blow-up speed " + num(v_blow) + " m/s: a numerical instability",
-       growth, c.energy_growth_factor,
-       step_advice(ctx) + "; watchdog.energy_growth_factor = 0 turns this check off");
+       growth, c.energy_growth_factor, step_advice(ctx) + "; watchdog.energy_growth_factor = 0 turns this check off");
 }
 
 }  // namespace

@@ -48,11 +48,11 @@
 namespace sparkdem {
 
 struct WatchdogConfig {
-  Step check_every = 10;              ///< steps between checks (>= 1)
-  double max_overlap_ratio = 0.0;     ///< [1] overlap / smaller radius; 0 = the contact law's bound
-  double max_speed = 0.0;             ///< [m/s] 0 = per particle radius / dt
-  double energy_growth_factor = 1e4;  ///< [1] 0 = no energy check
-  Step energy_window = 5;             ///< checks over which the growth is measured (>= 1)
+  Step check_every = 10;                ///< steps between checks (>= 1)
+  double max_overlap_ratio = 0.0;       ///< [1] overlap / smaller radius; 0 = the contact law's bound
+  double max_speed = 0.0;               ///< [m/s] 0 = per particle radius / dt
+  double energy_growth_factor = 1e4;    ///< [1] 0 = no energy check
+  Step energy_window = 5;               ///< checks over which the growth is measured (>= 1)
   double energy_floor_fraction = 0.01;  ///< [1] rms-speed floor as a fraction of the blow-up speed
   /// Checks between in-memory copies of the last healthy state (also taken at the stage start);
   /// 0 = no copies (a failure then leaves no checkpoint_before_failure.h5).
@@ -61,11 +61,11 @@ struct WatchdogConfig {
 
 /// What the watchdog needs to know about the running stage.
 struct WatchdogContext {
-  double dt = 0.0;                  ///< [s] mechanical step of the stage
-  double stable_dt = 0.0;           ///< [s] the contact law's stable step at the stage start (inf: none)
-  bool allow_unstable_dt = false;   ///< the stage runs above its stable step on purpose
-  double law_overlap_bound = 0.5;   ///< the contact law's overlap bound (used when max_overlap_ratio == 0)
-  std::string stage;                ///< stage name (for the message)
+  double dt = 0.0;                 ///< [s] mechanical step of the stage
+  double stable_dt = 0.0;          ///< [s] the contact law's stable step at the stage start (inf: none)
+  bool allow_unstable_dt = false;  ///< the stage runs above its stable step on purpose
+  double law_overlap_bound = 0.5;  ///< the contact law's overlap bound (used when max_overlap_ratio == 0)
+  std::string stage;               ///< stage name (for the message)
 };
 
 /// Runs checks 1-3 and, with `energy`, records the kinetic-energy sample and runs check 4.

@@ -27,7 +27,8 @@ namespace {
 
 void single(double nu, const std::vector<double>& spacings, int order, int sub) {
   const double a = 1.0, b = 3.0;
-  std::printf("alpha,h,nodes,unknowns,nonzeros,iterations,residual,U_norm,max_err_over_B,A,B,quad_volume,exact_volume,assembly_s,solve_s\n");
+  std::printf(
+      "alpha,h,nodes,unknowns,nonzeros,iterations,residual,U_norm,max_err_over_B,A,B,quad_volume,exact_volume,assembly_s,solve_s\n");
   for (double alpha : {1.0, 100.0})
     for (double h : spacings) {
       rkpm::Params p;
@@ -55,7 +56,8 @@ void single(double nu, const std::vector<double>& spacings, int order, int sub) 
           per[k] = std::max(per[k], std::abs(ur - (A * rr + B / (rr * rr))) / std::abs(B / (a * a)));
           if (k > 0) err = std::max(err, std::abs(ur - (A * rr + B / (rr * rr))));
         }
-      std::fprintf(stderr, "  per radius (1, 1.25, 1.5, 2, 2.5, 3): %.4f %.4f %.4f %.4f %.4f %.4f\n", per[0], per[1], per[2], per[3], per[4], per[5]);
+      std::fprintf(stderr, "  per radius (1, 1.25, 1.5, 2, 2.5, 3): %.4f %.4f %.4f %.4f %.4f %.4f\n", per[0], per[1], per[2], per[3],
+                   per[4], per[5]);
       std::printf("%g,%g,%zu,%zu,%zu,%d,%.3e,%.3e,%.5f,%.6f,%.6f,%.5f,%.5f,%.2f,%.2f\n", alpha, h, r.approximation.nodes(), r.unknowns,
                   r.nonzeros, r.iterations, r.residual, r.sphere_displacement[0].norm(), err / std::abs(B / (a * a)), A, B,
                   r.quadrature_volume, 4.0 / 3.0 * M_PI * (b * b * b - a * a * a), r.assembly_seconds, r.solve_seconds);
@@ -85,8 +87,9 @@ void two(double nu, std::vector<int> per_edge, int order, int sub) {
       if (*q == ',') ++q;
     }
   }
-  std::printf("domain,b_over_R,alpha_R_over_E,nu,depth,nodes_per_edge,h_over_R,nodes,unknowns,nonzeros,volume_points,surface_points,quad_volume,"
-              "exact_volume,iterations,residual,distance_change_over_eps0_D,assembly_s,solve_s\n");
+  std::printf(
+      "domain,b_over_R,alpha_R_over_E,nu,depth,nodes_per_edge,h_over_R,nodes,unknowns,nonzeros,volume_points,surface_points,quad_volume,"
+      "exact_volume,iterations,residual,distance_change_over_eps0_D,assembly_s,solve_s\n");
   for (int m : per_edge) {
     rkpm::Params p;
     p.poisson_ratio = nu;
@@ -110,10 +113,10 @@ void two(double nu, std::vector<int> per_edge, int order, int sub) {
     const rkpm::Result r = rkpm::solve_unit({Vec3(0.5 - R, 0.5, 0.5), Vec3(0.5 + R, 0.5, 0.5)}, {R, R}, d, p);
     const double dd = eps0 * (r.sphere_displacement[1] - r.sphere_displacement[0]).x();
     const double outer = ball ? 4.0 / 3.0 * M_PI * b * b * b : 1.0;
-    std::printf("%s,%g,%g,%g,%d,%d,%.4f,%zu,%zu,%zu,%zu,%zu,%.6f,%.6f,%d,%.3e,%.6f,%.2f,%.2f\n", ball ? "ball" : "cube", ball ? b / R : 5.0, p.bond_penalty * R, nu,
-                p.cut_cell_depth, m, p.node_spacing / R, r.approximation.nodes(), r.unknowns, r.nonzeros, r.volume_points, r.surface_points,
-                r.quadrature_volume, outer - 2.0 * 4.0 / 3.0 * M_PI * R * R * R, r.iterations, r.residual, dd / (eps0 * 2 * R),
-                r.assembly_seconds, r.solve_seconds);
+    std::printf("%s,%g,%g,%g,%d,%d,%.4f,%zu,%zu,%zu,%zu,%zu,%.6f,%.6f,%d,%.3e,%.6f,%.2f,%.2f\n", ball ? "ball" : "cube", ball ? b / R : 5.0,
+                p.bond_penalty * R, nu, p.cut_cell_depth, m, p.node_spacing / R, r.approximation.nodes(), r.unknowns, r.nonzeros,
+                r.volume_points, r.surface_points, r.quadrature_volume, outer - 2.0 * 4.0 / 3.0 * M_PI * R * R * R, r.iterations,
+                r.residual, dd / (eps0 * 2 * R), r.assembly_seconds, r.solve_seconds);
     std::fflush(stdout);
   }
 }
@@ -166,11 +169,13 @@ void box(double L, double h, double support, int order, int sub, double nu, doub
       negb += sb.opening[e] < 0;
       ++nc;
     }
-  std::printf("depth %d points %zu L %g n %zu h %g nodes %zu unknowns %zu nnz %zu CG %d residual %.2e vol %.1f (box %.1f, spheres %.1f) assembly %.1f s solve %.1f s\n",
-              p.cut_cell_depth, res.volume_points, L, n, h, res.approximation.nodes(), res.unknowns, res.nonzeros, res.iterations, res.residual, res.quadrature_volume, L * L * L,
-              n * 4.0 / 3.0 * M_PI, res.assembly_seconds, res.solve_seconds);
-  std::printf("contacts %zu: mean unit opening / D rkpm %.5f (negative %.3f) bonded %.5f (negative %.3f)\n", nc, mr / nc,
-              double(negr) / nc, mb / nc, double(negb) / nc);
+  std::printf(
+      "depth %d points %zu L %g n %zu h %g nodes %zu unknowns %zu nnz %zu CG %d residual %.2e vol %.1f (box %.1f, spheres %.1f) assembly "
+      "%.1f s solve %.1f s\n",
+      p.cut_cell_depth, res.volume_points, L, n, h, res.approximation.nodes(), res.unknowns, res.nonzeros, res.iterations, res.residual,
+      res.quadrature_volume, L * L * L, n * 4.0 / 3.0 * M_PI, res.assembly_seconds, res.solve_seconds);
+  std::printf("contacts %zu: mean unit opening / D rkpm %.5f (negative %.3f) bonded %.5f (negative %.3f)\n", nc, mr / nc, double(negr) / nc,
+              mb / nc, double(negb) / nc);
 }
 
 }  // namespace
@@ -184,12 +189,17 @@ int main(int argc, char** argv) {
   const int order = argc > 3 ? std::atoi(argv[3]) : 2;
   const int sub = argc > 4 ? std::atoi(argv[4]) : 2;
   try {
-    if (!std::strcmp(argv[1], "single")) single(nu, {0.75, 0.5, 0.375, 0.3}, order, sub);
-    else if (!std::strcmp(argv[1], "two")) two(nu, {8, 11, 14, 17, 20, 23, 26}, order, sub);
+    if (!std::strcmp(argv[1], "single"))
+      single(nu, {0.75, 0.5, 0.375, 0.3}, order, sub);
+    else if (!std::strcmp(argv[1], "two"))
+      two(nu, {8, 11, 14, 17, 20, 23, 26}, order, sub);
     else if (!std::strcmp(argv[1], "box"))
       box(argc > 5 ? std::atof(argv[5]) : 20.0, argc > 6 ? std::atof(argv[6]) : 3.0, argc > 7 ? std::atof(argv[7]) : 2.0, order, sub, nu,
           argc > 8 ? std::atof(argv[8]) : 0.0);
-    else { std::fprintf(stderr, "unknown mode %s\n", argv[1]); return 2; }
+    else {
+      std::fprintf(stderr, "unknown mode %s\n", argv[1]);
+      return 2;
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

@@ -60,8 +60,10 @@ void electrodes(Network& net, const std::vector<double>& z) {
   const auto [lo, hi] = std::minmax_element(z.begin(), z.end());
   const double z0 = *lo, h = *hi - *lo;
   for (std::size_t i = 0; i < z.size(); ++i) {
-    if (z[i] <= z0 + 0.05 * h) net.high.push_back(static_cast<Index>(i));
-    else if (z[i] >= z0 + 0.95 * h) net.low.push_back(static_cast<Index>(i));
+    if (z[i] <= z0 + 0.05 * h)
+      net.high.push_back(static_cast<Index>(i));
+    else if (z[i] >= z0 + 0.95 * h)
+      net.low.push_back(static_cast<Index>(i));
   }
 }
 
@@ -77,13 +79,21 @@ Network packing(std::size_t n, std::uint64_t seed, bool sintered) {
   double m1 = 0, m2 = 0, m3 = 0;
   for (std::size_t i = 0; i < n; ++i) {
     r[i] = rmin * std::pow(ratio, u(rng));
-    m1 += r[i]; m2 += r[i] * r[i]; m3 += r[i] * r[i] * r[i];
+    m1 += r[i];
+    m2 += r[i] * r[i];
+    m3 += r[i] * r[i] * r[i];
   }
-  m1 /= n; m2 /= n; m3 /= n;
+  m1 /= n;
+  m2 /= n;
+  m3 /= n;
   // mean degree = n / L^3 * (4/3) pi E[(r_i + r_j)^3], E[(r_i + r_j)^3] = 2 m3 + 6 m2 m1
   const double degree = 6.0;
   const double L = std::cbrt(static_cast<double>(n) * 4.0 / 3.0 * M_PI * (2 * m3 + 6 * m2 * m1) / degree);
-  for (std::size_t i = 0; i < n; ++i) { x[i] = L * u(rng); y[i] = L * u(rng); z[i] = L * u(rng); }
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = L * u(rng);
+    y[i] = L * u(rng);
+    z[i] = L * u(rng);
+  }
   // Cell list, cell side >= 2 rmax.
   const double cs = 2.0 * rmin * ratio;
   const int nc = std::max(1, static_cast<int>(L / cs));
@@ -250,19 +260,34 @@ int bench_main(int argc, char** argv, int ranks) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
-      if (i + 1 >= argc) { std::cerr << a << " needs a value\n"; std::exit(2); }
+      if (i + 1 >= argc) {
+        std::cerr << a << " needs a value\n";
+        std::exit(2);
+      }
       return argv[++i];
     };
-    if (a == "--sizes") { sizes.clear(); for (auto& s : split(next())) sizes.push_back(static_cast<std::size_t>(std::stod(s))); }
-    else if (a == "--families") families = split(next());
-    else if (a == "--csv") csv = next();
-    else if (a == "--pt-budget") pt_budget = std::stod(next());
-    else if (a == "--seed") seed = std::stoull(next());
-    else if (a == "--solvers") solvers = split(next());
-    else if (a == "--tolerances") { tols.clear(); for (auto& s : split(next())) tols.push_back(std::stod(s)); }
-    else if (a == "--amg-threshold") amg_defaults.amg_strong_threshold = std::stod(next());
-    else if (a == "--amg-aggressive") amg_defaults.amg_aggressive_levels = std::stoi(next());
-    else if (a == "--spread") continue;
+    if (a == "--sizes") {
+      sizes.clear();
+      for (auto& s : split(next())) sizes.push_back(static_cast<std::size_t>(std::stod(s)));
+    } else if (a == "--families")
+      families = split(next());
+    else if (a == "--csv")
+      csv = next();
+    else if (a == "--pt-budget")
+      pt_budget = std::stod(next());
+    else if (a == "--seed")
+      seed = std::stoull(next());
+    else if (a == "--solvers")
+      solvers = split(next());
+    else if (a == "--tolerances") {
+      tols.clear();
+      for (auto& s : split(next())) tols.push_back(std::stod(s));
+    } else if (a == "--amg-threshold")
+      amg_defaults.amg_strong_threshold = std::stod(next());
+    else if (a == "--amg-aggressive")
+      amg_defaults.amg_aggressive_levels = std::stoi(next());
+    else if (a == "--spread")
+      continue;
     else {
       std::cerr << "usage: bench_electric [--sizes N,..] [--families packing,bonded,sintered] [--csv FILE] [--pt-budget S]"
                    " [--seed N] [--solvers cg_ic,cg_jacobi,amg,pseudo_transient] [--tolerances 1e-4,..]"
@@ -271,7 +296,10 @@ int bench_main(int argc, char** argv, int ranks) {
     }
   }
   std::ofstream out(csv);
-  if (!out) { std::cerr << "cannot write " << csv << "\n"; return 1; }
+  if (!out) {
+    std::cerr << "cannot write " << csv << "\n";
+    return 1;
+  }
   out << "family,nodes,edges,free_nodes,reference,method,tolerance_or_beta,status,wall_s,iterations,indicator,"
          "relative_residual,G,G_rel_err,V_max_err\n";
   // Warm-up: the first hypre call in a process initialises MPI/hypre (~0.2 s); keep it out of the
@@ -285,12 +313,18 @@ int bench_main(int argc, char** argv, int ranks) {
   for (const auto& fam : families) {
     for (std::size_t n : sizes) {
       Network net;
-      if (fam == "packing") net = packing(n, seed + n, false);
-      else if (fam == "sintered") net = packing(n, seed + n, true);
-      else if (fam == "bonded") net = bonded(n, seed + n);
-      else { std::cerr << "unknown family " << fam << "\n"; return 2; }
-      std::cerr << fam << " n=" << net.nodes << " edges=" << net.a.size() << " electrodes " << net.high.size() << "/"
-                << net.low.size() << std::endl;
+      if (fam == "packing")
+        net = packing(n, seed + n, false);
+      else if (fam == "sintered")
+        net = packing(n, seed + n, true);
+      else if (fam == "bonded")
+        net = bonded(n, seed + n);
+      else {
+        std::cerr << "unknown family " << fam << "\n";
+        return 2;
+      }
+      std::cerr << fam << " n=" << net.nodes << " edges=" << net.a.size() << " electrodes " << net.high.size() << "/" << net.low.size()
+                << std::endl;
       std::vector<Run> rows;
       // Reference.
       const bool direct_ref = net.nodes <= 200000;
@@ -300,10 +334,16 @@ int bench_main(int argc, char** argv, int ranks) {
       set_amg_spread_ranks(1);  // the reference on one process
       Run ref = run(net, ro, direct_ref ? "" : "1e-13");
       set_amg_spread_ranks(ranks);
-      if (ref.status != "ok") { std::cerr << "reference failed\n"; return 1; }
+      if (ref.status != "ok") {
+        std::cerr << "reference failed\n";
+        return 1;
+      }
       const double G_ref = ref.G;
       std::cerr << "  reference " << ref.method << " " << ref.wall << " s, G = " << G_ref << std::endl;
-      if (direct_ref) { ref.status = "ok(reference)"; rows.push_back(ref); }
+      if (direct_ref) {
+        ref.status = "ok(reference)";
+        rows.push_back(ref);
+      }
       const auto wanted = [&](LaplacianMethod m) {
         return std::find(solvers.begin(), solvers.end(), laplacian_method_name(m)) != solvers.end();
       };
@@ -349,10 +389,9 @@ int bench_main(int argc, char** argv, int ranks) {
       }
       for (auto& r : rows) {
         score(r, ref.res, G_ref);
-        out << fam << ',' << net.nodes << ',' << net.a.size() << ',' << ref.res.free_nodes << ','
-            << (direct_ref ? "direct" : "amg@1e-13") << ',' << r.method << ',' << r.param << ',' << r.status << ','
-            << num(r.wall) << ',' << r.iterations << ',' << num(r.indicator) << ',' << num(r.rel_residual) << ','
-            << num(r.G) << ',' << num(r.g_err) << ',' << num(r.v_err) << '\n';
+        out << fam << ',' << net.nodes << ',' << net.a.size() << ',' << ref.res.free_nodes << ',' << (direct_ref ? "direct" : "amg@1e-13")
+            << ',' << r.method << ',' << r.param << ',' << r.status << ',' << num(r.wall) << ',' << r.iterations << ',' << num(r.indicator)
+            << ',' << num(r.rel_residual) << ',' << num(r.G) << ',' << num(r.g_err) << ',' << num(r.v_err) << '\n';
         r.res = LaplacianResult{};
       }
       out.flush();

@@ -61,15 +61,20 @@ int main(int argc, char** argv) {
     std::vector<fs::path> runs;
     for (int a = 1; a < argc; ++a) {
       const std::string s = argv[a];
-      if (s == "--csv" && a + 1 < argc) csv = argv[++a];
-      else if (s == "--fd-csv" && a + 1 < argc) fdcsv = argv[++a];
-      else if (s == "--k" && a + 1 < argc) k = std::stoul(argv[++a]);
-      else if (s == "--sensitivity") sensitivity = true;
+      if (s == "--csv" && a + 1 < argc)
+        csv = argv[++a];
+      else if (s == "--fd-csv" && a + 1 < argc)
+        fdcsv = argv[++a];
+      else if (s == "--k" && a + 1 < argc)
+        k = std::stoul(argv[++a]);
+      else if (s == "--sensitivity")
+        sensitivity = true;
       else if (s == "--fd-grids" && a + 1 < argc) {
         grids.clear();
         std::istringstream in(argv[++a]);
         for (int n; in >> n;) grids.push_back(n);
-      } else runs.emplace_back(s);
+      } else
+        runs.emplace_back(s);
     }
     if (grids.size() < 3) throw std::runtime_error("--fd-grids needs at least three grids");
     for (std::size_t g = 1; g < grids.size(); ++g)
@@ -105,9 +110,8 @@ int main(int argc, char** argv) {
       const fd::Richardson r = fd::richardson(v[m - 3], v[m - 2], v[m - 1]);
       ref[points[c].name] = {r.extrapolated, r.band, r.observed_order};
       char line[256];
-      std::snprintf(line, sizeof line, "# %s: Richardson (grids %d, %d, %d): observed order %.3f, reference %.6f +- %.1e\n",
-                    points[c].name, grids[grids.size() - 3], grids[grids.size() - 2], grids.back(), r.observed_order,
-                    r.extrapolated, r.band);
+      std::snprintf(line, sizeof line, "# %s: Richardson (grids %d, %d, %d): observed order %.3f, reference %.6f +- %.1e\n", points[c].name,
+                    grids[grids.size() - 3], grids[grids.size() - 2], grids.back(), r.observed_order, r.extrapolated, r.band);
       fdtab << line;
     }
     std::cout << fdtab.str();
@@ -160,12 +164,15 @@ int main(int argc, char** argv) {
       }
       double yg = 0.0, ng = 0.0, rs = 0.0;
       for (std::size_t i = 0; i < fr.radius.size(); ++i) {
-        if (!fr.ground.empty() && fr.ground[i] > 0.5) { yg += fr.position[3 * i + 1]; ng += 1.0; }
+        if (!fr.ground.empty() && fr.ground[i] > 0.5) {
+          yg += fr.position[3 * i + 1];
+          ng += 1.0;
+        }
         if (!fr.source.empty() && fr.source[i] > 0.5)
           rs = std::max(rs, std::hypot(fr.position[3 * i] - 0.015, fr.position[3 * i + 1] - 0.015));
       }
-      std::snprintf(line, sizeof line, ",%.6f,%.6f,%.4e,%.4e,%.4f,%.4f,%.1f,%.1f\n", pr["P1"].mean, pr["P2"].mean, ng > 0 ? yg / ng : NAN, rs,
-                    st["final"]["electrical_solve_time"].get<double>(), st["wall_time_s"].get<double>(), wall, cpu);
+      std::snprintf(line, sizeof line, ",%.6f,%.6f,%.4e,%.4e,%.4f,%.4f,%.1f,%.1f\n", pr["P1"].mean, pr["P2"].mean, ng > 0 ? yg / ng : NAN,
+                    rs, st["final"]["electrical_solve_time"].get<double>(), st["wall_time_s"].get<double>(), wall, cpu);
       tab << line;
     }
     std::cout << tab.str();

@@ -193,9 +193,12 @@ int main(int argc, char** argv) {
     bool quick = false;
     for (int a = 1; a < argc; ++a) {
       const std::string s = argv[a];
-      if (s == "--out" && a + 1 < argc) out = argv[++a];
-      else if (s == "--quick") quick = true;
-      else throw std::runtime_error("unknown argument " + s);
+      if (s == "--out" && a + 1 < argc)
+        out = argv[++a];
+      else if (s == "--quick")
+        quick = true;
+      else
+        throw std::runtime_error("unknown argument " + s);
     }
     std::vector<Row> rows;
     const std::vector<double> fe = {1.0, 0.5, 0.25, 0.1}, be = {1.0, 10.0, 100.0, 1000.0};
@@ -212,8 +215,8 @@ int main(int argc, char** argv) {
         for (double f : std::string(scheme) == "explicit" ? fe : be) {
           if (quick && f == 1000.0) continue;
           rows.push_back(run_stiff(scheme, f, s_exp, t_end));
-          std::cerr << rows.back().problem << " " << scheme << " x" << f << ": error " << rows.back().error << " K in "
-                    << rows.back().wall << " s\n";
+          std::cerr << rows.back().problem << " " << scheme << " x" << f << ": error " << rows.back().error << " K in " << rows.back().wall
+                    << " s\n";
         }
         // implicit rows are listed from the largest step down for the order
         if (std::string(scheme) == "implicit") std::reverse(rows.begin() + static_cast<std::ptrdiff_t>(from), rows.end());
@@ -228,8 +231,8 @@ int main(int argc, char** argv) {
         for (double f : std::string(scheme) == "explicit" ? fe : be) {
           if (quick && f == 1000.0) continue;
           rows.push_back(run_chain(scheme, f, s_exp, t_end));
-          std::cerr << rows.back().problem << " " << scheme << " x" << f << ": error " << rows.back().error << " K in "
-                    << rows.back().wall << " s\n";
+          std::cerr << rows.back().problem << " " << scheme << " x" << f << ": error " << rows.back().error << " K in " << rows.back().wall
+                    << " s\n";
         }
         if (std::string(scheme) == "implicit") std::reverse(rows.begin() + static_cast<std::ptrdiff_t>(from), rows.end());
         add_orders(from);
@@ -248,14 +251,14 @@ int main(int argc, char** argv) {
           "exact modal solution of the network; order = log(e_k / e_k+1) / log(dt_k / dt_k+1); wall = stage run time on "
           "one thread.\n\n"
        << "Explicit stable steps (0.9 x the Gershgorin bound min_i C_i / sum_j G_ij): stiff " << g(StiffScene::explicit_stable_dt(), 6)
-       << " s (set by the 10 um sphere; the chain alone would allow " << g(0.9 * StiffScene::capacity(StiffScene::R) / (2 * StiffScene::g_ll()), 4)
-       << " s), chain " << g(chain_stable_dt(), 6) << " s. Implicit rows run from the largest step down.\n\n"
+       << " s (set by the 10 um sphere; the chain alone would allow "
+       << g(0.9 * StiffScene::capacity(StiffScene::R) / (2 * StiffScene::g_ll()), 4) << " s), chain " << g(chain_stable_dt(), 6)
+       << " s. Implicit rows run from the largest step down.\n\n"
        << "| problem | scheme | dt / explicit stable | dt [s] | steps | t_end [s] | error [K] | order | wall [s] |\n"
        << "|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const Row& r : rows)
-      md << "| " << r.problem << " | " << r.scheme << " | " << g(r.factor) << " | " << g(r.dt) << " | " << r.steps << " | "
-         << g(r.t_end) << " | " << g(r.error, 3) << " | " << (std::isnan(r.order) ? "" : g(r.order, 3)) << " | "
-         << g(r.wall, 3) << " |\n";
+      md << "| " << r.problem << " | " << r.scheme << " | " << g(r.factor) << " | " << g(r.dt) << " | " << r.steps << " | " << g(r.t_end)
+         << " | " << g(r.error, 3) << " | " << (std::isnan(r.order) ? "" : g(r.order, 3)) << " | " << g(r.wall, 3) << " |\n";
     md << "\n";
     std::cout << "wrote " << (out / "results.csv").string() << " and " << (out / "results.md").string() << "\n";
     return 0;

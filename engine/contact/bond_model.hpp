@@ -28,17 +28,17 @@
 namespace sparkdem {
 
 struct BondGeometry {
-  Vec3 n;                  ///< unit vector j -> i (current)
-  double distance = 0.0;   ///< current centre distance [m]
-  double length0 = 0.0;    ///< centre distance at bonding [m]
+  Vec3 n;                       ///< unit vector j -> i (current)
+  double distance = 0.0;        ///< current centre distance [m]
+  double length0 = 0.0;         ///< centre distance at bonding [m]
   double r_i = 0.0, r_j = 0.0;  ///< radii [m]
-  Vec3 dir_i, dir_j;       ///< world images of the reference directions i->j and j->i (BondReference)
-  Vec3 perp_i, perp_j;     ///< world images of the reference normal vector in i's and j's frames
+  Vec3 dir_i, dir_j;            ///< world images of the reference directions i->j and j->i (BondReference)
+  Vec3 perp_i, perp_j;          ///< world images of the reference normal vector in i's and j's frames
 };
 
 struct BondMotion {
-  Vec3 v_ij;               ///< v_i - v_j [m/s]
-  Vec3 omega_i, omega_j;   ///< [rad/s]
+  Vec3 v_ij;              ///< v_i - v_j [m/s]
+  Vec3 omega_i, omega_j;  ///< [rad/s]
 };
 
 struct BondForces {
@@ -123,7 +123,12 @@ class BondModelT final : public BondModel {
     std::vector<std::uint8_t> broke(b.size(), 0);
 #pragma omp parallel for schedule(static) if (par::worth(rows, par::kHeavy))
     for (std::int64_t r = 0; r < rows; ++r) {
-      if (b.broken(r)) { F[r].setZero(); Ti[r].setZero(); Tj[r].setZero(); continue; }
+      if (b.broken(r)) {
+        F[r].setZero();
+        Ti[r].setZero();
+        Tj[r].setZero();
+        continue;
+      }
       const Index i = b.i(r), j = b.j(r);
       const BondGeometry g = detail::bond_geometry(p, b, r);
       const BondMotion m{p.velocity[i] - p.velocity[j], p.omega[i], p.omega[j]};
@@ -140,8 +145,10 @@ class BondModelT final : public BondModel {
   }
 
   std::vector<std::string> failure_modes() const override {
-    if constexpr (requires { Law::failure_modes(); }) return Law::failure_modes();
-    else return {};
+    if constexpr (requires { Law::failure_modes(); })
+      return Law::failure_modes();
+    else
+      return {};
   }
   double elastic_energy(const ParticleStore& p, const BondTable& b) const override {
     if constexpr (requires(const Law& l, const BondGeometry& g, const double* st) { l.energy(g, st); }) {

@@ -66,9 +66,8 @@ class ContactModel {
   /// Particle-wall pass over the candidate particles of each wall (those within r + skin at the
   /// last neighbour rebuild); adds forces and torques to the particles; returns wall loads.
   /// Wall history lives in the per-particle field "wall_state/<wall name>".
-  virtual WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls,
-                              const std::vector<std::vector<Index>>& candidates, double dt,
-                              double time_scale = 1.0) const = 0;
+  virtual WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& candidates,
+                              double dt, double time_scale = 1.0) const = 0;
   /// Stable step estimate from the current state [s]: min of the law's a-priori step (Rayleigh
   /// for Hertz laws) and 2/omega_max, omega_max^2 the largest eigenvalue of the mass-weighted
   /// stiffness matrix K~ = M^-1/2 K M^-1/2 of the current contacts, bounded by the tighter of two
@@ -110,21 +109,25 @@ inline double ContactModel::overlap_ratio_bound() const { return kDefaultOverlap
 /// True if Law declares kThermal (reads temperature and the time scale).
 template <class Law>
 constexpr bool is_thermal() {
-  if constexpr (requires { Law::kThermal; }) return Law::kThermal;
-  else return false;
+  if constexpr (requires { Law::kThermal; })
+    return Law::kThermal;
+  else
+    return false;
 }
 
 /// True if Law declares persistent pairs.
 template <class Law>
 constexpr bool is_persistent() {
-  if constexpr (requires { Law::kPersistent; }) return Law::kPersistent;
-  else return false;
+  if constexpr (requires { Law::kPersistent; })
+    return Law::kPersistent;
+  else
+    return false;
 }
 
 namespace detail {
 inline constexpr double kPi = 3.14159265358979323846;
 constexpr std::size_t kBlock = 1024;  // fixed reduction blocks: results independent of thread count
-}
+}  // namespace detail
 
 /// Grain-boundary fraction per particle (seed 000 Eq. 22), f_i = sum over its rows of
 /// pi a^2 / (4 pi r_i^2), a = the row's state column `neck_column` (live rows with a > 0). Serial
@@ -151,12 +154,16 @@ class ContactModelT final : public ContactModel {
   std::string name() const override { return std::string(Law::kName); }
   std::vector<std::string> state_columns() const override { return Law::state_columns(); }
   double overlap_ratio_bound() const override {
-    if constexpr (requires(const Law& l) { l.overlap_ratio_bound(); }) return law_.overlap_ratio_bound();
-    else return kDefaultOverlapRatioBound;
+    if constexpr (requires(const Law& l) { l.overlap_ratio_bound(); })
+      return law_.overlap_ratio_bound();
+    else
+      return kDefaultOverlapRatioBound;
   }
   std::function<bool(const double*)> alive_rule() const override {
-    if constexpr (is_persistent<Law>()) return [this](const double* st) { return law_.alive(st); };
-    else return {};
+    if constexpr (is_persistent<Law>())
+      return [this](const double* st) { return law_.alive(st); };
+    else
+      return {};
   }
 
   void pair_pass(const ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0) const override {
@@ -167,7 +174,10 @@ class ContactModelT final : public ContactModel {
     auto& Tj = t.torque_j();
 #pragma omp parallel for schedule(static) if (par::worth(rows, par::kHeavy))
     for (std::int64_t r = 0; r < rows; ++r)
-      if (!row_forces(p, t, r, dt, in, F[r], Ti[r], Tj[r])) { Ti[r].setZero(); Tj[r].setZero(); }
+      if (!row_forces(p, t, r, dt, in, F[r], Ti[r], Tj[r])) {
+        Ti[r].setZero();
+        Tj[r].setZero();
+      }
   }
 
   void pair_forces(ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0) const override {
@@ -191,7 +201,10 @@ class ContactModelT final : public ContactModel {
       if (!row_forces(p, t, r, dt, in, F[r], tri, trj)) continue;
       const Index i = t.i(r), j = t.j(r);
       if (i != cur) {
-        if (cur >= 0) { p.force[cur] = fi; p.torque[cur] = ti; }
+        if (cur >= 0) {
+          p.force[cur] = fi;
+          p.torque[cur] = ti;
+        }
         cur = i;
         fi = p.force[i];
         ti = p.torque[i];
@@ -201,11 +214,14 @@ class ContactModelT final : public ContactModel {
       p.force[j] -= F[r];
       p.torque[j] += trj;
     }
-    if (cur >= 0) { p.force[cur] = fi; p.torque[cur] = ti; }
+    if (cur >= 0) {
+      p.force[cur] = fi;
+      p.torque[cur] = ti;
+    }
   }
 
-  WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& cand,
-                      double dt, double time_scale = 1.0) const override {
+  WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& cand, double dt,
+                      double time_scale = 1.0) const override {
     const double* temp = nullptr;
     if constexpr (is_thermal<Law>())
       if (p.fields.has("temperature")) temp = p.fields.data("temperature").data();
@@ -221,7 +237,7 @@ class ContactModelT final : public ContactModel {
       const std::size_t nblocks = (n + detail::kBlock - 1) / detail::kBlock;
       std::vector<Vec3> partial(nblocks, Vec3::Zero());
       std::vector<double> partial_n(nblocks, 0.0);
-#pragma omp parallel for schedule(static) if (par::worth(static_cast<std::int64_t>(n), par::kHeavy))
+#pragma omp parallel for schedule(static) if (par::worth(static_cast <std::int64_t>(n), par::kHeavy))
       for (std::int64_t b = 0; b < static_cast<std::int64_t>(nblocks); ++b) {
         const std::size_t lo = b * detail::kBlock, hi = std::min(n, lo + detail::kBlock);
         for (std::size_t q = lo; q < hi; ++q) {
@@ -395,16 +411,15 @@ class ContactModelT final : public ContactModel {
     if constexpr (is_thermal<Law>())
       if (p.fields.has("temperature")) in.temp = p.fields.data("temperature").data();
     if constexpr (requires(const Law& l) { l.grain_boundary_fraction_column(); })
-      if (law_.grain_boundary_fraction_column() >= 0)
-        in.gbf = grain_boundary_fractions(p, t, law_.grain_boundary_fraction_column());
+      if (law_.grain_boundary_fraction_column() >= 0) in.gbf = grain_boundary_fractions(p, t, law_.grain_boundary_fraction_column());
     return in;
   }
 
   /// The law on row r: writes its overlap, and, for a live pair, the force on i and the torques
   /// on i and j and returns true; a pair out of contact (and not kept alive by its law) has its
   /// state cleared and returns false.
-  [[gnu::always_inline]] bool row_forces(const ParticleStore& p, ContactTable& t, std::int64_t r, double dt,
-                                         const PassInputs& in, Vec3& F, Vec3& Ti, Vec3& Tj) const {
+  [[gnu::always_inline]] bool row_forces(const ParticleStore& p, ContactTable& t, std::int64_t r, double dt, const PassInputs& in, Vec3& F,
+                                         Vec3& Ti, Vec3& Tj) const {
     const Index i = t.i(r), j = t.j(r);
     const Vec3 d = p.position[i] - p.position[j];
     const double dist = d.norm();

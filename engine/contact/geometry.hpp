@@ -7,15 +7,15 @@
 namespace sparkdem {
 
 struct ContactGeometry {
-  Vec3 n;                 ///< unit normal, j -> i
-  double overlap = 0.0;   ///< delta = r_i + r_j - d > 0 in contact [m]
-  double r_eff = 0.0;     ///< R* = r_i r_j / (r_i + r_j); r_i for a wall [m]
-  double m_eff = 0.0;     ///< m* = m_i m_j / (m_i + m_j); m_i for a wall [kg]
-  double arm_i = 0.0;     ///< centre of i to contact point [m]
-  double arm_j = 0.0;     ///< centre of j to contact point (0 for a wall) [m]
-  bool wall = false;      ///< true for a particle-wall contact
-  double r_i = 0.0;       ///< radius of i [m]
-  double r_j = 0.0;       ///< radius of j [m] (+inf for a wall)
+  Vec3 n;                ///< unit normal, j -> i
+  double overlap = 0.0;  ///< delta = r_i + r_j - d > 0 in contact [m]
+  double r_eff = 0.0;    ///< R* = r_i r_j / (r_i + r_j); r_i for a wall [m]
+  double m_eff = 0.0;    ///< m* = m_i m_j / (m_i + m_j); m_i for a wall [kg]
+  double arm_i = 0.0;    ///< centre of i to contact point [m]
+  double arm_j = 0.0;    ///< centre of j to contact point (0 for a wall) [m]
+  bool wall = false;     ///< true for a particle-wall contact
+  double r_i = 0.0;      ///< radius of i [m]
+  double r_j = 0.0;      ///< radius of j [m] (+inf for a wall)
   /// Filled only for laws that declare kThermal (ContactModelT): mean temperature of the pair
   /// (the particle's for a wall) from the particle field "temperature" [K], NaN without it; and
   /// the stage's time scale (physical seconds per mechanical second) for laws whose viscous
@@ -30,9 +30,9 @@ struct ContactGeometry {
 };
 
 struct RelativeMotion {
-  Vec3 v;                 ///< velocity of i's contact point relative to j's [m/s]
-  double vn = 0.0;        ///< v . n (< 0 when approaching) [m/s]
-  Vec3 vt;                ///< tangential part v - vn n [m/s]
+  Vec3 v;           ///< velocity of i's contact point relative to j's [m/s]
+  double vn = 0.0;  ///< v . n (< 0 when approaching) [m/s]
+  Vec3 vt;          ///< tangential part v - vn n [m/s]
 };
 
 struct ContactForces {
@@ -41,7 +41,7 @@ struct ContactForces {
 };
 
 [[gnu::always_inline]] inline RelativeMotion relative_motion(const ContactGeometry& g, const Vec3& vi, const Vec3& vj, const Vec3& wi,
-                                      const Vec3& wj) {
+                                                             const Vec3& wj) {
   RelativeMotion m;
   m.v = vi - vj - (g.arm_i * wi + g.arm_j * wj).cross(g.n);
   m.vn = m.v.dot(g.n);

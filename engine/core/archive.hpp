@@ -43,7 +43,10 @@ class Archive {
     if (!reading()) {
       flat.resize(4 * v.size());
       for (std::size_t i = 0; i < v.size(); ++i) {
-        flat[4 * i] = v[i].w(); flat[4 * i + 1] = v[i].x(); flat[4 * i + 2] = v[i].y(); flat[4 * i + 3] = v[i].z();
+        flat[4 * i] = v[i].w();
+        flat[4 * i + 1] = v[i].x();
+        flat[4 * i + 2] = v[i].y();
+        flat[4 * i + 3] = v[i].z();
       }
     }
     visit(name, flat, 4);

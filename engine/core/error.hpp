@@ -19,10 +19,8 @@ struct Diagnostic {
 /// Invalid scenario: carries every problem found, reported together (exit code 2).
 class ConfigError : public std::runtime_error {
  public:
-  explicit ConfigError(std::vector<Diagnostic> d)
-      : std::runtime_error(format(d)), diagnostics_(std::move(d)) {}
-  ConfigError(std::string path, std::string message)
-      : ConfigError(std::vector<Diagnostic>{{std::move(path), std::move(message)}}) {}
+  explicit ConfigError(std::vector<Diagnostic> d) : std::runtime_error(format(d)), diagnostics_(std::move(d)) {}
+  ConfigError(std::string path, std::string message) : ConfigError(std::vector<Diagnostic>{{std::move(path), std::move(message)}}) {}
   const std::vector<Diagnostic>& diagnostics() const { return diagnostics_; }
 
  private:
@@ -46,9 +44,9 @@ struct PhysicsErrorDetail {
   double time = std::numeric_limits<double>::quiet_NaN();   ///< [s] simulated time of `step` (NaN: not given)
   double value = std::numeric_limits<double>::quiet_NaN();  ///< the offending value (unit of the quantity)
   double bound = std::numeric_limits<double>::quiet_NaN();  ///< the bound it broke (same unit)
-  std::string hint;        ///< what the user should change
-  std::string checkpoint;  ///< file holding the last state that passed the watchdog ("" if none)
-  Step checkpoint_step = -1;  ///< the step of that state (-1: none)
+  std::string hint;                                         ///< what the user should change
+  std::string checkpoint;                                   ///< file holding the last state that passed the watchdog ("" if none)
+  Step checkpoint_step = -1;                                ///< the step of that state (-1: none)
 };
 
 /// The physics went wrong during a run: NaN, blow-up, step above the stable step.
@@ -59,8 +57,12 @@ class PhysicsError : public std::runtime_error {
   PhysicsError(Step step, std::vector<Id> ids, std::string quantity, const std::string& what)
       : PhysicsError(step, std::move(ids), std::move(quantity), what, PhysicsErrorDetail{}) {}
   PhysicsError(Step step, std::vector<Id> ids, std::string quantity, const std::string& what, PhysicsErrorDetail detail)
-      : std::runtime_error(format(step, ids, quantity, what, detail)), step_(step), ids_(std::move(ids)),
-        quantity_(std::move(quantity)), reason_(what), detail_(std::move(detail)) {}
+      : std::runtime_error(format(step, ids, quantity, what, detail)),
+        step_(step),
+        ids_(std::move(ids)),
+        quantity_(std::move(quantity)),
+        reason_(what),
+        detail_(std::move(detail)) {}
   Step step() const { return step_; }
   /// The particles involved, most severe first (all of them; the message prints the first 10).
   const std::vector<Id>& ids() const { return ids_; }
@@ -70,8 +72,7 @@ class PhysicsError : public std::runtime_error {
   const PhysicsErrorDetail& detail() const { return detail_; }
 
  private:
-  static std::string format(Step step, const std::vector<Id>& ids, const std::string& q, const std::string& w,
-                            const PhysicsErrorDetail& d) {
+  static std::string format(Step step, const std::vector<Id>& ids, const std::string& q, const std::string& w, const PhysicsErrorDetail& d) {
     // Built by appending: GCC 12 gives a false -Wrestrict on `"literal" + std::string&&` once
     // this is inlined into some callers.
     std::string s = "physics error at step ";

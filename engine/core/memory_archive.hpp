@@ -43,11 +43,21 @@ class MemoryArchive final : public Archive {
   void replay(Archive& out) {
     for (auto& [name, it] : items_) {
       switch (it.kind) {
-        case Kind::Reals: out.visit(name, it.reals, it.components); break;
-        case Kind::Ints: out.visit(name, it.ints, it.components); break;
-        case Kind::Real: out.visit(name, it.real); break;
-        case Kind::Int: out.visit(name, it.integer); break;
-        case Kind::Text: out.visit(name, it.text); break;
+        case Kind::Reals:
+          out.visit(name, it.reals, it.components);
+          break;
+        case Kind::Ints:
+          out.visit(name, it.ints, it.components);
+          break;
+        case Kind::Real:
+          out.visit(name, it.real);
+          break;
+        case Kind::Int:
+          out.visit(name, it.integer);
+          break;
+        case Kind::Text:
+          out.visit(name, it.text);
+          break;
       }
     }
   }
@@ -56,27 +66,42 @@ class MemoryArchive final : public Archive {
   bool has(const std::string& name) const override { return items_.count(name) != 0; }
   using Archive::visit;
   void visit(const std::string& name, std::vector<double>& v, int components = 1) override {
-    if (reading_) { v = get(name, Kind::Reals).reals; return; }
+    if (reading_) {
+      v = get(name, Kind::Reals).reals;
+      return;
+    }
     Item& it = put(name, Kind::Reals);
     it.reals.assign(v.begin(), v.end());
     it.components = components;
   }
   void visit(const std::string& name, std::vector<std::int64_t>& v, int components = 1) override {
-    if (reading_) { v = get(name, Kind::Ints).ints; return; }
+    if (reading_) {
+      v = get(name, Kind::Ints).ints;
+      return;
+    }
     Item& it = put(name, Kind::Ints);
     it.ints.assign(v.begin(), v.end());
     it.components = components;
   }
   void visit(const std::string& name, double& x) override {
-    if (reading_) { x = get(name, Kind::Real).real; return; }
+    if (reading_) {
+      x = get(name, Kind::Real).real;
+      return;
+    }
     put(name, Kind::Real).real = x;
   }
   void visit(const std::string& name, std::int64_t& x) override {
-    if (reading_) { x = get(name, Kind::Int).integer; return; }
+    if (reading_) {
+      x = get(name, Kind::Int).integer;
+      return;
+    }
     put(name, Kind::Int).integer = x;
   }
   void visit(const std::string& name, std::string& s) override {
-    if (reading_) { s = get(name, Kind::Text).text; return; }
+    if (reading_) {
+      s = get(name, Kind::Text).text;
+      return;
+    }
     put(name, Kind::Text).text.assign(s);
   }
 

@@ -8,26 +8,25 @@
 
 namespace sparkdem {
 
-EffectiveResistance effective_resistance(LaplacianSolver& solver, const LaplacianProblem& net,
-                                         std::span<const Index> high, std::span<const Index> low, double voltage) {
+EffectiveResistance effective_resistance(LaplacianSolver& solver, const LaplacianProblem& net, std::span<const Index> high,
+                                         std::span<const Index> low, double voltage) {
   const std::size_t n = net.nodes, ne = net.a.size();
   if (!net.dirichlet.empty() || !net.source.empty() || !net.shunt.empty())
-    throw SetupError("effective_resistance: the network must have no Dirichlet groups, sources or shunts (the "
-                     "electrodes are given separately)");
+    throw SetupError(
+        "effective_resistance: the network must have no Dirichlet groups, sources or shunts (the "
+        "electrodes are given separately)");
   if (!std::isfinite(voltage) || voltage == 0.0)
     throw SetupError("effective_resistance: the electrode voltage must be finite and non-zero");
-  if (net.b.size() != ne || net.g.size() != ne)
-    throw SetupError("effective_resistance: edge lists and conductances differ in length");
+  if (net.b.size() != ne || net.g.size() != ne) throw SetupError("effective_resistance: edge lists and conductances differ in length");
   if (!net.capacitance.empty() && net.capacitance.size() != n)
-    throw SetupError("effective_resistance: capacitance has " + std::to_string(net.capacitance.size()) +
-                     " entries for " + std::to_string(n) + " nodes");
+    throw SetupError("effective_resistance: capacitance has " + std::to_string(net.capacitance.size()) + " entries for " +
+                     std::to_string(n) + " nodes");
   // 1 = high, 2 = low.
   std::vector<std::uint8_t> electrode(n, 0);
   for (int side = 1; side <= 2; ++side)
     for (const Index v : side == 1 ? high : low) {
       if (v < 0 || static_cast<std::size_t>(v) >= n)
-        throw SetupError("effective_resistance: electrode node " + std::to_string(v) + " outside 0.." +
-                         std::to_string(n) + "-1");
+        throw SetupError("effective_resistance: electrode node " + std::to_string(v) + " outside 0.." + std::to_string(n) + "-1");
       if (electrode[v] != 0)
         throw SetupError("effective_resistance: node " + std::to_string(v) +
                          (electrode[v] == side ? " is listed twice in one electrode" : " is in both electrodes"));
@@ -38,8 +37,7 @@ EffectiveResistance effective_resistance(LaplacianSolver& solver, const Laplacia
   for (std::size_t e = 0; e < ne; ++e) {
     const Index a = net.a[e], b = net.b[e];
     if (a < 0 || b < 0 || static_cast<std::size_t>(a) >= n || static_cast<std::size_t>(b) >= n)
-      throw SetupError("effective_resistance: edge " + std::to_string(e) + " refers to a node outside 0.." +
-                       std::to_string(n) + "-1");
+      throw SetupError("effective_resistance: edge " + std::to_string(e) + " refers to a node outside 0.." + std::to_string(n) + "-1");
     if (!(net.g[e] >= 0.0) || !std::isfinite(net.g[e]))
       throw PhysicsError(net.step, {}, "conductance",
                          "edge " + std::to_string(e) + " (nodes " + std::to_string(a) + ", " + std::to_string(b) +
@@ -64,8 +62,14 @@ EffectiveResistance effective_resistance(LaplacianSolver& solver, const Laplacia
         sub_nodes.push_back(static_cast<Index>(v));
         if (is_root) ++out.spanning_components;
         break;
-      case 1: out.value[v] = voltage; ++out.single_electrode_nodes; break;
-      case 2: out.value[v] = 0.0; ++out.single_electrode_nodes; break;
+      case 1:
+        out.value[v] = voltage;
+        ++out.single_electrode_nodes;
+        break;
+      case 2:
+        out.value[v] = 0.0;
+        ++out.single_electrode_nodes;
+        break;
       default:
         ++out.floating_nodes;
         if (is_root) ++out.floating_components;

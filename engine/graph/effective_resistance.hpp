@@ -22,12 +22,12 @@
 namespace sparkdem {
 
 struct EffectiveResistance {
-  double conductance = 0.0;  ///< G = I / voltage [S]; exactly 0 without a spanning path
+  double conductance = 0.0;                                     ///< G = I / voltage [S]; exactly 0 without a spanning path
   double resistance = std::numeric_limits<double>::infinity();  ///< R = voltage / I [Ohm]; +inf without one
-  double current = 0.0;      ///< I leaving the high electrode into the network [A]
-  double current_low = 0.0;  ///< current leaving the low electrode (= -I up to the solver's tolerance)
-  double voltage = 0.0;      ///< potential of the high electrode (the low one is at 0) [V]
-  bool spanning = false;     ///< at least one component touches both electrodes
+  double current = 0.0;                                         ///< I leaving the high electrode into the network [A]
+  double current_low = 0.0;                                     ///< current leaving the low electrode (= -I up to the solver's tolerance)
+  double voltage = 0.0;                                         ///< potential of the high electrode (the low one is at 0) [V]
+  bool spanning = false;                                        ///< at least one component touches both electrodes
   std::size_t spanning_components = 0;
   std::size_t spanning_nodes = 0;          ///< nodes solved (electrode nodes included)
   std::size_t single_electrode_nodes = 0;  ///< in components touching one electrode only (excluded)
@@ -42,7 +42,7 @@ struct EffectiveResistance {
 /// method); its dirichlet, source and shunt must be empty. high / low: the electrode nodes
 /// (disjoint; an empty electrode gives G = 0). Throws SetupError for malformed input (see
 /// LaplacianSolver::solve) or a voltage that is 0 or not finite, PhysicsError as the solve does.
-EffectiveResistance effective_resistance(LaplacianSolver& solver, const LaplacianProblem& network,
-                                         std::span<const Index> high, std::span<const Index> low, double voltage = 1.0);
+EffectiveResistance effective_resistance(LaplacianSolver& solver, const LaplacianProblem& network, std::span<const Index> high,
+                                         std::span<const Index> low, double voltage = 1.0);
 
 }  // namespace sparkdem

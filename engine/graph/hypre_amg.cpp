@@ -103,9 +103,7 @@ struct Command {
   double tolerance = 0.0, strong_threshold = 0.0;
 };
 
-void send_command(int rank, const Command& c) {
-  MPI_Send(&c, static_cast<int>(sizeof c), MPI_CHAR, rank, kAmgCommandTag, MPI_COMM_WORLD);
-}
+void send_command(int rank, const Command& c) { MPI_Send(&c, static_cast<int>(sizeof c), MPI_CHAR, rank, kAmgCommandTag, MPI_COMM_WORLD); }
 template <class T>
 void send_data(int rank, const T* data, std::size_t count) {
   MPI_Send(data, static_cast<int>(count * sizeof(T)), MPI_CHAR, rank, kAmgDataTag, MPI_COMM_WORLD);
@@ -132,12 +130,12 @@ struct HypreAmgPcg::Impl {
   HYPRE_ParCSRMatrix pA = nullptr;
   HYPRE_ParVector pb = nullptr, px = nullptr;
   HYPRE_Solver pcg = nullptr, amg = nullptr;
-  HYPRE_BigInt n = 0;                 ///< global rows
-  HYPRE_BigInt lo = 0, hi = 0;        ///< this rank's rows [lo, hi)
-  std::vector<HYPRE_BigInt> rows;     ///< lo .. hi-1
-  int ranks = 1;                      ///< ranks the matrix is spread over (1: MPI_COMM_SELF)
-  std::vector<HYPRE_BigInt> perm;     ///< spread: the solver's row order (new -> old)
-  std::int64_t id = 0;                ///< spread solver's id on every rank
+  HYPRE_BigInt n = 0;              ///< global rows
+  HYPRE_BigInt lo = 0, hi = 0;     ///< this rank's rows [lo, hi)
+  std::vector<HYPRE_BigInt> rows;  ///< lo .. hi-1
+  int ranks = 1;                   ///< ranks the matrix is spread over (1: MPI_COMM_SELF)
+  std::vector<HYPRE_BigInt> perm;  ///< spread: the solver's row order (new -> old)
+  std::int64_t id = 0;             ///< spread solver's id on every rank
   bool ready = false;
 
   ~Impl() { clear(); }
@@ -174,8 +172,7 @@ struct HypreAmgPcg::Impl {
 
   /// Creates the matrix of rows [lo, hi) (CSR: ncols per row, global columns, values) on `comm`,
   /// the vectors and the preconditioned CG with its AMG hierarchy. Collective over `comm`.
-  void build(MPI_Comm comm, const HYPRE_Int* ncols, const HYPRE_BigInt* cols, const double* vals,
-             const HypreAmgPcg::Settings& settings) {
+  void build(MPI_Comm comm, const HYPRE_Int* ncols, const HYPRE_BigInt* cols, const double* vals, const HypreAmgPcg::Settings& settings) {
     const HYPRE_BigInt last = hi - 1;
     rows.resize(static_cast<std::size_t>(hi - lo));
     for (HYPRE_BigInt r = lo; r < hi; ++r) rows[static_cast<std::size_t>(r - lo)] = r;
@@ -188,8 +185,7 @@ struct HypreAmgPcg::Impl {
     check(HYPRE_IJMatrixSetDiagOffdSizes(A, diag.data(), offd.data()), "IJMatrixSetDiagOffdSizes");
     check(HYPRE_IJMatrixInitialize(A), "IJMatrixInitialize");
     if (!rows.empty())
-      check(HYPRE_IJMatrixSetValues(A, static_cast<HYPRE_Int>(rows.size()), const_cast<HYPRE_Int*>(ncols), rows.data(), cols,
-                                    vals),
+      check(HYPRE_IJMatrixSetValues(A, static_cast<HYPRE_Int>(rows.size()), const_cast<HYPRE_Int*>(ncols), rows.data(), cols, vals),
             "IJMatrixSetValues");
     check(HYPRE_IJMatrixAssemble(A), "IJMatrixAssemble");
     check(HYPRE_IJMatrixGetObject(A, reinterpret_cast<void**>(&pA)), "IJMatrixGetObject");
@@ -337,7 +333,10 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
   im.clear();
   im.perm.clear();
   im.n = static_cast<HYPRE_BigInt>(M.rows());
-  if (im.n == 0) { im.ready = true; return; }
+  if (im.n == 0) {
+    im.ready = true;
+    return;
+  }
   if (!M.isCompressed()) throw SetupError("HypreAmgPcg::setup: the matrix must be compressed");
   ensure_mpi();
   const int p = amg_spread_ranks() > 1 && M.rows() >= settings_.spread_min_rows ? amg_spread_ranks() : 1;
@@ -363,8 +362,7 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
     if (r == 0) {
       im.lo = lo;
       im.hi = hi;
-      im.build(p > 1 ? spread_comm() : MPI_COMM_SELF, all.ncols.data() + lo, all.cols.data() + e0, all.vals.data() + e0,
-               settings_);
+      im.build(p > 1 ? spread_comm() : MPI_COMM_SELF, all.ncols.data() + lo, all.cols.data() + e0, all.vals.data() + e0, settings_);
       break;
     }
     Command c;

@@ -77,9 +77,9 @@ class HypreAmgPcg {
 
  private:
   friend void serve_amg_command(const std::string& bytes);
-/// On a rank other than 0 of a program that only serves spread solves (benchmarks, tests): carry
-/// out rank 0's commands until a message with `stop_tag` arrives (probing every millisecond).
-void serve_amg_commands_until(int stop_tag);
+  /// On a rank other than 0 of a program that only serves spread solves (benchmarks, tests): carry
+  /// out rank 0's commands until a message with `stop_tag` arrives (probing every millisecond).
+  void serve_amg_commands_until(int stop_tag);
   struct Impl;
   Settings settings_;
   std::unique_ptr<Impl> impl_;

@@ -7,8 +7,9 @@ namespace sparkdem {
 
 namespace {
 [[noreturn]] void unavailable() {
-  throw SetupError("the Laplacian method 'amg' needs hypre, and this sparkdem was built without MPI (SPARKDEM_MPI=OFF); "
-                   "use another method or rebuild with -DSPARKDEM_MPI=ON");
+  throw SetupError(
+      "the Laplacian method 'amg' needs hypre, and this sparkdem was built without MPI (SPARKDEM_MPI=OFF); "
+      "use another method or rebuild with -DSPARKDEM_MPI=ON");
 }
 }  // namespace
 

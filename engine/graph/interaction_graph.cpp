@@ -12,18 +12,21 @@ namespace sparkdem {
 
 const char* edge_kind_name(EdgeKind k) {
   switch (k) {
-    case EdgeKind::Contact: return "contact";
-    case EdgeKind::Neck: return "neck";
-    case EdgeKind::Bond: return "bond";
-    case EdgeKind::Near: return "near";
-    case EdgeKind::Wall: return "wall";
+    case EdgeKind::Contact:
+      return "contact";
+    case EdgeKind::Neck:
+      return "neck";
+    case EdgeKind::Bond:
+      return "bond";
+    case EdgeKind::Near:
+      return "near";
+    case EdgeKind::Wall:
+      return "wall";
   }
   return "?";
 }
 
-std::size_t InteractionGraph::count(EdgeKind k) const {
-  return static_cast<std::size_t>(std::count(kind.begin(), kind.end(), k));
-}
+std::size_t InteractionGraph::count(EdgeKind k) const { return static_cast<std::size_t>(std::count(kind.begin(), kind.end(), k)); }
 
 namespace {
 
@@ -48,8 +51,8 @@ void check_rows(const PairRows& t, std::size_t n, const char* what) {
   for (std::size_t r = 0; r < t.size(); ++r) {
     const Index i = t.i(r), j = t.j(r);
     if (i < 0 || j < 0 || static_cast<std::size_t>(i) >= n || static_cast<std::size_t>(j) >= n)
-      throw SetupError(std::string("interaction graph: ") + what + " row " + std::to_string(r) +
-                       " refers to local particle " + std::to_string(std::max(i, j)) + " of " + std::to_string(n));
+      throw SetupError(std::string("interaction graph: ") + what + " row " + std::to_string(r) + " refers to local particle " +
+                       std::to_string(std::max(i, j)) + " of " + std::to_string(n));
   }
 }
 
@@ -99,8 +102,7 @@ struct Builder {
 
 }  // namespace
 
-std::uint64_t topology_hash(std::size_t particle_nodes, std::size_t wall_nodes, const std::vector<Index>& a,
-                            const std::vector<Index>& b) {
+std::uint64_t topology_hash(std::size_t particle_nodes, std::size_t wall_nodes, const std::vector<Index>& a, const std::vector<Index>& b) {
   std::uint64_t h = mix64(static_cast<std::uint64_t>(particle_nodes));
   h = mix64(h ^ static_cast<std::uint64_t>(wall_nodes));
   h = mix64(h ^ static_cast<std::uint64_t>(a.size()));
@@ -141,9 +143,12 @@ InteractionGraph build_interaction_graph(const State& s, const GraphOptions& o) 
       double d = 0.0, ov = 0.0;
       bld.pair_geometry(a, b, d, ov);
       const double neck = nc >= 0 ? t.state(r)[nc] : 0.0;
-      if (neck > 0.0) bld.push(a, b, EdgeKind::Neck, d, ov, neck, static_cast<std::int64_t>(r));
-      else if (ov > 0.0) bld.push(a, b, EdgeKind::Contact, d, ov, lens_radius(p.radius[a], p.radius[b], d), static_cast<std::int64_t>(r));
-      else continue;
+      if (neck > 0.0)
+        bld.push(a, b, EdgeKind::Neck, d, ov, neck, static_cast<std::int64_t>(r));
+      else if (ov > 0.0)
+        bld.push(a, b, EdgeKind::Contact, d, ov, lens_radius(p.radius[a], p.radius[b], d), static_cast<std::int64_t>(r));
+      else
+        continue;
       if (need_keys) edge_keys.insert(key);
     }
   }
@@ -253,13 +258,15 @@ std::vector<double> node_field(const State& s, const InteractionGraph& g, const 
     throw SetupError("interaction graph has " + std::to_string(g.particle_nodes) + " particle nodes, the state " +
                      std::to_string(p.size()) + " particles (rebuild the graph)");
   std::vector<double> v(g.nodes(), wall_value);
-  if (name == "radius") std::copy(p.radius.begin(), p.radius.end(), v.begin());
-  else if (name == "mass") std::copy(p.mass.begin(), p.mass.end(), v.begin());
+  if (name == "radius")
+    std::copy(p.radius.begin(), p.radius.end(), v.begin());
+  else if (name == "mass")
+    std::copy(p.mass.begin(), p.mass.end(), v.begin());
   else {
     if (!p.fields.has(name)) throw SetupError("interaction graph: no particle field '" + name + "'");
     if (p.fields.info(name).components != 1)
-      throw SetupError("interaction graph: particle field '" + name + "' has " +
-                       std::to_string(p.fields.info(name).components) + " components, node_field needs 1");
+      throw SetupError("interaction graph: particle field '" + name + "' has " + std::to_string(p.fields.info(name).components) +
+                       " components, node_field needs 1");
     const auto& f = p.fields.data(name);
     std::copy_n(f.begin(), g.particle_nodes, v.begin());
   }

@@ -58,11 +58,11 @@ enum class EdgeKind : std::uint8_t { Contact, Neck, Bond, Near, Wall };
 const char* edge_kind_name(EdgeKind k);
 
 struct GraphOptions {
-  bool contacts = true;     ///< contact-table rows in contact (overlap > 0) or with a neck
-  bool bonds = true;        ///< intact bonds
-  double near_gap = 0.0;    ///< [m] also connect pairs with 0 <= gap <= near_gap (tunnelling, thermal gaps); 0 = off
-  bool walls = false;       ///< walls become extra nodes n..n+W-1
-  double wall_gap = 0.0;    ///< [m] also connect particles within this gap of a wall; 0 = overlap only
+  bool contacts = true;                     ///< contact-table rows in contact (overlap > 0) or with a neck
+  bool bonds = true;                        ///< intact bonds
+  double near_gap = 0.0;                    ///< [m] also connect pairs with 0 <= gap <= near_gap (tunnelling, thermal gaps); 0 = off
+  bool walls = false;                       ///< walls become extra nodes n..n+W-1
+  double wall_gap = 0.0;                    ///< [m] also connect particles within this gap of a wall; 0 = overlap only
   std::string neck_column = "neck_radius";  ///< per-row state column holding a neck radius [m] ("" = none)
 };
 
@@ -71,9 +71,9 @@ struct InteractionGraph {
   std::size_t wall_nodes = 0;      ///< W (0 unless GraphOptions::walls)
   std::vector<Index> a, b;         ///< edge end points (node indices)
   std::vector<EdgeKind> kind;
-  std::vector<double> distance;    ///< [m] centre distance; particle-to-wall signed distance for wall edges
-  std::vector<double> overlap;     ///< [m] r_a + r_b - d (r_a - d for a wall): > 0 overlap, < 0 gap
-  std::vector<double> radius;      ///< [m] contact radius (neck, lens, plane section; 0 for gaps)
+  std::vector<double> distance;          ///< [m] centre distance; particle-to-wall signed distance for wall edges
+  std::vector<double> overlap;           ///< [m] r_a + r_b - d (r_a - d for a wall): > 0 overlap, < 0 gap
+  std::vector<double> radius;            ///< [m] contact radius (neck, lens, plane section; 0 for gaps)
   std::vector<std::int64_t> source_row;  ///< row in the contact table (Contact, Neck) or bond table (Bond); -1 otherwise
   /// Hash of (particle_nodes, wall_nodes, a, b): equal while the topology is unchanged, so a
   /// module can keep per-edge caches. (LaplacianSolver checks its matrix structure itself.)
@@ -98,8 +98,7 @@ InteractionGraph build_interaction_graph(const State& s, const GraphOptions& opt
 InteractionGraph build_interaction_graph_brute_force(const State& s, const GraphOptions& opt = {});
 
 /// Hash of the topology (node counts and the ordered (a, b) list).
-std::uint64_t topology_hash(std::size_t particle_nodes, std::size_t wall_nodes, const std::vector<Index>& a,
-                            const std::vector<Index>& b);
+std::uint64_t topology_hash(std::size_t particle_nodes, std::size_t wall_nodes, const std::vector<Index>& a, const std::vector<Index>& b);
 
 /// Radius of the intersection circle of two spheres (the "lens radius") of radii ra, rb at centre
 /// distance d. With x = (d^2 + ra^2 - rb^2) / (2 d) the distance from centre a to the radical

@@ -24,12 +24,12 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 void check_endpoints(std::size_t nodes, std::span<const Index> a, std::span<const Index> b) {
   if (a.size() != b.size())
-    throw SetupError("Laplacian: edge lists have different lengths (a " + std::to_string(a.size()) + ", b " +
-                     std::to_string(b.size()) + ")");
+    throw SetupError("Laplacian: edge lists have different lengths (a " + std::to_string(a.size()) + ", b " + std::to_string(b.size()) +
+                     ")");
   for (std::size_t e = 0; e < a.size(); ++e)
     if (a[e] < 0 || b[e] < 0 || static_cast<std::size_t>(a[e]) >= nodes || static_cast<std::size_t>(b[e]) >= nodes)
-      throw SetupError("Laplacian: edge " + std::to_string(e) + " (" + std::to_string(a[e]) + ", " +
-                       std::to_string(b[e]) + ") refers to a node outside 0.." + std::to_string(nodes) + "-1");
+      throw SetupError("Laplacian: edge " + std::to_string(e) + " (" + std::to_string(a[e]) + ", " + std::to_string(b[e]) +
+                       ") refers to a node outside 0.." + std::to_string(nodes) + "-1");
 }
 
 void check_edges(std::size_t nodes, std::span<const Index> a, std::span<const Index> b, std::span<const double> g) {
@@ -106,8 +106,7 @@ Index find_root(std::vector<Index>& parent, Index v) {
 
 }  // namespace
 
-std::vector<Index> component_roots(std::size_t nodes, std::span<const Index> a, std::span<const Index> b,
-                                   std::span<const double> g) {
+std::vector<Index> component_roots(std::size_t nodes, std::span<const Index> a, std::span<const Index> b, std::span<const double> g) {
   std::vector<Index> parent(nodes);
   std::iota(parent.begin(), parent.end(), Index{0});
   for (std::size_t e = 0; e < g.size(); ++e) {
@@ -119,9 +118,7 @@ std::vector<Index> component_roots(std::size_t nodes, std::span<const Index> a, 
   return parent;
 }
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 // ---------------------------------------------------------------------------------------------
 // Matrix-free operator, diagonal, assembly
@@ -153,8 +150,8 @@ void EdgeIncidence::build(std::size_t nodes, std::span<const Index> a, std::span
 void laplacian_apply(const EdgeIncidence& inc, std::span<const double> g, std::span<const double> x, std::span<double> y) {
   const std::size_t n = inc.nodes();
   if (x.size() != n || y.size() != n)
-    throw SetupError("laplacian_apply: x has " + std::to_string(x.size()) + " and y " + std::to_string(y.size()) +
-                     " entries for " + std::to_string(n) + " nodes");
+    throw SetupError("laplacian_apply: x has " + std::to_string(x.size()) + " and y " + std::to_string(y.size()) + " entries for " +
+                     std::to_string(n) + " nodes");
   if (g.size() != inc.edges)
     throw SetupError("laplacian_apply: " + std::to_string(g.size()) + " conductances for " + std::to_string(inc.edges) + " edges");
   const auto nn = static_cast<std::int64_t>(n);
@@ -177,8 +174,7 @@ void laplacian_apply(std::size_t nodes, std::span<const Index> a, std::span<cons
   laplacian_apply(inc, g, x, y);
 }
 
-std::vector<double> laplacian_diagonal(std::size_t nodes, std::span<const Index> a, std::span<const Index> b,
-                                       std::span<const double> g) {
+std::vector<double> laplacian_diagonal(std::size_t nodes, std::span<const Index> a, std::span<const Index> b, std::span<const double> g) {
   check_edges(nodes, a, b, g);
   std::vector<double> d(nodes, 0.0);
   for (std::size_t e = 0; e < a.size(); ++e) {
@@ -210,11 +206,16 @@ Eigen::SparseMatrix<double> assemble_laplacian(std::size_t nodes, std::span<cons
 
 const char* laplacian_method_name(LaplacianMethod m) {
   switch (m) {
-    case LaplacianMethod::Direct: return "direct";
-    case LaplacianMethod::CgIncompleteCholesky: return "cg_ic";
-    case LaplacianMethod::CgDiagonal: return "cg_jacobi";
-    case LaplacianMethod::PseudoTransient: return "pseudo_transient";
-    case LaplacianMethod::Amg: return "amg";
+    case LaplacianMethod::Direct:
+      return "direct";
+    case LaplacianMethod::CgIncompleteCholesky:
+      return "cg_ic";
+    case LaplacianMethod::CgDiagonal:
+      return "cg_jacobi";
+    case LaplacianMethod::PseudoTransient:
+      return "pseudo_transient";
+    case LaplacianMethod::Amg:
+      return "amg";
   }
   return "?";
 }
@@ -224,22 +225,25 @@ const char* laplacian_method_name(LaplacianMethod m) {
 
 EigenEstimate max_generalized_eigenvalue(const SpMat& A, std::span<const double> C, double rel_tol, int max_iterations) {
   const std::int64_t m = A.rows();
-  if (A.cols() != m || !A.isCompressed())
-    throw SetupError("max_generalized_eigenvalue: the matrix must be square and compressed");
+  if (A.cols() != m || !A.isCompressed()) throw SetupError("max_generalized_eigenvalue: the matrix must be square and compressed");
   if (C.size() != static_cast<std::size_t>(m))
-    throw SetupError("max_generalized_eigenvalue: " + std::to_string(C.size()) + " capacitances for " +
-                     std::to_string(m) + " rows");
-  if (!(rel_tol > 0.0) || max_iterations < 1)
-    throw SetupError("max_generalized_eigenvalue: needs rel_tol > 0 and max_iterations >= 1");
+    throw SetupError("max_generalized_eigenvalue: " + std::to_string(C.size()) + " capacitances for " + std::to_string(m) + " rows");
+  if (!(rel_tol > 0.0) || max_iterations < 1) throw SetupError("max_generalized_eigenvalue: needs rel_tol > 0 and max_iterations >= 1");
   for (std::int64_t i = 0; i < m; ++i)
     if (!(C[i] > 0.0) || !std::isfinite(C[i]))
       throw SetupError("max_generalized_eigenvalue: capacitance " + std::to_string(i) + " is not finite and > 0");
   EigenEstimate est;
-  if (m == 0) { est.converged = true; return est; }
+  if (m == 0) {
+    est.converged = true;
+    return est;
+  }
   // Lanczos on B = S A S, S = C^-1/2, without reorthogonalisation: the largest Ritz value is not
   // affected by the loss of orthogonality (it only brings spurious copies of converged values).
   Eigen::VectorXd s(m), q(m), q_prev = Eigen::VectorXd::Zero(m), w(m), sq(m);
-  for (std::int64_t i = 0; i < m; ++i) { s[i] = 1.0 / std::sqrt(C[i]); q[i] = start_entry(static_cast<std::uint64_t>(i)); }
+  for (std::int64_t i = 0; i < m; ++i) {
+    s[i] = 1.0 / std::sqrt(C[i]);
+    q[i] = start_entry(static_cast<std::uint64_t>(i));
+  }
   q /= std::sqrt(block_sum(m, [&](std::int64_t i) { return q[i] * q[i]; }));
   std::vector<double> alpha, beta;
   double b_prev = 0.0;
@@ -269,7 +273,10 @@ EigenEstimate max_generalized_eigenvalue(const SpMat& A, std::span<const double>
       est.value = theta;
       est.residual_bound = b * std::abs(sk);
       est.iterations = k;
-      if (est.residual_bound <= rel_tol * std::abs(theta)) { est.converged = true; break; }
+      if (est.residual_bound <= rel_tol * std::abs(theta)) {
+        est.converged = true;
+        break;
+      }
     }
     if (b == 0.0) break;  // invariant subspace; theta exact (caught above unless theta == 0)
     beta.push_back(b);
@@ -316,9 +323,9 @@ struct LaplacianSolver::Impl {
   std::vector<std::int32_t> role;  // >= 0: free index; -1 Dirichlet; -2 floating
   // Reduced matrix (both triangles) and the slots each edge / node adds into.
   SpMat A;
-  std::vector<std::int64_t> slot_diag;             // per free unknown
-  std::vector<std::int64_t> slot_ab, slot_ba;      // per edge (-1 unless both ends free)
-  std::vector<double> factored_values;             // matrix values of the current factorisation
+  std::vector<std::int64_t> slot_diag;         // per free unknown
+  std::vector<std::int64_t> slot_ab, slot_ba;  // per edge (-1 unless both ends free)
+  std::vector<double> factored_values;         // matrix values of the current factorisation
   bool factor_valid = false;
 
   Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
@@ -335,9 +342,9 @@ namespace {
 
 /// The pseudo-transient iteration x <- x + dt C^-1 (b - A x) until the change indicator < beta.
 /// Returns {iterations, indicator}; throws PhysicsError on divergence or no convergence.
-std::pair<int, double> pseudo_transient(const SpMat& A, const Eigen::VectorXd& b, const std::vector<double>& cap,
-                                        double dt, const PseudoTransientOptions& o, double spread, int max_it,
-                                        Eigen::VectorXd& x, Step step, double dt_limit) {
+std::pair<int, double> pseudo_transient(const SpMat& A, const Eigen::VectorXd& b, const std::vector<double>& cap, double dt,
+                                        const PseudoTransientOptions& o, double spread, int max_it, Eigen::VectorXd& x, Step step,
+                                        double dt_limit) {
   const std::int64_t m = A.rows(), nb = blocks(m);
   Eigen::VectorXd xn(m);
   std::vector<double> p_ind(nb), p_dmax(nb), p_xmax(nb), p_cn(nb), p_xn(nb);
@@ -360,13 +367,20 @@ std::pair<int, double> pseudo_transient(const SpMat& A, const Eigen::VectorXd& b
         xc += cap[i] * v * v;
         if (!std::isfinite(v)) cn = std::numeric_limits<double>::quiet_NaN();
       }
-      p_ind[k] = ind; p_dmax[k] = dmax; p_xmax[k] = xmax; p_cn[k] = cn; p_xn[k] = xc;
+      p_ind[k] = ind;
+      p_dmax[k] = dmax;
+      p_xmax[k] = xmax;
+      p_cn[k] = cn;
+      p_xn[k] = xc;
     }
     x.swap(xn);
     double ind = 0.0, dmax = 0.0, xmax = 0.0, cn2 = 0.0, xc2 = 0.0;
     for (std::int64_t k = 0; k < nb; ++k) {
-      ind = std::max(ind, p_ind[k]); dmax = std::max(dmax, p_dmax[k]); xmax = std::max(xmax, p_xmax[k]);
-      cn2 += p_cn[k]; xc2 += p_xn[k];
+      ind = std::max(ind, p_ind[k]);
+      dmax = std::max(dmax, p_dmax[k]);
+      xmax = std::max(xmax, p_xmax[k]);
+      cn2 += p_cn[k];
+      xc2 += p_xn[k];
     }
     if (!per_node) {
       const double scale = spread > 0.0 ? spread : xmax > 0.0 ? xmax : 1.0;
@@ -376,20 +390,22 @@ std::pair<int, double> pseudo_transient(const SpMat& A, const Eigen::VectorXd& b
     // Stable dt: ||x^{i+1} - x^i||_C is non-increasing (I - dt C^-1 A is C-self-adjoint with
     // spectral radius < 1). Growth by divergence_factor over its minimum (above rounding noise)
     // or a non-finite value means an unstable step.
-    const bool blown = !std::isfinite(cn) || !std::isfinite(xc2) ||
-                       (cn > o.divergence_factor * min_cn && cn > 1e-12 * std::sqrt(xc2));
+    const bool blown = !std::isfinite(cn) || !std::isfinite(xc2) || (cn > o.divergence_factor * min_cn && cn > 1e-12 * std::sqrt(xc2));
     if (blown)
       physics_fail(step, "pseudo-transient iteration",
-                   "diverges at iteration " + std::to_string(it) + ": the C-norm of the update grew from " +
-                       std::to_string(min_cn) + " (iteration " + std::to_string(min_at) + ") to " + std::to_string(cn) +
-                       " with dt = " + std::to_string(dt) + " s, dt / true limit = " + std::to_string(dt / dt_limit) +
-                       " (limit 2/lambda_max = " + std::to_string(dt_limit) + " s)");
-    if (cn < min_cn) { min_cn = cn; min_at = it; }
+                   "diverges at iteration " + std::to_string(it) + ": the C-norm of the update grew from " + std::to_string(min_cn) +
+                       " (iteration " + std::to_string(min_at) + ") to " + std::to_string(cn) + " with dt = " + std::to_string(dt) +
+                       " s, dt / true limit = " + std::to_string(dt / dt_limit) + " (limit 2/lambda_max = " + std::to_string(dt_limit) +
+                       " s)");
+    if (cn < min_cn) {
+      min_cn = cn;
+      min_at = it;
+    }
     if (ind < o.beta) return {it, ind};
     if (it == max_it)
       physics_fail(step, "pseudo-transient iteration",
-                   "change indicator " + std::to_string(ind) + " still above beta = " + std::to_string(o.beta) +
-                       " after " + std::to_string(max_it) + " iterations (" + std::to_string(m) + " unknowns)");
+                   "change indicator " + std::to_string(ind) + " still above beta = " + std::to_string(o.beta) + " after " +
+                       std::to_string(max_it) + " iterations (" + std::to_string(m) + " unknowns)");
   }
   return {0, 0.0};  // max_it <= 0: not reached (checked by the caller)
 }
@@ -414,7 +430,10 @@ void LaplacianSolver::invalidate() { impl_ = std::make_unique<Impl>(); }
 
 void LaplacianSolver::permute_warm_start(const std::vector<Index>& perm, std::size_t old_particle_nodes) {
   if (warm_.empty()) return;
-  if (old_particle_nodes > warm_.size()) { warm_.clear(); return; }
+  if (old_particle_nodes > warm_.size()) {
+    warm_.clear();
+    return;
+  }
   std::vector<double> w;
   w.reserve(perm.size() + warm_.size() - old_particle_nodes);
   for (const Index i : perm) w.push_back(static_cast<std::size_t>(i) < old_particle_nodes ? warm_[i] : kNaN);
@@ -441,29 +460,27 @@ bool check_problem(const LaplacianProblem& p, const LaplacianOptions& opt) {
   for (std::size_t e = 0; e < ne; ++e)
     if (!std::isfinite(p.g[e]) || (!p.signed_conductances && !(p.g[e] >= 0.0)))
       physics_fail(p.step, "conductance",
-                         "edge " + std::to_string(e) + " (nodes " + std::to_string(p.a[e]) + ", " + std::to_string(p.b[e]) +
-                             ") has g = " + std::to_string(p.g[e]) + "; conductances must be finite and >= 0");
+                   "edge " + std::to_string(e) + " (nodes " + std::to_string(p.a[e]) + ", " + std::to_string(p.b[e]) +
+                       ") has g = " + std::to_string(p.g[e]) + "; conductances must be finite and >= 0");
   for (std::size_t v = 0; v < p.source.size(); ++v)
-    if (!std::isfinite(p.source[v]))
-      physics_fail(p.step, "source", "node " + std::to_string(v) + " has a non-finite source");
+    if (!std::isfinite(p.source[v])) physics_fail(p.step, "source", "node " + std::to_string(v) + " has a non-finite source");
   const bool pseudo = opt.method == LaplacianMethod::PseudoTransient;
   if (pseudo) {
     if (p.capacitance.size() != n)
-      throw SetupError("Laplacian: the pseudo-transient method needs one capacitance per node (" +
-                       std::to_string(p.capacitance.size()) + " given for " + std::to_string(n) + " nodes)");
+      throw SetupError("Laplacian: the pseudo-transient method needs one capacitance per node (" + std::to_string(p.capacitance.size()) +
+                       " given for " + std::to_string(n) + " nodes)");
     for (std::size_t v = 0; v < n; ++v)
       if (!(p.capacitance[v] > 0.0) || !std::isfinite(p.capacitance[v]))
-        physics_fail(p.step, "capacitance", "node " + std::to_string(v) + " has capacitance " +
-                                                std::to_string(p.capacitance[v]) + "; it must be finite and > 0");
+        physics_fail(p.step, "capacitance",
+                     "node " + std::to_string(v) + " has capacitance " + std::to_string(p.capacitance[v]) + "; it must be finite and > 0");
     const auto& po = opt.pseudo;
     if (!(po.dt >= 0.0) || !std::isfinite(po.dt) || (po.dt == 0.0 && !(po.dt_fraction > 0.0 && std::isfinite(po.dt_fraction))))
-      throw SetupError("Laplacian: pseudo-transient step dt = " + std::to_string(po.dt) + ", dt_fraction = " +
-                       std::to_string(po.dt_fraction) + ": give dt > 0, or dt = 0 and dt_fraction > 0");
+      throw SetupError("Laplacian: pseudo-transient step dt = " + std::to_string(po.dt) +
+                       ", dt_fraction = " + std::to_string(po.dt_fraction) + ": give dt > 0, or dt = 0 and dt_fraction > 0");
     if (!(po.beta > 0.0) || !(po.divergence_factor > 1.0))
       throw SetupError("Laplacian: pseudo-transient needs beta > 0 and divergence_factor > 1");
   } else if (!p.capacitance.empty() && p.capacitance.size() != n) {
-    throw SetupError("Laplacian: capacitance has " + std::to_string(p.capacitance.size()) + " entries for " +
-                     std::to_string(n) + " nodes");
+    throw SetupError("Laplacian: capacitance has " + std::to_string(p.capacitance.size()) + " entries for " + std::to_string(n) + " nodes");
   }
   bool any_shunt = false;
   for (std::size_t v = 0; v < p.shunt.size(); ++v) {
@@ -486,12 +503,11 @@ DirichletNodes dirichlet_nodes(const LaplacianProblem& p) {
   d.group_of.assign(p.nodes, -1);
   for (std::size_t k = 0; k < p.dirichlet.size(); ++k) {
     const auto& gr = p.dirichlet[k];
-    if (!std::isfinite(gr.value))
-      physics_fail(p.step, "Dirichlet value", "group " + std::to_string(k) + " has a non-finite value");
+    if (!std::isfinite(gr.value)) physics_fail(p.step, "Dirichlet value", "group " + std::to_string(k) + " has a non-finite value");
     for (const Index v : gr.nodes) {
       if (v < 0 || static_cast<std::size_t>(v) >= p.nodes)
-        throw SetupError("Laplacian: Dirichlet group " + std::to_string(k) + " names node " + std::to_string(v) +
-                         " outside 0.." + std::to_string(p.nodes) + "-1");
+        throw SetupError("Laplacian: Dirichlet group " + std::to_string(k) + " names node " + std::to_string(v) + " outside 0.." +
+                         std::to_string(p.nodes) + "-1");
       if (d.group_of[v] >= 0)
         throw SetupError("Laplacian: node " + std::to_string(v) + " is in Dirichlet group " + std::to_string(d.group_of[v]) +
                          (d.group_of[v] == static_cast<std::int32_t>(k) ? " twice" : " and in group " + std::to_string(k)));
@@ -510,8 +526,10 @@ void write_results(const LaplacianProblem& p, const std::vector<std::int32_t>& r
   const std::size_t n = p.nodes, ne = p.a.size();
   res.value.assign(n, kNaN);
   for (std::size_t v = 0; v < n; ++v) {
-    if (role[v] == -1) res.value[v] = p.dirichlet[group_of[v]].value;
-    else if (role[v] >= 0) res.value[v] = x[role[v]];
+    if (role[v] == -1)
+      res.value[v] = p.dirichlet[group_of[v]].value;
+    else if (role[v] >= 0)
+      res.value[v] = x[role[v]];
   }
   res.flux.assign(ne, 0.0);
   res.dirichlet_flux.assign(p.dirichlet.size(), 0.0);
@@ -538,21 +556,25 @@ void LaplacianSolver::factorize_(const LaplacianProblem& p, const std::vector<do
   im.factor_valid = false;
   bool ok = true;
   switch (opt_.method) {
-    case LaplacianMethod::Direct: im.ldlt.factorize(im.A); ok = im.ldlt.info() == Eigen::Success; break;
+    case LaplacianMethod::Direct:
+      im.ldlt.factorize(im.A);
+      ok = im.ldlt.info() == Eigen::Success;
+      break;
     case LaplacianMethod::CgIncompleteCholesky:
       im.cg_ic.factorize(im.A);
       ok = im.cg_ic.preconditioner().info() == Eigen::Success;
       break;
-    case LaplacianMethod::CgDiagonal: im.cg_diag.factorize(im.A); break;
+    case LaplacianMethod::CgDiagonal:
+      im.cg_diag.factorize(im.A);
+      break;
     case LaplacianMethod::PseudoTransient: {
       const auto& po = opt_.pseudo;
       im.pt_lambda = max_generalized_eigenvalue(im.A, cap_free, po.eigen_tolerance, po.eigen_max_iterations);
       if (!im.pt_lambda.converged || !(im.pt_lambda.value > 0.0))
         physics_fail(p.step, "pseudo-transient stability limit",
-                     "lambda_max(C^-1 A) not found to the relative accuracy " + std::to_string(po.eigen_tolerance) +
-                         " in " + std::to_string(im.pt_lambda.iterations) + " Lanczos steps (estimate " +
-                         std::to_string(im.pt_lambda.value) + ", residual bound " +
-                         std::to_string(im.pt_lambda.residual_bound) + ")");
+                     "lambda_max(C^-1 A) not found to the relative accuracy " + std::to_string(po.eigen_tolerance) + " in " +
+                         std::to_string(im.pt_lambda.iterations) + " Lanczos steps (estimate " + std::to_string(im.pt_lambda.value) +
+                         ", residual bound " + std::to_string(im.pt_lambda.residual_bound) + ")");
       im.pt_gershgorin = gershgorin_step(im.A, cap_free);
       im.pt_capacitance = cap_free;
       break;
@@ -560,14 +582,13 @@ void LaplacianSolver::factorize_(const LaplacianProblem& p, const std::vector<do
     case LaplacianMethod::Amg:
       if (!im.amg)
         im.amg = std::make_unique<HypreAmgPcg>(
-            HypreAmgPcg::Settings{opt_.amg_strong_threshold, opt_.amg_aggressive_levels, opt_.amg_spread_min_rows,
-                                  opt_.amg_breadth_first});
+            HypreAmgPcg::Settings{opt_.amg_strong_threshold, opt_.amg_aggressive_levels, opt_.amg_spread_min_rows, opt_.amg_breadth_first});
       im.amg->setup(im.A);
       break;
   }
   if (!ok)
-    physics_fail(p.step, "Laplacian", "the factorisation of the reduced " + std::to_string(m) + " x " +
-                                                    std::to_string(m) + " system failed");
+    physics_fail(p.step, "Laplacian",
+                 "the factorisation of the reduced " + std::to_string(m) + " x " + std::to_string(m) + " system failed");
   ++factorizations_;
   res.factorized = true;
   im.factored_values.assign(val, val + nnz);
@@ -589,9 +610,7 @@ Eigen::VectorXd LaplacianSolver::iterate_(const LaplacianProblem& p, const std::
     const double w = use_warm ? warm_[free_node[f]] : kNaN;
     guess[f] = std::isfinite(w) ? w : fallback;
   }
-  const int max_it = opt_.max_iterations > 0 ? opt_.max_iterations
-                     : pseudo                ? 1000000
-                                             : static_cast<int>(2 * m);
+  const int max_it = opt_.max_iterations > 0 ? opt_.max_iterations : pseudo ? 1000000 : static_cast<int>(2 * m);
   bool ok = false;
   const char* what = "conjugate gradients";
   if (opt_.method == LaplacianMethod::CgIncompleteCholesky) {
@@ -625,23 +644,26 @@ Eigen::VectorXd LaplacianSolver::iterate_(const LaplacianProblem& p, const std::
     if (rep.dt >= rep.dt_limit && !po.allow_unstable)
       physics_fail(p.step, "pseudo-transient step",
                    "dt = " + std::to_string(rep.dt) + " s is not below the true stability limit 2/lambda_max(C^-1 K) = " +
-                       std::to_string(rep.dt_limit) + " s (the Gershgorin safe step is " +
-                       std::to_string(rep.dt_gershgorin) + " s); the iteration would diverge. Lower dt, or set "
+                       std::to_string(rep.dt_limit) + " s (the Gershgorin safe step is " + std::to_string(rep.dt_gershgorin) +
+                       " s); the iteration would diverge. Lower dt, or set "
                        "allow_unstable to run it anyway");
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (const auto& gr : p.dirichlet)
-      if (!gr.nodes.empty()) { lo = std::min(lo, gr.value); hi = std::max(hi, gr.value); }
+      if (!gr.nodes.empty()) {
+        lo = std::min(lo, gr.value);
+        hi = std::max(hi, gr.value);
+      }
     x = guess;
-    const auto [iters, indicator] = pseudo_transient(im.A, rhs, im.pt_capacitance, rep.dt, po, hi > lo ? hi - lo : 0.0,
-                                                     max_it, x, p.step, rep.dt_limit);
+    const auto [iters, indicator] = pseudo_transient(im.A, rhs, im.pt_capacitance, rep.dt, po, hi > lo ? hi - lo : 0.0, max_it, x, p.step,
+                                                     rep.dt_limit);
     res.iterations = iters;
     rep.change_indicator = indicator;
     ok = true;
   }
   if (!ok)
     physics_fail(p.step, "Laplacian",
-                 std::string(what) + " did not reach the relative tolerance " + std::to_string(opt_.tolerance) +
-                     " in " + std::to_string(res.iterations) + " iterations (" + std::to_string(m) + " unknowns)");
+                 std::string(what) + " did not reach the relative tolerance " + std::to_string(opt_.tolerance) + " in " +
+                     std::to_string(res.iterations) + " iterations (" + std::to_string(m) + " unknowns)");
   return x;
 }
 
@@ -657,8 +679,9 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
   const std::size_t n_dirichlet = dn.count;
   const double dirichlet_sum = dn.sum;
   if (n_dirichlet == 0 && !any_shunt)
-    throw SetupError("Laplacian: no Dirichlet node and no shunt: the potential is defined only up to a constant "
-                     "(give at least one node a prescribed value)");
+    throw SetupError(
+        "Laplacian: no Dirichlet node and no shunt: the potential is defined only up to a constant "
+        "(give at least one node a prescribed value)");
 
   // Connected components over the edges that conduct (union-find), grounded ones solved.
   std::vector<char> active(ne, 0);
@@ -672,7 +695,8 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
   LaplacianResult res;
   for (std::size_t v = 0; v < n; ++v) {
     const Index root = root_of[v];
-    if (group_of[v] >= 0) role[v] = -1;
+    if (group_of[v] >= 0)
+      role[v] = -1;
     else if (grounded[root]) {
       role[v] = static_cast<std::int32_t>(free_node.size());
       free_node.push_back(static_cast<Index>(v));
@@ -698,7 +722,10 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
     for (std::size_t e = 0; e < ne; ++e) {
       if (!active[e]) continue;
       const std::int32_t fa = role[p.a[e]], fb = role[p.b[e]];
-      if (fa >= 0 && fb >= 0) { t.emplace_back(fa, fb, 1.0); t.emplace_back(fb, fa, 1.0); }
+      if (fa >= 0 && fb >= 0) {
+        t.emplace_back(fa, fb, 1.0);
+        t.emplace_back(fb, fa, 1.0);
+      }
     }
     im.A.resize(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
     im.A.setFromTriplets(t.begin(), t.end());
@@ -710,15 +737,26 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
     for (std::size_t e = 0; e < ne; ++e) {
       if (!active[e]) continue;
       const std::int32_t fa = role[p.a[e]], fb = role[p.b[e]];
-      if (fa >= 0 && fb >= 0) { im.slot_ab[e] = slot_of(im.A, fa, fb); im.slot_ba[e] = slot_of(im.A, fb, fa); }
+      if (fa >= 0 && fb >= 0) {
+        im.slot_ab[e] = slot_of(im.A, fa, fb);
+        im.slot_ba[e] = slot_of(im.A, fb, fa);
+      }
     }
     if (m > 0) {
       switch (opt_.method) {
-        case LaplacianMethod::Direct: im.ldlt.analyzePattern(im.A); break;
-        case LaplacianMethod::CgIncompleteCholesky: im.cg_ic.analyzePattern(im.A); break;
-        case LaplacianMethod::CgDiagonal: im.cg_diag.analyzePattern(im.A); break;
-        case LaplacianMethod::PseudoTransient: break;  // nothing symbolic
-        case LaplacianMethod::Amg: break;              // hypre copies the matrix at setup
+        case LaplacianMethod::Direct:
+          im.ldlt.analyzePattern(im.A);
+          break;
+        case LaplacianMethod::CgIncompleteCholesky:
+          im.cg_ic.analyzePattern(im.A);
+          break;
+        case LaplacianMethod::CgDiagonal:
+          im.cg_diag.analyzePattern(im.A);
+          break;
+        case LaplacianMethod::PseudoTransient:
+          break;  // nothing symbolic
+        case LaplacianMethod::Amg:
+          break;  // hypre copies the matrix at setup
       }
     }
     ++analyses_;
@@ -741,7 +779,10 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
     const std::int32_t fa = role[p.a[e]], fb = role[p.b[e]];
     if (fa >= 0) val[im.slot_diag[fa]] += ge;
     if (fb >= 0) val[im.slot_diag[fb]] += ge;
-    if (im.slot_ab[e] >= 0) { val[im.slot_ab[e]] -= ge; val[im.slot_ba[e]] -= ge; }
+    if (im.slot_ab[e] >= 0) {
+      val[im.slot_ab[e]] -= ge;
+      val[im.slot_ba[e]] -= ge;
+    }
   }
   if (!p.shunt.empty())
     for (std::size_t f = 0; f < m; ++f) val[im.slot_diag[f]] += p.shunt[free_node[f]];
@@ -768,8 +809,10 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
   // Solve.
   Eigen::VectorXd x = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(m));
   if (m > 0) {
-    if (opt_.method == LaplacianMethod::Direct) x = im.ldlt.solve(rhs);
-    else x = iterate_(p, free_node, rhs, n_dirichlet > 0 ? dirichlet_sum / static_cast<double>(n_dirichlet) : 0.0, res);
+    if (opt_.method == LaplacianMethod::Direct)
+      x = im.ldlt.solve(rhs);
+    else
+      x = iterate_(p, free_node, rhs, n_dirichlet > 0 ? dirichlet_sum / static_cast<double>(n_dirichlet) : 0.0, res);
     const double rn = rhs.norm();
     res.residual_norm = (im.A * x - rhs).norm();
     res.relative_residual = rn > 0.0 ? res.residual_norm / rn : res.residual_norm;

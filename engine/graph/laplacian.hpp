@@ -66,8 +66,7 @@ void laplacian_apply(std::size_t nodes, std::span<const Index> a, std::span<cons
 /// Diagonal of L, D_v = sum_{e incident to v} g_e (self-loops excluded), summed in edge order.
 /// Gershgorin: lambda_max(C^-1 L) <= max_v 2 D_v / C_v, so forward Euler on C du/dt = -L u is
 /// stable for dt <= min_v C_v / D_v.
-std::vector<double> laplacian_diagonal(std::size_t nodes, std::span<const Index> a, std::span<const Index> b,
-                                       std::span<const double> g);
+std::vector<double> laplacian_diagonal(std::size_t nodes, std::span<const Index> a, std::span<const Index> b, std::span<const double> g);
 
 /// Result of max_generalized_eigenvalue.
 struct EigenEstimate {
@@ -85,8 +84,8 @@ struct EigenEstimate {
 /// 1e-3 relative error after 30 steps, 7e-6 after 1000; Lanczos 2e-9 after 20). Stops when the
 /// residual bound of the largest Ritz pair is <= rel_tol x its value. Deterministic for any thread
 /// count (fixed-order block sums).
-EigenEstimate max_generalized_eigenvalue(const Eigen::SparseMatrix<double>& A, std::span<const double> C,
-                                         double rel_tol = 1e-6, int max_iterations = 300);
+EigenEstimate max_generalized_eigenvalue(const Eigen::SparseMatrix<double>& A, std::span<const double> C, double rel_tol = 1e-6,
+                                         int max_iterations = 300);
 
 /// The cheap safe pseudo-transient step min_v C_v / A_vv (Gershgorin: every eigenvalue of C^-1 A
 /// lies in a disc of centre A_vv / C_v and radius sum_{w != v} |A_vw| / C_v <= A_vv / C_v, so
@@ -104,8 +103,7 @@ Eigen::SparseMatrix<double> assemble_laplacian(std::size_t nodes, std::span<cons
 /// every node, which is the smallest node index of its component (deterministic). Node
 /// indices must be valid. The one component search shared by the Laplacian solver, the
 /// effective resistance and the network modules.
-std::vector<Index> component_roots(std::size_t nodes, std::span<const Index> a, std::span<const Index> b,
-                                   std::span<const double> g);
+std::vector<Index> component_roots(std::size_t nodes, std::span<const Index> a, std::span<const Index> b, std::span<const double> g);
 
 /// Nodes held at one value (an electrode, an isothermal wall, ...). Its net flux is reported.
 struct DirichletGroup {
@@ -116,8 +114,8 @@ struct DirichletGroup {
 /// Input of one solve. The spans must stay valid during solve().
 struct LaplacianProblem {
   std::size_t nodes = 0;
-  std::span<const Index> a, b;            ///< edge end points
-  std::span<const double> g;              ///< conductance per edge, >= 0 (0 = no edge)
+  std::span<const Index> a, b;  ///< edge end points
+  std::span<const double> g;    ///< conductance per edge, >= 0 (0 = no edge)
   /// Accept negative conductances: the edges of a multi-terminal element whose matrix is
   /// positive semi-definite with zero row sums but not an M-matrix (the sphere element of
   /// physics/electrical/sphere_element.hpp). The caller guarantees that the assembled matrix is
@@ -134,11 +132,11 @@ struct LaplacianProblem {
 };
 
 enum class LaplacianMethod : std::uint8_t {
-  Direct,        ///< Eigen::SimplicialLDLT (AMD ordering); exact up to rounding
+  Direct,                ///< Eigen::SimplicialLDLT (AMD ordering); exact up to rounding
   CgIncompleteCholesky,  ///< conjugate gradients, incomplete-Cholesky preconditioner, warm start
-  CgDiagonal,    ///< conjugate gradients, Jacobi preconditioner, warm start
-  PseudoTransient,  ///< the explicit pseudo-transient iteration of seed 000 (Eqs. 10-15), warm start
-  Amg,           ///< conjugate gradients preconditioned by hypre's BoomerAMG, warm start
+  CgDiagonal,            ///< conjugate gradients, Jacobi preconditioner, warm start
+  PseudoTransient,       ///< the explicit pseudo-transient iteration of seed 000 (Eqs. 10-15), warm start
+  Amg,                   ///< conjugate gradients preconditioned by hypre's BoomerAMG, warm start
 };
 
 /// "direct", "cg_ic", "cg_jacobi", "pseudo_transient", "amg".
@@ -164,9 +162,9 @@ enum class ChangeIndicator : std::uint8_t {
 /// convergence the change per iteration is (1 - rho) times the error, rho -> 1 the slowest mode's
 /// factor, so a small indicator can hide a large error; the true residual is reported beside it.
 struct PseudoTransientOptions {
-  double dt = 0.0;               ///< pseudo time step [s]; 0 = dt_fraction x the true limit
-  double dt_fraction = 0.9;      ///< used when dt == 0; must be in (0, 1) unless allow_unstable
-  double beta = 2e-4;            ///< stop when the change indicator < beta (the paper's value)
+  double dt = 0.0;           ///< pseudo time step [s]; 0 = dt_fraction x the true limit
+  double dt_fraction = 0.9;  ///< used when dt == 0; must be in (0, 1) unless allow_unstable
+  double beta = 2e-4;        ///< stop when the change indicator < beta (the paper's value)
   ChangeIndicator indicator = ChangeIndicator::PerNode;
   /// Run a dt at or above the true limit instead of refusing it (PhysicsError). The divergence
   /// is then detected and reported as a PhysicsError, never returned as a silent NaN.
@@ -181,10 +179,10 @@ struct PseudoTransientOptions {
 
 struct LaplacianOptions {
   LaplacianMethod method = LaplacianMethod::Direct;
-  double tolerance = 1e-10;  ///< CG / Amg: stop when ||b - A x|| <= tolerance ||b|| (reduced system)
-  int max_iterations = 0;    ///< CG / Amg: 0 = 2 x unknowns; PseudoTransient: 0 = 1,000,000
-  bool warm_start = true;    ///< iterative methods: start from the previous solution (per node) when available
-  PseudoTransientOptions pseudo{};  ///< PseudoTransient only
+  double tolerance = 1e-10;           ///< CG / Amg: stop when ||b - A x|| <= tolerance ||b|| (reduced system)
+  int max_iterations = 0;             ///< CG / Amg: 0 = 2 x unknowns; PseudoTransient: 0 = 1,000,000
+  bool warm_start = true;             ///< iterative methods: start from the previous solution (per node) when available
+  PseudoTransientOptions pseudo{};    ///< PseudoTransient only
   double amg_strong_threshold = 0.5;  ///< Amg: BoomerAMG strength threshold (0.5 suits 3-D networks)
   int amg_aggressive_levels = 1;      ///< Amg: levels of aggressive coarsening (1 halves the 1e6-node time)
   /// Amg on several MPI ranks (set_amg_spread_ranks > 1): spread systems of at least this many
@@ -197,13 +195,13 @@ struct LaplacianOptions {
 
 /// What the pseudo-transient iteration reports besides the common fields.
 struct PseudoTransientReport {
-  double dt = 0.0;               ///< step used [s]
-  double lambda_max = 0.0;       ///< estimate of lambda_max(C^-1 A) [1/s] (a Ritz value: <= the exact one)
+  double dt = 0.0;                     ///< step used [s]
+  double lambda_max = 0.0;             ///< estimate of lambda_max(C^-1 A) [1/s] (a Ritz value: <= the exact one)
   double lambda_residual_bound = 0.0;  ///< some eigenvalue lies within this of lambda_max (Lanczos residual)
-  int eigen_iterations = 0;      ///< Lanczos steps
-  double dt_limit = 0.0;         ///< true stability limit 2 / lambda_max [s]
-  double dt_gershgorin = 0.0;    ///< the cheap safe step min_v C_v / A_vv [s] (Gershgorin; <= dt_limit)
-  double change_indicator = 0.0; ///< Eq. 14 indicator at stop (not the error: see relative_residual)
+  int eigen_iterations = 0;            ///< Lanczos steps
+  double dt_limit = 0.0;               ///< true stability limit 2 / lambda_max [s]
+  double dt_gershgorin = 0.0;          ///< the cheap safe step min_v C_v / A_vv [s] (Gershgorin; <= dt_limit)
+  double change_indicator = 0.0;       ///< Eq. 14 indicator at stop (not the error: see relative_residual)
 };
 
 struct LaplacianResult {
@@ -216,11 +214,11 @@ struct LaplacianResult {
   std::size_t free_nodes = 0;          ///< unknowns of the reduced system
   std::size_t floating_nodes = 0;      ///< nodes in components with no Dirichlet node and no shunt
   std::size_t floating_components = 0;
-  bool analyzed = false;               ///< this call recomputed the symbolic analysis (structure changed)
-  bool factorized = false;             ///< this call recomputed the numeric factorisation / preconditioner
-  double solve_seconds = 0.0;          ///< wall time of the whole call
-  int amg_ranks = 1;                   ///< Amg: MPI ranks the solve was spread over (set_amg_spread_ranks)
-  PseudoTransientReport pseudo;        ///< PseudoTransient only
+  bool analyzed = false;         ///< this call recomputed the symbolic analysis (structure changed)
+  bool factorized = false;       ///< this call recomputed the numeric factorisation / preconditioner
+  double solve_seconds = 0.0;    ///< wall time of the whole call
+  int amg_ranks = 1;             ///< Amg: MPI ranks the solve was spread over (set_amg_spread_ranks)
+  PseudoTransientReport pseudo;  ///< PseudoTransient only
 };
 
 /// Solves LaplacianProblems in sequence, keeping what can be kept between calls:
@@ -256,7 +254,7 @@ class LaplacianSolver {
   /// Change the options; a different method drops the cached analysis.
   void set_options(const LaplacianOptions& opt);
 
-  std::size_t analyses() const { return analyses_; }         ///< symbolic analyses so far
+  std::size_t analyses() const { return analyses_; }              ///< symbolic analyses so far
   std::size_t factorizations() const { return factorizations_; }  ///< numeric factorisations so far
   /// Drop the cached analysis and factorisation (the warm start is kept).
   void invalidate();

@@ -41,7 +41,7 @@ inline void verlet_first_half(ParticleStore& p, double dt) {
   const std::int64_t n = static_cast<std::int64_t>(p.size());
 #pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
   for (std::int64_t i = 0; i < n; ++i) {
-    if (p.fixed[i]) {  // prescribed velocity (zero = frozen): moved, not integrated
+    if (p.fixed[i]) {                                            // prescribed velocity (zero = frozen): moved, not integrated
       if (p.fixed[i] == 1) p.position[i] += dt * p.velocity[i];  // 2: a rotating set, moved by the simulation
       continue;
     }

@@ -23,21 +23,21 @@ template <class T>
 concept Parametrised = requires {
   typename T::Params;
   { T::spec() } -> std::convertible_to<ParamSpec<typename T::Params>>;
-} && std::constructible_from<T, const typename T::Params&>;
+}
+&&std::constructible_from<T, const typename T::Params&>;
 
 /// A contact law (engine/contact/contact_model.hpp): its name, per-contact state columns, the
 /// force of a contact, the stiffnesses and the Rayleigh step used by the stable step.
 template <class L>
 concept ContactLaw = Parametrised<L> &&
-    requires(const L& law, const ContactGeometry& g, const RelativeMotion& m, double dt, double* state, double radius,
-             double density) {
-      { L::kName } -> std::convertible_to<std::string_view>;
-      { L::state_columns() } -> std::convertible_to<std::vector<std::string>>;
-      { law(g, m, dt, state) } -> std::same_as<ContactForces>;
-      { law.normal_stiffness(g) } -> std::convertible_to<double>;
-      { law.tangential_stiffness(g) } -> std::convertible_to<double>;
-      { law.rayleigh_dt(radius, density) } -> std::convertible_to<double>;
-    };
+    requires(const L& law, const ContactGeometry& g, const RelativeMotion& m, double dt, double* state, double radius, double density) {
+  { L::kName } -> std::convertible_to<std::string_view>;
+  { L::state_columns() } -> std::convertible_to<std::vector<std::string>>;
+  { law(g, m, dt, state) } -> std::same_as<ContactForces>;
+  { law.normal_stiffness(g) } -> std::convertible_to<double>;
+  { law.tangential_stiffness(g) } -> std::convertible_to<double>;
+  { law.rayleigh_dt(radius, density) } -> std::convertible_to<double>;
+};
 
 /// A bond law (engine/contact/bond_model.hpp): its name, per-bond state columns, the forces and
 /// torques of a bond and its stiffness for the stable step.

@@ -42,13 +42,22 @@ class Generator {
   /// Checks against the scene the generator will run in, before step 0: `scene` holds the
   /// scenario's materials and walls, no particles. Problems go to `errors` with JSON pointers
   /// relative to the generator object (e.g. "/hi"). Default: none.
-  virtual void validate(const State& scene, std::vector<Diagnostic>& errors) const { (void)scene; (void)errors; }
+  virtual void validate(const State& scene, std::vector<Diagnostic>& errors) const {
+    (void)scene;
+    (void)errors;
+  }
   /// Key figures of the generated packing (N, densities, coordination, overlaps, sampled sizes).
   virtual std::map<std::string, double> report(const State& s) const = 0;
   /// Coordination histogram (index = contacts) of the packing.
-  virtual std::vector<int> coordination_histogram(const State& s) const { (void)s; return {}; }
+  virtual std::vector<int> coordination_histogram(const State& s) const {
+    (void)s;
+    return {};
+  }
   /// Further named arrays of the packing (histograms, profiles) for summary.json.
-  virtual std::map<std::string, std::vector<double>> report_arrays(const State& s) const { (void)s; return {}; }
+  virtual std::map<std::string, std::vector<double>> report_arrays(const State& s) const {
+    (void)s;
+    return {};
+  }
 };
 
 }  // namespace sparkdem

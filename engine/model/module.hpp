@@ -21,10 +21,10 @@ struct State;
 /// in particle fields "trigger/<module>/..." and in State::marks, so they are checkpointed.
 struct Trigger {
   double moved_beyond = std::numeric_limits<double>::infinity();  ///< [m] a particle moved more than this
-  std::string field;                                               ///< particle field watched ...
+  std::string field;                                              ///< particle field watched ...
   double field_change = std::numeric_limits<double>::infinity();  ///< ... for a change above this [field unit]
-  bool bond_broke = false;                                         ///< a bond broke
-  std::int64_t max_interval = 0;                                   ///< also after this many steps (0 = never)
+  bool bond_broke = false;                                        ///< a bond broke
+  std::int64_t max_interval = 0;                                  ///< also after this many steps (0 = never)
 };
 
 /// When a module runs, relative to the mechanical step dt_m.
@@ -44,10 +44,13 @@ struct Clock {
   /// Nominal step of one call [s] (AdaptiveSubsteps: the largest; OnEvent: one mechanical step).
   double dt(double dt_m) const {
     switch (kind) {
-      case Kind::EveryNSteps: return static_cast<double>(n) * dt_m;
+      case Kind::EveryNSteps:
+        return static_cast<double>(n) * dt_m;
       case Kind::SubstepsPerStep:
-      case Kind::AdaptiveSubsteps: return dt_m / static_cast<double>(n);
-      default: return dt_m;
+      case Kind::AdaptiveSubsteps:
+        return dt_m / static_cast<double>(n);
+      default:
+        return dt_m;
     }
   }
 };
@@ -64,9 +67,9 @@ enum class TimeDomain { Mechanical, Physical };
 enum class Phase { Force, Coupling };
 
 struct StepInfo {
-  Step step;    ///< global step index of the step being completed
-  double time;  ///< time at the end of the call in the module's domain [s] (step * dt, never accumulated)
-  double dt;    ///< step of this call in the module's domain [s]
+  Step step;                 ///< global step index of the step being completed
+  double time;               ///< time at the end of the call in the module's domain [s] (step * dt, never accumulated)
+  double dt;                 ///< step of this call in the module's domain [s]
   std::int64_t substep = 0;  ///< 0-based substep within the mechanical step
 };
 
@@ -78,7 +81,7 @@ struct EdgeField {
   std::vector<double> values;
 };
 struct EdgeOutput {
-  std::string name;              ///< group name in the frame (/networks/<name>)
+  std::string name;                 ///< group name in the frame (/networks/<name>)
   std::vector<std::int64_t> pairs;  ///< 2 ids per edge
   std::vector<EdgeField> fields;
 };
@@ -93,7 +96,7 @@ struct Declarations {
   /// temperature that heat_conduction wrote in the previous step, heat_conduction reads the
   /// joule_power of this step), instead of a read/write cycle.
   std::vector<std::string> reads_previous;
-  std::vector<std::string> writes;         ///< fields written
+  std::vector<std::string> writes;  ///< fields written
 };
 
 class Module {
@@ -112,16 +115,25 @@ class Module {
   /// Own stable step from the current state [s], in the module's time domain; +inf when
   /// unconditionally stable. Checked at the stage start and every stability_check_every steps
   /// (it may shrink during a stage); AdaptiveSubsteps clocks re-read it every step.
-  virtual double stable_dt(const State& s) const { (void)s; return std::numeric_limits<double>::infinity(); }
+  virtual double stable_dt(const State& s) const {
+    (void)s;
+    return std::numeric_limits<double>::infinity();
+  }
   virtual void advance(State& s, const StepInfo& step) = 0;
   /// Time-series columns the module reports (names fixed at construction, by convention
   /// prefixed with the module name) and their current values, in the same order.
   virtual std::vector<std::string> columns() const { return {}; }
-  virtual std::vector<double> column_values(const State& s) const { (void)s; return {}; }
+  virtual std::vector<double> column_values(const State& s) const {
+    (void)s;
+    return {};
+  }
   /// Per-edge outputs for the frames (held between calls like the columns; checkpointed by visit()).
   virtual std::vector<EdgeOutput> edge_outputs() const { return {}; }
   /// Every piece of state the module keeps between calls goes through here.
-  virtual void visit(Archive& ar, const std::string& prefix) { (void)ar; (void)prefix; }
+  virtual void visit(Archive& ar, const std::string& prefix) {
+    (void)ar;
+    (void)prefix;
+  }
 
  private:
   std::optional<Clock> configured_clock_;

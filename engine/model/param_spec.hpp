@@ -22,12 +22,18 @@ using ParamValues = std::map<std::string, ParamValue>;
 
 inline const char* kind_name(ParamKind k) {
   switch (k) {
-    case ParamKind::Real: return "number";
-    case ParamKind::Integer: return "integer";
-    case ParamKind::Boolean: return "boolean";
-    case ParamKind::Text: return "string";
-    case ParamKind::RealList: return "array of numbers";
-    case ParamKind::Vec3: return "array of 3 numbers";
+    case ParamKind::Real:
+      return "number";
+    case ParamKind::Integer:
+      return "integer";
+    case ParamKind::Boolean:
+      return "boolean";
+    case ParamKind::Text:
+      return "string";
+    case ParamKind::RealList:
+      return "array of numbers";
+    case ParamKind::Vec3:
+      return "array of 3 numbers";
   }
   return "?";
 }
@@ -36,19 +42,19 @@ inline const char* kind_name(ParamKind k) {
 struct ParamInfo {
   std::string name;
   ParamKind kind = ParamKind::Real;
-  std::string unit;                      ///< SI unit, "1" for dimensionless, "" for non-numbers
+  std::string unit;  ///< SI unit, "1" for dimensionless, "" for non-numbers
   std::string doc;
   bool required = false;
-  std::optional<double> min, max;        ///< inclusive bounds unless *_exclusive
+  std::optional<double> min, max;  ///< inclusive bounds unless *_exclusive
   bool min_exclusive = false, max_exclusive = false;
-  std::vector<std::string> choices;      ///< allowed values of a Text parameter
-  ParamValue default_value;              ///< monostate when there is no default
+  std::vector<std::string> choices;  ///< allowed values of a Text parameter
+  ParamValue default_value;          ///< monostate when there is no default
 };
 
 /// Spec of one named thing (a law, a module, a stage type, a wall shape, ...).
 struct Spec {
   std::string name;
-  std::string category;   ///< "contact_law", "module", "stage", "wall", "motion", ...
+  std::string category;  ///< "contact_law", "module", "stage", "wall", "motion", ...
   std::string doc;
   std::vector<ParamInfo> params;
   const ParamInfo* find(const std::string& n) const {
@@ -62,18 +68,54 @@ struct Spec {
 class ParamEditor {
  public:
   explicit ParamEditor(ParamInfo& p) : p_(p) {}
-  ParamEditor& unit(std::string u) { p_.unit = std::move(u); return *this; }
-  ParamEditor& doc(std::string d) { p_.doc = std::move(d); return *this; }
-  ParamEditor& required() { p_.required = true; p_.default_value = std::monostate{}; return *this; }
-  ParamEditor& min(double v) { p_.min = v; return *this; }
-  ParamEditor& max(double v) { p_.max = v; return *this; }
-  ParamEditor& range(double lo, double hi) { p_.min = lo; p_.max = hi; return *this; }
-  ParamEditor& positive() { p_.min = 0.0; p_.min_exclusive = true; return *this; }
-  ParamEditor& nonnegative() { p_.min = 0.0; return *this; }
-  ParamEditor& choices(std::vector<std::string> c) { p_.choices = std::move(c); return *this; }
-  ParamEditor& no_default() { p_.default_value = std::monostate{}; return *this; }
+  ParamEditor& unit(std::string u) {
+    p_.unit = std::move(u);
+    return *this;
+  }
+  ParamEditor& doc(std::string d) {
+    p_.doc = std::move(d);
+    return *this;
+  }
+  ParamEditor& required() {
+    p_.required = true;
+    p_.default_value = std::monostate{};
+    return *this;
+  }
+  ParamEditor& min(double v) {
+    p_.min = v;
+    return *this;
+  }
+  ParamEditor& max(double v) {
+    p_.max = v;
+    return *this;
+  }
+  ParamEditor& range(double lo, double hi) {
+    p_.min = lo;
+    p_.max = hi;
+    return *this;
+  }
+  ParamEditor& positive() {
+    p_.min = 0.0;
+    p_.min_exclusive = true;
+    return *this;
+  }
+  ParamEditor& nonnegative() {
+    p_.min = 0.0;
+    return *this;
+  }
+  ParamEditor& choices(std::vector<std::string> c) {
+    p_.choices = std::move(c);
+    return *this;
+  }
+  ParamEditor& no_default() {
+    p_.default_value = std::monostate{};
+    return *this;
+  }
   /// Default differing from the member initialiser (a spec shared by several owners).
-  ParamEditor& defaults_to(ParamValue v) { p_.default_value = std::move(v); return *this; }
+  ParamEditor& defaults_to(ParamValue v) {
+    p_.default_value = std::move(v);
+    return *this;
+  }
 
  private:
   ParamInfo& p_;
@@ -91,16 +133,14 @@ class ParamSpec {
   }
 
   ParamEditor add(std::string name, double P::*m) {
-    return add_impl(std::move(name), ParamKind::Real, ParamValue{P{}.*m},
-                    [m](P& p, const ParamValue& v) { p.*m = std::get<double>(v); });
+    return add_impl(std::move(name), ParamKind::Real, ParamValue{P{}.*m}, [m](P& p, const ParamValue& v) { p.*m = std::get<double>(v); });
   }
   ParamEditor add(std::string name, std::int64_t P::*m) {
     return add_impl(std::move(name), ParamKind::Integer, ParamValue{P{}.*m},
                     [m](P& p, const ParamValue& v) { p.*m = std::get<std::int64_t>(v); });
   }
   ParamEditor add(std::string name, bool P::*m) {
-    return add_impl(std::move(name), ParamKind::Boolean, ParamValue{P{}.*m},
-                    [m](P& p, const ParamValue& v) { p.*m = std::get<bool>(v); });
+    return add_impl(std::move(name), ParamKind::Boolean, ParamValue{P{}.*m}, [m](P& p, const ParamValue& v) { p.*m = std::get<bool>(v); });
   }
   ParamEditor add(std::string name, std::string P::*m) {
     return add_impl(std::move(name), ParamKind::Text, ParamValue{P{}.*m},
@@ -113,11 +153,10 @@ class ParamSpec {
   template <class V>
   ParamEditor add_vec3(std::string name, V P::*m) {
     const V d = P{}.*m;
-    return add_impl(std::move(name), ParamKind::Vec3, ParamValue{std::vector<double>{d[0], d[1], d[2]}},
-                    [m](P& p, const ParamValue& v) {
-                      const auto& x = std::get<std::vector<double>>(v);
-                      p.*m = V(x[0], x[1], x[2]);
-                    });
+    return add_impl(std::move(name), ParamKind::Vec3, ParamValue{std::vector<double>{d[0], d[1], d[2]}}, [m](P& p, const ParamValue& v) {
+      const auto& x = std::get<std::vector<double>>(v);
+      p.*m = V(x[0], x[1], x[2]);
+    });
   }
 
   /// Embed the parameters of a nested aggregate M (member `outer` of P) under "prefix.<name>";

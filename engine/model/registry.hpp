@@ -31,34 +31,31 @@ class Registry {
   template <ContactLaw Law>
   void contact_law() {
     auto ps = std::make_shared<ParamSpec<typename Law::Params>>(Law::spec());
-    laws_[std::string(Law::kName)] = {ps->spec(), [ps](const ParamValues& v) -> std::unique_ptr<ContactModel> {
-                                        return std::make_unique<ContactModelT<Law>>(ps->build(v));
-                                      }, {}};
+    laws_[std::string(Law::kName)] = {
+        ps->spec(),
+        [ps](const ParamValues& v) -> std::unique_ptr<ContactModel> { return std::make_unique<ContactModelT<Law>>(ps->build(v)); },
+        {}};
   }
   /// Register a bond law type (the BondLaw concept, engine/model/contracts.hpp).
   template <BondLaw Law>
   void bond_law() {
     auto ps = std::make_shared<ParamSpec<typename Law::Params>>(Law::spec());
-    bond_laws_[std::string(Law::kName)] = {ps->spec(), [ps](const ParamValues& v) -> std::unique_ptr<BondModel> {
-                                             return std::make_unique<BondModelT<Law>>(ps->build(v));
-                                           }, {}};
+    bond_laws_[std::string(Law::kName)] = {
+        ps->spec(), [ps](const ParamValues& v) -> std::unique_ptr<BondModel> { return std::make_unique<BondModelT<Law>>(ps->build(v)); }, {}};
   }
   /// Register a module or generator M with `static ParamSpec<M::Params> spec()` and
   /// a constructor from M::Params.
   template <ModuleType M>
   void module() {
     auto ps = std::make_shared<ParamSpec<typename M::Params>>(M::spec());
-    modules_[ps->spec().name] = {ps->spec(), [ps](const ParamValues& v) -> std::unique_ptr<Module> {
-                                   return std::make_unique<M>(ps->build(v));
-                                 }, {}};
+    modules_[ps->spec().name] = {
+        ps->spec(), [ps](const ParamValues& v) -> std::unique_ptr<Module> { return std::make_unique<M>(ps->build(v)); }, {}};
   }
   template <GeneratorType G>
   void generator() {
     auto ps = std::make_shared<ParamSpec<typename G::Params>>(G::spec());
     generators_[ps->spec().name] = {ps->spec(),
-                                    [ps](const ParamValues& v) -> std::unique_ptr<Generator> {
-                                      return std::make_unique<G>(ps->build(v));
-                                    },
+                                    [ps](const ParamValues& v) -> std::unique_ptr<Generator> { return std::make_unique<G>(ps->build(v)); },
                                     G::created_walls()};
   }
 
@@ -67,9 +64,8 @@ class Registry {
   template <MonitorType M>
   void monitor() {
     auto ps = std::make_shared<ParamSpec<typename M::Params>>(M::spec());
-    monitors_[ps->spec().name] = {ps->spec(), [ps](const ParamValues& v) -> std::unique_ptr<Monitor> {
-                                    return std::make_unique<M>(ps->build(v));
-                                  }, {}};
+    monitors_[ps->spec().name] = {
+        ps->spec(), [ps](const ParamValues& v) -> std::unique_ptr<Monitor> { return std::make_unique<M>(ps->build(v)); }, {}};
   }
 
   const std::map<std::string, RegistryEntry<ContactModel>>& laws() const { return laws_; }

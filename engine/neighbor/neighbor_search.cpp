@@ -27,8 +27,7 @@ struct Grid {
 
 }  // namespace
 
-std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const std::vector<double>& r, double skin,
-                                             NeighborStats* stats) {
+std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const std::vector<double>& r, double skin, NeighborStats* stats) {
   const std::size_t n = x.size();
   std::vector<std::array<Index, 2>> out;
   if (n < 2) return out;
@@ -84,7 +83,7 @@ std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const s
 
   const int nthreads = omp_get_max_threads();
   std::vector<std::vector<std::array<Index, 2>>> local(nthreads);
-#pragma omp parallel if (par::worth(static_cast<std::int64_t>(n), par::kHeavy))
+#pragma omp parallel if (par::worth(static_cast <std::int64_t>(n), par::kHeavy))
   {
     auto& buf = local[omp_get_thread_num()];
     std::vector<Index> found;
@@ -97,7 +96,10 @@ std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const s
         if (g.start.empty()) continue;
         const double range = r[i] + g.rmax + skin;
         std::array<std::int64_t, 3> a{}, b{};
-        for (int d = 0; d < 3; ++d) { a[d] = g.coord(x[i][d] - range, d); b[d] = g.coord(x[i][d] + range, d); }
+        for (int d = 0; d < 3; ++d) {
+          a[d] = g.coord(x[i][d] - range, d);
+          b[d] = g.coord(x[i][d] + range, d);
+        }
         for (std::int64_t cz = a[2]; cz <= b[2]; ++cz)
           for (std::int64_t cy = a[1]; cy <= b[1]; ++cy)
             for (std::int64_t cx = a[0]; cx <= b[0]; ++cx) {
@@ -118,12 +120,15 @@ std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const s
   for (auto& b : local) total += b.size();
   out.reserve(total);
   for (auto& b : local) out.insert(out.end(), b.begin(), b.end());
-  if (stats) { stats->levels = nlev; stats->cells = total_cells; stats->pairs = out.size(); }
+  if (stats) {
+    stats->levels = nlev;
+    stats->cells = total_cells;
+    stats->pairs = out.size();
+  }
   return out;
 }
 
-std::vector<std::array<Index, 2>> find_pairs_brute_force(const std::vector<Vec3>& x, const std::vector<double>& r,
-                                                         double skin) {
+std::vector<std::array<Index, 2>> find_pairs_brute_force(const std::vector<Vec3>& x, const std::vector<double>& r, double skin) {
   std::vector<std::array<Index, 2>> out;
   for (std::size_t i = 0; i < x.size(); ++i)
     for (std::size_t j = i + 1; j < x.size(); ++j) {

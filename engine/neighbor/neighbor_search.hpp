@@ -24,8 +24,7 @@ std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const s
                                              NeighborStats* stats = nullptr);
 
 /// O(N^2) reference used by the tests.
-std::vector<std::array<Index, 2>> find_pairs_brute_force(const std::vector<Vec3>& x, const std::vector<double>& r,
-                                                         double skin);
+std::vector<std::array<Index, 2>> find_pairs_brute_force(const std::vector<Vec3>& x, const std::vector<double>& r, double skin);
 
 /// Verlet bookkeeping: positions, radii and wall offsets at the last build; a rebuild is due
 /// when 2 (max displacement + max radius growth + max wall travel) > skin. This keeps both the
@@ -33,10 +32,11 @@ std::vector<std::array<Index, 2>> find_pairs_brute_force(const std::vector<Vec3>
 class VerletTracker {
  public:
   void mark_built(const std::vector<Vec3>& x, const std::vector<double>& r, std::vector<double> wall_u = {}) {
-    x0_ = x; r0_ = r; u0_ = std::move(wall_u);
+    x0_ = x;
+    r0_ = r;
+    u0_ = std::move(wall_u);
   }
-  bool needs_rebuild(const std::vector<Vec3>& x, const std::vector<double>& r, double skin,
-                     const std::vector<double>& wall_u = {}) const;
+  bool needs_rebuild(const std::vector<Vec3>& x, const std::vector<double>& r, double skin, const std::vector<double>& wall_u = {}) const;
   std::vector<Vec3>& x0() { return x0_; }
   std::vector<double>& r0() { return r0_; }
   std::vector<double>& u0() { return u0_; }

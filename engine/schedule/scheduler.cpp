@@ -8,8 +8,7 @@
 
 namespace sparkdem {
 
-StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields,
-                         bool bonds, bool mechanics) {
+StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields, bool bonds, bool mechanics) {
   using K = PlanItem::Kind;
   StepPlan plan;
   if (mechanics) {
@@ -29,8 +28,8 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
     if (c.n < 1) throw SetupError("module '" + m->name() + "': clock ratio must be a positive integer, found " + std::to_string(c.n));
     if (c.kind == Clock::Kind::OnEvent) {
       const Trigger& t = c.trigger;
-      const bool any = std::isfinite(t.moved_beyond) || (!t.field.empty() && std::isfinite(t.field_change)) ||
-                       t.bond_broke || t.max_interval > 0;
+      const bool any = std::isfinite(t.moved_beyond) || (!t.field.empty() && std::isfinite(t.field_change)) || t.bond_broke ||
+                       t.max_interval > 0;
       if (!any) throw SetupError("module '" + m->name() + "': its event clock has no condition that can fire");
       if (!(t.moved_beyond > 0.0) || !(t.field_change > 0.0) || t.max_interval < 0)
         throw SetupError("module '" + m->name() + "': event thresholds must be positive");
@@ -43,8 +42,10 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
       throw SetupError("module '" + m->name() + "' adds forces, but the stage's mechanics are frozen (\"mechanics\": \"frozen\")");
     if (m->phase() == Phase::Force && c.kind != Clock::Kind::EveryStep)
       throw SetupError("module '" + m->name() + "' adds forces, so it must run every mechanical step (its clock is not EveryStep)");
-    if (m->phase() == Phase::Force) plan.items.push_back({K::Module, m->name(), m, c});
-    else coupling.push_back(m);
+    if (m->phase() == Phase::Force)
+      plan.items.push_back({K::Module, m->name(), m, c});
+    else
+      coupling.push_back(m);
   }
   // Dangling reads.
   for (Module* m : modules) {
@@ -78,10 +79,16 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
         for (const auto& r : da.reads)
           if (std::find(db.writes.begin(), db.writes.end(), r) != db.writes.end()) blocked = true;
       }
-      if (!blocked) { ordered.push_back(coupling[a]); placed[a] = true; progress = true; break; }
+      if (!blocked) {
+        ordered.push_back(coupling[a]);
+        placed[a] = true;
+        progress = true;
+        break;
+      }
     }
     if (!progress)
-      throw SetupError("coupling modules form a read/write cycle; declare one of the reads as reads_previous (the value of the previous step)");
+      throw SetupError(
+          "coupling modules form a read/write cycle; declare one of the reads as reads_previous (the value of the previous step)");
   }
   for (Module* m : ordered) plan.items.push_back({K::Module, m->name(), m, m->effective_clock()});
   return plan;

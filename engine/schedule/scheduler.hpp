@@ -46,7 +46,7 @@ struct StepPlan {
 /// `mechanics` false: a frozen stage (items 1-8 left out; the particles keep their positions and
 /// the contact table of the stage start; only coupling modules run, e.g. a conduction run on a
 /// fixed packing). A force module in a frozen stage is a SetupError.
-StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields,
-                         bool bonds = false, bool mechanics = true);
+StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields, bool bonds = false,
+                         bool mechanics = true);
 
 }  // namespace sparkdem

@@ -25,8 +25,8 @@ BondReference make_bond_reference(const Vec3& xi, const Vec3& xj, const Quat& qi
   return ref;
 }
 
-std::size_t BondTable::add(Index a, Index b, const std::vector<Id>& ids, const std::vector<Vec3>& x,
-                           const std::vector<Quat>& q, const HandedState& handed) {
+std::size_t BondTable::add(Index a, Index b, const std::vector<Id>& ids, const std::vector<Vec3>& x, const std::vector<Quat>& q,
+                           const HandedState& handed) {
   if (a == b) throw SetupError("a bond needs two different particles (id " + std::to_string(ids[a]) + ")");
   if (ids[a] > ids[b]) std::swap(a, b);
   i_.push_back(a);
@@ -50,7 +50,11 @@ void BondTable::mark_broken(std::size_t r, Step step, const BondBreakRecord& rec
   broken_[r] = 1;
   broken_step_[r] = step;
   record_[r] = record;
-  if (r < force_.size()) { force_[r].setZero(); torque_i_[r].setZero(); torque_j_[r].setZero(); }
+  if (r < force_.size()) {
+    force_[r].setZero();
+    torque_i_[r].setZero();
+    torque_j_[r].setZero();
+  }
   ++version_;
 }
 
@@ -75,12 +79,21 @@ std::size_t BondTable::erase_particles(const std::unordered_set<Id>& gone) {
   for (std::size_t r = 0; r < n; ++r) {
     keep[r] = !(gone.count(id_i_[r]) || gone.count(id_j_[r]));
     if (!keep[r]) continue;
-    ref_[q] = ref_[r]; broken_[q] = broken_[r]; broken_step_[q] = broken_step_[r]; record_[q] = record_[r];
+    ref_[q] = ref_[r];
+    broken_[q] = broken_[r];
+    broken_step_[q] = broken_step_[r];
+    record_[q] = record_[r];
     ++q;
   }
-  ref_.resize(q); broken_.resize(q); broken_step_.resize(q); record_.resize(q);
+  ref_.resize(q);
+  broken_.resize(q);
+  broken_step_.resize(q);
+  record_.resize(q);
   keep_rows(keep);
-  if (q != n) { ++version_; dirty_ = true; }
+  if (q != n) {
+    ++version_;
+    dirty_ = true;
+  }
   return n - q;
 }
 
@@ -129,8 +142,7 @@ void BondTable::visit(Archive& ar, const std::string& prefix) {
     if (rec.size() != 4 * size() || modes.size() != size())
       throw SetupError("checkpoint bond break records are inconsistent: " + std::to_string(size()) + " rows");
     record_.assign(size(), {});
-    for (std::size_t r = 0; r < size(); ++r)
-      record_[r] = {rec[4 * r], Vec3(rec[4 * r + 1], rec[4 * r + 2], rec[4 * r + 3]), modes[r]};
+    for (std::size_t r = 0; r < size(); ++r) record_[r] = {rec[4 * r], Vec3(rec[4 * r + 1], rec[4 * r + 2], rec[4 * r + 3]), modes[r]};
     broken_.assign(br.begin(), br.end());
     contact_rule = rule ? ContactRule::Add : ContactRule::Exclude;
     ++version_;

@@ -18,11 +18,11 @@ namespace sparkdem {
 /// Reference geometry of a bond at creation. Directions are stored in each particle's body
 /// frame, so that the current bending and twisting follow from the particles' quaternions.
 struct BondReference {
-  double length0 = 0.0;          ///< centre distance at creation [m]
-  Vec3 dir_i = Vec3::UnitX();    ///< unit vector i -> j at creation, in i's body frame
-  Vec3 dir_j = -Vec3::UnitX();   ///< unit vector j -> i at creation, in j's body frame
-  Vec3 perp_i = Vec3::UnitY();   ///< a unit vector normal to the axis at creation, in i's body frame
-  Vec3 perp_j = Vec3::UnitY();   ///< the same world vector at creation, in j's body frame
+  double length0 = 0.0;         ///< centre distance at creation [m]
+  Vec3 dir_i = Vec3::UnitX();   ///< unit vector i -> j at creation, in i's body frame
+  Vec3 dir_j = -Vec3::UnitX();  ///< unit vector j -> i at creation, in j's body frame
+  Vec3 perp_i = Vec3::UnitY();  ///< a unit vector normal to the axis at creation, in i's body frame
+  Vec3 perp_j = Vec3::UnitY();  ///< the same world vector at creation, in j's body frame
 };
 
 /// Reference of a bond between particles at xi, xj with orientations qi, qj (body -> world).
@@ -35,7 +35,7 @@ inline constexpr std::int64_t kBreakModeVirialVonMises = -2;
 
 /// The log entry of a broken bond.
 struct BondBreakRecord {
-  double time = std::numeric_limits<double>::quiet_NaN();  ///< [s] at the end of the breaking step
+  double time = std::numeric_limits<double>::quiet_NaN();                    ///< [s] at the end of the breaking step
   Vec3 position = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());  ///< midpoint of the centres [m]
   std::int64_t mode = 0;  ///< failure mode (1-based index into the bond law's failure_modes(); 0 unknown; kBreakModeHydrostatic)
 };
@@ -45,8 +45,8 @@ class BondTable : public PairRows {
   /// Add an intact bond between local particles a and b (any order); the reference geometry is
   /// taken from the current positions and orientations. `handed` initialises same-named state
   /// columns (a contact's state when a contact turns into a bond). Returns the row.
-  std::size_t add(Index a, Index b, const std::vector<Id>& ids, const std::vector<Vec3>& x,
-                  const std::vector<Quat>& q, const HandedState& handed = {});
+  std::size_t add(Index a, Index b, const std::vector<Id>& ids, const std::vector<Vec3>& x, const std::vector<Quat>& q,
+                  const HandedState& handed = {});
 
   const BondReference& reference(std::size_t r) const { return ref_[r]; }
   bool broken(std::size_t r) const { return broken_[r] != 0; }
@@ -66,7 +66,11 @@ class BondTable : public PairRows {
 
   /// Rebuild the per-particle incidence if bonds were added since (call before a force pass).
   void prepare(std::size_t n_particles) {
-    if (incidence_n_ != n_particles || dirty_) { reset_results(n_particles); incidence_n_ = n_particles; dirty_ = false; }
+    if (incidence_n_ != n_particles || dirty_) {
+      reset_results(n_particles);
+      incidence_n_ = n_particles;
+      dirty_ = false;
+    }
   }
   /// Drop every row (intact or broken) that involves a particle whose global id is in `gone`
   /// (particle deletion); returns the rows dropped. Local indices are stale until

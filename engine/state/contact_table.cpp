@@ -7,8 +7,8 @@
 
 namespace sparkdem {
 
-void ContactTable::rebuild(const std::vector<std::array<Index, 2>>& pairs, const std::vector<Id>& ids,
-                           std::size_t n_particles, const ContactRebuildRules& rules) {
+void ContactTable::rebuild(const std::vector<std::array<Index, 2>>& pairs, const std::vector<Id>& ids, std::size_t n_particles,
+                           const ContactRebuildRules& rules) {
   const std::size_t w = state_names_.size();
   std::unordered_map<std::uint64_t, std::size_t> old;
   if (w > 0) {
@@ -19,14 +19,20 @@ void ContactTable::rebuild(const std::vector<std::array<Index, 2>>& pairs, const
   std::vector<Index> ni, nj;
   std::vector<Id> nidi, nidj;
   std::vector<double> nstate;
-  ni.reserve(pairs.size()); nj.reserve(pairs.size()); nidi.reserve(pairs.size()); nidj.reserve(pairs.size());
+  ni.reserve(pairs.size());
+  nj.reserve(pairs.size());
+  nidi.reserve(pairs.size());
+  nidj.reserve(pairs.size());
   nstate.reserve(pairs.size() * w);
   for (const auto& pr : pairs) {
     Index a = pr[0], b = pr[1];
     if (ids[a] > ids[b]) std::swap(a, b);
     const std::uint64_t k = pair_key(ids[a], ids[b]);
     if (rules.excluded && rules.excluded->count(k)) continue;
-    ni.push_back(a); nj.push_back(b); nidi.push_back(ids[a]); nidj.push_back(ids[b]);
+    ni.push_back(a);
+    nj.push_back(b);
+    nidi.push_back(ids[a]);
+    nidj.push_back(ids[b]);
     nstate.resize(nstate.size() + w, 0.0);
     if (w > 0) {
       auto it = old.find(k);
@@ -40,10 +46,17 @@ void ContactTable::rebuild(const std::vector<std::array<Index, 2>>& pairs, const
     for (std::size_t r = 0; r < size(); ++r) {
       if (carried[r] || !rules.alive(state(r))) continue;
       if (rules.excluded && rules.excluded->count(key(r))) continue;
-      ni.push_back(i_[r]); nj.push_back(j_[r]); nidi.push_back(id_i_[r]); nidj.push_back(id_j_[r]);
+      ni.push_back(i_[r]);
+      nj.push_back(j_[r]);
+      nidi.push_back(id_i_[r]);
+      nidj.push_back(id_j_[r]);
       nstate.insert(nstate.end(), state_.begin() + r * w, state_.begin() + (r + 1) * w);
     }
-  i_.swap(ni); j_.swap(nj); id_i_.swap(nidi); id_j_.swap(nidj); state_.swap(nstate);
+  i_.swap(ni);
+  j_.swap(nj);
+  id_i_.swap(nidi);
+  id_j_.swap(nidj);
+  state_.swap(nstate);
   if (!pending_.empty()) {
     for (std::size_t r = 0; r < size(); ++r) {
       auto it = pending_.find(key(r));
@@ -60,7 +73,10 @@ std::size_t ContactTable::erase_particles(const std::unordered_set<Id>& gone) {
   std::vector<char> keep(n, 1);
   std::size_t dropped = 0;
   for (std::size_t r = 0; r < n; ++r)
-    if (gone.count(id_i_[r]) || gone.count(id_j_[r])) { keep[r] = 0; ++dropped; }
+    if (gone.count(id_i_[r]) || gone.count(id_j_[r])) {
+      keep[r] = 0;
+      ++dropped;
+    }
   const bool have_overlap = overlap_.size() == n;
   std::size_t q = 0;
   if (have_overlap)
@@ -84,15 +100,13 @@ void ContactTable::visit(Archive& ar, const std::string& prefix) {
   // them, and a resumed stage checks its `until` conditions before its first force pass.
   if (!ar.reading() || ar.has(prefix + "/overlap")) ar.visit(prefix + "/overlap", overlap_);
   if (overlap_.size() != size())
-    throw SetupError("checkpoint contact overlaps have " + std::to_string(overlap_.size()) + " rows, expected " +
-                     std::to_string(size()));
+    throw SetupError("checkpoint contact overlaps have " + std::to_string(overlap_.size()) + " rows, expected " + std::to_string(size()));
   // Forces of the last force pass: the frame a resumed stage writes before its first force pass
   // (a checkpoint at the stage's last step) reports them. The torques are only read by the force
   // pass that recomputes them, so they are not stored.
   if (!ar.reading() || ar.has(prefix + "/force")) ar.visit(prefix + "/force", force_);
   if (force_.size() != size())
-    throw SetupError("checkpoint contact forces have " + std::to_string(force_.size()) + " rows, expected " +
-                     std::to_string(size()));
+    throw SetupError("checkpoint contact forces have " + std::to_string(force_.size()) + " rows, expected " + std::to_string(size()));
   // Pending hand-overs (a bond broke since the last rebuild), in key order.
   std::vector<std::int64_t> keys;
   std::string names;

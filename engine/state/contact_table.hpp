@@ -29,7 +29,6 @@ class ContactTable : public PairRows {
   std::vector<double>& overlap() { return overlap_; }  ///< r_i + r_j - d [m] (negative = gap)
   const std::vector<double>& overlap() const { return overlap_; }
 
-
   /// Replace the rows by the new candidate pairs (local indices) and carry state over from the
   /// old rows with the same global-id key; rows kept alive by their law are appended (old order);
   /// state handed over by a broken bond (hand_over) initialises a new row with that key.

@@ -9,8 +9,8 @@ namespace sparkdem {
 DeletionCounts delete_particles(State& s, const std::vector<bool>& remove) {
   auto& p = s.particles;
   if (remove.size() != p.size())
-    throw SetupError("delete_particles: the mask has " + std::to_string(remove.size()) + " entries for " +
-                     std::to_string(p.size()) + " particles");
+    throw SetupError("delete_particles: the mask has " + std::to_string(remove.size()) + " entries for " + std::to_string(p.size()) +
+                     " particles");
   DeletionCounts out;
   std::unordered_set<Id> gone;
   std::vector<bool> keep(p.size());

@@ -20,10 +20,10 @@ enum class FieldCheck {
 
 struct FieldInfo {
   std::string name;
-  int components = 1;      ///< values per row
-  std::string unit;        ///< SI unit
-  double init = 0.0;       ///< initial value of every component
-  bool output = true;      ///< written to result frames
+  int components = 1;                   ///< values per row
+  std::string unit;                     ///< SI unit
+  double init = 0.0;                    ///< initial value of every component
+  bool output = true;                   ///< written to result frames
   FieldCheck check = FieldCheck::None;  ///< watchdog check (not stored in checkpoints: modules re-declare it)
 };
 

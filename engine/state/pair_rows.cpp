@@ -35,15 +35,31 @@ void PairRows::keep_rows(const std::vector<char>& keep) {
   std::size_t q = 0;
   for (std::size_t r = 0; r < n; ++r) {
     if (!keep[r]) continue;
-    i_[q] = i_[r]; j_[q] = j_[r]; id_i_[q] = id_i_[r]; id_j_[q] = id_j_[r];
+    i_[q] = i_[r];
+    j_[q] = j_[r];
+    id_i_[q] = id_i_[r];
+    id_j_[q] = id_j_[r];
     std::copy_n(state_.begin() + r * w, w, state_.begin() + q * w);
-    if (results) { force_[q] = force_[r]; torque_i_[q] = torque_i_[r]; torque_j_[q] = torque_j_[r]; }
+    if (results) {
+      force_[q] = force_[r];
+      torque_i_[q] = torque_i_[r];
+      torque_j_[q] = torque_j_[r];
+    }
     ++q;
   }
-  i_.resize(q); j_.resize(q); id_i_.resize(q); id_j_.resize(q);
+  i_.resize(q);
+  j_.resize(q);
+  id_i_.resize(q);
+  id_j_.resize(q);
   state_.resize(q * w);
-  force_.resize(results ? q : 0); torque_i_.resize(results ? q : 0); torque_j_.resize(results ? q : 0);
-  if (!results) { force_.assign(q, Vec3::Zero()); torque_i_.assign(q, Vec3::Zero()); torque_j_.assign(q, Vec3::Zero()); }
+  force_.resize(results ? q : 0);
+  torque_i_.resize(results ? q : 0);
+  torque_j_.resize(results ? q : 0);
+  if (!results) {
+    force_.assign(q, Vec3::Zero());
+    torque_i_.assign(q, Vec3::Zero());
+    torque_j_.assign(q, Vec3::Zero());
+  }
 }
 
 void PairRows::copy_named_state(std::size_t r, const std::vector<std::string>& from_names, const double* from) {
@@ -73,8 +89,13 @@ void PairRows::gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const
     Vec3 f = Vec3::Zero(), t = Vec3::Zero();
     for (std::int64_t k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
       const std::int64_t code = inc_row_[k];
-      if (code >= 0) { f += force_[code]; t += torque_i_[code]; }
-      else { f -= force_[~code]; t += torque_j_[~code]; }
+      if (code >= 0) {
+        f += force_[code];
+        t += torque_i_[code];
+      } else {
+        f -= force_[~code];
+        t += torque_j_[~code];
+      }
     }
     force[p] += f;
     torque[p] += t;
@@ -94,15 +115,18 @@ void PairRows::visit_rows(Archive& ar, const std::string& prefix, const std::str
     state_names_.clear();
     std::string cur;
     for (char c : names) {
-      if (c == '\n') { state_names_.push_back(cur); cur.clear(); } else cur += c;
+      if (c == '\n') {
+        state_names_.push_back(cur);
+        cur.clear();
+      } else
+        cur += c;
     }
   }
   ar.visit(prefix + "/state", state_, std::max(1, state_width()));
   if (ar.reading()) {
     if (b.size() != a.size() || i_.size() != a.size() || j_.size() != a.size())
-      throw SetupError("checkpoint " + what + " table is inconsistent: id_i, id_j, i, j have " + std::to_string(a.size()) +
-                       ", " + std::to_string(b.size()) + ", " + std::to_string(i_.size()) + ", " + std::to_string(j_.size()) +
-                       " rows");
+      throw SetupError("checkpoint " + what + " table is inconsistent: id_i, id_j, i, j have " + std::to_string(a.size()) + ", " +
+                       std::to_string(b.size()) + ", " + std::to_string(i_.size()) + ", " + std::to_string(j_.size()) + " rows");
     id_i_.assign(a.begin(), a.end());
     id_j_.assign(b.begin(), b.end());
     if (state_.size() != size() * state_names_.size())

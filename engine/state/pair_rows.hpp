@@ -30,7 +30,10 @@ template <class EndI, class EndJ>
 void build_incidence(std::size_t n, std::size_t rows, EndI end_i, EndJ end_j, std::vector<std::int64_t>& start,
                      std::vector<std::int64_t>& row) {
   start.assign(n + 1, 0);
-  for (std::size_t r = 0; r < rows; ++r) { ++start[end_i(r) + 1]; ++start[end_j(r) + 1]; }
+  for (std::size_t r = 0; r < rows; ++r) {
+    ++start[end_i(r) + 1];
+    ++start[end_j(r) + 1];
+  }
   for (std::size_t p = 0; p < n; ++p) start[p + 1] += start[p];
   row.assign(start[n], 0);
   std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
@@ -66,7 +69,7 @@ class PairRows {
   const std::vector<double>& state_data() const { return state_; }
 
   // Per-row results of the last force pass.
-  std::vector<Vec3>& force() { return force_; }       ///< force on i (j gets minus) [N]
+  std::vector<Vec3>& force() { return force_; }        ///< force on i (j gets minus) [N]
   std::vector<Vec3>& torque_i() { return torque_i_; }  ///< [N m]
   std::vector<Vec3>& torque_j() { return torque_j_; }  ///< [N m]
   const std::vector<Vec3>& force() const { return force_; }

@@ -25,7 +25,6 @@ std::size_t bond_within_gap(State& s, double gap_tolerance);
 
 /// Mark bond row r broken at `step` (ending at `time` [s]; mode from the bond law, 0 unknown),
 /// log its midpoint, and hand its state to the contact table.
-void break_bond(State& s, std::size_t r, Step step, double time = std::numeric_limits<double>::quiet_NaN(),
-                std::int64_t mode = 0);
+void break_bond(State& s, std::size_t r, Step step, double time = std::numeric_limits<double>::quiet_NaN(), std::int64_t mode = 0);
 
 }  // namespace sparkdem

@@ -13,10 +13,10 @@ namespace sparkdem {
 struct SetSelector {
   enum class Kind { TopLayer, BottomLayer, TouchingWall, Ids, Box, Cylinder };
   Kind kind = Kind::TopLayer;
-  double thickness = 0.0;     ///< [m] TopLayer/BottomLayer: centres within this height of the top/bottom centre
-  std::string wall;           ///< TouchingWall: wall name
-  double tolerance = 0.0;     ///< [m] TouchingWall: gap allowed between particle surface and wall
-  std::vector<Id> ids;        ///< Ids
+  double thickness = 0.0;                     ///< [m] TopLayer/BottomLayer: centres within this height of the top/bottom centre
+  std::string wall;                           ///< TouchingWall: wall name
+  double tolerance = 0.0;                     ///< [m] TouchingWall: gap allowed between particle surface and wall
+  std::vector<Id> ids;                        ///< Ids
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  ///< Box: centres inside [lo, hi] [m]
   /// Cylinder (infinite along its axis): the axis passes through `axis_point` [m] along `axis`
   /// (any non-zero length; normalised here). With `overlap` false a particle is a member when
@@ -35,7 +35,10 @@ inline std::vector<Index> select_particles(const State& s, const SetSelector& se
   std::vector<Index> out;
   if (p.size() == 0) return out;
   double zmin = p.position[0].z(), zmax = zmin;
-  for (const auto& x : p.position) { zmin = std::min(zmin, x.z()); zmax = std::max(zmax, x.z()); }
+  for (const auto& x : p.position) {
+    zmin = std::min(zmin, x.z());
+    zmax = std::max(zmax, x.z());
+  }
   const Wall* wall = nullptr;
   if (sel.kind == SetSelector::Kind::TouchingWall) {
     for (const auto& w : s.walls)
@@ -51,8 +54,12 @@ inline std::vector<Index> select_particles(const State& s, const SetSelector& se
   for (std::size_t i = 0; i < p.size(); ++i) {
     bool in = false;
     switch (sel.kind) {
-      case SetSelector::Kind::TopLayer: in = p.position[i].z() >= zmax - sel.thickness; break;
-      case SetSelector::Kind::BottomLayer: in = p.position[i].z() <= zmin + sel.thickness; break;
+      case SetSelector::Kind::TopLayer:
+        in = p.position[i].z() >= zmax - sel.thickness;
+        break;
+      case SetSelector::Kind::BottomLayer:
+        in = p.position[i].z() <= zmin + sel.thickness;
+        break;
       case SetSelector::Kind::TouchingWall: {
         Vec3 n;
         double d;
@@ -60,7 +67,9 @@ inline std::vector<Index> select_particles(const State& s, const SetSelector& se
         in = d <= p.radius[i] + sel.tolerance;
         break;
       }
-      case SetSelector::Kind::Ids: in = std::find(sel.ids.begin(), sel.ids.end(), p.id[i]) != sel.ids.end(); break;
+      case SetSelector::Kind::Ids:
+        in = std::find(sel.ids.begin(), sel.ids.end(), p.id[i]) != sel.ids.end();
+        break;
       case SetSelector::Kind::Box:
         in = (p.position[i].array() >= sel.lo.array()).all() && (p.position[i].array() <= sel.hi.array()).all();
         break;

@@ -12,18 +12,18 @@ namespace sparkdem {
 
 struct ParticleStore {
   std::vector<Id> id;
-  std::vector<Vec3> position;      ///< [m]
-  std::vector<Vec3> velocity;      ///< [m/s]
-  std::vector<Quat> orientation;   ///< unit quaternion
-  std::vector<Vec3> omega;         ///< angular velocity [rad/s]
-  std::vector<Vec3> force;         ///< [N]
-  std::vector<Vec3> torque;        ///< [N m]
-  std::vector<double> radius;      ///< [m]
-  std::vector<double> mass;        ///< [kg] (includes mass scaling when enabled)
-  std::vector<double> inertia;     ///< moment of inertia of the sphere [kg m^2]
+  std::vector<Vec3> position;          ///< [m]
+  std::vector<Vec3> velocity;          ///< [m/s]
+  std::vector<Quat> orientation;       ///< unit quaternion
+  std::vector<Vec3> omega;             ///< angular velocity [rad/s]
+  std::vector<Vec3> force;             ///< [N]
+  std::vector<Vec3> torque;            ///< [N m]
+  std::vector<double> radius;          ///< [m]
+  std::vector<double> mass;            ///< [kg] (includes mass scaling when enabled)
+  std::vector<double> inertia;         ///< moment of inertia of the sphere [kg m^2]
   std::vector<std::int32_t> material;  ///< index into the material table
   std::vector<std::int32_t> fixed;     ///< 1 = not integrated (frozen particle)
-  FieldRegistry fields;            ///< optional per-particle fields
+  FieldRegistry fields;                ///< optional per-particle fields
 
   std::size_t size() const { return id.size(); }
   /// Mean radius [m] (0 for no particle).
@@ -54,9 +54,18 @@ struct ParticleStore {
 
   /// Reorder: new[i] = old[perm[i]] for every core array and every registered field.
   void permute(const std::vector<Index>& perm) {
-    apply(id, perm); apply(position, perm); apply(velocity, perm); apply(orientation, perm);
-    apply(omega, perm); apply(force, perm); apply(torque, perm); apply(radius, perm);
-    apply(mass, perm); apply(inertia, perm); apply(material, perm); apply(fixed, perm);
+    apply(id, perm);
+    apply(position, perm);
+    apply(velocity, perm);
+    apply(orientation, perm);
+    apply(omega, perm);
+    apply(force, perm);
+    apply(torque, perm);
+    apply(radius, perm);
+    apply(mass, perm);
+    apply(inertia, perm);
+    apply(material, perm);
+    apply(fixed, perm);
     fields.permute(perm);
   }
 
@@ -101,14 +110,22 @@ struct ParticleStore {
         throw SetupError(std::string("checkpoint particle array '") + what + "' has " + std::to_string(m) + " rows for " +
                          std::to_string(n) + " particle ids");
     };
-    rows("position", position.size()); rows("velocity", velocity.size()); rows("orientation", orientation.size());
-    rows("omega", omega.size()); rows("force", force.size()); rows("torque", torque.size()); rows("radius", radius.size());
-    rows("mass", mass.size()); rows("inertia", inertia.size()); rows("material", material.size()); rows("fixed", fixed.size());
+    rows("position", position.size());
+    rows("velocity", velocity.size());
+    rows("orientation", orientation.size());
+    rows("omega", omega.size());
+    rows("force", force.size());
+    rows("torque", torque.size());
+    rows("radius", radius.size());
+    rows("mass", mass.size());
+    rows("inertia", inertia.size());
+    rows("material", material.size());
+    rows("fixed", fixed.size());
     for (const auto& name : fields.names()) {
       const std::size_t c = static_cast<std::size_t>(fields.info(name).components);
       if (fields.data(name).size() != n * c)
-        throw SetupError("checkpoint particle field '" + name + "' has " + std::to_string(fields.data(name).size()) +
-                         " values, expected " + std::to_string(n) + " x " + std::to_string(c));
+        throw SetupError("checkpoint particle field '" + name + "' has " + std::to_string(fields.data(name).size()) + " values, expected " +
+                         std::to_string(n) + " x " + std::to_string(c));
     }
     for (std::size_t i = 0; i < n; ++i) {
       const bool finite = position[i].allFinite() && velocity[i].allFinite() && omega[i].allFinite() && force[i].allFinite() &&

@@ -29,18 +29,19 @@ struct State {
   std::vector<Material> materials;
   VerletTracker verlet;
   std::vector<std::vector<Index>> wall_candidates;  ///< per wall: particles within r + skin at the last rebuild
-  Step step = 0;               ///< global step counter (all stages)
-  double time = 0.0;           ///< [s] = stage_t0 + (step - stage_step0) * dt
-  Step stage_step0 = 0;        ///< step at the start of the current stage
-  double stage_t0 = 0.0;       ///< [s] time at the start of the current stage
-  double stage_dt = 0.0;       ///< [s] mechanical step of the current stage
-  double stage_skin = 0.0;     ///< [m] Verlet skin of the current stage
-  double physical_time = 0.0;  ///< [s] = stage_phys_t0 + time_scale * (step - stage_step0) * dt
-  double stage_phys_t0 = 0.0;  ///< [s] physical time at the start of the current stage
-  double stage_time_scale = 1.0;  ///< physical seconds per mechanical second in the current stage
+  Step step = 0;                                    ///< global step counter (all stages)
+  double time = 0.0;                                ///< [s] = stage_t0 + (step - stage_step0) * dt
+  Step stage_step0 = 0;                             ///< step at the start of the current stage
+  double stage_t0 = 0.0;                            ///< [s] time at the start of the current stage
+  double stage_dt = 0.0;                            ///< [s] mechanical step of the current stage
+  double stage_skin = 0.0;                          ///< [m] Verlet skin of the current stage
+  double physical_time = 0.0;                       ///< [s] = stage_phys_t0 + time_scale * (step - stage_step0) * dt
+  double stage_phys_t0 = 0.0;                       ///< [s] physical time at the start of the current stage
+  double stage_time_scale = 1.0;                    ///< physical seconds per mechanical second in the current stage
   std::int64_t stage_index = 0;
   std::int64_t rebuilds = 0;
-  bool bonds_active = false;   ///< the running stage has a bond law (set by Simulation::prepare)   ///< neighbour rebuilds so far (drives periodic sorting)
+  bool bonds_active =
+      false;  ///< the running stage has a bond law (set by Simulation::prepare)   ///< neighbour rebuilds so far (drives periodic sorting)
   std::mt19937_64 rng{12345};
   /// Scheduler bookkeeping that must survive a restart (event-trigger references: last run step,
   /// bond-table version, ...), keyed "trigger/<module>/<what>".
@@ -84,8 +85,8 @@ struct State {
         if (ar.reading())
           for (const Index i : wall_candidates[k])
             if (i < 0 || static_cast<std::size_t>(i) >= particles.size())
-              throw SetupError("checkpoint wall candidates of '" + walls[k].name + "' name particle row " + std::to_string(i) +
-                               " of " + std::to_string(particles.size()));
+              throw SetupError("checkpoint wall candidates of '" + walls[k].name + "' name particle row " + std::to_string(i) + " of " +
+                               std::to_string(particles.size()));
       }
     if (ar.reading() && (verlet.r0().size() != verlet.x0().size() || (!verlet.x0().empty() && verlet.x0().size() != particles.size())))
       throw SetupError("checkpoint Verlet reference has " + std::to_string(verlet.x0().size()) + " positions and " +
@@ -105,7 +106,10 @@ struct State {
     std::string mk;
     std::vector<double> mv;
     if (!ar.reading())
-      for (const auto& [k, v] : marks) { mk += k + "\n"; mv.push_back(v); }
+      for (const auto& [k, v] : marks) {
+        mk += k + "\n";
+        mv.push_back(v);
+      }
     if (!ar.reading() || ar.has("state/marks/names")) {
       ar.visit("state/marks/names", mk);
       ar.visit("state/marks/values", mv);
@@ -118,16 +122,22 @@ struct State {
     }
     ar.visit("state/rebuilds", rebuilds);
     std::string rs;
-    if (!ar.reading()) { std::ostringstream os; os << rng; rs = os.str(); }
+    if (!ar.reading()) {
+      std::ostringstream os;
+      os << rng;
+      rs = os.str();
+    }
     ar.visit("state/rng", rs);
-    if (ar.reading()) { std::istringstream is(rs); is >> rng;
+    if (ar.reading()) {
+      std::istringstream is(rs);
+      is >> rng;
       if (is.fail()) throw SetupError("checkpoint item 'state/rng' does not hold a random generator state");
       if (step < 0 || stage_step0 < 0 || stage_step0 > step)
         throw SetupError("checkpoint steps are inconsistent: step " + std::to_string(step) + ", stage started at step " +
                          std::to_string(stage_step0));
       if (!std::isfinite(time) || !std::isfinite(stage_t0) || !std::isfinite(stage_dt) || !(stage_dt >= 0.0) ||
-          !std::isfinite(stage_skin) || !(stage_skin >= 0.0) || !std::isfinite(physical_time) ||
-          !std::isfinite(stage_phys_t0) || !std::isfinite(stage_time_scale) || !(stage_time_scale > 0.0))
+          !std::isfinite(stage_skin) || !(stage_skin >= 0.0) || !std::isfinite(physical_time) || !std::isfinite(stage_phys_t0) ||
+          !std::isfinite(stage_time_scale) || !(stage_time_scale > 0.0))
         throw SetupError("checkpoint clock values are invalid (non-finite time, negative step or skin, or time scale not > 0)");
       contacts.remap_after_permutation(particles.id);
       bonds.remap_after_permutation(particles.id);

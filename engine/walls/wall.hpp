@@ -28,35 +28,35 @@ struct PlaneShape {
   Vec3 normal = Vec3::UnitZ();  ///< unit, into the domain
 };
 struct CylinderShape {
-  Vec3 base = Vec3::Zero();     ///< a point on the axis
-  Vec3 axis = Vec3::UnitZ();    ///< unit axis
-  double radius = 1.0;          ///< [m] at u = 0
+  Vec3 base = Vec3::Zero();   ///< a point on the axis
+  Vec3 axis = Vec3::UnitZ();  ///< unit axis
+  double radius = 1.0;        ///< [m] at u = 0
 };
 using WallShape = std::variant<PlaneShape, CylinderShape>;
 
 struct WallMotion {
   enum class Kind { Fixed, Velocity, Table, Pressure };
   Kind kind = Kind::Fixed;
-  double speed = 0.0;                  ///< [m/s] along the inward normal (Velocity)
+  double speed = 0.0;                                       ///< [m/s] along the inward normal (Velocity)
   double travel = std::numeric_limits<double>::infinity();  ///< [m] max |u - u_start| (Velocity)
-  std::vector<double> table_time;      ///< [s] from stage start (Table), physical if physical_time
-  std::vector<double> table_disp;      ///< [m] displacement from u_start (Table)
-  std::vector<double> pressure_time;   ///< [s] (Pressure) piecewise-linear target, physical if physical_time
-  std::vector<double> pressure_value;  ///< [Pa]
-  double area = 0.0;                   ///< [m^2] area the pressure acts on (0 = from the enclosing cylinder)
-  double max_speed = 0.0;              ///< [m/s] servo speed limit
-  bool physical_time = false;          ///< table times are physical seconds (read at time_scale * t_stage)
-  std::string halt_quantity;           ///< stop the wall for good once this monitor column ...
-  double halt_value = 0.0;             ///< ... reaches at least this value (checked with `until`)
+  std::vector<double> table_time;                           ///< [s] from stage start (Table), physical if physical_time
+  std::vector<double> table_disp;                           ///< [m] displacement from u_start (Table)
+  std::vector<double> pressure_time;                        ///< [s] (Pressure) piecewise-linear target, physical if physical_time
+  std::vector<double> pressure_value;                       ///< [Pa]
+  double area = 0.0;                                        ///< [m^2] area the pressure acts on (0 = from the enclosing cylinder)
+  double max_speed = 0.0;                                   ///< [m/s] servo speed limit
+  bool physical_time = false;                               ///< table times are physical seconds (read at time_scale * t_stage)
+  std::string halt_quantity;                                ///< stop the wall for good once this monitor column ...
+  double halt_value = 0.0;                                  ///< ... reaches at least this value (checked with `until`)
 };
 
 struct Wall {
   std::string name;
   WallShape shape;
   WallMotion motion;
-  double u = 0.0;          ///< current offset [m]
-  double u_dot = 0.0;      ///< current offset rate [m/s]
-  double u_start = 0.0;    ///< offset at the start of the current motion [m]
+  double u = 0.0;             ///< current offset [m]
+  double u_dot = 0.0;         ///< current offset rate [m/s]
+  double u_start = 0.0;       ///< offset at the start of the current motion [m]
   Vec3 force = Vec3::Zero();  ///< total force of the particles on the wall [N]
   double normal_force = 0.0;  ///< component of `force` against the inward normal (push) [N]
   bool halted = false;        ///< the motion's halt condition was met: the wall stays where it is
@@ -84,8 +84,12 @@ struct Wall {
     ar.visit(prefix + "/kind", kind);
     std::vector<double> g;
     if (!ar.reading()) {
-      if (const auto* p = std::get_if<PlaneShape>(&shape)) g = {p->point[0], p->point[1], p->point[2], p->normal[0], p->normal[1], p->normal[2], 0.0};
-      else { const auto& c = std::get<CylinderShape>(shape); g = {c.base[0], c.base[1], c.base[2], c.axis[0], c.axis[1], c.axis[2], c.radius}; }
+      if (const auto* p = std::get_if<PlaneShape>(&shape))
+        g = {p->point[0], p->point[1], p->point[2], p->normal[0], p->normal[1], p->normal[2], 0.0};
+      else {
+        const auto& c = std::get<CylinderShape>(shape);
+        g = {c.base[0], c.base[1], c.base[2], c.axis[0], c.axis[1], c.axis[2], c.radius};
+      }
     }
     ar.visit(prefix + "/geometry", g, 7);
     if (ar.reading()) {
@@ -94,17 +98,19 @@ struct Wall {
         throw SetupError("checkpoint wall '" + name + "': geometry has " + std::to_string(g.size()) + " values, expected 7");
       for (double x : g)
         if (!std::isfinite(x)) throw SetupError("checkpoint wall '" + name + "': geometry holds a non-finite value");
-      if (kind == "plane") shape = PlaneShape{Vec3(g[0], g[1], g[2]), Vec3(g[3], g[4], g[5])};
-      else if (kind == "cylinder") shape = CylinderShape{Vec3(g[0], g[1], g[2]), Vec3(g[3], g[4], g[5]), g[6]};
-      else throw SetupError("checkpoint wall '" + name + "': unknown kind '" + kind + "' (expected plane or cylinder)");
+      if (kind == "plane")
+        shape = PlaneShape{Vec3(g[0], g[1], g[2]), Vec3(g[3], g[4], g[5])};
+      else if (kind == "cylinder")
+        shape = CylinderShape{Vec3(g[0], g[1], g[2]), Vec3(g[3], g[4], g[5]), g[6]};
+      else
+        throw SetupError("checkpoint wall '" + name + "': unknown kind '" + kind + "' (expected plane or cylinder)");
     }
     ar.visit(prefix + "/u", u);
     ar.visit(prefix + "/u_dot", u_dot);
     ar.visit(prefix + "/u_start", u_start);
     std::vector<Vec3> f{force};
     ar.visit(prefix + "/force", f);
-    if (f.size() != 1)
-      throw SetupError("checkpoint wall '" + name + "': force has " + std::to_string(f.size()) + " rows, expected 1");
+    if (f.size() != 1) throw SetupError("checkpoint wall '" + name + "': force has " + std::to_string(f.size()) + " rows, expected 1");
     force = f[0];
     ar.visit(prefix + "/normal_force", normal_force);
     ar.visit(prefix + "/halted", halted);
@@ -171,8 +177,7 @@ inline void advance_wall(Wall& w, double t_stage, double dt, double area_hint, d
 
 /// Move a plane wall along its normal so that the nearest of the given spheres' surfaces is `gap`
 /// [m] away (a punch put on top of a packing). No-op for a cylinder or no spheres.
-inline void place_plane_at_clearance(Wall& w, const std::vector<Vec3>& centres, const std::vector<double>& radii,
-                                     double gap) {
+inline void place_plane_at_clearance(Wall& w, const std::vector<Vec3>& centres, const std::vector<double>& radii, double gap) {
   if (!w.is_plane() || centres.empty()) return;
   double nearest = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < centres.size(); ++i) {

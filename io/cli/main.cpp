@@ -73,12 +73,10 @@ void print_continue_hint(std::ostream& out, const sparkdem::io::RunProgress& p, 
   std::string line;
   for (const auto& a : command) line += (line.empty() ? "" : " ") + shell_word(a);
   out << "stage '" << p.stage << "' (" << p.stage_number << " of " << p.stages << ") "
-      << (p.until_unmet ? "ended at its hard stop with its required 'until' conditions unmet"
-                        : "was the last stage to complete")
-      << "; its end state is " << p.final_state.string() << ". To continue the run from it with stage '" << p.next_stage
-      << "' (" << p.stage_number + 1 << " of " << p.stages << ")"
-      << (p.until_unmet ? ", accepting that state," : " once the cause is fixed") << ":\n  " << line
-      << "\n(a new output directory keeps this run's frames and index files in " << outdir.string()
+      << (p.until_unmet ? "ended at its hard stop with its required 'until' conditions unmet" : "was the last stage to complete")
+      << "; its end state is " << p.final_state.string() << ". To continue the run from it with stage '" << p.next_stage << "' ("
+      << p.stage_number + 1 << " of " << p.stages << ")" << (p.until_unmet ? ", accepting that state," : " once the cause is fixed")
+      << ":\n  " << line << "\n(a new output directory keeps this run's frames and index files in " << outdir.string()
       << "; restarting into it replaces them";
   if (sparkdem::io::ranks::size() > 1)
     out << "; this run had " << sparkdem::io::ranks::size() << " MPI ranks: start it under the same launcher, e.g. mpirun -np "
@@ -114,8 +112,7 @@ struct CliArgs {
 };
 
 /// `sparkdem calibrate`: fit cohesive-beam parameters on the tension test of calibration file `file`.
-int calibrate_command(const sparkdem::io::json& j, const std::filesystem::path& file, const CliArgs& a,
-                      const sparkdem::Registry& reg) {
+int calibrate_command(const sparkdem::io::json& j, const std::filesystem::path& file, const CliArgs& a, const sparkdem::Registry& reg) {
   using namespace sparkdem;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
@@ -125,10 +122,9 @@ int calibrate_command(const sparkdem::io::json& j, const std::filesystem::path& 
   copt.threads = a.threads;
   if (!a.quiet)
     copt.on_iteration = [](const io::json& it) {
-      err() << "iteration " << it["iteration"] << ": radius_ratio " << it["radius_ratio"] << ", E_mu "
-            << it["young_modulus_Pa"] << " Pa -> E_M " << it["measured_young_modulus_Pa"] << " Pa, nu_M "
-            << it["measured_poisson_ratio"] << " (errors " << it["error_young_modulus"] << ", "
-            << it["error_poisson_ratio"] << "), " << it["wall_time_s"] << " s\n";
+      err() << "iteration " << it["iteration"] << ": radius_ratio " << it["radius_ratio"] << ", E_mu " << it["young_modulus_Pa"]
+            << " Pa -> E_M " << it["measured_young_modulus_Pa"] << " Pa, nu_M " << it["measured_poisson_ratio"] << " (errors "
+            << it["error_young_modulus"] << ", " << it["error_poisson_ratio"] << "), " << it["wall_time_s"] << " s\n";
     };
   const io::json rep = io::calibrate_beams(spec, reg, copt);
   if (!a.quiet)
@@ -139,8 +135,8 @@ int calibrate_command(const sparkdem::io::json& j, const std::filesystem::path& 
 
 /// `sparkdem run` of a loaded scenario: rank 0 runs it (the other ranks serve its sweep items);
 /// `progress` and `physical_outdir` say how far it got, for the advice after a failure.
-int run_scene(sparkdem::io::Scenario& sc, CliArgs a, sparkdem::io::RunProgress& progress,
-              std::filesystem::path& physical_outdir, bool& serving) {
+int run_scene(sparkdem::io::Scenario& sc, CliArgs a, sparkdem::io::RunProgress& progress, std::filesystem::path& physical_outdir,
+              bool& serving) {
   using namespace sparkdem;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
@@ -162,10 +158,11 @@ int run_scene(sparkdem::io::Scenario& sc, CliArgs a, sparkdem::io::RunProgress& 
   physical_outdir = opt.outdir;
   const io::json summary = io::run_scenario(sc, opt);
   if (!a.quiet)
-    err() << "done: " << summary["steps"] << " steps, " << summary["wall_time_s"] << " s wall, "
-          << summary["particle_steps_per_s"] << " particle-steps/s; outputs in " << a.outdir
+    err() << "done: " << summary["steps"] << " steps, " << summary["wall_time_s"] << " s wall, " << summary["particle_steps_per_s"]
+          << " particle-steps/s; outputs in " << a.outdir
           << ((std::filesystem::absolute(a.outdir) / "").lexically_normal() != (opt.outdir / "").lexically_normal()
-                  ? " (" + opt.outdir.string() + ")" : std::string())
+                  ? " (" + opt.outdir.string() + ")"
+                  : std::string())
           << "\n";
   return checks_exit_code(summary, a.report_only);
 }
@@ -190,7 +187,8 @@ int run_command(int argc, char** argv, bool& serving) {
   auto* check = app.add_subcommand("check", "validate a scenario and print it resolved");
   check->add_option("scene", a.scene, "scenario JSON file")->required();
   auto* schema = app.add_subcommand("schema", "print every stage, law, module and generator with its parameters");
-  auto* calibrate = app.add_subcommand("calibrate", "calibrate cohesive_beam parameters on a tension test (see io/scenario/calibrate_beams.hpp)");
+  auto* calibrate = app.add_subcommand("calibrate",
+                                       "calibrate cohesive_beam parameters on a tension test (see io/scenario/calibrate_beams.hpp)");
   calibrate->add_option("calibration", a.scene, "calibration JSON file")->required();
   calibrate->add_option("-o,--output", a.outdir, "output directory (one run per iteration, calibration.json)");
   calibrate->add_option("--threads", a.threads, "OpenMP threads (0 = default)");

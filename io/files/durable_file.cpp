@@ -19,9 +19,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-[[noreturn]] void fail_errno(const std::string& what, int error) {
-  throw SetupError(what + ": " + std::strerror(error));
-}
+[[noreturn]] void fail_errno(const std::string& what, int error) { throw SetupError(what + ": " + std::strerror(error)); }
 
 /// Opens `path` with open(2), retrying on EINTR; throws on failure.
 int open_or_throw(const fs::path& path, int flags, const std::string& what, mode_t mode = 0644) {
@@ -80,8 +78,7 @@ void sync_directory(const fs::path& dir) {
 }
 
 void rename_durably(const fs::path& from, const fs::path& to) {
-  if (std::rename(from.c_str(), to.c_str()) != 0)
-    fail_errno("cannot rename '" + from.string() + "' to '" + to.string() + "'", errno);
+  if (std::rename(from.c_str(), to.c_str()) != 0) fail_errno("cannot rename '" + from.string() + "' to '" + to.string() + "'", errno);
   sync_directory(directory_of(to));
 }
 

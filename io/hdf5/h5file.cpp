@@ -42,14 +42,12 @@ struct ObjectIo {
   herr_t (*write)(hid_t object, hid_t mem_type, const void* buffer);
 };
 
-const ObjectIo dataset_io{
-    H5Dget_type, H5Dget_space,
-    [](hid_t d, hid_t t, void* b) { return H5Dread(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, b); },
-    [](hid_t d, hid_t t, const void* b) { return H5Dwrite(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, b); }};
+const ObjectIo dataset_io{H5Dget_type, H5Dget_space,
+                          [](hid_t d, hid_t t, void* b) { return H5Dread(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, b); },
+                          [](hid_t d, hid_t t, const void* b) { return H5Dwrite(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, b); }};
 
-const ObjectIo attribute_io{
-    H5Aget_type, H5Aget_space, [](hid_t a, hid_t t, void* b) { return H5Aread(a, t, b); },
-    [](hid_t a, hid_t t, const void* b) { return H5Awrite(a, t, b); }};
+const ObjectIo attribute_io{H5Aget_type, H5Aget_space, [](hid_t a, hid_t t, void* b) { return H5Aread(a, t, b); },
+                            [](hid_t a, hid_t t, const void* b) { return H5Awrite(a, t, b); }};
 
 /// The most specific message of the current HDF5 error stack (then clears the stack).
 std::string innermost_hdf5_error() {
@@ -104,15 +102,13 @@ Handle string_space(const std::string& s, const fs::path& file) {
   return own(H5Screate(s.empty() ? H5S_NULL : H5S_SCALAR), H5Sclose, file, "cannot create a dataspace");
 }
 
-Handle scalar_space(const fs::path& file) {
-  return own(H5Screate(H5S_SCALAR), H5Sclose, file, "cannot create a dataspace");
-}
+Handle scalar_space(const fs::path& file) { return own(H5Screate(H5S_SCALAR), H5Sclose, file, "cannot create a dataspace"); }
 
 /// Before allocating for `n` values of a dataset: they must all be stored in the file. A dataset
 /// whose dataspace declares more values than its storage holds (never written, or a damaged
 /// or hostile file) is refused, so its size cannot trigger a huge allocation.
-void check_stored(hid_t object, const ObjectIo& io, std::uint64_t n, std::size_t value_size, hid_t type,
-                  const fs::path& file, const std::string& label) {
+void check_stored(hid_t object, const ObjectIo& io, std::uint64_t n, std::size_t value_size, hid_t type, const fs::path& file,
+                  const std::string& label) {
   if (&io != &dataset_io || n == 0) return;
   const std::size_t stored_size = H5Tget_size(type);
   if (stored_size == 0) throw_error(file, "cannot get the value size of " + label);
@@ -125,8 +121,7 @@ void check_stored(hid_t object, const ObjectIo& io, std::uint64_t n, std::size_t
 
 /// Reads every value of a dataset or attribute, checking its type class first.
 template <class T>
-std::vector<T> read_values(hid_t object, const ObjectIo& io, hid_t mem_type, const fs::path& file,
-                           const std::string& label) {
+std::vector<T> read_values(hid_t object, const ObjectIo& io, hid_t mem_type, const fs::path& file, const std::string& label) {
   constexpr bool floating = std::is_floating_point_v<T>;
   Handle type = own(io.get_type(object), H5Tclose, file, "cannot get the type of " + label);
   if (H5Tget_class(type.get()) != (floating ? H5T_FLOAT : H5T_INTEGER))
@@ -160,8 +155,7 @@ std::string read_text(hid_t object, const ObjectIo& io, const fs::path& file, co
 
 template <class T>
 T single_value(const std::vector<T>& values, const fs::path& file, const std::string& label) {
-  if (values.size() != 1)
-    throw_error(file, label + " holds " + std::to_string(values.size()) + " values, expected exactly one");
+  if (values.size() != 1) throw_error(file, label + " holds " + std::to_string(values.size()) + " values, expected exactly one");
   return values[0];
 }
 
@@ -183,8 +177,7 @@ H5File H5File::open_image(const fs::path& path, std::span<const unsigned char> i
   Handle fapl = own(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, path, "cannot create a property list");
   // Core (in-memory) driver without a backing store: nothing is ever written to disk.
   check(H5Pset_fapl_core(fapl.get(), 1 << 16, 0), path, "cannot select the in-memory driver");
-  check(H5Pset_file_image(fapl.get(), const_cast<unsigned char*>(image.data()), image.size()), path,
-        "cannot set the file image");
+  check(H5Pset_file_image(fapl.get(), const_cast<unsigned char*>(image.data()), image.size()), path, "cannot set the file image");
   // The core driver refuses to open an image under the name of an existing file, so the image
   // gets a name below the file itself, which cannot exist (a regular file has no children).
   const fs::path image_name = path / "in-memory-image";
@@ -267,8 +260,7 @@ void H5File::create_group(const std::string& path) {
 std::vector<std::string> H5File::children(const std::string& group) const {
   require_open("list group '" + group + "'");
   if (!exists(group)) fail("no group '" + absolute(group) + "'");
-  Handle g = own(H5Gopen2(id_, absolute(group).c_str(), H5P_DEFAULT), H5Gclose, path_,
-                 "cannot open group '" + absolute(group) + "'");
+  Handle g = own(H5Gopen2(id_, absolute(group).c_str(), H5P_DEFAULT), H5Gclose, path_, "cannot open group '" + absolute(group) + "'");
   std::vector<std::string> names;
   check(H5Literate(
             g.get(), H5_INDEX_NAME, H5_ITER_INC, nullptr,
@@ -294,26 +286,24 @@ std::vector<std::size_t> H5File::shape(const std::string& dataset) const {
   return std::vector<std::size_t>(dims.begin(), dims.end());
 }
 
-void H5File::create_external_link(const std::string& path, const std::string& target_file,
-                                  const std::string& target_object) {
+void H5File::create_external_link(const std::string& path, const std::string& target_file, const std::string& target_object) {
   require_open("create link '" + absolute(path) + "'");
   if (exists(path)) fail("cannot create link '" + absolute(path) + "': it already exists");
   Handle lcpl = own(H5Pcreate(H5P_LINK_CREATE), H5Pclose, path_, "cannot create a property list");
   check(H5Pset_create_intermediate_group(lcpl.get(), 1), path_, "cannot set intermediate group creation");
-  check(H5Lcreate_external(target_file.c_str(), target_object.c_str(), id_, absolute(path).c_str(), lcpl.get(),
-                           H5P_DEFAULT),
-        path_, "cannot create link '" + absolute(path) + "' to '" + target_file + ":" + target_object + "'");
+  check(H5Lcreate_external(target_file.c_str(), target_object.c_str(), id_, absolute(path).c_str(), lcpl.get(), H5P_DEFAULT), path_,
+        "cannot create link '" + absolute(path) + "' to '" + target_file + ":" + target_object + "'");
 }
 
 namespace {
 
 /// Creates a dataset (and missing parent groups) and writes `buffer` into it.
-void write_dataset(hid_t file_id, const fs::path& file, const std::string& path, hid_t file_type,
-                   hid_t mem_type, hid_t space, const void* buffer, bool has_data) {
+void write_dataset(hid_t file_id, const fs::path& file, const std::string& path, hid_t file_type, hid_t mem_type, hid_t space,
+                   const void* buffer, bool has_data) {
   Handle lcpl = own(H5Pcreate(H5P_LINK_CREATE), H5Pclose, file, "cannot create a property list");
   check(H5Pset_create_intermediate_group(lcpl.get(), 1), file, "cannot set intermediate group creation");
-  Handle d = own(H5Dcreate2(file_id, absolute(path).c_str(), file_type, space, lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
-                 H5Dclose, file, "cannot create " + dataset_label(path));
+  Handle d = own(H5Dcreate2(file_id, absolute(path).c_str(), file_type, space, lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Dclose, file,
+                 "cannot create " + dataset_label(path));
   if (has_data) check(dataset_io.write(d.get(), mem_type, buffer), file, "cannot write " + dataset_label(path));
 }
 
@@ -326,8 +316,8 @@ Handle array_space(std::size_t size, int components, const fs::path& file, const
   }
   const auto c = static_cast<std::size_t>(components);
   if (size % c != 0)
-    throw_error(file, "cannot write " + dataset_label(path) + ": " + std::to_string(size) +
-                          " values are not a multiple of " + std::to_string(c) + " components");
+    throw_error(file, "cannot write " + dataset_label(path) + ": " + std::to_string(size) + " values are not a multiple of " +
+                          std::to_string(c) + " components");
   const hsize_t dims[2] = {size / c, c};
   return own(H5Screate_simple(2, dims, nullptr), H5Sclose, file, "cannot create a dataspace");
 }
@@ -384,13 +374,9 @@ std::vector<std::int64_t> H5File::read_int64s(const std::string& path) const {
   return read_values<std::int64_t>(d.get(), dataset_io, H5T_NATIVE_INT64, path_, dataset_label(path));
 }
 
-double H5File::read_double(const std::string& path) const {
-  return single_value(read_doubles(path), path_, dataset_label(path));
-}
+double H5File::read_double(const std::string& path) const { return single_value(read_doubles(path), path_, dataset_label(path)); }
 
-std::int64_t H5File::read_int64(const std::string& path) const {
-  return single_value(read_int64s(path), path_, dataset_label(path));
-}
+std::int64_t H5File::read_int64(const std::string& path) const { return single_value(read_int64s(path), path_, dataset_label(path)); }
 
 std::string H5File::read_string(const std::string& path) const {
   require_open("read " + dataset_label(path));
@@ -402,17 +388,15 @@ std::string H5File::read_string(const std::string& path) const {
 namespace {
 
 /// Creates (replacing any previous one) an attribute on an existing object and writes it.
-void write_attribute(hid_t file_id, const fs::path& file, const std::string& object, const std::string& name,
-                     hid_t file_type, hid_t mem_type, hid_t space, const void* buffer, bool has_data) {
+void write_attribute(hid_t file_id, const fs::path& file, const std::string& object, const std::string& name, hid_t file_type,
+                     hid_t mem_type, hid_t space, const void* buffer, bool has_data) {
   const std::string obj = absolute(object);
   const htri_t present = H5Aexists_by_name(file_id, obj.c_str(), name.c_str(), H5P_DEFAULT);
   if (present < 0) throw_error(file, "cannot look up " + attribute_label(object, name));
   if (present > 0)
-    check(H5Adelete_by_name(file_id, obj.c_str(), name.c_str(), H5P_DEFAULT), file,
-          "cannot replace " + attribute_label(object, name));
-  Handle a = own(H5Acreate_by_name(file_id, obj.c_str(), name.c_str(), file_type, space, H5P_DEFAULT, H5P_DEFAULT,
-                                   H5P_DEFAULT),
-                 H5Aclose, file, "cannot create " + attribute_label(object, name));
+    check(H5Adelete_by_name(file_id, obj.c_str(), name.c_str(), H5P_DEFAULT), file, "cannot replace " + attribute_label(object, name));
+  Handle a = own(H5Acreate_by_name(file_id, obj.c_str(), name.c_str(), file_type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                 file, "cannot create " + attribute_label(object, name));
   if (has_data) check(attribute_io.write(a.get(), mem_type, buffer), file, "cannot write " + attribute_label(object, name));
 }
 

@@ -60,8 +60,7 @@ class H5File {
   /// Creates an external link at `path` (missing parent groups are created) to the object
   /// `target_object` of the file `target_file`. A relative `target_file` is resolved by HDF5
   /// relative to the directory of this file when the link is followed.
-  void create_external_link(const std::string& path, const std::string& target_file,
-                            const std::string& target_object);
+  void create_external_link(const std::string& path, const std::string& target_file, const std::string& target_object);
 
   /// Writes an array dataset: 1-D when components == 0, else rows x components with
   /// rows = data.size() / components. Zero rows are allowed. The dataset must not exist.

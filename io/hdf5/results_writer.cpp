@@ -38,12 +38,23 @@ std::string xml_escaped(const std::string& s) {
   std::string out;
   for (const char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&apos;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -52,11 +63,16 @@ std::string xml_escaped(const std::string& s) {
 /// XDMF attribute type for a field with this many components.
 const char* attribute_type(int components) {
   switch (components) {
-    case 1: return "Scalar";
-    case 3: return "Vector";
-    case 6: return "Tensor6";
-    case 9: return "Tensor";
-    default: return "Matrix";
+    case 1:
+      return "Scalar";
+    case 3:
+      return "Vector";
+    case 6:
+      return "Tensor6";
+    case 9:
+      return "Tensor";
+    default:
+      return "Matrix";
   }
 }
 
@@ -111,9 +127,7 @@ ResultsWriter::~ResultsWriter() {
 
 std::string ResultsWriter::frame_file(int index) { return std::string(kFrames) + "/frame_" + counter(index) + ".h5"; }
 
-void ResultsWriter::fail(const std::string& what) const {
-  throw SetupError("results in '" + outdir_.string() + "': " + what);
-}
+void ResultsWriter::fail(const std::string& what) const { throw SetupError("results in '" + outdir_.string() + "': " + what); }
 
 std::string ResultsWriter::write_frame(std::int64_t step, double time, const std::string& stage,
                                        const std::vector<FrameField>& particle_fields, const ContactFrame& contacts,
@@ -122,8 +136,7 @@ std::string ResultsWriter::write_frame(std::int64_t step, double time, const std
   const std::string name = "frame " + counter(frames());
 
   // Validate everything before writing anything, so a bad frame leaves no file.
-  const auto check_fields = [&](const std::vector<FrameField>& fields, const std::string& kind,
-                                std::size_t expected_rows) {
+  const auto check_fields = [&](const std::vector<FrameField>& fields, const std::string& kind, std::size_t expected_rows) {
     std::set<std::string> seen;
     for (const FrameField& f : fields) {
       const std::string label = kind + " field '" + f.name + "' of " + name;
@@ -133,8 +146,7 @@ std::string ResultsWriter::write_frame(std::int64_t step, double time, const std
       if (f.components < 1) fail(label + ": components must be at least 1");
       const auto c = static_cast<std::size_t>(f.components);
       if (f.data.size() % c != 0)
-        fail(label + ": " + std::to_string(f.data.size()) + " values are not a multiple of " + std::to_string(c) +
-             " components");
+        fail(label + ": " + std::to_string(f.data.size()) + " values are not a multiple of " + std::to_string(c) + " components");
       if (f.data.size() / c != expected_rows)
         fail(label + ": " + std::to_string(f.data.size() / c) + " rows, expected " + std::to_string(expected_rows));
     }
@@ -202,8 +214,7 @@ std::string ResultsWriter::write_frame(std::int64_t step, double time, const std
   return relative;
 }
 
-void ResultsWriter::set_timeseries(const std::vector<std::string>& columns,
-                                   const std::vector<std::vector<double>>& rows) {
+void ResultsWriter::set_timeseries(const std::vector<std::string>& columns, const std::vector<std::vector<double>>& rows) {
   if (finalized_) fail("set_timeseries() called after finalize()");
   std::set<std::string> seen;
   for (const std::string& c : columns) {
@@ -222,8 +233,7 @@ void ResultsWriter::set_timeseries(const std::vector<std::string>& columns,
 void ResultsWriter::write_results_h5(const fs::path& file) const {
   H5File h5 = H5File::create(file);
   h5.create_group("/frames");
-  for (std::size_t k = 0; k < frames_.size(); ++k)
-    h5.create_external_link("/frames/" + counter(static_cast<int>(k)), frames_[k].file, "/");
+  for (std::size_t k = 0; k < frames_.size(); ++k) h5.create_external_link("/frames/" + counter(static_cast<int>(k)), frames_[k].file, "/");
   h5.create_group("/timeseries");
   for (std::size_t c = 0; c < columns_.size(); ++c) {
     std::vector<double> column(rows_.size());
@@ -264,8 +274,7 @@ std::vector<double> ResultsWriter::listed_times(const std::vector<double>& times
     listed[k] = times[k];
     if (k == 0) continue;
     // (x + gap rounds to x itself only where the spacing of doubles exceeds the gap.)
-    const double least = std::max(listed[k - 1] + kXdmfTimeGap,
-                                  std::nextafter(listed[k - 1], std::numeric_limits<double>::infinity()));
+    const double least = std::max(listed[k - 1] + kXdmfTimeGap, std::nextafter(listed[k - 1], std::numeric_limits<double>::infinity()));
     if (!(times[k] >= least)) listed[k] = least;
   }
   return listed;
@@ -275,8 +284,8 @@ std::string ResultsWriter::xdmf_text() const {
   std::ostringstream out;
   const auto data_item = [&](const FrameInfo& frame, const std::string& field, int components) {
     out << "          <DataItem Dimensions=\"" << frame.particles << ' ' << components
-        << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << xml_escaped(frame.file) << ":/particles/"
-        << xml_escaped(field) << "</DataItem>\n";
+        << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << xml_escaped(frame.file) << ":/particles/" << xml_escaped(field)
+        << "</DataItem>\n";
   };
   std::vector<double> times;
   for (const FrameInfo& frame : frames_) times.push_back(frame.time);
@@ -293,8 +302,7 @@ std::string ResultsWriter::xdmf_text() const {
         << "        <Information Name=\"time\" Value=\"" << number(frame.time) << "\"/>\n"
         << "        <Information Name=\"step\" Value=\"" << frame.step << "\"/>\n"
         << "        <Information Name=\"stage\" Value=\"" << xml_escaped(frame.stage) << "\"/>\n"
-        << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << frame.particles
-        << "\" NodesPerElement=\"1\"/>\n"
+        << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << frame.particles << "\" NodesPerElement=\"1\"/>\n"
         << "        <Geometry GeometryType=\"XYZ\">\n";
     data_item(frame, "position", 3);
     out << "        </Geometry>\n";

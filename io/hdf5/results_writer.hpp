@@ -67,9 +67,8 @@ class ResultsWriter {
   /// throws before anything is written.
   /// `networks` are further edge sets (a module's network edges, e.g. branch currents), written
   /// as /networks/<name>/pairs and /networks/<name>/<field>, with the same checks as contacts.
-  std::string write_frame(std::int64_t step, double time, const std::string& stage,
-                          const std::vector<FrameField>& particle_fields, const ContactFrame& contacts,
-                          const std::vector<std::pair<std::string, ContactFrame>>& networks = {});
+  std::string write_frame(std::int64_t step, double time, const std::string& stage, const std::vector<FrameField>& particle_fields,
+                          const ContactFrame& contacts, const std::vector<std::pair<std::string, ContactFrame>>& networks = {});
   /// Sets the time series (each row has one value per column) for the next write_index().
   /// (The index counts as out of date after this call, whatever the values.)
   void set_timeseries(const std::vector<std::string>& columns, const std::vector<std::vector<double>>& rows);

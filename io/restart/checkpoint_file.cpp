@@ -71,9 +71,12 @@ bool parse_number(std::string_view text, std::size_t pos, std::size_t digits, in
   for (std::size_t k = pos; k < pos + digits; ++k) {
     const char c = text[k];
     unsigned d;
-    if (c >= '0' && c <= '9') d = static_cast<unsigned>(c - '0');
-    else if (base == 16 && c >= 'a' && c <= 'f') d = static_cast<unsigned>(c - 'a' + 10);
-    else return false;
+    if (c >= '0' && c <= '9')
+      d = static_cast<unsigned>(c - '0');
+    else if (base == 16 && c >= 'a' && c <= 'f')
+      d = static_cast<unsigned>(c - 'a' + 10);
+    else
+      return false;
     if (value > (UINT64_MAX - d) / static_cast<std::uint64_t>(base)) return false;
     value = value * static_cast<std::uint64_t>(base) + d;
   }
@@ -85,15 +88,15 @@ bool parse_number(std::string_view text, std::size_t pos, std::size_t digits, in
 /// the full header (a truncated file).
 void check_magic(std::string_view header, const fs::path& file) {
   if (std::all_of(header.begin(), header.end(), [](char c) { return c == '\0'; }))
-    fail(file, " is incomplete: its header is blank, so it was never sealed (the writer stopped before "
-               "finishing it, e.g. a '.tmp' file left by a killed run)");
+    fail(file,
+         " is incomplete: its header is blank, so it was never sealed (the writer stopped before "
+         "finishing it, e.g. a '.tmp' file left by a killed run)");
   const std::string magic = std::string(kCheckpointMagic) + '\n';
   const std::size_t n = std::min(header.size(), magic.size());
   if (header.substr(0, n) == std::string_view(magic).substr(0, n)) return;
   if (header.size() > kFamily.size() && header.substr(0, kFamily.size()) == kFamily) {
     const std::size_t end = std::min(header.find('\n'), std::size_t{60});
-    fail(file, " has the unsupported format '" + std::string(header.substr(0, end)) + "' (this build reads '" +
-                   kCheckpointMagic + "')");
+    fail(file, " has the unsupported format '" + std::string(header.substr(0, end)) + "' (this build reads '" + kCheckpointMagic + "')");
   }
   fail(file, " is not a sparkdem checkpoint: it does not start with the '" + std::string(kCheckpointMagic) +
                  "' header (checkpoints written before checksums were introduced cannot be loaded either)");
@@ -112,8 +115,8 @@ std::uint64_t fnv1a64(std::span<const unsigned char> bytes, std::uint64_t state)
 std::string checkpoint_header(std::uint64_t payload_bytes, std::uint64_t checksum) {
   char length[32];
   std::snprintf(length, sizeof length, "%020llu", static_cast<unsigned long long>(payload_bytes));
-  std::string h = std::string(kCheckpointMagic) + "\n" + std::string(kLengthKey) + length + "\n" +
-                  std::string(kChecksumKey) + hex64(checksum) + "\n";
+  std::string h = std::string(kCheckpointMagic) + "\n" + std::string(kLengthKey) + length + "\n" + std::string(kChecksumKey) +
+                  hex64(checksum) + "\n";
   h.resize(kCheckpointHeaderBytes, '\0');
   return h;
 }
@@ -124,8 +127,7 @@ void seal_checkpoint(const fs::path& file) {
   struct stat st {};
   if (::fstat(f.fd, &st) != 0) fail_errno(file, "cannot stat it", errno);
   const auto size = static_cast<std::uint64_t>(st.st_size);
-  if (size < kCheckpointHeaderBytes)
-    fail(file, ": cannot seal it: " + std::to_string(size) + " bytes, shorter than the user block");
+  if (size < kCheckpointHeaderBytes) fail(file, ": cannot seal it: " + std::to_string(size) + " bytes, shorter than the user block");
   std::vector<unsigned char> buffer(kChunk);
   std::uint64_t hash = fnv1a64({});
   for (std::uint64_t offset = kCheckpointHeaderBytes; offset < size;) {
@@ -168,8 +170,8 @@ std::vector<unsigned char> read_verified_checkpoint(const fs::path& file) {
   if (got != header.size()) fail(file, ": it shrank while being read");
   check_magic(header, file);
   if (size < kCheckpointHeaderBytes)
-    fail(file, " is truncated: " + std::to_string(size) + " bytes, shorter than its " +
-                   std::to_string(kCheckpointHeaderBytes) + "-byte header");
+    fail(file,
+         " is truncated: " + std::to_string(size) + " bytes, shorter than its " + std::to_string(kCheckpointHeaderBytes) + "-byte header");
 
   const std::string magic_line = std::string(kCheckpointMagic) + '\n';
   std::size_t pos = magic_line.size();
@@ -183,8 +185,7 @@ std::vector<unsigned char> read_verified_checkpoint(const fs::path& file) {
     ++pos;
     return true;
   };
-  if (!field(kLengthKey, kLengthDigits, 10, payload))
-    fail(file, " has a damaged header: no valid '" + std::string(kLengthKey) + "' line");
+  if (!field(kLengthKey, kLengthDigits, 10, payload)) fail(file, " has a damaged header: no valid '" + std::string(kLengthKey) + "' line");
   if (!field(kChecksumKey, kChecksumDigits, 16, checksum))
     fail(file, " has a damaged header: no valid '" + std::string(kChecksumKey) + "' line");
   if (std::any_of(header.begin() + static_cast<std::ptrdiff_t>(pos), header.end(), [](char c) { return c != '\0'; }))
@@ -193,18 +194,16 @@ std::vector<unsigned char> read_verified_checkpoint(const fs::path& file) {
   if (payload > UINT64_MAX - kCheckpointHeaderBytes)
     fail(file, " has a damaged header: impossible payload length " + std::to_string(payload));
   const std::uint64_t expected = kCheckpointHeaderBytes + payload;
-  if (size < expected)
-    fail(file, " is truncated: " + std::to_string(size) + " bytes, its header says " + std::to_string(expected));
-  if (size > expected)
-    fail(file, " is corrupt: " + std::to_string(size) + " bytes, its header says " + std::to_string(expected));
+  if (size < expected) fail(file, " is truncated: " + std::to_string(size) + " bytes, its header says " + std::to_string(expected));
+  if (size > expected) fail(file, " is corrupt: " + std::to_string(size) + " bytes, its header says " + std::to_string(expected));
 
   std::vector<unsigned char> bytes(static_cast<std::size_t>(size));
   if (read_at(f.fd, bytes.data(), bytes.size(), 0, file) != bytes.size()) fail(file, ": it shrank while being read");
   if (std::memcmp(bytes.data(), header.data(), header.size()) != 0) fail(file, ": it changed while being read");
   const std::uint64_t actual = fnv1a64(std::span(bytes).subspan(kCheckpointHeaderBytes));
   if (actual != checksum)
-    fail(file, " is corrupt: checksum mismatch (FNV-1a 64 of its " + std::to_string(payload) + " data bytes is " +
-                   hex64(actual) + ", its header says " + hex64(checksum) + ")");
+    fail(file, " is corrupt: checksum mismatch (FNV-1a 64 of its " + std::to_string(payload) + " data bytes is " + hex64(actual) +
+                   ", its header says " + hex64(checksum) + ")");
   return bytes;
 }
 

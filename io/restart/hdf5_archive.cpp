@@ -22,8 +22,7 @@ std::string shape_text(const std::vector<std::size_t>& dims) {
 }  // namespace
 
 Hdf5Archive::Hdf5Archive(H5File file, fs::path path, bool reading)
-    : file_(std::move(file)), path_(std::move(path)), tmp_(reading ? fs::path() : tmp_name(path_)),
-      reading_(reading), pending_(!reading) {}
+    : file_(std::move(file)), path_(std::move(path)), tmp_(reading ? fs::path() : tmp_name(path_)), reading_(reading), pending_(!reading) {}
 
 Hdf5Archive Hdf5Archive::for_writing(const fs::path& path) {
   return Hdf5Archive(H5File::create(tmp_name(path), kCheckpointHeaderBytes), path, false);
@@ -35,8 +34,12 @@ Hdf5Archive Hdf5Archive::for_reading(const fs::path& path) {
 }
 
 Hdf5Archive::Hdf5Archive(Hdf5Archive&& other) noexcept
-    : Archive(), file_(std::move(other.file_)), path_(std::move(other.path_)), tmp_(std::move(other.tmp_)),
-      reading_(other.reading_), pending_(std::exchange(other.pending_, false)) {}
+    : Archive(),
+      file_(std::move(other.file_)),
+      path_(std::move(other.path_)),
+      tmp_(std::move(other.tmp_)),
+      reading_(other.reading_),
+      pending_(std::exchange(other.pending_, false)) {}
 
 Hdf5Archive::~Hdf5Archive() {
   if (!pending_) return;
@@ -62,25 +65,21 @@ bool Hdf5Archive::has(const std::string& name) const { return !name.empty() && f
 
 void Hdf5Archive::require_item(const std::string& name) const {
   if (name.empty()) throw SetupError("checkpoint '" + path_.string() + "': empty item name");
-  if (!file_.is_open())
-    throw SetupError("checkpoint '" + path_.string() + "': cannot visit item '" + name + "': already committed");
-  if (reading_ && !file_.exists(name))
-    throw SetupError("checkpoint '" + path_.string() + "' has no item '" + name + "'");
+  if (!file_.is_open()) throw SetupError("checkpoint '" + path_.string() + "': cannot visit item '" + name + "': already committed");
+  if (reading_ && !file_.exists(name)) throw SetupError("checkpoint '" + path_.string() + "' has no item '" + name + "'");
 }
 
 void Hdf5Archive::require_components(const std::string& name, int components) const {
   const std::vector<std::size_t> dims = file_.shape(name);
-  const bool ok = (components == 1 && dims.size() == 1) ||
-                  (dims.size() == 2 && dims[1] == static_cast<std::size_t>(components));
+  const bool ok = (components == 1 && dims.size() == 1) || (dims.size() == 2 && dims[1] == static_cast<std::size_t>(components));
   if (!ok)
-    throw SetupError("checkpoint '" + path_.string() + "': item '" + name + "' has shape " + shape_text(dims) +
-                     ", expected (rows, " + std::to_string(components) + ")");
+    throw SetupError("checkpoint '" + path_.string() + "': item '" + name + "' has shape " + shape_text(dims) + ", expected (rows, " +
+                     std::to_string(components) + ")");
 }
 
 void Hdf5Archive::visit(const std::string& name, std::vector<double>& v, int components) {
   require_item(name);
-  if (components < 1)
-    throw SetupError("checkpoint '" + path_.string() + "': item '" + name + "': components must be at least 1");
+  if (components < 1) throw SetupError("checkpoint '" + path_.string() + "': item '" + name + "': components must be at least 1");
   if (reading_) {
     require_components(name, components);
     v = file_.read_doubles(name);
@@ -91,8 +90,7 @@ void Hdf5Archive::visit(const std::string& name, std::vector<double>& v, int com
 
 void Hdf5Archive::visit(const std::string& name, std::vector<std::int64_t>& v, int components) {
   require_item(name);
-  if (components < 1)
-    throw SetupError("checkpoint '" + path_.string() + "': item '" + name + "': components must be at least 1");
+  if (components < 1) throw SetupError("checkpoint '" + path_.string() + "': item '" + name + "': components must be at least 1");
   if (reading_) {
     require_components(name, components);
     v = file_.read_int64s(name);

@@ -60,10 +60,10 @@ class Hdf5Archive final : public sparkdem::Archive {
   void require_components(const std::string& name, int components) const;
 
   H5File file_;
-  std::filesystem::path path_;     ///< final checkpoint path
-  std::filesystem::path tmp_;      ///< file being written (writing mode)
+  std::filesystem::path path_;  ///< final checkpoint path
+  std::filesystem::path tmp_;   ///< file being written (writing mode)
   bool reading_;
-  bool pending_ = false;           ///< writing and not committed yet: the tmp file is ours to remove
+  bool pending_ = false;  ///< writing and not committed yet: the tmp file is ours to remove
 };
 
 }  // namespace sparkdem::io

@@ -104,8 +104,14 @@ double next_radius_ratio(const std::vector<double>& r, const std::vector<double>
   double lo = -kInf, hi = kInf;  // bracket: the r's closest to the target from either side
   double flo = 0.0, fhi = 0.0;
   for (std::size_t i = 0; i <= k; ++i) {
-    if (f[i] > 0.0 && (lo == -kInf || std::abs(f[i]) < std::abs(flo))) { lo = r[i]; flo = f[i]; }
-    if (f[i] < 0.0 && (hi == kInf || std::abs(f[i]) < std::abs(fhi))) { hi = r[i]; fhi = f[i]; }
+    if (f[i] > 0.0 && (lo == -kInf || std::abs(f[i]) < std::abs(flo))) {
+      lo = r[i];
+      flo = f[i];
+    }
+    if (f[i] < 0.0 && (hi == kInf || std::abs(f[i]) < std::abs(fhi))) {
+      hi = r[i];
+      fhi = f[i];
+    }
   }
   double next;
   if (k == 0 || f[k] == f[k - 1] || r[k] == r[k - 1]) {
@@ -145,7 +151,8 @@ CalibrationSpec parse_calibration(const json& j, const fs::path& base_dir) {
   top.only({"scenario", "stage", "targets", "initial", "tolerance", "max_iterations", "write", "check_break"});
   if (auto s = top.text("scenario", true, "the tension scene's file name (string)")) {
     c.scenario = base_dir / *s;
-    if (!fs::is_regular_file(c.scenario)) errors.push_back({"/scenario", "expected an existing file, found none at '" + c.scenario.string() + "'"});
+    if (!fs::is_regular_file(c.scenario))
+      errors.push_back({"/scenario", "expected an existing file, found none at '" + c.scenario.string() + "'"});
   }
   if (auto s = top.text("stage", true, "the name of the tension stage (string)")) c.stage = *s;
   if (auto s = top.text("write", true, "the params file to write (string)")) c.write = base_dir / *s;
@@ -235,8 +242,8 @@ json run_check_break(const json& scene, const fs::path& scene_dir, const Calibra
   const auto t0 = clock::now();
   const json summary = run_scene(run, scene_dir, reg, opt.outdir / "check_break", opt.threads);
   const json* st = stage_entry(summary, spec.check_break);
-  json chk = {{"stage", spec.check_break}, {"output", "check_break"},
-              {"wall_time_s", std::chrono::duration<double>(clock::now() - t0).count()}};
+  json chk = {
+      {"stage", spec.check_break}, {"output", "check_break"}, {"wall_time_s", std::chrono::duration<double>(clock::now() - t0).count()}};
   if (st) {
     chk["broke"] = final_value(*st, "bonds_broken") > 0.5;
     chk["stress_at_first_break_Pa"] = final_value(*st, "tension_stress");
@@ -291,8 +298,7 @@ json calibrate_beams(const CalibrationSpec& spec, const Registry& reg, const Cal
     nu_M = final_value(*st, "tension_poisson_ratio");
     stress = final_value(*st, "tension_stress");
     crit = final_value(*st, "bonds_max_failure_stress");
-    if (!std::isfinite(E_M) || !std::isfinite(nu_M) || !std::isfinite(stress) || !std::isfinite(crit) || !(E_M > 0.0) ||
-        !(stress > 0.0))
+    if (!std::isfinite(E_M) || !std::isfinite(nu_M) || !std::isfinite(stress) || !std::isfinite(crit) || !(E_M > 0.0) || !(stress > 0.0))
       throw SetupError("calibrate: stage '" + spec.stage + "' of iteration " + std::to_string(k) +
                        " gives no usable tension_test values (final tension_young_modulus " + format_number(E_M) +
                        " Pa, tension_poisson_ratio " + format_number(nu_M) + ", tension_stress " + format_number(stress) +
@@ -331,13 +337,12 @@ json calibrate_beams(const CalibrationSpec& spec, const Registry& reg, const Cal
   if (!converged) {
     report["wall_time_s"] = std::chrono::duration<double>(clock::now() - t_start).count();
     write_json_atomic(opt.outdir / "calibration.json", report);
-    throw SetupError("calibrate: no convergence within " + std::to_string(spec.max_iterations) +
-                     " iterations (last: E_M = " + format_number(E_M) + " Pa, nu_M = " + format_number(nu_M) +
-                     "); see " + (opt.outdir / "calibration.json").string());
+    throw SetupError("calibrate: no convergence within " + std::to_string(spec.max_iterations) + " iterations (last: E_M = " +
+                     format_number(E_M) + " Pa, nu_M = " + format_number(nu_M) + "); see " + (opt.outdir / "calibration.json").string());
   }
   const double strength = spec.target_tensile_strength * crit / stress;
-  const json params = {{"young_modulus", E}, {"poisson_ratio", beam_poisson}, {"radius_ratio", r},
-                       {"failure", failure}, {"strength", strength}};
+  const json params = {
+      {"young_modulus", E}, {"poisson_ratio", beam_poisson}, {"radius_ratio", r}, {"failure", failure}, {"strength", strength}};
   report["result"] = {{"params", params},
                       {"measured_young_modulus_Pa", E_M},
                       {"measured_poisson_ratio", nu_M},

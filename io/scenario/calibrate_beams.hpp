@@ -61,8 +61,8 @@ struct CalibrationSpec {
   double initial_young_modulus = 0.0;    ///< [Pa]
   double tolerance = 0.01;               ///< relative
   int max_iterations = 12;
-  std::filesystem::path write;           ///< params file
-  std::string check_break;              ///< loading stage of the break check (empty: no check)
+  std::filesystem::path write;  ///< params file
+  std::string check_break;      ///< loading stage of the break check (empty: no check)
 };
 
 /// Validate a calibration file's JSON (every problem at once: ConfigError with JSON paths);

@@ -41,11 +41,15 @@ ParamValue convert(const json& v, const ParamInfo& p, const std::string& path, s
     return ParamValue{};
   };
   auto check_range = [&](double x, const std::string& at) {
-    if (!std::isfinite(x)) { errors.push_back({at, "expected a finite number, found " + num(x)}); return false; }
+    if (!std::isfinite(x)) {
+      errors.push_back({at, "expected a finite number, found " + num(x)});
+      return false;
+    }
     bool ok = true;
     if (p.min && (p.min_exclusive ? !(x > *p.min) : !(x >= *p.min))) ok = false;
     if (p.max && (p.max_exclusive ? !(x < *p.max) : !(x <= *p.max))) ok = false;
-    if (!ok) errors.push_back({at, "expected a value " + range_text(p) + (p.unit.empty() ? "" : " [" + p.unit + "]") + ", found " + num(x)});
+    if (!ok)
+      errors.push_back({at, "expected a value " + range_text(p) + (p.unit.empty() ? "" : " [" + p.unit + "]") + ", found " + num(x)});
     return ok;
   };
   switch (p.kind) {
@@ -54,7 +58,8 @@ ParamValue convert(const json& v, const ParamInfo& p, const std::string& path, s
       if (!check_range(v.get<double>(), path)) return {};
       return v.get<double>();
     case ParamKind::Integer: {
-      if (!v.is_number_integer() && !(v.is_number_float() && std::floor(v.get<double>()) == v.get<double>() && std::abs(v.get<double>()) < 9e15))
+      if (!v.is_number_integer() &&
+          !(v.is_number_float() && std::floor(v.get<double>()) == v.get<double>() && std::abs(v.get<double>()) < 9e15))
         return wrong();
       const auto x = v.is_number_integer() ? v.get<std::int64_t>() : static_cast<std::int64_t>(v.get<double>());
       if (!check_range(static_cast<double>(x), path)) return {};
@@ -70,7 +75,8 @@ ParamValue convert(const json& v, const ParamInfo& p, const std::string& path, s
         std::string list;
         for (const auto& c : p.choices) list += (list.empty() ? "" : ", ") + ("\"" + c + "\"");
         const auto dym = did_you_mean(s, p.choices);
-        errors.push_back({path, "expected one of " + list + ", found \"" + s + "\"" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});
+        errors.push_back(
+            {path, "expected one of " + list + ", found \"" + s + "\"" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});
         return {};
       }
       return s;
@@ -104,8 +110,8 @@ ParamValue convert(const json& v, const ParamInfo& p, const std::string& path, s
   return {};
 }
 
-void bind_level(const json& obj, const Spec& spec, const std::string& prefix, const std::string& path,
-                ParamValues& out, std::vector<Diagnostic>& errors, const std::set<std::string>& extra) {
+void bind_level(const json& obj, const Spec& spec, const std::string& prefix, const std::string& path, ParamValues& out,
+                std::vector<Diagnostic>& errors, const std::set<std::string>& extra) {
   // Keys known at this level: plain names and group names.
   std::vector<std::string> known;
   std::set<std::string> groups;
@@ -113,8 +119,12 @@ void bind_level(const json& obj, const Spec& spec, const std::string& prefix, co
     if (p.name.rfind(prefix, 0) != 0) continue;
     const std::string rest = p.name.substr(prefix.size());
     const auto dot = rest.find('.');
-    if (dot == std::string::npos) known.push_back(rest);
-    else { groups.insert(rest.substr(0, dot)); known.push_back(rest.substr(0, dot)); }
+    if (dot == std::string::npos)
+      known.push_back(rest);
+    else {
+      groups.insert(rest.substr(0, dot));
+      known.push_back(rest.substr(0, dot));
+    }
   }
   std::vector<std::string> all = known;
   all.insert(all.end(), extra.begin(), extra.end());
@@ -160,7 +170,10 @@ std::string did_you_mean(const std::string& word, const std::vector<std::string>
     const std::size_t diff = word.size() > c.size() ? word.size() - c.size() : c.size() - word.size();
     if (diff >= bestd) continue;
     const std::size_t d = levenshtein(word, c);
-    if (d < bestd) { bestd = d; best = c; }
+    if (d < bestd) {
+      bestd = d;
+      best = c;
+    }
   }
   return bestd <= std::max<std::size_t>(1, std::min<std::size_t>(3, word.size() / 2)) ? best : "";
 }
@@ -175,7 +188,7 @@ std::string describe(const json& v) {
 }
 
 ParamValues bind_params(const json& obj, const Spec& spec, const std::string& path, std::vector<Diagnostic>& errors,
-                 const std::set<std::string>& extra_keys) {
+                        const std::set<std::string>& extra_keys) {
   ParamValues out;
   if (!obj.is_object()) {
     errors.push_back({path, "expected an object, found " + describe(obj)});
@@ -196,10 +209,12 @@ json to_json(const ParamValues& values, const Spec& spec) {
       node = &(*node)[name.substr(0, dot)];
       name = name.substr(dot + 1);
     }
-    std::visit([&](const auto& x) {
-      using T = std::decay_t<decltype(x)>;
-      if constexpr (!std::is_same_v<T, std::monostate>) (*node)[name] = x;
-    }, it->second);
+    std::visit(
+        [&](const auto& x) {
+          using T = std::decay_t<decltype(x)>;
+          if constexpr (!std::is_same_v<T, std::monostate>) (*node)[name] = x;
+        },
+        it->second);
   }
   return out;
 }
@@ -220,11 +235,18 @@ json spec_to_json(const Spec& spec) {
     if (p.min) q[p.min_exclusive ? "exclusive_minimum" : "minimum"] = *p.min;
     if (p.max) q[p.max_exclusive ? "exclusive_maximum" : "maximum"] = *p.max;
     if (!p.choices.empty()) q["choices"] = p.choices;
-    std::visit([&](const auto& x) {
-      using T = std::decay_t<decltype(x)>;
-      if constexpr (std::is_same_v<T, double>) { if (std::isfinite(x)) q["default"] = x; else q["default"] = "inf"; }
-      else if constexpr (!std::is_same_v<T, std::monostate>) q["default"] = x;
-    }, p.default_value);
+    std::visit(
+        [&](const auto& x) {
+          using T = std::decay_t<decltype(x)>;
+          if constexpr (std::is_same_v<T, double>) {
+            if (std::isfinite(x))
+              q["default"] = x;
+            else
+              q["default"] = "inf";
+          } else if constexpr (!std::is_same_v<T, std::monostate>)
+            q["default"] = x;
+        },
+        p.default_value);
     j["params"].push_back(q);
   }
   return j;

@@ -24,7 +24,7 @@ std::string describe(const json& v);
 /// Bind `obj` (must be an object) against `spec`. Keys listed in `extra_keys` are accepted and
 /// left to the caller. Returns the values (defaults filled in) and appends diagnostics.
 ParamValues bind_params(const json& obj, const Spec& spec, const std::string& path, std::vector<Diagnostic>& errors,
-                 const std::set<std::string>& extra_keys = {});
+                        const std::set<std::string>& extra_keys = {});
 
 /// The resolved JSON of bound values (defaults filled in), nested by dotted names.
 json to_json(const ParamValues& values, const Spec& spec);

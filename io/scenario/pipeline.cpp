@@ -41,8 +41,7 @@ std::string short_number(double x) {
 void note(RunLog& log, const std::string& text) noexcept {
   try {
     log.line(text);
-  } catch (...) {
-  }
+  } catch (...) {}
 }
 
 /// The I/O side of a run: frames, time series, checkpoints, progress, the run log.
@@ -115,14 +114,17 @@ class OutputObserver final : public Observer {
     // Only now, with the frame file complete on disk, is the frame reported.
     char counter[16];
     std::snprintf(counter, sizeof counter, "%06d", index);
-    log_.line(std::string("frame ") + counter + " written: " + file + " (step " + std::to_string(s.step) +
-              ", t = " + short_number(s.time) + " s, stage '" + stage_ + "')");
+    log_.line(std::string("frame ") + counter + " written: " + file + " (step " + std::to_string(s.step) + ", t = " + short_number(s.time) +
+              " s, stage '" + stage_ + "')");
   }
   void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) override {
     std::map<std::string, double> row;
     for (std::size_t k = 0; k < cols.size(); ++k) {
       row[cols[k]] = vals[k];
-      if (!col_index_.count(cols[k])) { col_index_[cols[k]] = columns_.size(); columns_.push_back(cols[k]); }
+      if (!col_index_.count(cols[k])) {
+        col_index_[cols[k]] = columns_.size();
+        columns_.push_back(cols[k]);
+      }
     }
     rows_.push_back(std::move(row));
     dirty_ = true;
@@ -130,7 +132,8 @@ class OutputObserver final : public Observer {
   void checkpoint(State& s) override {
     const std::filesystem::path file = checkpoint_file_.empty() ? outdir_ / "checkpoint.h5" : checkpoint_file_;
     write_checkpoint(file, s, true);
-    log_.line("checkpoint written: " + (checkpoint_file_.empty() ? std::string("checkpoint.h5") : file.string()) + " (step " + std::to_string(s.step) + ", stage '" + stage_ + "')");
+    log_.line("checkpoint written: " + (checkpoint_file_.empty() ? std::string("checkpoint.h5") : file.string()) + " (step " +
+              std::to_string(s.step) + ", stage '" + stage_ + "')");
     publish();
   }
   /// The watchdog passed: keep an in-memory copy of what a checkpoint of this state would hold.
@@ -149,8 +152,8 @@ class OutputObserver final : public Observer {
     Hdf5Archive ar = Hdf5Archive::for_writing(file);
     healthy_.replay(ar);
     ar.commit();
-    log_.line("checkpoint before failure written: checkpoint_before_failure.h5 (step " + std::to_string(healthy_step_) +
-              ", stage '" + stage_ + "')");
+    log_.line("checkpoint before failure written: checkpoint_before_failure.h5 (step " + std::to_string(healthy_step_) + ", stage '" +
+              stage_ + "')");
     return file;
   }
   Step healthy_step() const { return healthy_step_; }
@@ -207,7 +210,8 @@ class OutputObserver final : public Observer {
     const double rate = el > 0 ? static_cast<double>(k - k0_) / el : 0.0;
     double remaining = std::nan("");
     if (std::isfinite(cfg_.duration)) remaining = (cfg_.duration - t) / dt;
-    if (cfg_.max_steps < std::numeric_limits<Step>::max()) remaining = std::min(std::isnan(remaining) ? 1e300 : remaining, static_cast<double>(cfg_.max_steps - k));
+    if (cfg_.max_steps < std::numeric_limits<Step>::max())
+      remaining = std::min(std::isnan(remaining) ? 1e300 : remaining, static_cast<double>(cfg_.max_steps - k));
     const auto cols = builtin_columns(s);
     const auto vals = builtin_values(s);
     auto value = [&](const char* name) {
@@ -216,13 +220,15 @@ class OutputObserver final : public Observer {
       return std::nan("");
     };
     char buf[320];
-    std::snprintf(buf, sizeof buf, "[%s] step %lld  t = %.4g s  KE/m = %.3g J/kg  max overlap %.3g  %.3g steps/s  ETA %s%s",
-                  stage_.c_str(), static_cast<long long>(s.step), s.time, value("kinetic_energy_per_mass"),
-                  value("max_overlap_ratio"), rate,
-                  std::isnan(remaining) || rate <= 0 ? "? (until-condition)" : (std::to_string(static_cast<long long>(remaining / rate)) + " s").c_str(),
+    std::snprintf(buf, sizeof buf, "[%s] step %lld  t = %.4g s  KE/m = %.3g J/kg  max overlap %.3g  %.3g steps/s  ETA %s%s", stage_.c_str(),
+                  static_cast<long long>(s.step), s.time, value("kinetic_energy_per_mass"), value("max_overlap_ratio"), rate,
+                  std::isnan(remaining) || rate <= 0 ? "? (until-condition)"
+                                                     : (std::to_string(static_cast<long long>(remaining / rate)) + " s").c_str(),
                   cfg_.until.empty() ? "" : " (or earlier)");
-    if (tty_) std::cerr << "\r" << buf << "\033[K" << std::flush;
-    else std::cerr << buf << "\n";
+    if (tty_)
+      std::cerr << "\r" << buf << "\033[K" << std::flush;
+    else
+      std::cerr << buf << "\n";
   }
   void steps_planned(double dt, double stable, const std::vector<ModuleStep>& modules) override {
     if (quiet_) return;
@@ -231,12 +237,14 @@ class OutputObserver final : public Observer {
                   cfg_.mechanics ? "" : ", mechanics frozen");
     std::cerr << buf;
     for (const auto& m : modules) {
-      std::snprintf(buf, sizeof buf, "[%s]   %-22s stable step %.4g s, runs with %.4g s, %s (%.4g calls per step)\n",
-                    stage_.c_str(), m.name.c_str(), m.stable_dt, m.dt, m.clock.c_str(), m.calls_per_step);
+      std::snprintf(buf, sizeof buf, "[%s]   %-22s stable step %.4g s, runs with %.4g s, %s (%.4g calls per step)\n", stage_.c_str(),
+                    m.name.c_str(), m.stable_dt, m.dt, m.clock.c_str(), m.calls_per_step);
       std::cerr << buf;
     }
   }
-  void end_stage_line() { if (tty_ && !quiet_) std::cerr << "\n"; }
+  void end_stage_line() {
+    if (tty_ && !quiet_) std::cerr << "\n";
+  }
   void set_k0(Step k0) { k0_ = k0; }
   /// Rewrites results.h5, results.xdmf and timeseries.csv with everything so far.
   void publish() {
@@ -262,8 +270,8 @@ class OutputObserver final : public Observer {
     writer_.set_timeseries(columns_, rows);
   }
   void log_index() {
-    log_.line("index written: results.h5, results.xdmf, timeseries.csv (" + std::to_string(writer_.frames()) +
-              " frames, " + std::to_string(rows_.size()) + " time-series rows)");
+    log_.line("index written: results.h5, results.xdmf, timeseries.csv (" + std::to_string(writer_.frames()) + " frames, " +
+              std::to_string(rows_.size()) + " time-series rows)");
   }
 
   std::filesystem::path outdir_;
@@ -317,9 +325,7 @@ json write_broken_bonds(const State& s, const BondModel& law, const std::filesys
 
 void write_json_atomic(const std::filesystem::path& file, const json& j) { write_file_atomic(file, j.dump(2) + "\n"); }
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 namespace {
 
@@ -336,7 +342,10 @@ void delete_stage_sets(State& s, const std::vector<std::pair<std::string, SetSel
   for (const auto& [name, sel] : sets) {
     std::size_t n = 0;  // members not already taken by an earlier set of the list
     for (Index i : select_particles(s, sel))
-      if (!remove[i]) { remove[i] = true; ++n; }
+      if (!remove[i]) {
+        remove[i] = true;
+        ++n;
+      }
     s.marks[std::string(kDeletedMark) + "set/" + name] = static_cast<double>(n);
   }
   const DeletionCounts c = delete_particles(s, remove);
@@ -393,8 +402,8 @@ json evaluate_check(const CheckDef& c, const json& stages) {
     if (!within)
       jc["failure"] = "value " + short_number(v) + " against reference " + short_number(c.reference) + ": relative error " +
                       percent(err, true) + ", outside the band +-" + percent(c.tolerance, false) + " by " +
-                      percent(std::abs(err) - c.tolerance, false) + " of the reference (|value - reference| = " +
-                      short_number(std::abs(v - c.reference)) + ", the band allows " +
+                      percent(std::abs(err) - c.tolerance, false) +
+                      " of the reference (|value - reference| = " + short_number(std::abs(v - c.reference)) + ", the band allows " +
                       short_number(c.tolerance * std::abs(c.reference)) + ")";
   }
   return jc;
@@ -407,8 +416,8 @@ void evaluate_checks(const std::vector<CheckDef>& checks, json& summary, RunLog&
   for (const auto& c : checks) {
     const json jc = evaluate_check(c, summary["stages"]);
     if (jc.contains("value"))
-      log.line("check '" + c.name + "': " + short_number(jc["value"].get<double>()) + " against " + short_number(c.reference) +
-               " (" + percent(jc["error_rel"].is_null() ? std::nan("") : jc["error_rel"].get<double>(), true) + ")");
+      log.line("check '" + c.name + "': " + short_number(jc["value"].get<double>()) + " against " + short_number(c.reference) + " (" +
+               percent(jc["error_rel"].is_null() ? std::nan("") : jc["error_rel"].get<double>(), true) + ")");
     if (jc.contains("failure")) {
       log.line("check '" + c.name + "' failed: " + jc["failure"].get<std::string>());
       summary["checks_failed"].push_back(c.name);
@@ -450,7 +459,7 @@ RestartPoint read_restart(const Scenario& sc, const RunOptions& opt, State& s, R
 
 /// What preparing a stage made, for its summary entry.
 struct StagePrep {
-  bool generated = true;   ///< false: a dry run left out the stage's generator (see Generator::cheap_to_generate)
+  bool generated = true;  ///< false: a dry run left out the stage's generator (see Generator::cheap_to_generate)
   std::size_t bonds_made = 0;
   double bond_gap = -1.0;  ///< [m] the gap bonds were created within (create_bonds)
   json set_counts;         ///< particles per named set
@@ -460,8 +469,7 @@ struct StagePrep {
 /// rest is in the checkpoint): the snapshot it starts from, walls removed and added, the
 /// generator, deleted sets, bonds created within the gap, the particle sets. A dry run
 /// (`sparkdem check`) leaves out a generator that is not cheap to run (StagePrep::generated).
-StagePrep prepare_stage(State& s, StageDef& st, const Scenario& sc, bool resuming, std::int64_t stage_index,
-                        bool dry_run = false) {
+StagePrep prepare_stage(State& s, StageDef& st, const Scenario& sc, bool resuming, std::int64_t stage_index, bool dry_run = false) {
   StagePrep p;
   if (!resuming) {
     if (!st.from_snapshot.empty()) {
@@ -474,16 +482,17 @@ StagePrep prepare_stage(State& s, StageDef& st, const Scenario& sc, bool resumin
       snap.time = s.time;
       s = std::move(snap);
     }
-    for (const auto& n : st.remove_walls)
-      std::erase_if(s.walls, [&](const Wall& w) { return w.name == n; });
+    for (const auto& n : st.remove_walls) std::erase_if(s.walls, [&](const Wall& w) { return w.name == n; });
     for (std::size_t k = 0; k < st.add_walls.size(); ++k) {
       Wall w = st.add_walls[k];
       const double gap = k < st.add_wall_clearance.size() ? st.add_wall_clearance[k] : -1.0;
       if (gap >= 0.0) place_plane_at_clearance(w, s.particles.position, s.particles.radius, gap);
       s.walls.push_back(std::move(w));
     }
-    if (st.generator && (!dry_run || st.generator->cheap_to_generate())) st.generator->generate(s);
-    else if (st.generator) p.generated = false;
+    if (st.generator && (!dry_run || st.generator->cheap_to_generate()))
+      st.generator->generate(s);
+    else if (st.generator)
+      p.generated = false;
     s.stage_index = stage_index;
     delete_stage_sets(s, st.delete_sets);
   }
@@ -529,17 +538,23 @@ void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool 
   js["mass_floor_radius"] = st.cfg.mass_floor_radius;
   if (!resuming) {
     const auto& o = r.initial_overlap;
-    js["initial_overlap"] = {{"policy", o.policy}, {"limit", o.limit}, {"max_ratio", o.max_ratio},
-                             {"pairs_over_limit", o.pairs_over_limit}, {"walls_over_limit", o.walls_over_limit},
-                             {"worst_ids", {o.worst_i, o.worst_j}}, {"worst_wall", o.worst_wall},
-                             {"relax_sweeps", o.sweeps}, {"max_ratio_after", o.max_ratio_after},
-                             {"particles_moved", o.moved}, {"max_displacement_m", o.max_displacement}};
+    js["initial_overlap"] = {{"policy", o.policy},
+                             {"limit", o.limit},
+                             {"max_ratio", o.max_ratio},
+                             {"pairs_over_limit", o.pairs_over_limit},
+                             {"walls_over_limit", o.walls_over_limit},
+                             {"worst_ids", {o.worst_i, o.worst_j}},
+                             {"worst_wall", o.worst_wall},
+                             {"relax_sweeps", o.sweeps},
+                             {"max_ratio_after", o.max_ratio_after},
+                             {"particles_moved", o.moved},
+                             {"max_displacement_m", o.max_displacement}};
   }
   js["step_plan"] = r.plan;
   js["mechanics"] = st.cfg.mechanics ? "on" : "frozen";
   for (const auto& m : r.module_steps)
-    js["module_steps"][m.name] = {{"stable_dt_s", finite_or_null(m.stable_dt)}, {"dt_s", m.dt},
-                                  {"calls_per_step", m.calls_per_step}, {"clock", m.clock}};
+    js["module_steps"][m.name] = {
+        {"stable_dt_s", finite_or_null(m.stable_dt)}, {"dt_s", m.dt}, {"calls_per_step", m.calls_per_step}, {"clock", m.clock}};
   for (const auto& [c, v] : r.final_values) js["final"][c] = finite_or_null(v);
 }
 
@@ -547,9 +562,14 @@ void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool 
 /// checkpoint of the last healthy state when one was written.
 json failure_entry(const PhysicsError& e) {
   const PhysicsErrorDetail& d = e.detail();
-  json f = {{"step", e.step()}, {"quantity", e.quantity()}, {"reason", e.reason()},
-            {"particles", e.ids().size()}, {"time_s", finite_or_null(d.time)}, {"value", finite_or_null(d.value)},
-            {"bound", finite_or_null(d.bound)}, {"hint", d.hint}};
+  json f = {{"step", e.step()},
+            {"quantity", e.quantity()},
+            {"reason", e.reason()},
+            {"particles", e.ids().size()},
+            {"time_s", finite_or_null(d.time)},
+            {"value", finite_or_null(d.value)},
+            {"bound", finite_or_null(d.bound)},
+            {"hint", d.hint}};
   f["ids"] = std::vector<Id>(e.ids().begin(), e.ids().begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(e.ids().size(), 100)));
   if (!d.checkpoint.empty()) f["checkpoint_before_failure"] = {{"file", "checkpoint_before_failure.h5"}, {"step", d.checkpoint_step}};
   return f;
@@ -565,9 +585,7 @@ PhysicsError with_healthy_checkpoint(const PhysicsError& e, OutputObserver& obs,
       d.checkpoint = f.string();
       d.checkpoint_step = obs.healthy_step();
     }
-  } catch (const std::exception& w) {
-    note(log, std::string("checkpoint before failure not written: ") + w.what());
-  }
+  } catch (const std::exception& w) { note(log, std::string("checkpoint before failure not written: ") + w.what()); }
   return PhysicsError(e.step(), e.ids(), e.quantity(), e.reason(), d);
 }
 
@@ -579,9 +597,8 @@ struct RunTotals {
 
 /// Stage k (not a sweep) from preparation to its summary entry, its final state committed.
 /// `rp` holds the checkpoint image while the stage resumes from it.
-void run_plain_stage(Scenario& sc, std::size_t k, State& s, OutputObserver& obs, RunRecord& record, RestartPoint& rp,
-                     const RunOptions& opt, RunLog& log, json& summary, RunTotals& totals,
-                     const std::function<void(const std::filesystem::path&)>& committed_ok,
+void run_plain_stage(Scenario& sc, std::size_t k, State& s, OutputObserver& obs, RunRecord& record, RestartPoint& rp, const RunOptions& opt,
+                     RunLog& log, json& summary, RunTotals& totals, const std::function<void(const std::filesystem::path&)>& committed_ok,
                      const std::function<void(const std::filesystem::path&)>& committed_unmet) {
   StageDef& st = sc.stages[k];
   const bool resuming = rp.resume && k == rp.first;
@@ -591,7 +608,10 @@ void run_plain_stage(Scenario& sc, std::size_t k, State& s, OutputObserver& obs,
   const ContactModel& law = sc.law_of(st);
   Simulation sim(s, law, sc.bond_law.get());
   std::vector<Module*> mods;
-  for (auto& m : st.modules) { sim.add_module(m.get()); mods.push_back(m.get()); }
+  for (auto& m : st.modules) {
+    sim.add_module(m.get());
+    mods.push_back(m.get());
+  }
   std::vector<std::unique_ptr<Monitor>> mons;
   if (st.generator) mons = st.generator->monitors();
   for (auto& m : mons) sim.add_monitor(m.get());
@@ -649,8 +669,9 @@ void run_plain_stage(Scenario& sc, std::size_t k, State& s, OutputObserver& obs,
   obs.final_state(s, until_unmet ? committed_unmet : committed_ok);
   if (until_unmet)
     throw PhysicsError(s.step, {}, "stop condition",
-                       "stage '" + st.cfg.name + "' reached its hard stop before its 'until' conditions held "
-                       "(see the stage's \"final\" values in summary.json)");
+                       "stage '" + st.cfg.name +
+                           "' reached its hard stop before its 'until' conditions held "
+                           "(see the stage's \"final\" values in summary.json)");
 }
 
 /// `check`'s view of stage k, prepared exactly as the run prepares it: the particles at its start,
@@ -672,9 +693,7 @@ json derive_stage(const Scenario& sc, StageDef& st, State& s) {
     if (dt > stable && !st.cfg.allow_unstable_dt)
       throw ConfigError(st.path + "/dt", "dt = " + std::to_string(dt) + " s exceeds the stable step " + std::to_string(stable) +
                                              " s (set allow_unstable_dt to override)");
-  } catch (const SetupError& e) {
-    d["dt_note"] = e.what();
-  }
+  } catch (const SetupError& e) { d["dt_note"] = e.what(); }
   for (const auto& [name, sdt] : sim.module_stable_dts())
     d["module_stable_dt_s"][name] = std::isfinite(sdt) ? json(sdt) : json("unconditionally stable");
   d["step_plan"] = json::array();
@@ -702,7 +721,10 @@ json dry_run(Scenario& sc) {
     if (st.generator) js["estimated_particles"] = st.generator->estimated_particles();
     if (!known) continue;
     const StagePrep prep = prepare_stage(s, st, sc, false, static_cast<std::int64_t>(k), true);
-    if (!prep.generated) { known = false; continue; }
+    if (!prep.generated) {
+      known = false;
+      continue;
+    }
     if (!st.dynamics) continue;
     js["derived"] = derive_stage(sc, st, s);
     known = false;  // later stages start from a state that only the run produces
@@ -812,8 +834,8 @@ json run_scenario(Scenario& sc, const RunOptions& given) {
   RunOptions opt = given;
   opt.outdir = resolve_output_directory(given.outdir);
   RunLog log(opt.outdir / "run.log");
-  log.line("run started: scenario '" + sc.name + "', sparkdem " + SPARKDEM_VERSION + ", pid " +
-           std::to_string(::getpid()) + ", " + std::to_string(omp_get_max_threads()) + " thread(s)" +
+  log.line("run started: scenario '" + sc.name + "', sparkdem " + SPARKDEM_VERSION + ", pid " + std::to_string(::getpid()) + ", " +
+           std::to_string(omp_get_max_threads()) + " thread(s)" +
            (opt.restart ? ", restarting from '" + opt.restart->string() + "'" : std::string()));
   try {
     return run_logged(sc, opt, log, t0);

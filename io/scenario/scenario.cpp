@@ -26,8 +26,7 @@ struct TopParams {
   std::string description;
 };
 ParamSpec<TopParams> top_spec() {
-  ParamSpec<TopParams> s("scenario", "scenario",
-                         "top level: materials, contact, walls, stages (each stage: a generator or dynamics)");
+  ParamSpec<TopParams> s("scenario", "scenario", "top level: materials, contact, walls, stages (each stage: a generator or dynamics)");
   s.add("name", &TopParams::name).doc("scenario name");
   s.add("seed", &TopParams::seed).nonnegative().doc("random seed of every generator");
   s.add("description", &TopParams::description).doc("free text: what the scenario is and the choices behind it (not used by the run)");
@@ -74,7 +73,10 @@ ParamSpec<SetParams> set_spec() {
                          "a named particle set, evaluated at the start of each stage that lists it in `sets` or "
                          "`prescribe`; stored as the field set/<name>");
   s.add("type", &SetParams::type).choices({"top_layer", "bottom_layer", "touching_wall", "ids", "box", "cylinder"}).doc("selector");
-  s.add("thickness", &SetParams::thickness).unit("m").nonnegative().doc("top/bottom_layer: centres within this height of the extreme centre");
+  s.add("thickness", &SetParams::thickness)
+      .unit("m")
+      .nonnegative()
+      .doc("top/bottom_layer: centres within this height of the extreme centre");
   s.add("wall", &SetParams::wall).doc("touching_wall: wall name");
   s.add("tolerance", &SetParams::tolerance).unit("m").nonnegative().doc("touching_wall: allowed surface gap");
   s.add("ids", &SetParams::ids).nonnegative().doc("ids: particle ids");
@@ -83,8 +85,11 @@ ParamSpec<SetParams> set_spec() {
   s.add_vec3("axis_point", &SetParams::axis_point).unit("m").doc("cylinder: a point of the axis (the cylinder is unbounded along it)");
   s.add_vec3("axis", &SetParams::axis).unit("1").doc("cylinder: axis direction (any non-zero length)");
   s.add("radius", &SetParams::radius).unit("m").nonnegative().doc("cylinder: radius (required, > 0)");
-  s.add("criterion", &SetParams::criterion).choices({"centre", "overlap"})
-      .doc("cylinder: members are the particles whose centre lies within the radius of the axis (centre), or that reach into the cylinder (overlap: distance < radius + particle radius)");
+  s.add("criterion", &SetParams::criterion)
+      .choices({"centre", "overlap"})
+      .doc(
+          "cylinder: members are the particles whose centre lies within the radius of the axis (centre), or that reach into the cylinder "
+          "(overlap: distance < radius + particle radius)");
   return s;
 }
 
@@ -98,7 +103,8 @@ ParamSpec<SweepParams> sweep_spec() {
                            "results in OUTDIR/sweep_<stage>.csv and summary.json; the main state after the stage is the "
                            "state before it. Exactly one of snapshots_of, parameter (+ values), seeds");
   s.add("snapshots_of", &SweepParams::snapshots_of).doc("one item per snapshot of this earlier stage");
-  s.add("parameter", &SweepParams::parameter).doc("JSON pointer relative to the stage (e.g. /modules/gravity/acceleration/2) substituted by each of `values`");
+  s.add("parameter", &SweepParams::parameter)
+      .doc("JSON pointer relative to the stage (e.g. /modules/gravity/acceleration/2) substituted by each of `values`");
   return s;
 }
 using Calibration = SweepDef::Calibration;
@@ -111,7 +117,8 @@ ParamSpec<Calibration> calibrate_spec() {
   s.add("column", &Calibration::column).doc("time-series column whose final value is matched");
   s.add("snapshot", &Calibration::snapshot).min(0).doc("index k of the calibration snapshot (its at[k])");
   s.add("target", &Calibration::target).doc("value of `column` to reach");
-  s.add("scan", &Calibration::scan).doc("increasing positive values of the parameter run first (the map); the target must lie between two of them");
+  s.add("scan", &Calibration::scan)
+      .doc("increasing positive values of the parameter run first (the map); the target must lie between two of them");
   s.add("tolerance", &Calibration::tolerance).unit("1").positive().doc("relative tolerance on `column`");
   s.add("max_iterations", &Calibration::max_iterations).min(1).doc("search items after the scan");
   return s;
@@ -119,12 +126,18 @@ ParamSpec<Calibration> calibrate_spec() {
 
 json sweep_schema() {
   json j = spec_to_json(sweep_spec().spec());
-  j["params"].push_back({{"name", "values"}, {"type", "array"}, {"doc", "parameter: one item per value (any JSON value, validated in place)"}});
-  j["params"].push_back({{"name", "seeds"}, {"type", "array of integers"}, {"minimum", 0}, {"doc", "one item per seed of the random generator (an ensemble; the table gets mean, sample std and count per column)"}});
-  j["params"].push_back({{"name", "collect"}, {"type", "array of strings"}, {"doc", "table columns: final time-series columns and `packing.<key>` report values (default: all)"}});
+  j["params"].push_back(
+      {{"name", "values"}, {"type", "array"}, {"doc", "parameter: one item per value (any JSON value, validated in place)"}});
+  j["params"].push_back(
+      {{"name", "seeds"},
+       {"type", "array of integers"},
+       {"minimum", 0},
+       {"doc", "one item per seed of the random generator (an ensemble; the table gets mean, sample std and count per column)"}});
+  j["params"].push_back({{"name", "collect"},
+                         {"type", "array of strings"},
+                         {"doc", "table columns: final time-series columns and `packing.<key>` report values (default: all)"}});
   return j;
 }
-
 
 /// JSON pointer of a value nested more than `limit` levels deep in `j`, or "". The walk stops at
 /// the limit, so it never recurses deeper itself (copying a JSON value is recursive: a document
@@ -140,7 +153,6 @@ std::string too_deep(const json& j, int limit, const std::string& path) {
   return "";
 }
 
-
 /// Is `token` an index of an array of `size` elements (RFC 6901: digits, no leading zero)?
 bool array_index(const std::string& token, std::size_t size) {
   if (token.empty() || token.size() > 18 || (token.size() > 1 && token[0] == '0')) return false;
@@ -153,9 +165,7 @@ std::string check_parameter(const json& stage, const std::string& text, json::js
   const std::string example = " (e.g. \"/modules/gravity/acceleration/2\" or \"/contact/params/friction\")";
   try {
     ptr = json::json_pointer(text);
-  } catch (const json::exception&) {
-    return "\"" + text + "\" is not a JSON pointer" + example;
-  }
+  } catch (const json::exception&) { return "\"" + text + "\" is not a JSON pointer" + example; }
   if (ptr.empty()) return "expected a JSON pointer to one value of the stage" + example + ", found \"\"";
   json::json_pointer top = ptr;
   while (!top.parent_pointer().empty()) top = top.parent_pointer();
@@ -167,12 +177,18 @@ std::string check_parameter(const json& stage, const std::string& text, json::js
   std::string walked;
   json::json_pointer rest = parent;
   std::vector<std::string> tokens;
-  while (!rest.empty()) { tokens.insert(tokens.begin(), rest.back()); rest.pop_back(); }
+  while (!rest.empty()) {
+    tokens.insert(tokens.begin(), rest.back());
+    rest.pop_back();
+  }
   for (const auto& t : tokens) {
     walked += "/" + t;
-    if (node->is_object() && node->contains(t)) node = &(*node)[t];
-    else if (node->is_array() && array_index(t, node->size())) node = &(*node)[std::stoull(t)];
-    else return "\"" + text + "\": the stage has no " + walked + " (the parameter's parent must be written in the stage)";
+    if (node->is_object() && node->contains(t))
+      node = &(*node)[t];
+    else if (node->is_array() && array_index(t, node->size()))
+      node = &(*node)[std::stoull(t)];
+    else
+      return "\"" + text + "\": the stage has no " + walked + " (the parameter's parent must be written in the stage)";
   }
   if (node->is_array() && !array_index(ptr.back(), node->size()))
     return "\"" + text + "\": " + (parent.empty() ? std::string("/") : parent.to_string()) + " is an array of " +
@@ -185,8 +201,8 @@ std::string check_parameter(const json& stage, const std::string& text, json::js
 /// What a sweep over snapshots needs to know of a stage before it.
 struct EarlierStage {
   std::string name;
-  bool snapshots = false;             ///< it takes snapshots
-  std::set<std::string> wall_names;   ///< its walls (those of its snapshots)
+  bool snapshots = false;            ///< it takes snapshots
+  std::set<std::string> wall_names;  ///< its walls (those of its snapshots)
 };
 
 /// Largest number of items of one sweep: each item is a whole run that keeps its state, and 1e5
@@ -194,8 +210,8 @@ struct EarlierStage {
 constexpr std::size_t kMaxSweepItems = 10000;
 
 /// Parses a stage's "sweep" (the stage JSON `js` has one) into `sw`.
-void parse_sweep(const json& js, const std::string& path, const std::vector<EarlierStage>& earlier,
-                 SweepDef& sw, std::vector<Diagnostic>& errors, json& resolved) {
+void parse_sweep(const json& js, const std::string& path, const std::vector<EarlierStage>& earlier, SweepDef& sw,
+                 std::vector<Diagnostic>& errors, json& resolved) {
   const std::string sp = path + "/sweep";
   const json& j = js["sweep"];
   json r;
@@ -204,14 +220,16 @@ void parse_sweep(const json& js, const std::string& path, const std::vector<Earl
   if (j.contains("calibrate")) {
     json rc;
     const Calibration c = build(calibrate_spec(), j["calibrate"], sp + "/calibrate", errors, rc, {});
-    if (!j.contains("snapshots_of")) errors.push_back({sp + "/calibrate", "calibrate goes with snapshots_of (it calibrates on one snapshot)"});
+    if (!j.contains("snapshots_of"))
+      errors.push_back({sp + "/calibrate", "calibrate goes with snapshots_of (it calibrates on one snapshot)"});
     for (const char* k : {"parameter", "column", "target", "scan"})
       if (j["calibrate"].is_object() && !j["calibrate"].contains(k)) errors.push_back({sp + "/calibrate/" + k, "required"});
     bool increasing = c.scan.size() >= 2;
     for (std::size_t q = 0; q < c.scan.size(); ++q)
       if (!(c.scan[q] > 0.0) || (q > 0 && !(c.scan[q] > c.scan[q - 1]))) increasing = false;
     if (j["calibrate"].is_object() && j["calibrate"].contains("scan") && !increasing)
-      errors.push_back({sp + "/calibrate/scan", "expected at least two positive, increasing values, found " + describe(j["calibrate"]["scan"])});
+      errors.push_back(
+          {sp + "/calibrate/scan", "expected at least two positive, increasing values, found " + describe(j["calibrate"]["scan"])});
     sw.calibrate = c;
     r["calibrate"] = rc;
   }
@@ -235,11 +253,11 @@ void parse_sweep(const json& js, const std::string& path, const std::vector<Earl
     if (j["snapshots_of"].is_string() && sw.snapshots_stage < 0) {
       const bool exists = std::any_of(earlier.begin(), earlier.end(), [&](const auto& e) { return e.name == p.snapshots_of; });
       const auto dym = did_you_mean(p.snapshots_of, with);
-      errors.push_back({sp + "/snapshots_of",
-                        exists ? "stage \"" + p.snapshots_of + "\" takes no snapshots (give it \"snapshots\")"
-                               : "no earlier stage named \"" + p.snapshots_of + "\" takes snapshots" +
-                                     (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") +
-                                     (with.empty() ? std::string("; no earlier stage takes any") : "; stages with snapshots: " + list_names(with))});
+      errors.push_back({sp + "/snapshots_of", exists ? "stage \"" + p.snapshots_of + "\" takes no snapshots (give it \"snapshots\")"
+                                                     : "no earlier stage named \"" + p.snapshots_of + "\" takes snapshots" +
+                                                           (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") +
+                                                           (with.empty() ? std::string("; no earlier stage takes any")
+                                                                         : "; stages with snapshots: " + list_names(with))});
     }
   }
   if (kinds.size() == 1 && kinds[0] == "parameter") {
@@ -261,12 +279,15 @@ void parse_sweep(const json& js, const std::string& path, const std::vector<Earl
     if (!x.is_array() || x.empty()) {
       errors.push_back({sp + "/seeds", "expected a non-empty array of seeds (non-negative integers), found " + describe(x)});
     } else if (x.size() > kMaxSweepItems) {
-      errors.push_back({sp + "/seeds", "expected at most " + std::to_string(kMaxSweepItems) + " seeds, found " +
-                                           std::to_string(x.size()) + " (split the sweep into several scenarios)"});
+      errors.push_back({sp + "/seeds", "expected at most " + std::to_string(kMaxSweepItems) + " seeds, found " + std::to_string(x.size()) +
+                                           " (split the sweep into several scenarios)"});
     } else {
       for (std::size_t q = 0; q < x.size(); ++q) {
         const bool ok = x[q].is_number_unsigned() || (x[q].is_number_integer() && x[q].get<std::int64_t>() >= 0);
-        if (!ok) { errors.push_back({sp + "/seeds/" + std::to_string(q), "expected a non-negative integer seed, found " + describe(x[q])}); continue; }
+        if (!ok) {
+          errors.push_back({sp + "/seeds/" + std::to_string(q), "expected a non-negative integer seed, found " + describe(x[q])});
+          continue;
+        }
         const auto seed = x[q].get<std::uint64_t>();
         if (std::find(sw.seeds.begin(), sw.seeds.end(), seed) != sw.seeds.end())
           errors.push_back({sp + "/seeds/" + std::to_string(q), "duplicate seed " + std::to_string(seed)});
@@ -300,12 +321,11 @@ void parse_sweep(const json& js, const std::string& path, const std::vector<Earl
     if (r.contains(k)) resolved[k] = r[k];
 }
 
-
 /// A stage with a "sweep": checks the sweep and every item's stage JSON (a parameter value that
 /// does not bind is reported at /stages/k/sweep/values/i), and keeps a builder of fresh item
 /// stages for the run. The context is left as before the stage: a sweep is a branch.
-StageDef build_sweep_stage(StageContext& ctx, const json& js, const std::string& path,
-                           const std::vector<EarlierStage>& earlier, std::vector<Diagnostic>& errors, json& r) {
+StageDef build_sweep_stage(StageContext& ctx, const json& js, const std::string& path, const std::vector<EarlierStage>& earlier,
+                           std::vector<Diagnostic>& errors, json& r) {
   auto sw = std::make_shared<SweepDef>();
   json rsweep;
   parse_sweep(js, path, earlier, *sw, errors, rsweep);
@@ -330,7 +350,9 @@ StageDef build_sweep_stage(StageContext& ctx, const json& js, const std::string&
     // that value, the others are reported once.
     const std::string target = path + ptr.to_string();
     bool absent = false;
-    try { absent = !sw->stage_json.contains(ptr); } catch (const json::exception&) { absent = true; }
+    try {
+      absent = !sw->stage_json.contains(ptr);
+    } catch (const json::exception&) { absent = true; }
     // A problem at (or inside) the substituted value, or one that only some values cause (a
     // consequence, e.g. no hard stop left), belongs to those values; one every value causes is
     // reported once at its own path.
@@ -343,7 +365,11 @@ StageDef build_sweep_stage(StageContext& ctx, const json& js, const std::string&
       std::set<std::pair<std::string, std::string>> once;
       for (const auto& d : per_item[i])
         if (once.insert({d.path, d.message}).second) ++count[{d.path, d.message}];
-      if (i == 0) { st = std::move(sti); r = ri; columns = c.columns; }
+      if (i == 0) {
+        st = std::move(sti);
+        r = ri;
+        columns = c.columns;
+      }
     }
     std::set<std::pair<std::string, std::string>> reported;
     for (std::size_t i = 0; i < sw->values.size(); ++i) {
@@ -403,8 +429,10 @@ StageDef build_sweep_stage(StageContext& ctx, const json& js, const std::string&
     }
   }
   if (!more_unknown.empty())
-    errors.push_back({path + "/sweep/collect", std::to_string(more_unknown.size()) + " more entries are not time-series columns of "
-                      "this stage (indices " + list_names(more_unknown) + ")"});
+    errors.push_back({path + "/sweep/collect", std::to_string(more_unknown.size()) +
+                                                   " more entries are not time-series columns of "
+                                                   "this stage (indices " +
+                                                   list_names(more_unknown) + ")"});
   if (st.snapshots) errors.push_back({path + "/snapshots", "a sweep stage takes no snapshots (take them in the stage it sweeps over)"});
   if (sw->kind == SweepDef::Kind::Snapshots && !st.from_snapshot.empty())
     errors.push_back({path + "/from_snapshot", "a sweep over snapshots starts from each snapshot; remove from_snapshot"});
@@ -428,8 +456,8 @@ json read_json_file(const std::filesystem::path& file) {
   // obscurely; a size limit keeps a mistaken include from exhausting memory.
   std::error_code ec;
   if (!std::filesystem::is_regular_file(file, ec))
-    throw ConfigError("", "cannot read the scenario file '" + file.string() + "': " +
-                              (std::filesystem::exists(file, ec) ? "not a regular file" : "no such file"));
+    throw ConfigError("", "cannot read the scenario file '" + file.string() +
+                              "': " + (std::filesystem::exists(file, ec) ? "not a regular file" : "no such file"));
   if (std::filesystem::file_size(file, ec) > (std::uintmax_t{64} << 20))
     throw ConfigError("", "the scenario file '" + file.string() + "' is larger than 64 MiB");
   std::ifstream in(file);
@@ -447,8 +475,7 @@ json read_json_file(const std::filesystem::path& file) {
 /// relative to the including file's directory), with the keys written beside "$include"
 /// overriding the included ones (shallow). Included files may include others (8 levels).
 /// Any other key starting with '$' ("$sources", "$comment") is an annotation and is dropped.
-void expand_includes(json& j, const std::filesystem::path& dir, const std::string& path, int depth,
-                     std::vector<Diagnostic>& errors) {
+void expand_includes(json& j, const std::filesystem::path& dir, const std::string& path, int depth, std::vector<Diagnostic>& errors) {
   if (j.is_array()) {
     for (std::size_t k = 0; k < j.size(); ++k) expand_includes(j[k], dir, path + "/" + std::to_string(k), depth, errors);
     return;
@@ -496,7 +523,8 @@ constexpr std::size_t kMaxStages = 1000;
 /// of that name is the one it reads); a banded check needs a stage that steps.
 static void load_checks(const json& j, Scenario& sc, std::vector<Diagnostic>& errors) {
   if (j.contains("checks")) {
-    if (!j["checks"].is_array()) errors.push_back({"/checks", "expected an array of checks, found " + describe(j["checks"])});
+    if (!j["checks"].is_array())
+      errors.push_back({"/checks", "expected an array of checks, found " + describe(j["checks"])});
     else if (j["checks"].size() > kMaxStages)
       errors.push_back({"/checks", "expected at most " + std::to_string(kMaxStages) + " checks, found " + std::to_string(j["checks"].size())});
     else
@@ -511,11 +539,13 @@ static void load_checks(const json& j, Scenario& sc, std::vector<Diagnostic>& er
         if (!stage)
           errors.push_back({cp + "/stage", "expected the name of a stage of this scenario, found \"" + c.stage + "\""});
         else if (c.tolerance > 0.0 && (stage->sweep || !stage->dynamics))
-          errors.push_back({cp + "/stage", "expected a stage that steps (a check with a tolerance band needs the stage's final "
-                                           "values), found \"" + c.stage + "\", " +
-                                               (stage->sweep ? "a sweep stage (its items' values are in its sweep table)"
-                                                             : "a generator stage without dynamics") +
-                                               "; use tolerance 0 (report only)"});
+          errors.push_back(
+              {cp + "/stage",
+               "expected a stage that steps (a check with a tolerance band needs the stage's final "
+               "values), found \"" +
+                   c.stage + "\", " +
+                   (stage->sweep ? "a sweep stage (its items' values are in its sweep table)" : "a generator stage without dynamics") +
+                   "; use tolerance 0 (report only)"});
         sc.checks.push_back(c);
         sc.resolved["checks"].push_back(r);
       }
@@ -526,7 +556,8 @@ static void load_checks(const json& j, Scenario& sc, std::vector<Diagnostic>& er
 static std::map<std::string, SetSelector> parse_particle_sets(const json& j, std::vector<Diagnostic>& errors, json& resolved_top) {
   std::map<std::string, SetSelector> sets;
   if (j.contains("particle_sets")) {
-    if (!j["particle_sets"].is_object()) errors.push_back({"/particle_sets", "expected an object {name: selector}, found " + describe(j["particle_sets"])});
+    if (!j["particle_sets"].is_object())
+      errors.push_back({"/particle_sets", "expected an object {name: selector}, found " + describe(j["particle_sets"])});
     else
       for (auto it = j["particle_sets"].begin(); it != j["particle_sets"].end(); ++it) {
         json r;
@@ -548,7 +579,8 @@ static std::map<std::string, SetSelector> parse_particle_sets(const json& j, std
         };
         if (sp_.type == "cylinder" && !(sp_.radius > 0.0) && !reported(sp + "/radius"))
           errors.push_back({sp + "/radius", "a cylinder set needs radius > 0 [m], found " +
-                                                (it.value().is_object() && it.value().contains("radius") ? it.value()["radius"].dump() : std::string("nothing"))});
+                                                (it.value().is_object() && it.value().contains("radius") ? it.value()["radius"].dump()
+                                                                                                         : std::string("nothing"))});
         if (sp_.type == "cylinder" && !(sp_.axis.norm() > 0.0) && !reported(sp + "/axis"))
           errors.push_back({sp + "/axis", "a cylinder set needs a non-zero axis direction [1], found [0, 0, 0]"});
         sel.thickness = sp_.thickness;
@@ -571,11 +603,12 @@ static std::map<std::string, SetSelector> parse_particle_sets(const json& j, std
 /// The "stages": each bound in order (build_stage, or build_sweep_stage for a sweep), the context
 /// (walls, particles) carried from one to the next; stage names that name files must be unique.
 static void parse_stages(const json& j, const Registry& reg, const std::filesystem::path& base_dir,
-                  const std::map<std::string, SetSelector>& sets, const std::set<std::string>& wall_names, Scenario& sc,
-                  std::vector<Diagnostic>& errors) {
+                         const std::map<std::string, SetSelector>& sets, const std::set<std::string>& wall_names, Scenario& sc,
+                         std::vector<Diagnostic>& errors) {
   sc.resolved["stages"] = json::array();
   if (!j.contains("stages") || !j["stages"].is_array() || j["stages"].empty()) {
-    errors.push_back({"/stages", "expected a non-empty array of stages, found " + (j.contains("stages") ? describe(j["stages"]) : std::string("nothing"))});
+    errors.push_back({"/stages", "expected a non-empty array of stages, found " +
+                                     (j.contains("stages") ? describe(j["stages"]) : std::string("nothing"))});
   } else if (j["stages"].size() > kMaxStages) {
     errors.push_back({"/stages", "expected at most " + std::to_string(kMaxStages) + " stages, found " + std::to_string(j["stages"].size())});
   } else {
@@ -608,9 +641,10 @@ static void parse_stages(const json& j, const Registry& reg, const std::filesyst
       if (!sc.stages[k].snapshots && !sc.stages[k].sweep) continue;
       for (std::size_t q = 0; q < sc.stages.size(); ++q)
         if (q != k && sc.stages[q].cfg.name == sc.stages[k].cfg.name) {
-          errors.push_back({"/stages/" + std::to_string(k) + "/name", "a stage with snapshots or a sweep needs a unique name (it names "
-                                                                      "its files); stage " + std::to_string(q) + " is also \"" +
-                                                                      sc.stages[k].cfg.name + "\""});
+          errors.push_back({"/stages/" + std::to_string(k) + "/name",
+                            "a stage with snapshots or a sweep needs a unique name (it names "
+                            "its files); stage " +
+                                std::to_string(q) + " is also \"" + sc.stages[k].cfg.name + "\""});
           break;
         }
     }
@@ -627,7 +661,8 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
   expand_includes(j, base_dir, "", 0, errors);
   if (!errors.empty()) throw ConfigError(std::move(errors));
   json resolved_top;
-  const TopParams top = build(top_spec(), j, "", errors, resolved_top, {"materials", "contact", "bonds", "walls", "stages", "particle_sets", "checks"});
+  const TopParams top = build(top_spec(), j, "", errors, resolved_top,
+                              {"materials", "contact", "bonds", "walls", "stages", "particle_sets", "checks"});
   const std::map<std::string, SetSelector> sets = parse_particle_sets(j, errors, resolved_top);
   sc.name = top.name;
   sc.seed = static_cast<std::uint64_t>(top.seed);
@@ -647,17 +682,27 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
     }
   }
   // Contact law
-  if (!j.contains("contact")) errors.push_back({"/contact", "missing required key \"contact\" ({\"law\": name, \"params\": {...}}); registered laws: " + list_names(names_of(reg.laws()))});
-  else { json r; sc.law = make_law(j["contact"], reg, "/contact", errors, r); sc.resolved["contact"] = r; }
+  if (!j.contains("contact"))
+    errors.push_back({"/contact", "missing required key \"contact\" ({\"law\": name, \"params\": {...}}); registered laws: " +
+                                      list_names(names_of(reg.laws()))});
+  else {
+    json r;
+    sc.law = make_law(j["contact"], reg, "/contact", errors, r);
+    sc.resolved["contact"] = r;
+  }
   // Bond law (optional): {"law", "params", "contact_rule": "exclude"|"add"}
   if (j.contains("bonds")) {
     json r;
     sc.bond_law = make_named(j["bonds"], reg.bond_laws(), "bond law", "/bonds", errors, r, {"contact_rule"});
     if (j["bonds"].is_object() && j["bonds"].contains("contact_rule")) {
       const json& cr = j["bonds"]["contact_rule"];
-      if (cr == "add") sc.bond_contact_rule = BondTable::ContactRule::Add;
+      if (cr == "add")
+        sc.bond_contact_rule = BondTable::ContactRule::Add;
       else if (cr != "exclude")
-        errors.push_back({"/bonds/contact_rule", "expected \"exclude\" (bonded pairs get no contact force, default) or \"add\" (bond and contact forces add up), found " + describe(cr)});
+        errors.push_back(
+            {"/bonds/contact_rule",
+             "expected \"exclude\" (bonded pairs get no contact force, default) or \"add\" (bond and contact forces add up), found " +
+                 describe(cr)});
     }
     r["contact_rule"] = sc.bond_contact_rule == BondTable::ContactRule::Add ? "add" : "exclude";
     sc.resolved["bonds"] = r;
@@ -666,7 +711,8 @@ Scenario load_scenario(const json& j_in, const Registry& reg, const std::filesys
   std::set<std::string> wall_names;
   sc.resolved["walls"] = json::array();
   if (j.contains("walls")) {
-    if (!j["walls"].is_array()) errors.push_back({"/walls", "expected an array of walls, found " + describe(j["walls"])});
+    if (!j["walls"].is_array())
+      errors.push_back({"/walls", "expected an array of walls, found " + describe(j["walls"])});
     else
       for (std::size_t k = 0; k < j["walls"].size(); ++k) {
         json r;

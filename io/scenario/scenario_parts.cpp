@@ -23,8 +23,11 @@ ParamSpec<WallParams> wall_spec() {
   s.add("type", &WallParams::type).choices({"plane", "cylinder"}).doc("shape");
   s.add_vec3("point", &WallParams::point).unit("m").doc("plane: a point on the plane");
   s.add_vec3("normal", &WallParams::normal).unit("1").doc("plane: normal pointing into the particle domain");
-  s.add("clearance", &WallParams::clearance).unit("m")
-      .doc("plane added by a stage: placed along its normal at this gap from the nearest particle surface at the stage start (e.g. a punch on a packing); < 0: at `point`");
+  s.add("clearance", &WallParams::clearance)
+      .unit("m")
+      .doc(
+          "plane added by a stage: placed along its normal at this gap from the nearest particle surface at the stage start (e.g. a punch "
+          "on a packing); < 0: at `point`");
   s.add_vec3("base", &WallParams::base).unit("m").doc("cylinder: a point on the axis");
   s.add_vec3("axis", &WallParams::axis).unit("1").doc("cylinder: axis direction");
   s.add("radius", &WallParams::radius).unit("m").nonnegative().doc("cylinder: radius");
@@ -45,7 +48,10 @@ ParamSpec<MotionParams> motion_spec() {
   s.add("type", &MotionParams::type).choices({"fixed", "velocity", "table", "pressure"}).doc("kind of motion");
   s.add("speed", &MotionParams::speed).unit("m/s").doc("velocity: du/dt (positive moves into the domain)");
   s.add("travel", &MotionParams::travel).unit("m").positive().doc("velocity: stop after this displacement");
-  s.add("times", &MotionParams::times).unit("s").nonnegative().doc("table/pressure: physical times from the stage start (stage time x time_scale; = stage time when time_scale is 1)");
+  s.add("times", &MotionParams::times)
+      .unit("s")
+      .nonnegative()
+      .doc("table/pressure: physical times from the stage start (stage time x time_scale; = stage time when time_scale is 1)");
   s.add("displacements", &MotionParams::displacements).unit("m").doc("table: displacement at each time");
   s.add("pressures", &MotionParams::pressures).unit("Pa").nonnegative().doc("pressure: target pressure at each time");
   s.add("area", &MotionParams::area).unit("m^2").nonnegative().doc("pressure: loaded area (0 = die cross-section)");
@@ -67,8 +73,11 @@ struct ClockParams {
 ParamSpec<ClockParams> clock_spec() {
   using P = ClockParams;
   ParamSpec<P> s("clock", "object", "when a module runs relative to the mechanical step");
-  s.add("kind", &P::kind).choices({"every_step", "every_n_steps", "substeps", "adaptive_substeps", "on_event"})
-      .doc("every step; every n steps (dt = n dt_m); n substeps per step (dt = dt_m/n); adaptive substeps (at least n, more when the module's stable step shrinks); on an event");
+  s.add("kind", &P::kind)
+      .choices({"every_step", "every_n_steps", "substeps", "adaptive_substeps", "on_event"})
+      .doc(
+          "every step; every n steps (dt = n dt_m); n substeps per step (dt = dt_m/n); adaptive substeps (at least n, more when the "
+          "module's stable step shrinks); on an event");
   s.add("n", &P::n).min(1).doc("steps per call (every_n_steps) or (minimum) substeps per step");
   s.add("moved_beyond", &P::moved_beyond).unit("m").positive().doc("on_event: a particle moved more than this since the last call");
   s.add("field", &P::field).doc("on_event: particle field watched for changes");
@@ -86,8 +95,8 @@ std::string list_names(const std::vector<std::string>& n) {
   return s;
 }
 
-std::unique_ptr<ContactModel> make_law(const json& c, const Registry& reg, const std::string& path,
-                                       std::vector<Diagnostic>& errors, json& resolved) {
+std::unique_ptr<ContactModel> make_law(const json& c, const Registry& reg, const std::string& path, std::vector<Diagnostic>& errors,
+                                       json& resolved) {
   return make_named(c, reg.laws(), "contact law", path, errors, resolved);
 }
 
@@ -99,19 +108,21 @@ Clock make_clock(const json& j, const std::string& path, std::vector<Diagnostic>
   const ClockParams p = build(clock_spec(), j, path, errors, resolved);
   Clock c;
   c.n = p.n;
-  if (p.kind == "every_n_steps") c.kind = Clock::Kind::EveryNSteps;
-  else if (p.kind == "substeps") c.kind = Clock::Kind::SubstepsPerStep;
-  else if (p.kind == "adaptive_substeps") c.kind = Clock::Kind::AdaptiveSubsteps;
-  else if (p.kind == "on_event") c.kind = Clock::Kind::OnEvent;
+  if (p.kind == "every_n_steps")
+    c.kind = Clock::Kind::EveryNSteps;
+  else if (p.kind == "substeps")
+    c.kind = Clock::Kind::SubstepsPerStep;
+  else if (p.kind == "adaptive_substeps")
+    c.kind = Clock::Kind::AdaptiveSubsteps;
+  else if (p.kind == "on_event")
+    c.kind = Clock::Kind::OnEvent;
   c.trigger = {p.moved_beyond, p.field, p.field_change, p.bond_broke, p.max_interval};
-  const bool event_keys = std::isfinite(p.moved_beyond) || !p.field.empty() || std::isfinite(p.field_change) ||
-                          p.bond_broke || p.max_interval > 0;
+  const bool event_keys = std::isfinite(p.moved_beyond) || !p.field.empty() || std::isfinite(p.field_change) || p.bond_broke ||
+                          p.max_interval > 0;
   if (c.kind == Clock::Kind::OnEvent) {
-    if (!(std::isfinite(p.moved_beyond) || (!p.field.empty() && std::isfinite(p.field_change)) || p.bond_broke ||
-          p.max_interval > 0))
+    if (!(std::isfinite(p.moved_beyond) || (!p.field.empty() && std::isfinite(p.field_change)) || p.bond_broke || p.max_interval > 0))
       errors.push_back({path, "an on_event clock needs a condition: moved_beyond, field + field_change, bond_broke or max_interval"});
-    if (p.field.empty() != !std::isfinite(p.field_change))
-      errors.push_back({path + "/field_change", "field and field_change go together"});
+    if (p.field.empty() != !std::isfinite(p.field_change)) errors.push_back({path + "/field_change", "field and field_change go together"});
   } else if (event_keys) {
     errors.push_back({path + "/kind", "trigger conditions are given but kind is \"" + p.kind + "\", not \"on_event\""});
   }
@@ -138,11 +149,16 @@ WallMotion make_motion(const json& m, const std::string& path, std::vector<Diagn
   WallMotion out;
   out.physical_time = true;  // tables in physical seconds, like the physical-time modules
   if (p.type == "fixed") out.kind = WallMotion::Kind::Fixed;
-  if (p.type == "velocity") { out.kind = WallMotion::Kind::Velocity; out.speed = p.speed; out.travel = p.travel; }
+  if (p.type == "velocity") {
+    out.kind = WallMotion::Kind::Velocity;
+    out.speed = p.speed;
+    out.travel = p.travel;
+  }
   auto check_table = [&](const std::vector<double>& values, const char* key) {
     if (p.times.empty()) errors.push_back({path + "/times", std::string("a ") + p.type + " motion needs `times`, found none"});
     if (values.size() != p.times.size())
-      errors.push_back({path + "/" + key, "expected " + std::to_string(p.times.size()) + " values (one per time), found " + std::to_string(values.size())});
+      errors.push_back({path + "/" + key,
+                        "expected " + std::to_string(p.times.size()) + " values (one per time), found " + std::to_string(values.size())});
     for (std::size_t k = 1; k < p.times.size(); ++k)
       if (!(p.times[k] > p.times[k - 1])) errors.push_back({path + "/times/" + std::to_string(k), "times must increase strictly"});
   };

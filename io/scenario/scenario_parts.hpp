@@ -20,8 +20,8 @@ using nlohmann::json;
 /// Bind `obj` against the spec of `ps` and build its aggregate; `resolved` gets the bound values
 /// (defaults filled in). Values that did not bind keep the aggregate's defaults.
 template <class P>
-P build(const ParamSpec<P>& ps, const json& obj, const std::string& path, std::vector<Diagnostic>& errors,
-        json& resolved, const std::set<std::string>& extra = {}) {
+P build(const ParamSpec<P>& ps, const json& obj, const std::string& path, std::vector<Diagnostic>& errors, json& resolved,
+        const std::set<std::string>& extra = {}) {
   const ParamValues v = bind_params(obj, ps.spec(), path, errors, extra);
   resolved = to_json(v, ps.spec());
   return ps.build(v);
@@ -43,7 +43,10 @@ template <class T>
 std::unique_ptr<T> make_named(const json& c, const std::map<std::string, RegistryEntry<T>>& table, const std::string& what,
                               const std::string& path, std::vector<Diagnostic>& errors, json& resolved,
                               const std::set<std::string>& extra = {}) {
-  if (!c.is_object()) { errors.push_back({path, "expected an object {\"law\": ..., \"params\": {...}}, found " + describe(c)}); return nullptr; }
+  if (!c.is_object()) {
+    errors.push_back({path, "expected an object {\"law\": ..., \"params\": {...}}, found " + describe(c)});
+    return nullptr;
+  }
   for (auto it = c.begin(); it != c.end(); ++it)
     if (it.key() != "law" && it.key() != "params" && !extra.count(it.key()))
       errors.push_back({path + "/" + it.key(), "unknown key \"" + it.key() + "\" (expected \"law\" and \"params\")"});
@@ -66,8 +69,8 @@ std::unique_ptr<T> make_named(const json& c, const std::map<std::string, Registr
   return it->second.make(v);
 }
 
-std::unique_ptr<ContactModel> make_law(const json& c, const Registry& reg, const std::string& path,
-                                       std::vector<Diagnostic>& errors, json& resolved);
+std::unique_ptr<ContactModel> make_law(const json& c, const Registry& reg, const std::string& path, std::vector<Diagnostic>& errors,
+                                       json& resolved);
 
 /// Specs of a wall, a wall motion and a module clock (for binding and `sparkdem schema`).
 Spec wall_schema();

@@ -62,21 +62,33 @@ ParamSpec<StageParams::Watchdog> watchdog_spec() {
                  "time, particle ids, quantity, value and bound, and write the last state that passed them as "
                  "OUTDIR/checkpoint_before_failure.h5 (loadable with --restart); the defaults never fire on a healthy run");
   s.add("check_every", &P::check_every).min(1).doc("steps between checks (also checked before step 0 and at the stage end)");
-  s.add("max_overlap_ratio", &P::max_overlap_ratio).unit("1").nonnegative()
-      .doc("largest overlap / smaller radius of a particle pair (walls are not checked); 0: the contact law's bound "
-           "(0.5 for elastic laws, max(1, creep_overlap_limit) + 0.5 for sintering)");
-  s.add("max_speed", &P::max_speed).unit("m/s").nonnegative()
+  s.add("max_overlap_ratio", &P::max_overlap_ratio)
+      .unit("1")
+      .nonnegative()
+      .doc(
+          "largest overlap / smaller radius of a particle pair (walls are not checked); 0: the contact law's bound "
+          "(0.5 for elastic laws, max(1, creep_overlap_limit) + 0.5 for sintering)");
+  s.add("max_speed", &P::max_speed)
+      .unit("m/s")
+      .nonnegative()
       .doc("a particle speed above this is a blow-up (0: blowup_speed, or else each particle's radius per step, r/dt)");
-  s.add("energy_growth_factor", &P::energy_growth_factor).unit("1").nonnegative()
-      .doc("stop when the kinetic energy per unit mass grew by more than this factor over energy_window checks, at "
-           "every check, while its rms speed exceeds energy_floor_fraction of the blow-up speed (a numerical "
-           "instability; 0: off)");
+  s.add("energy_growth_factor", &P::energy_growth_factor)
+      .unit("1")
+      .nonnegative()
+      .doc(
+          "stop when the kinetic energy per unit mass grew by more than this factor over energy_window checks, at "
+          "every check, while its rms speed exceeds energy_floor_fraction of the blow-up speed (a numerical "
+          "instability; 0: off)");
   s.add("energy_window", &P::energy_window).min(1).doc("checks over which the kinetic-energy growth is measured");
-  s.add("energy_floor_fraction", &P::energy_floor_fraction).unit("1").nonnegative()
+  s.add("energy_floor_fraction", &P::energy_floor_fraction)
+      .unit("1")
+      .nonnegative()
       .doc("rms speed sqrt(2 KE / M) below this fraction of the blow-up speed (max_speed or min radius / dt) never counts as growth");
-  s.add("snapshot_every_checks", &P::snapshot_every_checks).min(0)
-      .doc("checks between in-memory copies of the last healthy state (one more at the stage start; memory: about one "
-           "checkpoint; 0: none, and no checkpoint_before_failure.h5)");
+  s.add("snapshot_every_checks", &P::snapshot_every_checks)
+      .min(0)
+      .doc(
+          "checks between in-memory copies of the last healthy state (one more at the stage start; memory: about one "
+          "checkpoint; 0: none, and no checkpoint_before_failure.h5)");
   return s;
 }
 ParamSpec<StageParams::Stop> stop_spec() {
@@ -105,20 +117,44 @@ ParamSpec<StageParams> stage_spec(const Registry& reg) {
   s.add("name", &StageParams::name).doc("stage name");
   s.add("type", &StageParams::type).choices(types).doc("dynamics or a generator name");
   s.add("dt", &StageParams::dt).unit("s").nonnegative().doc("time step (0: dt_fraction of the stable step)");
-  s.add("dt_fraction", &StageParams::dt_fraction).unit("1").range(0.0, 10.0).doc("time step as a fraction of the stable step at stage start");
-  s.add("mechanics", &StageParams::mechanics).choices({"on", "frozen"})
-      .doc("frozen: no mechanical step (positions and contacts of the stage start kept; only coupling modules run); dt_fraction then refers to the smallest module stable step");
+  s.add("dt_fraction", &StageParams::dt_fraction)
+      .unit("1")
+      .range(0.0, 10.0)
+      .doc("time step as a fraction of the stable step at stage start");
+  s.add("mechanics", &StageParams::mechanics)
+      .choices({"on", "frozen"})
+      .doc(
+          "frozen: no mechanical step (positions and contacts of the stage start kept; only coupling modules run); dt_fraction then refers "
+          "to the smallest module stable step");
   s.add("allow_unstable_dt", &StageParams::allow_unstable_dt).doc("run above the stable step (explicit override)");
   s.add("mass_scaling", &StageParams::mass_scaling).unit("1").min(1.0).doc("mass scaling factor (reported; 1 = off)");
-  s.add("mass_floor_radius", &StageParams::mass_floor_radius).unit("m").nonnegative().doc("particles smaller than this radius take the mass (and inertia) of a sphere of this radius during the stage, on top of mass_scaling: density scaling of the fines for quasi-static stages (0 = off)");
-  s.add("time_scale", &StageParams::time_scale).unit("1").positive().doc("physical seconds per mechanical second: modules in physical time (thermal, sintering kinetics) advance time_scale x dt per step; both clocks are reported");
+  s.add("mass_floor_radius", &StageParams::mass_floor_radius)
+      .unit("m")
+      .nonnegative()
+      .doc(
+          "particles smaller than this radius take the mass (and inertia) of a sphere of this radius during the stage, on top of "
+          "mass_scaling: density scaling of the fines for quasi-static stages (0 = off)");
+  s.add("time_scale", &StageParams::time_scale)
+      .unit("1")
+      .positive()
+      .doc(
+          "physical seconds per mechanical second: modules in physical time (thermal, sintering kinetics) advance time_scale x dt per "
+          "step; both clocks are reported");
   s.add("skin", &StageParams::skin).unit("m").nonnegative().doc("Verlet skin (0: 0.3 x smallest radius)");
-  s.add("blowup_speed", &StageParams::blowup_speed).unit("m/s").nonnegative().doc("speed that counts as a blow-up (0: radius per step); watchdog.max_speed, when set, takes precedence");
+  s.add("blowup_speed", &StageParams::blowup_speed)
+      .unit("m/s")
+      .nonnegative()
+      .doc("speed that counts as a blow-up (0: radius per step); watchdog.max_speed, when set, takes precedence");
   s.add("sort_every_rebuilds", &StageParams::sort_every_rebuilds).min(0).doc("spatial sort period in neighbour rebuilds (0: never)");
   s.add("stability_check_every", &StageParams::stability_check_every).min(0).doc("steps between stable-step checks (0: start only)");
-  s.add("initial_overlap", &StageParams::initial_overlap).choices({"allow", "refuse", "relax"})
-      .doc("overlaps of the starting packing above initial_overlap_limit (always reported in summary.json): run as is (allow), refuse before step 0 naming the worst pair (refuse), or move the particles apart first (relax)");
-  s.add("initial_overlap_limit", &StageParams::initial_overlap_limit).unit("1").positive()
+  s.add("initial_overlap", &StageParams::initial_overlap)
+      .choices({"allow", "refuse", "relax"})
+      .doc(
+          "overlaps of the starting packing above initial_overlap_limit (always reported in summary.json): run as is (allow), refuse "
+          "before step 0 naming the worst pair (refuse), or move the particles apart first (relax)");
+  s.add("initial_overlap_limit", &StageParams::initial_overlap_limit)
+      .unit("1")
+      .positive()
       .doc("largest accepted initial overlap / smaller radius (pairs) or / radius (walls)");
   s.add("from_snapshot", &StageParams::from_snapshot).doc("start from the state stored in this checkpoint file");
   s.add_group("stop", &StageParams::stop, stop_spec());
@@ -140,7 +176,9 @@ ParamSpec<SnapshotParams> snapshot_spec() {
   s.add("column", &SnapshotParams::column).doc("time-series column watched by `at` (every_steps: recorded only; default time)");
   s.add("at", &SnapshotParams::at).doc("values of `column`: snapshot k when the column first reaches at[k] (from its first sample's side)");
   s.add("every_steps", &SnapshotParams::every_steps).min(0).doc("instead of `at`: a snapshot every this many stage steps");
-  s.add("check_every", &SnapshotParams::check_every).min(0).doc("stage steps between checks of `at` besides the time-series rows (0: rows only)");
+  s.add("check_every", &SnapshotParams::check_every)
+      .min(0)
+      .doc("stage steps between checks of `at` besides the time-series rows (0: rows only)");
   return s;
 }
 
@@ -168,7 +206,6 @@ std::vector<std::string> stage_columns(const StageDef& st, const std::set<std::s
     for (const auto& c : m->columns()) cols.push_back(c);
   return cols;
 }
-
 
 // ------------------------------------------------------------------------- the stage's own keys
 
@@ -238,13 +275,13 @@ void bind_from_snapshot(const std::string& file, StageBuild& b) {
 void check_stop_and_dt(StageBuild& b) {
   const auto& c = b.st.cfg;
   if (b.st.type == "dynamics" && !b.ctx.has_particles)
-    b.errors.push_back({b.path + "/type", "this dynamics stage has no particles: no earlier stage generates them and it has no from_snapshot"});
+    b.errors.push_back(
+        {b.path + "/type", "this dynamics stage has no particles: no earlier stage generates them and it has no from_snapshot"});
   if (b.st.dynamics && std::isinf(c.duration) && c.max_steps == std::numeric_limits<std::int64_t>::max())
     b.errors.push_back({b.path + "/stop", "a stage needs a hard stop: stop.time [s] or stop.steps"});
   if (b.st.dynamics && c.dt == 0.0 && c.dt_fraction == 0.0)
     b.errors.push_back({b.path + "/dt", "set dt [s] or dt_fraction (fraction of the stable step)"});
-  if (c.dt > 0.0 && c.dt_fraction > 0.0)
-    b.errors.push_back({b.path + "/dt_fraction", "give either dt or dt_fraction, not both"});
+  if (c.dt > 0.0 && c.dt_fraction > 0.0) b.errors.push_back({b.path + "/dt_fraction", "give either dt or dt_fraction, not both"});
 }
 
 /// After the keys: the generator's settling (its motions, stop conditions and modules, after the
@@ -365,9 +402,15 @@ ParamSpec<CreateBondsParams> create_bonds_spec() {
   ParamSpec<CreateBondsParams> s("create_bonds", "object",
                                  "bond every pair whose gap is at most the tolerance at the stage start (after the "
                                  "generator), with the scenario's bond law; exactly one of the two keys");
-  s.add("gap_tolerance", &CreateBondsParams::gap_tolerance).unit("m").nonnegative().no_default()
+  s.add("gap_tolerance", &CreateBondsParams::gap_tolerance)
+      .unit("m")
+      .nonnegative()
+      .no_default()
       .doc("largest gap of a bonded pair (0 = touching pairs)");
-  s.add("gap_tolerance_relative", &CreateBondsParams::gap_tolerance_relative).unit("1").nonnegative().no_default()
+  s.add("gap_tolerance_relative", &CreateBondsParams::gap_tolerance_relative)
+      .unit("1")
+      .nonnegative()
+      .no_default()
       .doc("largest gap as a fraction of the mean radius at the stage start (follows the packing's element size)");
   return s;
 }
@@ -377,9 +420,11 @@ void bind_create_bonds(const json& value, const std::string& at, StageBuild& b) 
   const CreateBondsParams p = build(create_bonds_spec(), value, at, b.errors, ignored);
   const bool abs = p.gap_tolerance >= 0.0, rel = p.gap_tolerance_relative >= 0.0;
   if (b.errors.size() == before && abs == rel)
-    b.errors.push_back({at, "expected {\"gap_tolerance\": number >= 0} [m] or {\"gap_tolerance_relative\": number >= 0} "
-                            "[1, of the mean radius at the stage start] (bond every pair whose gap is at most this; 0 = "
-                            "touching pairs), found " + describe(value)});
+    b.errors.push_back({at,
+                        "expected {\"gap_tolerance\": number >= 0} [m] or {\"gap_tolerance_relative\": number >= 0} "
+                        "[1, of the mean radius at the stage start] (bond every pair whose gap is at most this; 0 = "
+                        "touching pairs), found " +
+                            describe(value)});
   else if (b.errors.size() == before) {
     b.st.create_bonds_gap = rel ? p.gap_tolerance_relative : p.gap_tolerance;
     b.st.create_bonds_gap_relative = rel;
@@ -397,7 +442,10 @@ void bind_contact(const json& value, const std::string& at, StageBuild& b) {
 
 /// "add_walls": walls added at the stage start (a plane may be placed by `clearance`).
 void bind_add_walls(const json& value, const std::string& at, StageBuild& b) {
-  if (!value.is_array()) { b.errors.push_back({at, "expected an array of walls, found " + describe(value)}); return; }
+  if (!value.is_array()) {
+    b.errors.push_back({at, "expected an array of walls, found " + describe(value)});
+    return;
+  }
   b.resolved["add_walls"] = json::array();
   for (std::size_t q = 0; q < value.size(); ++q) {
     const std::string wp = at + "/" + std::to_string(q);
@@ -416,7 +464,10 @@ void bind_add_walls(const json& value, const std::string& at, StageBuild& b) {
 /// "remove_walls": names of walls removed at the stage start.
 void bind_remove_walls(const json& value, const std::string& at, StageBuild& b) {
   b.resolved["remove_walls"] = value;
-  if (!value.is_array()) { b.errors.push_back({at, "expected an array of wall names"}); return; }
+  if (!value.is_array()) {
+    b.errors.push_back({at, "expected an array of wall names"});
+    return;
+  }
   for (std::size_t q = 0; q < value.size(); ++q) {
     const auto& x = value[q];
     if (x.is_string() && b.ctx.wall_names.count(x.get<std::string>())) {
@@ -431,11 +482,15 @@ void bind_remove_walls(const json& value, const std::string& at, StageBuild& b) 
 
 /// "walls": {wall name: motion} during the stage.
 void bind_walls(const json& value, const std::string& at, StageBuild& b) {
-  if (!value.is_object()) { b.errors.push_back({at, "expected an object {wall name: motion}, found " + describe(value)}); return; }
+  if (!value.is_object()) {
+    b.errors.push_back({at, "expected an object {wall name: motion}, found " + describe(value)});
+    return;
+  }
   b.resolved["walls"] = json::object();
   for (auto it = value.begin(); it != value.end(); ++it) {
     if (!b.ctx.wall_names.count(it.key())) {
-      b.errors.push_back({at + "/" + it.key(), "no wall named \"" + it.key() + "\" exists in this stage" + suggest(it.key(), wall_list(b.ctx))});
+      b.errors.push_back(
+          {at + "/" + it.key(), "no wall named \"" + it.key() + "\" exists in this stage" + suggest(it.key(), wall_list(b.ctx))});
       continue;
     }
     json rm;
@@ -459,11 +514,16 @@ void use_set(const std::string& name, const std::string& at, StageBuild& b) {
 /// "sets": names of particle sets evaluated at the stage start (fields set/<name>).
 void bind_sets(const json& value, const std::string& at, StageBuild& b) {
   b.resolved["sets"] = value;
-  if (!value.is_array()) { b.errors.push_back({at, "expected an array of particle set names"}); return; }
+  if (!value.is_array()) {
+    b.errors.push_back({at, "expected an array of particle set names"});
+    return;
+  }
   for (std::size_t q = 0; q < value.size(); ++q) {
     const std::string sp = at + "/" + std::to_string(q);
-    if (!value[q].is_string()) b.errors.push_back({sp, "expected a set name, found " + describe(value[q])});
-    else use_set(value[q].get<std::string>(), sp, b);
+    if (!value[q].is_string())
+      b.errors.push_back({sp, "expected a set name, found " + describe(value[q])});
+    else
+      use_set(value[q].get<std::string>(), sp, b);
   }
 }
 
@@ -486,8 +546,10 @@ void bind_delete_sets(const json& value, const std::string& at, StageBuild& b) {
     }
     bool dup = false;
     for (const auto& [n, s2] : b.st.delete_sets) dup = dup || n == x.get<std::string>();
-    if (dup) b.errors.push_back({sp, "expected each set once, found \"" + x.get<std::string>() + "\" twice"});
-    else b.st.delete_sets.emplace_back(x.get<std::string>(), b.ctx.sets.at(x.get<std::string>()));
+    if (dup)
+      b.errors.push_back({sp, "expected each set once, found \"" + x.get<std::string>() + "\" twice"});
+    else
+      b.st.delete_sets.emplace_back(x.get<std::string>(), b.ctx.sets.at(x.get<std::string>()));
   }
 }
 
@@ -548,7 +610,10 @@ ParamSpec<UntilParams> until_spec() {
 /// "until": {column: {"above"|"below": value}}.
 void bind_until(const json& value, const std::string& at, StageBuild& b) {
   b.resolved["until"] = value;
-  if (!value.is_object()) { b.errors.push_back({at, "expected an object {quantity: {\"above\"|\"below\": value}}"}); return; }
+  if (!value.is_object()) {
+    b.errors.push_back({at, "expected an object {quantity: {\"above\"|\"below\": value}}"});
+    return;
+  }
   for (auto it = value.begin(); it != value.end(); ++it) {
     const std::string cp = at + "/" + it.key();
     json ignored;
@@ -586,11 +651,11 @@ StageFacet monitor_facet(const std::string& key, const RegistryEntry<Monitor>& e
     for (const WallUse& u : m->wall_uses()) {
       const char* want = u.plane ? "plane" : "cylinder";
       if (!b.ctx.wall_names.count(u.name))
-        b.errors.push_back({at + "/" + u.key, "expected the name of a wall of this stage, found \"" + u.name + "\"" +
-                                                  suggest(u.name, wall_list(b.ctx))});
+        b.errors.push_back(
+            {at + "/" + u.key, "expected the name of a wall of this stage, found \"" + u.name + "\"" + suggest(u.name, wall_list(b.ctx))});
       else if (plane.count(u.name) && plane[u.name] != u.plane)
-        b.errors.push_back({at + "/" + u.key, std::string("expected a ") + want + " wall, found the " +
-                                                  (u.plane ? "cylinder" : "plane") + " \"" + u.name + "\""});
+        b.errors.push_back({at + "/" + u.key, std::string("expected a ") + want + " wall, found the " + (u.plane ? "cylinder" : "plane") +
+                                                  " \"" + u.name + "\""});
     }
     b.st.monitors.push_back(std::move(m));
   };
@@ -604,7 +669,8 @@ void bind_snapshots(const json& value, const std::string& at, StageBuild& b) {
   const SnapshotParams q = build(snapshot_spec(), value, at, b.errors, rs);
   if (b.errors.size() == before) {
     if (!b.st.dynamics && !b.generator_failed)
-      b.errors.push_back({at, "only a stage that steps (dynamics, or a generator that settles its packing) takes snapshots; this one is `" + b.st.type + "`"});
+      b.errors.push_back({at, "only a stage that steps (dynamics, or a generator that settles its packing) takes snapshots; this one is `" +
+                                  b.st.type + "`"});
     if (q.at.empty() && q.every_steps == 0) b.errors.push_back({at, "give `at` (values of `column`) or `every_steps`"});
     if (!q.at.empty() && q.every_steps > 0) b.errors.push_back({at + "/every_steps", "give either `at` or `every_steps`, not both"});
     if (!q.at.empty() && q.column.empty())
@@ -630,10 +696,15 @@ std::vector<StageFacet> stage_facets(const Registry& reg) {
       {"remove_walls", "array of wall names", "walls removed at the stage start", {}, false, bind_remove_walls},
       {"walls", "object {wall name: motion}", "wall motions during the stage (see \"motion\")", motion_schema(), false, bind_walls},
       {"sets", "array of particle-set names", "particle sets evaluated at the stage start (fields set/<name>)", {}, false, bind_sets},
-      {"delete_sets", "array of particle-set names",
+      {"delete_sets",
+       "array of particle-set names",
        "their members at the stage start (after the generator) are deleted, with their contacts and bonds; summary.json "
-       "reports the counts (deleted_particles)", {}, false, bind_delete_sets},
-      {"prescribe", "object {set name: [vx, vy, vz] | prescribe}", prescribe_spec().spec().doc, prescribe_spec().spec(), false, bind_prescribe},
+       "reports the counts (deleted_particles)",
+       {},
+       false,
+       bind_delete_sets},
+      {"prescribe", "object {set name: [vx, vy, vz] | prescribe}", prescribe_spec().spec().doc, prescribe_spec().spec(), false,
+       bind_prescribe},
       {"until", "object {time-series column: until}", until_spec().spec().doc, until_spec().spec(), false, bind_until},
   };
   for (const auto& [k, entry] : reg.monitors()) f.push_back(monitor_facet(k, entry));

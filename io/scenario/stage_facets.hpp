@@ -41,21 +41,21 @@ struct StageContext {
 struct StageBuild {
   StageContext& ctx;
   StageDef& st;
-  const json& js;                   ///< the stage object as written
-  const std::string& path;          ///< its JSON pointer
+  const json& js;           ///< the stage object as written
+  const std::string& path;  ///< its JSON pointer
   std::vector<Diagnostic>& errors;
-  json& resolved;                   ///< the resolved stage (each facet adds its key)
-  bool generator_failed = false;    ///< the generator did not build: checks that need it are left out
-  bool modules_built = true;        ///< every module built (else the stage's columns are unknown)
+  json& resolved;                 ///< the resolved stage (each facet adds its key)
+  bool generator_failed = false;  ///< the generator did not build: checks that need it are left out
+  bool modules_built = true;      ///< every module built (else the stage's columns are unknown)
 };
 
 /// One stage key.
 struct StageFacet {
   std::string key;
-  std::string form;    ///< the JSON form of the value ("object", "array of particle-set names", ...)
+  std::string form;  ///< the JSON form of the value ("object", "array of particle-set names", ...)
   std::string doc;
-  Spec params;         ///< parameters of the value (an object) or of each entry (a map); may be empty
-  bool always = false; ///< bound even when the key is absent (the value is then null)
+  Spec params;          ///< parameters of the value (an object) or of each entry (a map); may be empty
+  bool always = false;  ///< bound even when the key is absent (the value is then null)
   std::function<void(const json& value, const std::string& at, StageBuild& b)> bind;
 };
 

@@ -81,18 +81,24 @@ std::string cell(const json& v) {
 std::vector<std::string> key_columns(const SweepDef& sw) {
   if (sw.calibrate) return {"phase", "value", "snapshot", "snapshot_step", "snapshot_time", "snapshot_value"};
   switch (sw.kind) {
-    case SweepDef::Kind::Parameter: return {"value"};
-    case SweepDef::Kind::Seeds: return {"seed"};
-    case SweepDef::Kind::Snapshots: return {"snapshot", "snapshot_step", "snapshot_time", "snapshot_value"};
+    case SweepDef::Kind::Parameter:
+      return {"value"};
+    case SweepDef::Kind::Seeds:
+      return {"seed"};
+    case SweepDef::Kind::Snapshots:
+      return {"snapshot", "snapshot_step", "snapshot_time", "snapshot_value"};
   }
   return {};
 }
 
 const char* kind_name(SweepDef::Kind kind) {
   switch (kind) {
-    case SweepDef::Kind::Parameter: return "parameter";
-    case SweepDef::Kind::Seeds: return "seeds";
-    case SweepDef::Kind::Snapshots: return "snapshots";
+    case SweepDef::Kind::Parameter:
+      return "parameter";
+    case SweepDef::Kind::Seeds:
+      return "seeds";
+    case SweepDef::Kind::Snapshots:
+      return "snapshots";
   }
   return "?";
 }
@@ -173,7 +179,8 @@ CalibrationState calibration_state(const SweepDef::Calibration& c, const json& r
     const double y = number_of(r.value("values", json::object()).value(c.column, json(nullptr)));
     if (!std::isfinite(v) || !(y > 0.0)) continue;
     st.points.emplace_back(v, y);
-    if (std::abs(y / c.target - 1.0) <= c.tolerance && (!std::isfinite(st.found) || std::abs(y / c.target - 1.0) < std::abs(st.achieved / c.target - 1.0))) {
+    if (std::abs(y / c.target - 1.0) <= c.tolerance &&
+        (!std::isfinite(st.found) || std::abs(y / c.target - 1.0) < std::abs(st.achieved / c.target - 1.0))) {
       st.found = v;
       st.achieved = y;
     }
@@ -197,8 +204,7 @@ double next_search_value(const SweepDef::Calibration& c, const CalibrationState&
   std::string seen;
   for (const auto& [v, y] : st.points) seen += (seen.empty() ? "" : ", ") + std::to_string(v) + " -> " + std::to_string(y);
   throw SetupError("stage '" + stage + "': the calibration target " + c.column + " = " + std::to_string(c.target) +
-                     " is not bracketed by the scan (" + (seen.empty() ? std::string("no completed item") : seen) +
-                     "); widen calibrate/scan");
+                   " is not bracketed by the scan (" + (seen.empty() ? std::string("no completed item") : seen) + "); widen calibrate/scan");
 }
 
 }  // namespace
@@ -208,9 +214,15 @@ json RunRecord::to_json() const {
   json j;
   j["snapshots"] = json::array();
   for (const auto& r : snapshots)
-    j["snapshots"].push_back({{"stage_index", r.stage_index}, {"stage", r.stage}, {"index", r.index}, {"column", r.column},
-                              {"target", number_or_null(r.target)}, {"value", number_or_null(r.value)}, {"step", r.step},
-                              {"time", r.time}, {"file", r.file}});
+    j["snapshots"].push_back({{"stage_index", r.stage_index},
+                              {"stage", r.stage},
+                              {"index", r.index},
+                              {"column", r.column},
+                              {"target", number_or_null(r.target)},
+                              {"value", number_or_null(r.value)},
+                              {"step", r.step},
+                              {"time", r.time},
+                              {"file", r.file}});
   j["first_values"] = json::object();
   for (const auto& [k, v] : first_values) j["first_values"][std::to_string(k)] = number_or_null(v);
   j["sweep"] = sweep;
@@ -236,9 +248,7 @@ RunRecord RunRecord::from_json(const json& j) {
     for (auto it = j.at("first_values").begin(); it != j.at("first_values").end(); ++it)
       r.first_values[std::stoll(it.key())] = number_of(it.value());
     r.sweep = j.at("sweep");
-  } catch (const std::exception& e) {
-    throw SetupError(std::string("the checkpoint's pipeline record is malformed: ") + e.what());
-  }
+  } catch (const std::exception& e) { throw SetupError(std::string("the checkpoint's pipeline record is malformed: ") + e.what()); }
   return r;
 }
 
@@ -290,7 +300,8 @@ void SnapshotObserver::watch(State& s, const std::vector<std::string>& cols, con
   if (it == cols.end()) {
     std::string list;
     for (const auto& c : cols) list += (list.empty() ? "" : ", ") + c;
-    throw SetupError("stage '" + stage_ + "': the snapshot column '" + spec_.column + "' is not a time-series column of this stage (" + list + ")");
+    throw SetupError("stage '" + stage_ + "': the snapshot column '" + spec_.column + "' is not a time-series column of this stage (" +
+                     list + ")");
   }
   const double v = vals[static_cast<std::size_t>(it - cols.begin())];
   if (spec_.every_steps > 0) {
@@ -347,7 +358,8 @@ json column_statistics(const json& rows, const std::vector<std::string>& columns
     const double mean = x.empty() ? std::nan("") : sum / n;
     double ss = 0.0;
     for (double v : x) ss += (v - mean) * (v - mean);
-    out[c] = {{"count", x.size()}, {"mean", number_or_null(mean)},
+    out[c] = {{"count", x.size()},
+              {"mean", number_or_null(mean)},
               {"std", x.size() >= 2 ? number_or_null(std::sqrt(ss / (n - 1.0))) : json(nullptr)}};
   }
   return out;
@@ -373,8 +385,8 @@ std::optional<Item> plan_item(const SweepContext& ctx, std::size_t j, const std:
   const CalibrationState st = calibration_state(c, rows);
   if (!std::isfinite(st.found)) {
     if (st.searches >= static_cast<std::size_t>(c.max_iterations))
-      throw SetupError("stage '" + stage + "': the calibration did not reach " + c.column + " within " +
-                       std::to_string(c.tolerance) + " of the target in " + std::to_string(c.max_iterations) + " search items");
+      throw SetupError("stage '" + stage + "': the calibration did not reach " + c.column + " within " + std::to_string(c.tolerance) +
+                       " of the target in " + std::to_string(c.max_iterations) + " search items");
     return Item{ks, next_search_value(c, st, stage), "search"};
   }
   std::size_t validated = 0;
@@ -384,9 +396,16 @@ std::optional<Item> plan_item(const SweepContext& ctx, std::size_t j, const std:
 }
 
 json ItemJob::to_json() const {
-  return {{"stage", stage}, {"stage_index", stage_index}, {"j", j}, {"index", item.index},
-          {"value", number_or_null(item.value)}, {"phase", item.phase}, {"input_state", input_state},
-          {"snapshot", snapshot}, {"directory", directory}, {"quiet", quiet}};
+  return {{"stage", stage},
+          {"stage_index", stage_index},
+          {"j", j},
+          {"index", item.index},
+          {"value", number_or_null(item.value)},
+          {"phase", item.phase},
+          {"input_state", input_state},
+          {"snapshot", snapshot},
+          {"directory", directory},
+          {"quiet", quiet}};
 }
 
 ItemJob ItemJob::from_json(const json& x) {
@@ -442,8 +461,12 @@ Scenario item_scenario(const Scenario& sc, const ItemJob& job, json& row) {
     row["value"] = job.item.value;
   }
   switch (sw.kind) {
-    case SweepDef::Kind::Parameter: row["value"] = sw.values.at(i); break;
-    case SweepDef::Kind::Seeds: row["seed"] = sw.seeds.at(i); break;
+    case SweepDef::Kind::Parameter:
+      row["value"] = sw.values.at(i);
+      break;
+    case SweepDef::Kind::Seeds:
+      row["seed"] = sw.seeds.at(i);
+      break;
     case SweepDef::Kind::Snapshots:
       row["snapshot"] = job.snapshot.at("file");
       row["snapshot_index"] = job.snapshot.at("index");
@@ -537,8 +560,7 @@ using namespace sweep_detail;
 
 /// The sweep's context: the input state (the state before the stage, kept in a file for a
 /// restart; on a restart read back from it), its items, and the rows a restart carries over.
-SweepContext sweep_context(Scenario& sc, std::size_t k, const State& s, const RunRecord& record, bool resuming,
-                           const RunOptions& opt) {
+SweepContext sweep_context(Scenario& sc, std::size_t k, const State& s, const RunRecord& record, bool resuming, const RunOptions& opt) {
   SweepContext ctx;
   const StageDef& st = sc.stages[k];
   ctx.stage = k;
@@ -589,8 +611,7 @@ SweepContext sweep_context(Scenario& sc, std::size_t k, const State& s, const Ru
 /// One rank: the items in order, each a nested run whose checkpoints go to the main checkpoint
 /// file with the sweep's progress in the pipeline record (a restart resumes inside the item).
 /// Rows finished before a restart are kept, not rerun.
-std::map<std::size_t, ItemResult> run_items_in_order(Scenario& sc, const SweepContext& ctx, RunRecord& record,
-                                                     const RunOptions& opt) {
+std::map<std::size_t, ItemResult> run_items_in_order(Scenario& sc, const SweepContext& ctx, RunRecord& record, const RunOptions& opt) {
   std::map<std::size_t, ItemResult> ran;
   std::map<std::size_t, json> rows = ctx.done;
   for (std::size_t j = 0;; ++j) {
@@ -651,8 +672,13 @@ json sweep_entry(const SweepContext& ctx, const StageDef& st, const json& rows) 
     const auto& c = *sw.calibrate;
     const CalibrationState cs = calibration_state(c, rows);
     json& cj = x["calibration"];
-    cj = {{"parameter", c.parameter}, {"column", c.column}, {"snapshot", c.snapshot}, {"target", c.target},
-          {"tolerance", c.tolerance}, {"value", number_or_null(cs.found)}, {"achieved", number_or_null(cs.achieved)},
+    cj = {{"parameter", c.parameter},
+          {"column", c.column},
+          {"snapshot", c.snapshot},
+          {"target", c.target},
+          {"tolerance", c.tolerance},
+          {"value", number_or_null(cs.found)},
+          {"achieved", number_or_null(cs.achieved)},
           {"search_items", cs.searches}};
     cj["map"] = json::array();
     for (const auto& [v, y] : cs.points) cj["map"].push_back({v, y});

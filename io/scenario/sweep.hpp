@@ -36,19 +36,19 @@ struct RunOptions;
 struct SnapshotRecord {
   std::int64_t stage_index = 0;
   std::string stage;
-  std::int64_t index = 0;                ///< k of at[k], or the k-th every_steps snapshot
+  std::int64_t index = 0;  ///< k of at[k], or the k-th every_steps snapshot
   std::string column;
-  double target = std::nan("");          ///< at[k] (NaN for every_steps)
-  double value = std::nan("");           ///< the column's value when taken
+  double target = std::nan("");  ///< at[k] (NaN for every_steps)
+  double value = std::nan("");   ///< the column's value when taken
   Step step = 0;
   double time = 0.0;
-  std::string file;                      ///< absolute path of the state file
+  std::string file;  ///< absolute path of the state file
 };
 
 struct RunRecord {
   std::vector<SnapshotRecord> snapshots;
   std::map<std::int64_t, double> first_values;  ///< stage index -> first finite sample of its snapshot column
-  json sweep;  ///< sweep in progress {"stage", "item", "rows", "input_state"}, or null
+  json sweep;                                   ///< sweep in progress {"stage", "item", "rows", "input_state"}, or null
 
   json to_json() const;
   static RunRecord from_json(const json& j);
@@ -68,10 +68,15 @@ std::string file_name_of(const std::string& stage);
 class SnapshotObserver final : public Observer {
  public:
   using Save = std::function<void(const std::filesystem::path&, State&)>;
-  SnapshotObserver(Observer& inner, const SnapshotSpec& spec, std::int64_t stage_index, std::string stage,
-                   std::filesystem::path outdir, RunRecord& record, Save save)
-      : inner_(inner), spec_(spec), stage_index_(stage_index), stage_(std::move(stage)), outdir_(std::move(outdir)),
-        record_(record), save_(std::move(save)) {}
+  SnapshotObserver(Observer& inner, const SnapshotSpec& spec, std::int64_t stage_index, std::string stage, std::filesystem::path outdir,
+                   RunRecord& record, Save save)
+      : inner_(inner),
+        spec_(spec),
+        stage_index_(stage_index),
+        stage_(std::move(stage)),
+        outdir_(std::move(outdir)),
+        record_(record),
+        save_(std::move(save)) {}
   void frame(const State& s) override { inner_.frame(s); }
   void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) override { inner_.timeseries(cols, vals); }
   void checkpoint(State& s) override { inner_.checkpoint(s); }
@@ -95,16 +100,15 @@ class SnapshotObserver final : public Observer {
 
 /// The snapshots of a stage for its summary entry: column, taken (index, target, value, step,
 /// time, file relative to `outdir` when inside it) and the `at` values not reached.
-json snapshots_summary(const RunRecord& record, std::int64_t stage_index, const SnapshotSpec& spec,
-                       const std::filesystem::path& outdir);
+json snapshots_summary(const RunRecord& record, std::int64_t stage_index, const SnapshotSpec& spec, const std::filesystem::path& outdir);
 
 /// Count, mean and sample standard deviation (n - 1; null below 2 values) of each column over
 /// the completed rows' finite values, summed in row order.
 json column_statistics(const json& rows, const std::vector<std::string>& columns);
 
 struct SweepOutcome {
-  json entry;                 ///< the stage's summary entry
-  Step steps = 0;             ///< steps of every item run here
+  json entry;      ///< the stage's summary entry
+  Step steps = 0;  ///< steps of every item run here
   double particle_steps = 0;
 };
 

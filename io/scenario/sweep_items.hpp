@@ -26,17 +26,17 @@ struct Item {
 
 /// What every item of one sweep stage shares, and what a restart carried over.
 struct SweepContext {
-  std::size_t stage = 0;              ///< position of the stage in the scenario
-  std::int64_t stage_index = 0;       ///< in the enclosing run (RunOptions::stage_offset + stage)
+  std::size_t stage = 0;         ///< position of the stage in the scenario
+  std::int64_t stage_index = 0;  ///< in the enclosing run (RunOptions::stage_offset + stage)
   const SweepDef* sw = nullptr;
   std::string stage_name;
   std::filesystem::path outdir, dir, table, checkpoint;
-  std::string input_file;             ///< the input state's file (absolute)
-  State input;                        ///< the state before the stage
-  std::vector<SnapshotRecord> snaps;  ///< Snapshots kind: the items' snapshots
-  std::size_t n = 0;                  ///< snapshots / values / seeds
-  std::int64_t cal_pos = -1;          ///< position of the calibration snapshot among snaps
-  std::map<std::size_t, json> done;   ///< rows finished before a restart, by item number
+  std::string input_file;                  ///< the input state's file (absolute)
+  State input;                             ///< the state before the stage
+  std::vector<SnapshotRecord> snaps;       ///< Snapshots kind: the items' snapshots
+  std::size_t n = 0;                       ///< snapshots / values / seeds
+  std::int64_t cal_pos = -1;               ///< position of the calibration snapshot among snaps
+  std::map<std::size_t, json> done;        ///< rows finished before a restart, by item number
   std::optional<std::size_t> resume_item;  ///< the checkpoint lies inside this item (one-rank runs)
   bool quiet = false;
 };
@@ -50,7 +50,7 @@ std::optional<Item> plan_item(const SweepContext& ctx, std::size_t j, const std:
 struct ItemJob {
   std::size_t stage = 0;
   std::int64_t stage_index = 0;
-  std::size_t j = 0;        ///< item number: its row's place in the table
+  std::size_t j = 0;  ///< item number: its row's place in the table
   Item item;
   std::string input_state;  ///< the sweep's input state file
   json snapshot;            ///< Snapshots kind: {file, index, step, time, value}; else null

@@ -197,17 +197,13 @@ std::map<std::size_t, ItemResult> run_items_over_ranks(Scenario& sc, const Sweep
   std::thread dispatcher([&sched] {
     try {
       dispatch(sched);
-    } catch (...) {
-      sched.fail(static_cast<std::size_t>(-1), std::current_exception());
-    }
+    } catch (...) { sched.fail(static_cast<std::size_t>(-1), std::current_exception()); }
   });
   while (auto job = sched.take(true)) {
     try {
       ItemResult r = run_item(sc, *job, ctx.input, spread_item_options(*job));
       sched.complete(job->j, std::move(r));
-    } catch (...) {
-      sched.fail(job->j, std::current_exception());
-    }
+    } catch (...) { sched.fail(job->j, std::current_exception()); }
   }
   dispatcher.join();
   if (auto e = sched.error()) std::rethrow_exception(e);
@@ -245,13 +241,9 @@ int serve_sweep_items(Scenario& sc) {
       reply["row"] = r.row;
       reply["steps"] = r.steps;
       reply["particle_steps"] = r.particle_steps;
-    } catch (const Interrupted& e) {
-      reply = {{"j", j}, {"error", e.what()}, {"kind", "interrupted"}};
-    } catch (const SetupError& e) {
+    } catch (const Interrupted& e) { reply = {{"j", j}, {"error", e.what()}, {"kind", "interrupted"}}; } catch (const SetupError& e) {
       reply = {{"j", j}, {"error", e.what()}, {"kind", "setup"}};
-    } catch (const std::exception& e) {
-      reply = {{"j", j}, {"error", e.what()}, {"kind", "internal"}};
-    }
+    } catch (const std::exception& e) { reply = {{"j", j}, {"error", e.what()}, {"kind", "internal"}}; }
     ranks::send(0, ranks::kResult, reply.dump());
   }
 }

@@ -28,7 +28,10 @@ class Gravity final : public Module {
   }
   explicit Gravity(const Params& p) : p_(p) {}
   std::string name() const override { return "gravity"; }
-  void declare(Declarations& d) const override { d.writes = {"force"}; d.reads = {"mass"}; }
+  void declare(Declarations& d) const override {
+    d.writes = {"force"};
+    d.reads = {"mass"};
+  }
   void advance(State& s, const StepInfo&) override {
     auto& p = s.particles;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
@@ -55,7 +58,10 @@ class ViscousDamping final : public Module {
   }
   explicit ViscousDamping(const Params& p) : p_(p) {}
   std::string name() const override { return "viscous_damping"; }
-  void declare(Declarations& d) const override { d.writes = {"force"}; d.reads = {"velocity"}; }
+  void declare(Declarations& d) const override {
+    d.writes = {"force"};
+    d.reads = {"velocity"};
+  }
   double stable_dt(const State&) const override { return p_.rate > 0.0 ? 2.0 / p_.rate : std::numeric_limits<double>::infinity(); }
   void advance(State& s, const StepInfo&) override {
     auto& p = s.particles;
@@ -93,7 +99,10 @@ class LocalDamping final : public Module {
   }
   explicit LocalDamping(const Params& p) : p_(p) {}
   std::string name() const override { return "local_damping"; }
-  void declare(Declarations& d) const override { d.writes = {"force", "torque"}; d.reads = {"velocity", "omega"}; }
+  void declare(Declarations& d) const override {
+    d.writes = {"force", "torque"};
+    d.reads = {"velocity", "omega"};
+  }
   void advance(State& s, const StepInfo&) override {
     auto& p = s.particles;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
@@ -141,7 +150,10 @@ class AddForce final : public Module {
     auto& p = s.particles;
     const auto& f = p.fields.data("set/" + p_.set);
     for (std::size_t i = 0; i < p.size(); ++i)
-      if (f[i] > 0.5) { p.force[i] += p_.force; p.torque[i] += p_.torque; }
+      if (f[i] > 0.5) {
+        p.force[i] += p_.force;
+        p.torque[i] += p_.torque;
+      }
   }
 
  private:

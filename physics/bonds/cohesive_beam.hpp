@@ -65,11 +65,11 @@ struct BeamSection {
 
 /// Kinematics of a beam in its co-rotational frame.
 struct BeamKinematics {
-  Vec3 e;                    ///< unit chord i -> j
-  double length = 0.0;       ///< current chord length L [m]
-  double stretch = 0.0;      ///< L - L0 [m]
-  Vec3 theta_i, theta_j;     ///< end rotations relative to the chord [rad] (normal to e)
-  double twist = 0.0;        ///< phi, rotation of j relative to i about e [rad]
+  Vec3 e;                 ///< unit chord i -> j
+  double length = 0.0;    ///< current chord length L [m]
+  double stretch = 0.0;   ///< L - L0 [m]
+  Vec3 theta_i, theta_j;  ///< end rotations relative to the chord [rad] (normal to e)
+  double twist = 0.0;     ///< phi, rotation of j relative to i about e [rad]
 };
 
 namespace beam {
@@ -125,7 +125,8 @@ struct CohesiveBeam {
     s.add("young_modulus", &Params::young_modulus).unit("Pa").positive().required().doc("Young's modulus E_mu of the beam");
     s.add("poisson_ratio", &Params::poisson_ratio).unit("1").range(-0.99, 0.5).doc("Poisson ratio nu_mu (G_mu = E_mu / (2 (1 + nu_mu)))");
     s.add("radius_ratio", &Params::radius_ratio).unit("1").positive().doc("beam radius / mean radius of the two particles");
-    s.add("failure", &Params::failure).choices({"none", "max_normal", "von_mises", "tresca"})
+    s.add("failure", &Params::failure)
+        .choices({"none", "max_normal", "von_mises", "tresca"})
         .doc("failure criterion: none, max_normal (axial + bending, André 2012), von_mises or tresca (with torsional shear)");
     s.add("strength", &Params::strength).unit("Pa").positive().doc("threshold sigma_mu_f of the failure criterion");
     return s;
@@ -154,10 +155,14 @@ struct CohesiveBeam {
   double criterion(const Stresses& st) const {
     const double n = std::abs(st.axial) + st.bending;
     switch (kind_) {
-      case 1: return st.axial + st.bending;
-      case 2: return std::sqrt(n * n + 3.0 * st.shear * st.shear);
-      case 3: return std::sqrt(n * n + 4.0 * st.shear * st.shear);
-      default: return 0.0;
+      case 1:
+        return st.axial + st.bending;
+      case 2:
+        return std::sqrt(n * n + 3.0 * st.shear * st.shear);
+      case 3:
+        return std::sqrt(n * n + 4.0 * st.shear * st.shear);
+      default:
+        return 0.0;
     }
   }
   double failure_stress(const BondGeometry& g, const double*) const { return criterion(stresses(g, beam::kinematics(g))); }
@@ -200,8 +205,7 @@ struct CohesiveBeam {
   BondStiffness stiffness(const BondGeometry& g) const {
     const BeamSection sec = beam::section(p_.radius_ratio, g.r_i, g.r_j);
     const double E = p_.young_modulus, L0 = g.length0;
-    return {E * sec.area / L0, 12.0 * E * sec.inertia / (L0 * L0 * L0), 4.0 * E * sec.inertia / L0,
-            shear_modulus_ * sec.polar / L0};
+    return {E * sec.area / L0, 12.0 * E * sec.inertia / (L0 * L0 * L0), 4.0 * E * sec.inertia / L0, shear_modulus_ * sec.polar / L0};
   }
 
   const Params& params() const { return p_; }

@@ -60,8 +60,7 @@ struct SpringBond {
     const Vec3 vt = v - v.dot(g.n) * g.n;
     BondForces f;
     const double stretch = g.distance - g.length0;
-    const Vec3 ft = kernel::tangential_history(g.n, vt, p_.shear_stiffness, 0.0, 1.0,
-                                               std::numeric_limits<double>::infinity(), dt, s);
+    const Vec3 ft = kernel::tangential_history(g.n, vt, p_.shear_stiffness, 0.0, 1.0, std::numeric_limits<double>::infinity(), dt, s);
     f.force = -p_.normal_stiffness * stretch * g.n + ft;
     f.torque_i = -half * g.n.cross(ft);
     f.torque_j = f.torque_i;
@@ -74,8 +73,7 @@ struct SpringBond {
   /// Elastic energy k_n (d - L0)^2 / 2 + k_t |s|^2 / 2 [J].
   double energy(const BondGeometry& g, const double* s) const {
     const double stretch = g.distance - g.length0;
-    return 0.5 * p_.normal_stiffness * stretch * stretch +
-           0.5 * p_.shear_stiffness * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
+    return 0.5 * p_.normal_stiffness * stretch * stretch + 0.5 * p_.shear_stiffness * (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]);
   }
   BondStiffness stiffness(const BondGeometry&) const { return {p_.normal_stiffness, p_.shear_stiffness, 0.0, 0.0}; }
 

@@ -16,7 +16,7 @@ std::vector<double> bond_hydrostatic_stress(const ParticleStore& p, const BondTa
     if (b.broken(r)) continue;
     const Index i = b.i(r), j = b.j(r);
     const Vec3 mid = 0.5 * (p.position[i] + p.position[j]);
-    trace[i] += (mid - p.position[i]).dot(F[r]);   // tr((x_b - x_i) (x) f_b,i)
+    trace[i] += (mid - p.position[i]).dot(F[r]);  // tr((x_b - x_i) (x) f_b,i)
     trace[j] += (mid - p.position[j]).dot(-F[r]);
   }
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -37,8 +37,7 @@ std::vector<Eigen::Matrix3d> bond_virial_stress(const ParticleStore& p, const Bo
     sigma[i] += (mid - p.position[i]) * F[r].transpose();
     sigma[j] += (mid - p.position[j]) * (-F[r]).transpose();
   }
-  for (std::size_t i = 0; i < p.size(); ++i)
-    sigma[i] /= 4.0 / 3.0 * kPi * p.radius[i] * p.radius[i] * p.radius[i] / packing_fraction;
+  for (std::size_t i = 0; i < p.size(); ++i) sigma[i] /= 4.0 / 3.0 * kPi * p.radius[i] * p.radius[i] * p.radius[i] / packing_fraction;
   return sigma;
 }
 
@@ -48,8 +47,7 @@ double von_mises_stress(const Eigen::Matrix3d& sigma) {
   return std::sqrt(1.5 * dev.cwiseProduct(dev).sum());
 }
 
-std::vector<double> bond_virial_criterion(const ParticleStore& p, const BondTable& b, double packing_fraction,
-                                          bool von_mises) {
+std::vector<double> bond_virial_criterion(const ParticleStore& p, const BondTable& b, double packing_fraction, bool von_mises) {
   std::vector<double> c(b.size(), 0.0);
   if (von_mises) {
     const std::vector<Eigen::Matrix3d> s = bond_virial_stress(p, b, packing_fraction);
@@ -68,9 +66,12 @@ ParamSpec<BondVirialFailure::Params> BondVirialFailure::spec() {
                       "bonds break when the mean hydrostatic virial stress of their two elements reaches `strength` "
                       "(GranOO brittle hydrostatic criterion; list it first among the force modules)");
   s.add("strength", &Params::strength).unit("Pa").positive().required().doc("hydrostatic tensile stress at failure");
-  s.add("packing_fraction", &Params::packing_fraction).unit("1").range(1e-3, 1.0)
+  s.add("packing_fraction", &Params::packing_fraction)
+      .unit("1")
+      .range(1e-3, 1.0)
       .doc("solid fraction f_v: element volume V_i = (4/3) pi r_i^3 / f_v");
-  s.add("criterion", &Params::criterion).choices({"hydrostatic", "von_mises"})
+  s.add("criterion", &Params::criterion)
+      .choices({"hydrostatic", "von_mises"})
       .doc("hydrostatic: mean hydrostatic stress of the two elements; von_mises: von Mises stress of their mean virial tensor");
   return s;
 }

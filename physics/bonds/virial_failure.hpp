@@ -54,8 +54,7 @@ double von_mises_stress(const Eigen::Matrix3d& sigma);
 
 /// The averaged criterion value [Pa] of every bond row (0 for broken rows): the mean hydrostatic
 /// stress of its two elements, or (von_mises) the von Mises stress of their mean virial tensor.
-std::vector<double> bond_virial_criterion(const ParticleStore& p, const BondTable& b, double packing_fraction,
-                                          bool von_mises);
+std::vector<double> bond_virial_criterion(const ParticleStore& p, const BondTable& b, double packing_fraction, bool von_mises);
 
 class BondVirialFailure final : public Module {
  public:

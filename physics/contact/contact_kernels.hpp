@@ -23,19 +23,15 @@ inline double effective_shear_modulus(double E, double nu) {
 }
 
 /// Hertz normal force [N]: F = 4/3 E* sqrt(R* delta) delta   (Hertz 1882; Johnson eq. 4.23)
-inline double hertz_force(double e_star, double r_eff, double delta) {
-  return 4.0 / 3.0 * e_star * std::sqrt(r_eff * delta) * delta;
-}
+inline double hertz_force(double e_star, double r_eff, double delta) { return 4.0 / 3.0 * e_star * std::sqrt(r_eff * delta) * delta; }
 /// Tangent stiffness dF/d(delta) of the Hertz law [N/m]: k = 2 E* sqrt(R* delta).
-inline double hertz_stiffness(double e_star, double r_eff, double delta) {
-  return 2.0 * e_star * std::sqrt(r_eff * delta);
-}
+inline double hertz_stiffness(double e_star, double r_eff, double delta) { return 2.0 * e_star * std::sqrt(r_eff * delta); }
 
 /// Tsuji et al. (Powder Technol. 71, 1992) damping coefficient polynomial alpha(e) as used by
 /// LAMMPS `damping tsuji`: F_d = -alpha sqrt(m* k_nfac) v_n, with k_nfac = 4/3 E* sqrt(R* delta).
 inline double tsuji_alpha_polynomial(double e) {
-  return 1.2728 - 4.2783 * e + 11.087 * e * e - 22.348 * e * e * e + 27.467 * e * e * e * e -
-         18.022 * e * e * e * e * e + 4.8218 * e * e * e * e * e * e;
+  return 1.2728 - 4.2783 * e + 11.087 * e * e - 22.348 * e * e * e + 27.467 * e * e * e * e - 18.022 * e * e * e * e * e +
+         4.8218 * e * e * e * e * e * e;
 }
 
 /// Restitution coefficient of the Hertz law with Tsuji-form damping, from the dimensionless
@@ -63,7 +59,9 @@ inline double hertz_tsuji_restitution(double alpha, double* duration = nullptr) 
       if (duration) *duration = t + s * h;
       return -(v + s * (vn - v));
     }
-    x = xn; v = vn; t += h;
+    x = xn;
+    v = vn;
+    t += h;
   }
   if (duration) *duration = t;
   return 0.0;  // did not separate: fully damped
@@ -85,7 +83,10 @@ inline double hertz_tsuji_alpha_for_restitution(double e_target) {
   while (hertz_tsuji_restitution(hi) > e_target) hi *= 2.0;
   for (int k = 0; k < 60; ++k) {
     const double mid = 0.5 * (lo + hi);
-    if (hertz_tsuji_restitution(mid) > e_target) lo = mid; else hi = mid;
+    if (hertz_tsuji_restitution(mid) > e_target)
+      lo = mid;
+    else
+      hi = mid;
   }
   const double alpha = 0.5 * (lo + hi);
   if (memoise) {
@@ -109,8 +110,7 @@ inline double linear_damping_for_restitution(double e, double m_eff, double k) {
 /// the force is scaled to the cone and xi reset to -(F_t + gamma_t v_t)/k_t.
 /// @param[in,out] xi tangential displacement history [m] (3 values)
 /// @return tangential force on i [N]
-inline Vec3 tangential_history(const Vec3& n, const Vec3& vt, double k_t, double gamma_t, double mu, double fn_abs,
-                               double dt, double* xi) {
+inline Vec3 tangential_history(const Vec3& n, const Vec3& vt, double k_t, double gamma_t, double mu, double fn_abs, double dt, double* xi) {
   Vec3 s(xi[0], xi[1], xi[2]);
   const double mag = s.norm();
   s -= s.dot(n) * n;
@@ -128,7 +128,9 @@ inline Vec3 tangential_history(const Vec3& n, const Vec3& vt, double k_t, double
       ft.setZero();
     }
   }
-  xi[0] = s[0]; xi[1] = s[1]; xi[2] = s[2];
+  xi[0] = s[0];
+  xi[1] = s[1];
+  xi[2] = s[2];
   return ft;
 }
 

@@ -50,7 +50,8 @@ struct HertzMindlin {
   static std::vector<std::string> state_columns() { return {"shear_x", "shear_y", "shear_z"}; }
 
   explicit HertzMindlin(const Params& p)
-      : p_(p), e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
+      : p_(p),
+        e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
         g_star_(kernel::effective_shear_modulus(p.youngs_modulus, p.poisson_ratio)),
         alpha_(kernel::hertz_tsuji_alpha_for_restitution(p.restitution)) {}
 

@@ -51,8 +51,8 @@ struct LinearSpringDashpot {
     const double gn = kernel::linear_damping_for_restitution(p_.restitution, g.m_eff, p_.normal_stiffness);
     const double fn = p_.normal_stiffness * g.overlap - gn * m.vn;
     ContactForces f;
-    f.tangential = kernel::tangential_history(g.n, m.vt, p_.kt_ratio * p_.normal_stiffness, p_.gammat_ratio * gn,
-                                              p_.friction, std::abs(fn), dt, xi);
+    f.tangential = kernel::tangential_history(g.n, m.vt, p_.kt_ratio * p_.normal_stiffness, p_.gammat_ratio * gn, p_.friction, std::abs(fn),
+                                              dt, xi);
     f.force = fn * g.n + f.tangential;
     return f;
   }

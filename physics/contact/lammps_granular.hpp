@@ -34,8 +34,7 @@ struct LammpsHertzTsuji {
     bool lammps2021_wall_modulus = true;
   };
   static ParamSpec<Params> spec() {
-    ParamSpec<Params> s(std::string(kName), "contact_law",
-                        "LAMMPS granular: hertz/material + linear_history tangential + tsuji damping");
+    ParamSpec<Params> s(std::string(kName), "contact_law", "LAMMPS granular: hertz/material + linear_history tangential + tsuji damping");
     s.add("youngs_modulus", &Params::youngs_modulus).unit("Pa").positive().doc("E of hertz/material");
     s.add("restitution", &Params::restitution).unit("1").range(0.0, 1.0).doc("e fed to the Tsuji polynomial");
     s.add("poisson_ratio", &Params::poisson_ratio).unit("1").range(0.0, 0.5).doc("nu of hertz/material");
@@ -48,7 +47,8 @@ struct LammpsHertzTsuji {
   }
   static std::vector<std::string> state_columns() { return {"shear_x", "shear_y", "shear_z"}; }
   explicit LammpsHertzTsuji(const Params& p)
-      : p_(p), e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
+      : p_(p),
+        e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
         e_star_wall_(p.lammps2021_wall_modulus ? p.youngs_modulus / (2.0 * (1.0 - p.poisson_ratio)) : e_star_),
         alpha_(kernel::tsuji_alpha_polynomial(p.restitution)) {}
 
@@ -57,8 +57,7 @@ struct LammpsHertzTsuji {
     const double damp = alpha_ * std::sqrt(g.m_eff * knfac);
     const double fn = knfac * g.overlap - damp * m.vn;
     ContactForces f;
-    f.tangential = kernel::tangential_history(g.n, m.vt, p_.tangential_stiffness, p_.x_gammat * damp, p_.friction,
-                                              std::abs(fn), dt, xi);
+    f.tangential = kernel::tangential_history(g.n, m.vt, p_.tangential_stiffness, p_.x_gammat * damp, p_.friction, std::abs(fn), dt, xi);
     f.force = fn * g.n + f.tangential;
     return f;
   }

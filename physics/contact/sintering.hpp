@@ -97,13 +97,12 @@ namespace sparkdem::physics {
 
 namespace kernel {
 
-inline constexpr double kBoltzmann = 1.380649e-23;  ///< k_B [J/K]
+inline constexpr double kBoltzmann = 1.380649e-23;   ///< k_B [J/K]
 inline constexpr double kGasConstant = 8.314462618;  ///< R [J/(mol K)]
 
 /// Effective grain-boundary diffusion coefficient [m^5/(N s)] (Coble; Nosewicz 2013):
 ///   D_eff = D_0 exp(-Q / (R T)) delta_b Omega / (k_B T).
-inline double gb_effective_diffusivity(double d0_m2_per_s, double q_J_per_mol, double delta_b_m, double omega_m3,
-                                       double t_K) {
+inline double gb_effective_diffusivity(double d0_m2_per_s, double q_J_per_mol, double delta_b_m, double omega_m3, double t_K) {
   return d0_m2_per_s * std::exp(-q_J_per_mol / (kGasConstant * t_K)) * delta_b_m * omega_m3 / (kBoltzmann * t_K);
 }
 
@@ -130,8 +129,8 @@ inline double kratos_neck_radius(double r_min_m, double h_m) {
 /// eta = +inf: elastic (F' = F + k v dt, du = 0). k = 0: F' = F, du = F dt / eta.
 /// Monotone and bounded for every dt: F' lies between F and eta v.
 struct MaxwellStep {
-  double force;       ///< F at the end of the step
-  double flow;        ///< du: dashpot displacement over the step
+  double force;  ///< F at the end of the step
+  double flow;   ///< du: dashpot displacement over the step
 };
 /// The step's decay factors {e^-x, phi(x)} for x = k dt / eta (eta = +inf: {1, 1}).
 struct MaxwellFactors {
@@ -204,37 +203,58 @@ struct Sintering {
     s.add("friction", &P::friction).unit("1").nonnegative().doc("Coulomb mu of contacts without a neck");
     s.add("wall_friction", &P::wall_friction).unit("1").nonnegative().doc("Coulomb mu against walls (punches, die)");
     s.add("min_neck_fraction", &P::min_neck_fraction).unit("1").range(1e-6, 1.0).doc("smallest neck of a sintering pair, / r_min");
-    s.add("neck_strength", &P::neck_strength).unit("Pa").nonnegative().doc("a neck breaks when its tension exceeds this x pi a^2 (0: never)");
-    s.add("neck", &P::neck).choices({"kratos", "coble", "cv"}).doc("neck radius from the overlap: Kratos 1.43 sqrt(r_min^2 - x^2), Coble, constant volume");
-    s.add("sintering_radius", &P::sintering_radius).choices({"r_min", "r_eff", "two_r_eff"}).doc("R of the driving force for unequal spheres");
-    s.add("cold_necks", &P::cold_necks).choices({"bonded", "contact"}).doc("a neck below the start temperature: elastic bond (tension too) or frictional contact");
+    s.add("neck_strength", &P::neck_strength)
+        .unit("Pa")
+        .nonnegative()
+        .doc("a neck breaks when its tension exceeds this x pi a^2 (0: never)");
+    s.add("neck", &P::neck)
+        .choices({"kratos", "coble", "cv"})
+        .doc("neck radius from the overlap: Kratos 1.43 sqrt(r_min^2 - x^2), Coble, constant volume");
+    s.add("sintering_radius", &P::sintering_radius)
+        .choices({"r_min", "r_eff", "two_r_eff"})
+        .doc("R of the driving force for unequal spheres");
+    s.add("cold_necks", &P::cold_necks)
+        .choices({"bonded", "contact"})
+        .doc("a neck below the start temperature: elastic bond (tension too) or frictional contact");
     s.add("creep_overlap_limit", &P::creep_overlap_limit).unit("1").positive().doc("creep: the dashpot stops at overlap h = this x r_min");
-    s.add("neck_stiffness", &P::neck_stiffness).choices({"elastic_approach", "neck_radius"})
-        .doc("spring of a pair with a neck: Hertz on the elastic approach, 2 E* sqrt(R* |h - u_s|) (the Kratos code), or the bonded "
-             "circular contact of the neck, 2 E* max(a, sqrt(R* |h - u_s|)) (Johnson, Contact Mechanics, 1985, section 5.2: a flat circular "
-             "junction of radius a is 2 E* a stiff); tangential 8 G* times the same radius");
-    s.add("creep_stop_gb_fraction", &P::creep_stop_gb_fraction).unit("1").nonnegative()
-        .doc("creep: the dashpot of a pair also stops once either particle's grain-boundary fraction sum a^2 / (4 r^2) over its necks "
-             "reaches this (seed 000 Eq. 22-23: 1 = the particle's surface all grain boundary, full density); 0: never");
-    s.add("after_equilibrium", &P::after_equilibrium).choices({"frozen", "creep"}).doc("neck at a_eq: the dashpot stops (frozen, Kratos) or keeps creeping under load (creep); the driving force stops in both");
+    s.add("neck_stiffness", &P::neck_stiffness)
+        .choices({"elastic_approach", "neck_radius"})
+        .doc(
+            "spring of a pair with a neck: Hertz on the elastic approach, 2 E* sqrt(R* |h - u_s|) (the Kratos code), or the bonded "
+            "circular contact of the neck, 2 E* max(a, sqrt(R* |h - u_s|)) (Johnson, Contact Mechanics, 1985, section 5.2: a flat circular "
+            "junction of radius a is 2 E* a stiff); tangential 8 G* times the same radius");
+    s.add("creep_stop_gb_fraction", &P::creep_stop_gb_fraction)
+        .unit("1")
+        .nonnegative()
+        .doc(
+            "creep: the dashpot of a pair also stops once either particle's grain-boundary fraction sum a^2 / (4 r^2) over its necks "
+            "reaches this (seed 000 Eq. 22-23: 1 = the particle's surface all grain boundary, full density); 0: never");
+    s.add("after_equilibrium", &P::after_equilibrium)
+        .choices({"frozen", "creep"})
+        .doc("neck at a_eq: the dashpot stops (frozen, Kratos) or keeps creeping under load (creep); the driving force stops in both");
     return s;
   }
   /// State: neck radius [m], Maxwell force F_e [N], viscous approach u_s [m], tangential elastic
   /// force [N] (3 values), r_i + r_j at the last evaluation [m] (the thermal approach rate).
   static std::vector<std::string> state_columns() {
-    return {"neck_radius", "elastic_force", "viscous_approach", "tangential_fx", "tangential_fy", "tangential_fz",
-            "radius_sum"};
+    return {"neck_radius", "elastic_force", "viscous_approach", "tangential_fx", "tangential_fy", "tangential_fz", "radius_sum"};
   }
   enum Column { kNeck = 0, kElastic = 1, kViscous = 2, kTangential = 3, kRadiusSum = 6 };
 
   explicit Sintering(const Params& p)
-      : p_(p), e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
+      : p_(p),
+        e_star_(kernel::effective_modulus(p.youngs_modulus, p.poisson_ratio)),
         g_star_(kernel::effective_shear_modulus(p.youngs_modulus, p.poisson_ratio)),
-        sin_half_(std::sin(0.5 * p.dihedral_angle)), cos_half_(std::cos(0.5 * p.dihedral_angle)),
-        neck_kind_(p.neck == "coble" ? NeckKind::Coble : p.neck == "cv" ? NeckKind::ConstantVolume : NeckKind::Kratos),
-        radius_kind_(p.sintering_radius == "r_eff" ? RadiusKind::Reff
-                     : p.sintering_radius == "two_r_eff" ? RadiusKind::TwoReff : RadiusKind::Rmin),
-        cold_contact_(p.cold_necks == "contact"), creep_(p.after_equilibrium == "creep"),
+        sin_half_(std::sin(0.5 * p.dihedral_angle)),
+        cos_half_(std::cos(0.5 * p.dihedral_angle)),
+        neck_kind_(p.neck == "coble" ? NeckKind::Coble
+                   : p.neck == "cv"  ? NeckKind::ConstantVolume
+                                     : NeckKind::Kratos),
+        radius_kind_(p.sintering_radius == "r_eff"       ? RadiusKind::Reff
+                     : p.sintering_radius == "two_r_eff" ? RadiusKind::TwoReff
+                                                         : RadiusKind::Rmin),
+        cold_contact_(p.cold_necks == "contact"),
+        creep_(p.after_equilibrium == "creep"),
         neck_spring_(p.neck_stiffness == "neck_radius") {}
 
   bool alive(const double* st) const { return st[kNeck] > 0.0; }
@@ -267,8 +287,7 @@ struct Sintering {
     thread_local std::uint64_t owner = 0;
     thread_local double t_last = std::numeric_limits<double>::quiet_NaN(), d_last = 0.0;
     if (owner != identity_ || !(t_K == t_last)) {
-      d_last = kernel::gb_effective_diffusivity(p_.gb_diffusivity_prefactor, p_.gb_activation_energy, p_.gb_width,
-                                                p_.atomic_volume, t_K);
+      d_last = kernel::gb_effective_diffusivity(p_.gb_diffusivity_prefactor, p_.gb_activation_energy, p_.gb_width, p_.atomic_volume, t_K);
       t_last = t_K;
       owner = identity_;
     }

@@ -77,7 +77,10 @@ void TemperatureController::bind(State& s) {
   const auto& f = set_field(s, p_.set, "temperature_controller");
   if (std::none_of(f.begin(), f.end(), [](double x) { return x > 0.5; }))
     throw SetupError("temperature_controller: the control set '" + p_.set + "' holds no particle");
-  if (restored_) { restored_ = false; return; }
+  if (restored_) {
+    restored_ = false;
+    return;
+  }
   pi_ = control::PiState{};
   max_error_after_ = 0.0;
   last_setpoint_ = setpoint(0.0);
@@ -105,8 +108,8 @@ void TemperatureController::advance(State& s, const StepInfo& info) {
 }
 
 std::vector<std::string> TemperatureController::columns() const {
-  return {"controller_setpoint", "controller_temperature", "controller_error", "controller_power", "controller_voltage",
-          "controller_max_error_after"};
+  return {"controller_setpoint", "controller_temperature", "controller_error",
+          "controller_power",    "controller_voltage",     "controller_max_error_after"};
 }
 std::vector<double> TemperatureController::column_values(const State&) const {
   return {last_setpoint_, last_temperature_, last_setpoint_ - last_temperature_, pi_.output, last_voltage_, max_error_after_};

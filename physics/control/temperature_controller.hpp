@@ -47,16 +47,16 @@ PiState pi_step(const PiState& s, double error, double dt, double kp, double ki,
 class TemperatureController final : public Module {
  public:
   struct Params {
-    std::string set;                  ///< control particle set
-    std::vector<double> time;         ///< [s] set-point table, physical, from the stage start
-    std::vector<double> temperature;  ///< [K]
-    double kp = 0.0;                  ///< [W/K]
-    double ki = 0.0;                  ///< [W/(K s)]
+    std::string set;                    ///< control particle set
+    std::vector<double> time;           ///< [s] set-point table, physical, from the stage start
+    std::vector<double> temperature;    ///< [K]
+    double kp = 0.0;                    ///< [W/K]
+    double ki = 0.0;                    ///< [W/(K s)]
     double feedforward_capacity = 0.0;  ///< [J/K]
-    double max_power = 1.0;           ///< [W]
-    double initial_voltage = 0.0;     ///< [V]
+    double max_power = 1.0;             ///< [W]
+    double initial_voltage = 0.0;       ///< [V]
     std::string signal = "supply_voltage";
-    double track_after = 60.0;        ///< [s]
+    double track_after = 60.0;  ///< [s]
   };
   static ParamSpec<Params> spec();
   explicit TemperatureController(const Params& p);

@@ -39,7 +39,8 @@ std::vector<double> sintered_neck_radii(const BranchModel& m, const State& s, co
   for (std::size_t e = 0; e < g.size(); ++e) {
     const double ra = radius(g.a[e]), rb = radius(g.b[e]);
     const bool law_neck = m.neck == "law" && g.kind[e] == EdgeKind::Neck;
-    if (law_neck) a[e] = g.radius[e];
+    if (law_neck)
+      a[e] = g.radius[e];
     else if (g.overlap[e] > 0.0 && std::isfinite(ra) && std::isfinite(rb))
       a[e] = m.neck == "cv" ? el::cv_neck_radius(ra, rb, g.overlap[e]) : el::coble_neck_radius(ra, rb, g.overlap[e]);
     // A neck never exceeds the smaller particle (§7.9; the kernels leave the cap to the caller):
@@ -63,8 +64,8 @@ double layer_conductance(const BranchModel& m, double kappa_S_per_m, double a_m)
   return m.gb_thickness > 0.0 ? el::grain_boundary_layer_conductance(kappa_S_per_m, a_m, m.gb_epsilon, m.gb_thickness) : kInf;
 }
 
-std::vector<double> branch_conductances(const BranchModel& m, const State& s, const InteractionGraph& g,
-                                        const std::vector<double>& k_edge, std::vector<double>& share_a) {
+std::vector<double> branch_conductances(const BranchModel& m, const State& s, const InteractionGraph& g, const std::vector<double>& k_edge,
+                                        std::vector<double>& share_a) {
   const auto& p = s.particles;
   auto radius = [&](Index v) { return g.is_wall_node(v) ? kInf : p.radius[v]; };
   std::vector<double> G(g.size(), 0.0);
@@ -72,7 +73,8 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
   if (m.model == "holm") {
     for (std::size_t e = 0; e < g.size(); ++e) {
       double a = 0.0;
-      if (g.kind[e] == EdgeKind::Neck || (g.kind[e] == EdgeKind::Bond && g.radius[e] > 0.0)) a = g.radius[e];
+      if (g.kind[e] == EdgeKind::Neck || (g.kind[e] == EdgeKind::Bond && g.radius[e] > 0.0))
+        a = g.radius[e];
       else if (g.overlap[e] > 0.0)
         a = m.contact_radius == "hertz" ? el::hertz_contact_radius(radius(g.a[e]), radius(g.b[e]), g.overlap[e]) : g.radius[e];
       G[e] = a > 0.0 ? el::holm_conductance(a, k_edge[e], k_edge[e]) : 0.0;
@@ -80,8 +82,8 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
   } else if (m.model == "sintered_neck") {
     const std::vector<double> a = sintered_neck_radii(m, s, g);
     const el::HemisphereLaw law = hemisphere_law(m.hemisphere);
-    const el::GrainBoundaryLayer layer =
-        m.gb_thickness > 0.0 ? el::GrainBoundaryLayer::layer(m.gb_epsilon, m.gb_thickness) : el::GrainBoundaryLayer::none();
+    const el::GrainBoundaryLayer layer = m.gb_thickness > 0.0 ? el::GrainBoundaryLayer::layer(m.gb_epsilon, m.gb_thickness)
+                                                              : el::GrainBoundaryLayer::none();
     for (std::size_t e = 0; e < g.size(); ++e) {
       if (!(a[e] > 0.0)) continue;
       const double ra = radius(g.a[e]), rb = radius(g.b[e]), k = k_edge[e];
@@ -114,7 +116,8 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
         const Vec3 du((*u)[3 * ib] - (*u)[3 * ia], (*u)[3 * ib + 1] - (*u)[3 * ia + 1], (*u)[3 * ib + 2] - (*u)[3 * ia + 2]);
         if (dn > 0.0) overlap -= d.dot(du) / dn;
       }
-      if (overlap >= -m.touch_tolerance) G[e] = el::touching_conductance(overlap, m.touch_tolerance, m.unit_conductance);
+      if (overlap >= -m.touch_tolerance)
+        G[e] = el::touching_conductance(overlap, m.touch_tolerance, m.unit_conductance);
       else if (m.model == "tunnelling")
         G[e] = el::tunnelling_conductance(-overlap, m.tunnel_g0, m.tunnel_length, m.tunnel_cutoff);
       else if (m.open_conductance > 0.0)

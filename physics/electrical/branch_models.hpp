@@ -26,19 +26,19 @@
 namespace sparkdem::physics {
 
 struct BranchModel {
-  std::string model = "holm";          ///< holm, sintered_neck, transmission_surface, touching, tunnelling
+  std::string model = "holm";            ///< holm, sintered_neck, transmission_surface, touching, tunnelling
   std::string contact_radius = "hertz";  ///< holm: hertz or geometric
-  std::string neck = "law";            ///< sintered_neck: law, coble, cv
+  std::string neck = "law";              ///< sintered_neck: law, coble, cv
   std::string hemisphere = "reading_a";  ///< sintered_neck: reading_a/b/c, fe_table
-  double gb_epsilon = 1.0;             ///< sintered_neck: layer conductivity ratio [-]
-  double gb_thickness = 0.0;           ///< sintered_neck: layer thickness [m] (0: none)
-  bool gbf_correction = true;          ///< sintered_neck: grain-boundary-fraction correction
-  double alpha_constant = 0.0;         ///< transmission_surface: fixed alpha (0: alpha(n), f(e))
-  double touch_tolerance = 0.0;        ///< [m] gap up to which a pair counts as touching
-  double unit_conductance = 1.0;       ///< touching/tunnelling [S]
-  double tunnel_g0 = 1.0;              ///< [S]
-  double tunnel_length = 1e-9;         ///< [m]
-  double tunnel_cutoff = 0.0;          ///< [m]
+  double gb_epsilon = 1.0;               ///< sintered_neck: layer conductivity ratio [-]
+  double gb_thickness = 0.0;             ///< sintered_neck: layer thickness [m] (0: none)
+  bool gbf_correction = true;            ///< sintered_neck: grain-boundary-fraction correction
+  double alpha_constant = 0.0;           ///< transmission_surface: fixed alpha (0: alpha(n), f(e))
+  double touch_tolerance = 0.0;          ///< [m] gap up to which a pair counts as touching
+  double unit_conductance = 1.0;         ///< touching/tunnelling [S]
+  double tunnel_g0 = 1.0;                ///< [S]
+  double tunnel_length = 1e-9;           ///< [m]
+  double tunnel_cutoff = 0.0;            ///< [m]
   /// touching/tunnelling: a per-particle displacement field [m] (3 components, e.g.
   /// ptc_displacement of ptc_self_heating) added to the geometry, linearised: the gap of a
   /// particle pair becomes gap + n . (u_b - u_a), n the unit vector from a to b ("" = none).
@@ -51,8 +51,8 @@ struct BranchModel {
 /// Conductance per graph edge; `share_a` receives the resistance share of side a per edge.
 /// `k_edge` has one bulk conductivity per edge (> 0). Throws ConfigError (from the kernels) on
 /// invalid geometry or parameters.
-std::vector<double> branch_conductances(const BranchModel& m, const State& s, const InteractionGraph& g,
-                                        const std::vector<double>& k_edge, std::vector<double>& share_a);
+std::vector<double> branch_conductances(const BranchModel& m, const State& s, const InteractionGraph& g, const std::vector<double>& k_edge,
+                                        std::vector<double>& share_a);
 
 /// sintered_neck: the neck radius [m] per graph edge (0: no neck): the contact law's neck column
 /// (neck = law) or Coble / constant volume from the overlap, capped at r_min, then the

@@ -34,10 +34,8 @@ double interpolate(std::span<const double> x, std::span<const double> y, double 
 }
 
 /// The note's FE table of K_i/(kappa pi r) versus a/r (sintering-electrical.md §2.4).
-constexpr std::array<double, 13> kFeX = {0.05, 0.10, 0.15, 0.20, 0.30, 0.40, 0.50,
-                                         0.60, 0.70, 0.80, 0.90, 0.95, 0.99};
-constexpr std::array<double, 13> kFeK = {0.059, 0.113, 0.166, 0.216, 0.316, 0.418, 0.525,
-                                         0.642, 0.775, 0.936, 1.149, 1.293, 1.449};
+constexpr std::array<double, 13> kFeX = {0.05, 0.10, 0.15, 0.20, 0.30, 0.40, 0.50, 0.60, 0.70, 0.80, 0.90, 0.95, 0.99};
+constexpr std::array<double, 13> kFeK = {0.059, 0.113, 0.166, 0.216, 0.316, 0.418, 0.525, 0.642, 0.775, 0.936, 1.149, 1.293, 1.449};
 
 void check_edges(std::span<const Index> edge_a, std::span<const Index> edge_b, std::size_t nodes) {
   if (edge_a.size() != edge_b.size())
@@ -51,11 +49,9 @@ void check_edges(std::span<const Index> edge_a, std::span<const Index> edge_b, s
   }
 }
 
-void check_necks(std::span<const Index> edge_a, std::span<const double> neck_radius_m,
-                 std::span<const double> node_radius_m) {
+void check_necks(std::span<const Index> edge_a, std::span<const double> neck_radius_m, std::span<const double> node_radius_m) {
   if (neck_radius_m.size() != edge_a.size())
-    throw ConfigError("", "neck radii: " + std::to_string(neck_radius_m.size()) + " values for " +
-                              std::to_string(edge_a.size()) + " edges");
+    throw ConfigError("", "neck radii: " + std::to_string(neck_radius_m.size()) + " values for " + std::to_string(edge_a.size()) + " edges");
   for (const double a : neck_radius_m) detail::require_nonnegative("neck radius [m]", a);
   for (const double r : node_radius_m) detail::require_positive_or_inf("node radius [m]", r);
 }
@@ -108,8 +104,8 @@ double hemisphere_conductance(const HemisphereLaw& law, double kappa_S_per_m, do
   return std::max(k_law, k_floor);
 }
 
-double sintered_neck_conductance(const HemisphereLaw& law, const GrainBoundaryLayer& layer, double kappa_i_S_per_m,
-                                 double kappa_j_S_per_m, double r_i_m, double r_j_m, double a_m) {
+double sintered_neck_conductance(const HemisphereLaw& law, const GrainBoundaryLayer& layer, double kappa_i_S_per_m, double kappa_j_S_per_m,
+                                 double r_i_m, double r_j_m, double a_m) {
   const double k_i = hemisphere_conductance(law, kappa_i_S_per_m, r_i_m, a_m);
   const double k_j = hemisphere_conductance(law, kappa_j_S_per_m, r_j_m, a_m);
   double k_c = kInf;
@@ -127,33 +123,33 @@ double cv_neck_radius(double r_i_m, double r_j_m, double overlap_m) {
   if (!(overlap_m > 0.0)) return 0.0;
   const double h = overlap_m;
   const double r_min = std::min(r_i_m, r_j_m);
-  const double dist = r_i_m + r_j_m - h;                    // centre distance D
-  if (!(dist > std::abs(r_i_m - r_j_m))) return r_min;     // one sphere inside the other
+  const double dist = r_i_m + r_j_m - h;                // centre distance D
+  if (!(dist > std::abs(r_i_m - r_j_m))) return r_min;  // one sphere inside the other
   // Cap heights c_k = r_k - d_k without cancellation, d_k = centre k -> radical plane.
   const double c_i = h * (r_j_m + dist - r_i_m) / (2.0 * dist);
   const double c_j = h * (r_i_m + dist - r_j_m) / (2.0 * dist);
   const double d_i = r_i_m - c_i, d_j = r_j_m - c_j;
-  if (!(d_i > 0.0 && d_j > 0.0)) return r_min;             // radical plane not between the centres
-  const double rho2 = h * (dist - r_i_m + r_j_m) * (dist + r_i_m - r_j_m) * (dist + r_i_m + r_j_m) /
-                      (4.0 * dist * dist);                 // lens radius^2
-  const double v_caps =
-      kPi / 3.0 * (c_i * c_i * (3.0 * r_i_m - c_i) + c_j * c_j * (3.0 * r_j_m - c_j));
+  if (!(d_i > 0.0 && d_j > 0.0)) return r_min;  // radical plane not between the centres
+  const double rho2 = h * (dist - r_i_m + r_j_m) * (dist + r_i_m - r_j_m) * (dist + r_i_m + r_j_m) / (4.0 * dist * dist);  // lens radius^2
+  const double v_caps = kPi / 3.0 * (c_i * c_i * (3.0 * r_i_m - c_i) + c_j * c_j * (3.0 * r_j_m - c_j));
 
   // Collar volume on one side as a function of s = a^2 - rho^2 in [0, d^2]:
   // z = sqrt(d^2 - s), L = d - z = s/(d + z), V = pi/3 L^2 (d + 2z), dV/ds = pi L.
-  struct Side { double v, dv; };
+  struct Side {
+    double v, dv;
+  };
   auto collar = [](double s, double d) {
     const double z = std::sqrt(std::max(d * d - s, 0.0));
     const double len = s / (d + z);
     return Side{kPi / 3.0 * len * len * (d + 2.0 * z), kPi * len};
   };
-  const double s_max = std::min(d_i * d_i, d_j * d_j);     // a <= min(r_i, r_j)
+  const double s_max = std::min(d_i * d_i, d_j * d_j);  // a <= min(r_i, r_j)
   auto f = [&](double s, double* df) {
     const Side a = collar(s, d_i), b = collar(s, d_j);
     if (df) *df = a.dv + b.dv;
     return a.v + b.v - v_caps;
   };
-  if (f(s_max, nullptr) <= 0.0) return r_min;              // the widest collar cannot hold the lens
+  if (f(s_max, nullptr) <= 0.0) return r_min;  // the widest collar cannot hold the lens
 
   // f is increasing and convex on [0, s_max], f(0) < 0 < f(s_max). Newton from the Coble guess
   // (the Coble neck is wider than the CV neck, so usually f > 0 there and Newton then decreases
@@ -166,7 +162,10 @@ double cv_neck_radius(double r_i_m, double r_j_m, double overlap_m) {
     double df = 0.0;
     const double fs = f(s, &df);
     if (fs == 0.0) break;
-    if (fs > 0.0) hi = s; else lo = s;
+    if (fs > 0.0)
+      hi = s;
+    else
+      lo = s;
     double s_new = df > 0.0 ? s - fs / df : 0.5 * (lo + hi);
     if (!(s_new > lo && s_new < hi)) s_new = 0.5 * (lo + hi);
     const bool done = std::abs(s_new - s) <= 1e-15 * s_new || !(hi - lo > 1e-15 * hi);
@@ -177,8 +176,7 @@ double cv_neck_radius(double r_i_m, double r_j_m, double overlap_m) {
 }
 
 std::vector<double> grain_boundary_fraction_factors(std::span<const Index> edge_a, std::span<const Index> edge_b,
-                                                    std::span<const double> neck_radius_m,
-                                                    std::span<const double> node_radius_m) {
+                                                    std::span<const double> neck_radius_m, std::span<const double> node_radius_m) {
   check_edges(edge_a, edge_b, node_radius_m.size());
   check_necks(edge_a, neck_radius_m, node_radius_m);
   std::vector<double> sum_a2(node_radius_m.size(), 0.0);
@@ -196,8 +194,7 @@ std::vector<double> grain_boundary_fraction_factors(std::span<const Index> edge_
 }
 
 std::vector<double> corrected_neck_radii(std::span<const Index> edge_a, std::span<const Index> edge_b,
-                                         std::span<const double> neck_radius_m,
-                                         std::span<const double> node_radius_m) {
+                                         std::span<const double> neck_radius_m, std::span<const double> node_radius_m) {
   const std::vector<double> alpha = grain_boundary_fraction_factors(edge_a, edge_b, neck_radius_m, node_radius_m);
   std::vector<double> out(neck_radius_m.size());
   for (std::size_t k = 0; k < out.size(); ++k) {
@@ -212,19 +209,17 @@ std::vector<double> corrected_neck_radii(std::span<const Index> edge_a, std::spa
 // Transmission surface
 // ----------------------------------------------------------------------------------------------
 
-PiecewiseLinear::PiecewiseLinear(std::vector<double> x, std::vector<double> y, const char* name)
-    : x_(std::move(x)), y_(std::move(y)) {
+PiecewiseLinear::PiecewiseLinear(std::vector<double> x, std::vector<double> y, const char* name) : x_(std::move(x)), y_(std::move(y)) {
   const std::string n(name);
   if (x_.size() != y_.size())
-    throw ConfigError("", n + ": " + std::to_string(x_.size()) + " abscissae but " + std::to_string(y_.size()) +
-                              " values");
+    throw ConfigError("", n + ": " + std::to_string(x_.size()) + " abscissae but " + std::to_string(y_.size()) + " values");
   if (x_.size() < 2) throw ConfigError("", n + ": needs at least 2 points, found " + std::to_string(x_.size()));
   for (std::size_t k = 0; k < x_.size(); ++k) {
     if (!std::isfinite(x_[k])) throw ConfigError("", n + ": abscissa " + std::to_string(k) + " is " + fmt(x_[k]));
     if (!std::isfinite(y_[k])) throw ConfigError("", n + ": value " + std::to_string(k) + " is " + fmt(y_[k]));
     if (k > 0 && !(x_[k] > x_[k - 1]))
-      throw ConfigError("", n + ": abscissae must increase strictly, found " + fmt(x_[k - 1]) + " then " +
-                                fmt(x_[k]) + " at point " + std::to_string(k));
+      throw ConfigError(
+          "", n + ": abscissae must increase strictly, found " + fmt(x_[k - 1]) + " then " + fmt(x_[k]) + " at point " + std::to_string(k));
   }
 }
 
@@ -236,14 +231,17 @@ double PiecewiseLinear::eval(double x, bool extrapolate) const {
 double PiecewiseLinear::clamped(double x) const { return eval(x, false); }
 double PiecewiseLinear::extrapolated(double x) const { return eval(x, true); }
 
-TransmissionSurfaceModel::TransmissionSurfaceModel(PiecewiseLinear alpha, PiecewiseLinear volume_fraction,
-                                                   double n_min, double n_max, double e_face, double e_tolerance,
-                                                   double eccentric_factor)
-    : alpha_(std::move(alpha)), fv_(std::move(volume_fraction)), n_min_(n_min), n_max_(n_max), e_face_(e_face),
-      e_tol_(e_tolerance), factor_(eccentric_factor) {
+TransmissionSurfaceModel::TransmissionSurfaceModel(PiecewiseLinear alpha, PiecewiseLinear volume_fraction, double n_min, double n_max,
+                                                   double e_face, double e_tolerance, double eccentric_factor)
+    : alpha_(std::move(alpha)),
+      fv_(std::move(volume_fraction)),
+      n_min_(n_min),
+      n_max_(n_max),
+      e_face_(e_face),
+      e_tol_(e_tolerance),
+      factor_(eccentric_factor) {
   if (!std::isfinite(n_min_) || !std::isfinite(n_max_) || !(n_min_ <= n_max_))
-    throw ConfigError("", "transmission surface: need finite n_min <= n_max, found " + fmt(n_min_) + ", " +
-                              fmt(n_max_));
+    throw ConfigError("", "transmission surface: need finite n_min <= n_max, found " + fmt(n_min_) + ", " + fmt(n_max_));
   if (!(e_face_ > 0.0) || std::isinf(e_face_)) detail::invalid("face eccentricity threshold [-]", "> 0", e_face_);
   detail::require_nonnegative("eccentricity tolerance [-]", e_tol_);
   if (!(factor_ >= 1.0) || std::isinf(factor_)) detail::invalid("eccentricity factor [-]", ">= 1 and finite", factor_);
@@ -273,13 +271,11 @@ TransmissionSurfaceModel TransmissionSurfaceModel::platonic(double e_tolerance) 
   std::vector<double> alpha = {6.0 * s3, 4.0, 1.5 * s3, a12, a20};
   std::vector<double> fv(n.size());
   for (std::size_t k = 0; k < n.size(); ++k) fv[k] = 4.0 * kPi / (n[k] * alpha[k]);
-  return TransmissionSurfaceModel(PiecewiseLinear(n, std::move(alpha), "alpha(n)"),
-                                  PiecewiseLinear(n, std::move(fv), "f_v(n)"), 3.0, 20.0, 0.4, e_tolerance, 2.0);
+  return TransmissionSurfaceModel(PiecewiseLinear(n, std::move(alpha), "alpha(n)"), PiecewiseLinear(n, std::move(fv), "f_v(n)"), 3.0, 20.0,
+                                  0.4, e_tolerance, 2.0);
 }
 
-double TransmissionSurfaceModel::clamp_n(int n) const {
-  return std::clamp(static_cast<double>(n), n_min_, n_max_);
-}
+double TransmissionSurfaceModel::clamp_n(int n) const { return std::clamp(static_cast<double>(n), n_min_, n_max_); }
 double TransmissionSurfaceModel::alpha(int n) const { return alpha_.extrapolated(clamp_n(n)); }
 double TransmissionSurfaceModel::volume_fraction_table(int n) const { return fv_.extrapolated(clamp_n(n)); }
 double TransmissionSurfaceModel::eccentricity_factor(double e) const {
@@ -290,12 +286,9 @@ double TransmissionSurfaceModel::surface(int n, double e, double r_m) const {
   detail::require_positive("particle radius r [m]", r_m);
   return alpha(n) * r_m * r_m / eccentricity_factor(e);
 }
-double TransmissionSurfaceModel::volume_fraction(int n, double e) const {
-  return eccentricity_factor(e) * volume_fraction_table(n);
-}
+double TransmissionSurfaceModel::volume_fraction(int n, double e) const { return eccentricity_factor(e) * volume_fraction_table(n); }
 
-std::vector<int> coordination_numbers(std::size_t nodes, std::span<const Index> edge_a,
-                                      std::span<const Index> edge_b) {
+std::vector<int> coordination_numbers(std::size_t nodes, std::span<const Index> edge_a, std::span<const Index> edge_b) {
   check_edges(edge_a, edge_b, nodes);
   std::vector<int> n(nodes, 0);
   for (std::size_t k = 0; k < edge_a.size(); ++k) {
@@ -305,11 +298,11 @@ std::vector<int> coordination_numbers(std::size_t nodes, std::span<const Index> 
   return n;
 }
 
-std::vector<double> eccentricities(std::span<const Vec3> positions_m, std::span<const double> radii_m,
-                                   std::span<const Index> edge_a, std::span<const Index> edge_b) {
+std::vector<double> eccentricities(std::span<const Vec3> positions_m, std::span<const double> radii_m, std::span<const Index> edge_a,
+                                   std::span<const Index> edge_b) {
   if (positions_m.size() != radii_m.size())
-    throw ConfigError("", "eccentricities: " + std::to_string(positions_m.size()) + " positions but " +
-                              std::to_string(radii_m.size()) + " radii");
+    throw ConfigError(
+        "", "eccentricities: " + std::to_string(positions_m.size()) + " positions but " + std::to_string(radii_m.size()) + " radii");
   check_edges(edge_a, edge_b, positions_m.size());
   for (const double r : radii_m) detail::require_positive("particle radius [m]", r);
   std::vector<Vec3> sum(positions_m.size(), Vec3::Zero());
@@ -324,18 +317,16 @@ std::vector<double> eccentricities(std::span<const Vec3> positions_m, std::span<
   std::vector<double> e(positions_m.size(), 0.0);
   for (std::size_t i = 0; i < e.size(); ++i) {
     if (count[i] == 0) continue;
-    if (!positions_m[i].allFinite()) throw ConfigError("", "eccentricities: position " + std::to_string(i) +
-                                                               " is not finite");
+    if (!positions_m[i].allFinite()) throw ConfigError("", "eccentricities: position " + std::to_string(i) + " is not finite");
     e[i] = (sum[i] / count[i] - positions_m[i]).norm() / radii_m[i];
-    if (!std::isfinite(e[i])) throw ConfigError("", "eccentricities: a neighbour of node " + std::to_string(i) +
-                                                        " has a non-finite position");
+    if (!std::isfinite(e[i]))
+      throw ConfigError("", "eccentricities: a neighbour of node " + std::to_string(i) + " has a non-finite position");
   }
   return e;
 }
 
 std::vector<double> transmission_surfaces(const TransmissionSurfaceModel& model, std::span<const Vec3> positions_m,
-                                          std::span<const double> radii_m, std::span<const Index> edge_a,
-                                          std::span<const Index> edge_b) {
+                                          std::span<const double> radii_m, std::span<const Index> edge_a, std::span<const Index> edge_b) {
   const std::vector<double> e = eccentricities(positions_m, radii_m, edge_a, edge_b);
   const std::vector<int> n = coordination_numbers(positions_m.size(), edge_a, edge_b);
   std::vector<double> s(e.size());
@@ -360,9 +351,8 @@ double conductivity(const ConductivityLaw& law, double t_K) {
     if (!std::isfinite(lin->beta_per_K)) detail::invalid("resistivity coefficient beta [1/K]", "finite", lin->beta_per_K);
     const double denom = 1.0 + lin->beta_per_K * (t_K - lin->t_ref_K);
     if (!(denom > 0.0))
-      throw ConfigError("", "linear resistivity law: 1 + beta (T - T_ref) = " + fmt(denom) + " <= 0 at T = " +
-                                fmt(t_K) + " K (beta = " + fmt(lin->beta_per_K) + " 1/K, T_ref = " +
-                                fmt(lin->t_ref_K) + " K): outside the law's range");
+      throw ConfigError("", "linear resistivity law: 1 + beta (T - T_ref) = " + fmt(denom) + " <= 0 at T = " + fmt(t_K) + " K (beta = " +
+                                fmt(lin->beta_per_K) + " 1/K, T_ref = " + fmt(lin->t_ref_K) + " K): outside the law's range");
     return lin->kappa_ref_S_per_m / denom;
   }
   return std::get<ConductivityTable>(law)(t_K);

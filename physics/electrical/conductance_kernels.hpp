@@ -88,8 +88,10 @@ inline double series_conductance(std::span<const double> g_S) {
   bool open = false;
   for (const double g : g_S) {
     if (!(g >= 0.0)) detail::invalid("conductance [S]", ">= 0 (+inf allowed)", g);
-    if (g == 0.0) open = true;
-    else if (!std::isinf(g)) r += 1.0 / g;
+    if (g == 0.0)
+      open = true;
+    else if (!std::isinf(g))
+      r += 1.0 / g;
   }
   if (open) return 0.0;
   return r > 0.0 ? 1.0 / r : kInf;
@@ -175,9 +177,9 @@ double fe_hemisphere_normalised(double a_over_r);
 struct HemisphereLaw {
   enum class Form { Linear, FeTable };
   Form form = Form::Linear;
-  double c1 = 1.15;                  ///< slope of Eq. (19) [-] (Linear only)
-  double c0 = -0.08;                 ///< intercept of Eq. (19) [-] (Linear only)
-  double floor_holm_fraction = 0.01; ///< phi in (0, 1]: K_i >= phi 4 kappa a [-]
+  double c1 = 1.15;                   ///< slope of Eq. (19) [-] (Linear only)
+  double c0 = -0.08;                  ///< intercept of Eq. (19) [-] (Linear only)
+  double floor_holm_fraction = 0.01;  ///< phi in (0, 1]: K_i >= phi 4 kappa a [-]
 
   static HemisphereLaw reading_a() { return {Form::Linear, 1.15, -0.08, 0.01}; }
   static HemisphereLaw reading_b() { return {Form::Linear, 1.15, 0.08, 0.01}; }
@@ -206,8 +208,7 @@ struct GrainBoundaryLayer {
 /// Only eps/delta_gb matters (a specific contact conductance h_c = eps kappa/delta_gb [S/m^2]).
 /// This delta_gb is the mesoscale porous band (~0.1-0.4 um), NOT the atomic grain-boundary width
 /// of the sintering viscosity (§7.10).
-inline double grain_boundary_layer_conductance(double kappa_S_per_m, double a_m, double epsilon,
-                                               double thickness_m) {
+inline double grain_boundary_layer_conductance(double kappa_S_per_m, double a_m, double epsilon, double thickness_m) {
   detail::require_positive("conductivity kappa [S/m]", kappa_S_per_m);
   detail::require_nonnegative("neck radius a [m]", a_m);
   if (!(epsilon > 0.0 && epsilon <= 1.0)) detail::invalid("grain-boundary factor epsilon [-]", "in (0, 1]", epsilon);
@@ -223,8 +224,8 @@ inline double grain_boundary_layer_conductance(double kappa_S_per_m, double a_m,
 /// layer split into two half-layers of thickness delta_gb/2, one in each material (own choice).
 /// Radii must be finite (a wall has no hemisphere; give the wall side K = +inf through
 /// series_conductance instead). a = 0 gives 0.
-double sintered_neck_conductance(const HemisphereLaw& law, const GrainBoundaryLayer& layer, double kappa_i_S_per_m,
-                                 double kappa_j_S_per_m, double r_i_m, double r_j_m, double a_m);
+double sintered_neck_conductance(const HemisphereLaw& law, const GrainBoundaryLayer& layer, double kappa_i_S_per_m, double kappa_j_S_per_m,
+                                 double r_i_m, double r_j_m, double a_m);
 
 /// Coble neck radius [m] (seed 000 Eq. 21): a = sqrt(2 r* h), r* = 2 r_i r_j/(r_i + r_j)
 /// (= the Bouvard-McMeeking a^2 = 4 R* h). r_j = +inf is a plane (r* = 2 r_i). h <= 0 gives 0.
@@ -261,8 +262,7 @@ double cv_neck_radius(double r_i_m, double r_j_m, double overlap_m);
 /// r_i = +inf, e.g. a wall node). Edges are (edge_a[k], edge_b[k]) with neck radius a[k] >= 0;
 /// an edge listed twice counts twice. node_radius_m has one entry per node (> 0, +inf allowed).
 std::vector<double> grain_boundary_fraction_factors(std::span<const Index> edge_a, std::span<const Index> edge_b,
-                                                    std::span<const double> neck_radius_m,
-                                                    std::span<const double> node_radius_m);
+                                                    std::span<const double> neck_radius_m, std::span<const double> node_radius_m);
 
 /// Neck radii corrected for the grain-boundary fraction (seed 000 Eqs. 22-25 and §7.9), per edge:
 ///   a_corr = min(min(alpha_a, alpha_b) a, r_a, r_b).
@@ -270,8 +270,7 @@ std::vector<double> grain_boundary_fraction_factors(std::span<const Index> edge_
 /// the smaller particle. Particles whose necks already satisfy (23) keep them unchanged unless a
 /// neighbour is corrected or the neck exceeds r_min. Deterministic (edge order, no threads).
 std::vector<double> corrected_neck_radii(std::span<const Index> edge_a, std::span<const Index> edge_b,
-                                         std::span<const double> neck_radius_m,
-                                         std::span<const double> node_radius_m);
+                                         std::span<const double> neck_radius_m, std::span<const double> node_radius_m);
 
 // ---------------------------------------------------------------------------------------------
 // 3. Transmission surface (seed 001)
@@ -312,8 +311,8 @@ class TransmissionSurfaceModel {
   /// extrapolation of the end segments inside that range). Throws ConfigError unless
   /// n_min <= n_max, alpha > 0 and f_v > 0 over [n_min, n_max], e_face > 0, tol >= 0,
   /// eccentric_factor >= 1.
-  TransmissionSurfaceModel(PiecewiseLinear alpha, PiecewiseLinear volume_fraction, double n_min, double n_max,
-                           double e_face, double e_tolerance, double eccentric_factor);
+  TransmissionSurfaceModel(PiecewiseLinear alpha, PiecewiseLinear volume_fraction, double n_min, double n_max, double e_face,
+                           double e_tolerance, double eccentric_factor);
   /// The note's default table (above), e_face = 0.4, tol = 1e-9, factor 2.
   static TransmissionSurfaceModel platonic(double e_tolerance = 1e-9);
 
@@ -336,21 +335,19 @@ class TransmissionSurfaceModel {
 
 /// Coordination number n_i of every node: the number of edges (edge_a[k], edge_b[k]) that touch
 /// it (an edge listed twice counts twice). Nodes are 0..nodes-1.
-std::vector<int> coordination_numbers(std::size_t nodes, std::span<const Index> edge_a,
-                                      std::span<const Index> edge_b);
+std::vector<int> coordination_numbers(std::size_t nodes, std::span<const Index> edge_a, std::span<const Index> edge_b);
 
 /// Eccentricity of every node (seed 001 Eq. 2, rebuilt in cohesive-joule-torsion.md §3.1):
 ///   e_i = | (1/n_i) sum_j x_j - x_i | / r_i   over the neighbours j of the edge list;
 /// 0 for a node without neighbours. positions [m] and radii [m] (> 0, finite) one per node.
 /// Simple cubic lattice: interior 0, face 0.4, edge 0.707, corner 1.155.
-std::vector<double> eccentricities(std::span<const Vec3> positions_m, std::span<const double> radii_m,
-                                   std::span<const Index> edge_a, std::span<const Index> edge_b);
+std::vector<double> eccentricities(std::span<const Vec3> positions_m, std::span<const double> radii_m, std::span<const Index> edge_a,
+                                   std::span<const Index> edge_b);
 
 /// S_i [m^2] of every node from the edge list (coordination and eccentricity from the same
 /// edges), Eq. (3).
 std::vector<double> transmission_surfaces(const TransmissionSurfaceModel& model, std::span<const Vec3> positions_m,
-                                          std::span<const double> radii_m, std::span<const Index> edge_a,
-                                          std::span<const Index> edge_b);
+                                          std::span<const double> radii_m, std::span<const Index> edge_a, std::span<const Index> edge_b);
 
 /// Branch resistance of seed 001 [Ohm] (Eqs. 4-5): R_ij = rho_e l_ij / sqrt(S_i S_j),
 /// l_ij = centre distance [m] (> 0), S [m^2] (> 0), rho_e bulk resistivity [Ohm m] (> 0).

@@ -21,8 +21,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 namespace percolation {
 
-Metrics metrics(std::size_t n, std::span<const Index> a, std::span<const Index> b, std::span<const Index> high,
-                std::span<const Index> low) {
+Metrics metrics(std::size_t n, std::span<const Index> a, std::span<const Index> b, std::span<const Index> high, std::span<const Index> low) {
   Metrics m;
   if (n == 0) return m;
   std::set<std::pair<Index, Index>> distinct;
@@ -38,7 +37,10 @@ Metrics metrics(std::size_t n, std::span<const Index> a, std::span<const Index> 
   std::vector<char> at_high(n, 0), spans(n, 0);
   for (Index v : high) at_high[root[v]] = 1;
   for (Index v : low)
-    if (at_high[root[v]] && !spans[root[v]]) { spans[root[v]] = 1; ++m.spanning_clusters; }
+    if (at_high[root[v]] && !spans[root[v]]) {
+      spans[root[v]] = 1;
+      ++m.spanning_clusters;
+    }
   m.spanning = m.spanning_clusters > 0;
   return m;
 }
@@ -50,14 +52,20 @@ std::vector<double> cluster_resistances(std::size_t n, std::span<const Index> a,
   const std::vector<double> g(a.size(), g_unit);
   const std::vector<Index> root = component_roots(n, a, b, g);
   std::vector<char> is_high(n, 0), at_high(n, 0), spans(n, 0);
-  for (Index v : high) { is_high[v] = 1; at_high[root[v]] = 1; }
+  for (Index v : high) {
+    is_high[v] = 1;
+    at_high[root[v]] = 1;
+  }
   for (Index v : low)
     if (at_high[root[v]]) spans[root[v]] = 1;
   // Keep only the edges of spanning clusters: the rest carries no current, and a cluster that
   // touches a single electrode would only add unknowns.
   std::vector<Index> ea, eb;
   for (std::size_t e = 0; e < a.size(); ++e)
-    if (spans[root[a[e]]] && a[e] != b[e]) { ea.push_back(a[e]); eb.push_back(b[e]); }
+    if (spans[root[a[e]]] && a[e] != b[e]) {
+      ea.push_back(a[e]);
+      eb.push_back(b[e]);
+    }
   if (ea.empty()) return out;
   const std::vector<double> ge(ea.size(), g_unit);
   LaplacianProblem p;
@@ -92,7 +100,9 @@ ParamSpec<ContactPercolation::Params> ContactPercolation::spec() {
                  "resistance over spanning clusters");
   s.add("high", &P::high).doc("electrode particle set on one face (e.g. touching_wall of the cpc_fillers wall xlo)");
   s.add("low", &P::low).doc("electrode particle set on the opposite face");
-  s.add("touch_tolerance", &P::touch_tolerance).unit("m").nonnegative()
+  s.add("touch_tolerance", &P::touch_tolerance)
+      .unit("m")
+      .nonnegative()
       .doc("pairs with a surface gap up to this touch (paper: 0.1 % of D = 2e-3 R); use the electrical_network's value");
   s.add("length", &P::length).unit("m").nonnegative().doc("L of rho = R_eq L; 0: the box edge recorded by cpc_fillers");
   s.add("cluster_resistances", &P::cluster_resistances)
@@ -116,8 +126,7 @@ Clock percolation::geometry_event_clock(const State& s) {
 double percolation::box_length(const State& s, double given, const std::string& module) {
   if (given > 0.0) return given;
   const auto it = s.marks.find("cpc_fillers/box_length");
-  if (it == s.marks.end())
-    throw SetupError(module + ": `length` is 0 and no cpc_fillers stage recorded a box length; give length [m]");
+  if (it == s.marks.end()) throw SetupError(module + ": `length` is 0 and no cpc_fillers stage recorded a box length; give length [m]");
   return it->second;
 }
 
@@ -147,20 +156,28 @@ void ContactPercolation::advance(State& s, const StepInfo&) {
       mean = parallel = kInf;
     } else {
       double sum = 0.0, inv = 0.0;
-      for (double r : rk) { sum += r; inv += r > 0.0 ? 1.0 / r : kInf; }
+      for (double r : rk) {
+        sum += r;
+        inv += r > 0.0 ? 1.0 / r : kInf;
+      }
       mean = sum / static_cast<double>(rk.size());
       parallel = 1.0 / inv;
     }
   }
-  held_ = {m.spanning ? 1.0 : 0.0, static_cast<double>(m.spanning_clusters), m.largest_cluster_fraction, m.coordination,
-           static_cast<double>(m.touching_pairs), mean, parallel};
+  held_ = {m.spanning ? 1.0 : 0.0,
+           static_cast<double>(m.spanning_clusters),
+           m.largest_cluster_fraction,
+           m.coordination,
+           static_cast<double>(m.touching_pairs),
+           mean,
+           parallel};
 }
 
 std::vector<std::string> ContactPercolation::columns() const {
-  std::vector<std::string> c = {"contact_percolation_spanning",      "contact_percolation_spanning_clusters",
-                                "contact_percolation_largest_cluster_fraction", "contact_percolation_coordination",
-                                "contact_percolation_touching_pairs", "contact_percolation_resistance",
-                                "contact_percolation_resistivity",    "contact_percolation_conductivity"};
+  std::vector<std::string> c = {
+      "contact_percolation_spanning",     "contact_percolation_spanning_clusters", "contact_percolation_largest_cluster_fraction",
+      "contact_percolation_coordination", "contact_percolation_touching_pairs",    "contact_percolation_resistance",
+      "contact_percolation_resistivity",  "contact_percolation_conductivity"};
   if (p_.cluster_resistances)
     for (const char* x : {"contact_percolation_resistance_cluster_mean", "contact_percolation_resistivity_cluster_mean",
                           "contact_percolation_resistance_parallel"})
@@ -185,7 +202,8 @@ void ContactPercolation::visit(Archive& ar, const std::string& prefix) {
   std::vector<double> held = held_;
   ar.visit(prefix + "/held", held);
   if (ar.reading()) {
-    if (held.size() != 7) throw SetupError("checkpoint contact_percolation state has " + std::to_string(held.size()) + " values, expected 7");
+    if (held.size() != 7)
+      throw SetupError("checkpoint contact_percolation state has " + std::to_string(held.size()) + " values, expected 7");
     held_ = held;
   }
   solver_.visit(ar, prefix + "/solver");

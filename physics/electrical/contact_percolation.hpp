@@ -54,8 +54,7 @@ struct Metrics {
 };
 /// Connectivity of n nodes joined by the edges (a[e], b[e]) (self-loops and repeated pairs are
 /// counted once), with electrode node sets high and low (a node in both counts for both).
-Metrics metrics(std::size_t n, std::span<const Index> a, std::span<const Index> b, std::span<const Index> high,
-                std::span<const Index> low);
+Metrics metrics(std::size_t n, std::span<const Index> a, std::span<const Index> b, std::span<const Index> high, std::span<const Index> low);
 
 /// Resistance [Ohm] of every spanning cluster (in order of their smallest node) of the network
 /// of edges (a[e], b[e]) with conductance g_unit [S] each, `high` at 1 V and `low` at 0 V:
@@ -77,8 +76,8 @@ class ContactPercolation final : public Module {
   struct Params {
     std::string high = "x_lo";
     std::string low = "x_hi";
-    double touch_tolerance = 0.0;   ///< [m]
-    double length = 0.0;            ///< [m] 0: State::marks["cpc_fillers/box_length"]
+    double touch_tolerance = 0.0;  ///< [m]
+    double length = 0.0;           ///< [m] 0: State::marks["cpc_fillers/box_length"]
     bool cluster_resistances = false;
     double unit_conductance = 1.0;  ///< [S] (cluster_resistances)
   };

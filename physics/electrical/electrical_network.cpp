@@ -37,7 +37,9 @@ std::vector<Index> electrode_nodes(const State& s, const InteractionGraph& g, co
   const auto& f = s.particles.fields.data("set/" + e);
   for (std::size_t i = 0; i < f.size(); ++i)
     if (f[i] > 0.5) out.push_back(static_cast<Index>(i));
-  if (out.empty() && !allow_empty) throw SetupError("electrical_network: electrode set '" + e + "' holds no particle (empty_electrode: \"open\" reads it as an open circuit)");
+  if (out.empty() && !allow_empty)
+    throw SetupError("electrical_network: electrode set '" + e +
+                     "' holds no particle (empty_electrode: \"open\" reads it as an open circuit)");
   return out;
 }
 
@@ -61,7 +63,12 @@ struct ResistorNet {
   std::vector<double> share;  ///< share of the resistor's dissipation that heats heat_a (the rest heats heat_b)
   std::vector<Index> high, low;
   void add(Index x, Index y, double gxy, Index ha, Index hb, double share_a = 0.5) {
-    a.push_back(x); b.push_back(y); g.push_back(gxy); heat_a.push_back(ha); heat_b.push_back(hb); share.push_back(share_a);
+    a.push_back(x);
+    b.push_back(y);
+    g.push_back(gxy);
+    heat_a.push_back(ha);
+    heat_b.push_back(hb);
+    share.push_back(share_a);
   }
 };
 
@@ -107,72 +114,150 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
   using P = Params;
   ParamSpec<P> s("electrical_network", "module",
                  "steady DC resistor network on the interaction graph: potentials, currents, resistance, effective conductivity");
-  s.add("topology", &P::topology).choices({"particle_centred", "contact_centred", "sphere_element"})
-      .doc("nodes at particle centres; at contact points with resistors through each particle between its contacts (seed 003); or (sintered_neck) at the necks, each particle a multi-terminal sphere element whose necks share its volume (physics/electrical/sphere_element.hpp)");
-  s.add("element_cap", &P::element_cap).choices({"equal_area", "rim"})
-      .doc("sphere_element: a neck's cap on the sphere has the neck's area (default) or its rim radius (physics/electrical/sphere_element.hpp)");
+  s.add("topology", &P::topology)
+      .choices({"particle_centred", "contact_centred", "sphere_element"})
+      .doc(
+          "nodes at particle centres; at contact points with resistors through each particle between its contacts (seed 003); or "
+          "(sintered_neck) at the necks, each particle a multi-terminal sphere element whose necks share its volume "
+          "(physics/electrical/sphere_element.hpp)");
+  s.add("element_cap", &P::element_cap)
+      .choices({"equal_area", "rim"})
+      .doc(
+          "sphere_element: a neck's cap on the sphere has the neck's area (default) or its rim radius "
+          "(physics/electrical/sphere_element.hpp)");
   s.add("chord_scaling", &P::chord_scaling).doc("contact_centred: scale each intra-particle resistor by chord / (path through the centre)");
-  s.add("model", &P::model).choices({"holm", "sintered_neck", "transmission_surface", "touching", "tunnelling"})
+  s.add("model", &P::model)
+      .choices({"holm", "sintered_neck", "transmission_surface", "touching", "tunnelling"})
       .doc("branch conductance model (physics/electrical/conductance_kernels.hpp)");
   s.add("conductivity", &P::conductivity).unit("S/m").positive().doc("bulk conductivity kappa at reference_temperature");
-  s.add("temperature", &P::temperature).unit("K").positive().doc("temperature at which the conductivity is evaluated (measurements of sintered samples are made cold)");
+  s.add("temperature", &P::temperature)
+      .unit("K")
+      .positive()
+      .doc("temperature at which the conductivity is evaluated (measurements of sintered samples are made cold)");
   s.add("reference_temperature", &P::reference_temperature).unit("K").positive().doc("T_ref of `conductivity`");
-  s.add("resistivity_coefficient", &P::resistivity_coefficient).unit("1/K").doc("beta of the linear resistivity law kappa(T) = kappa / (1 + beta (T - T_ref)); 0: constant");
-  s.add("conductivity_table_temperature", &P::conductivity_table_temperature).unit("K")
-      .doc("tabulated kappa(T): temperatures, strictly increasing (>= 2 points; empty: the linear law). Replaces conductivity / resistivity_coefficient");
-  s.add("conductivity_table_values", &P::conductivity_table_values).unit("S/m")
+  s.add("resistivity_coefficient", &P::resistivity_coefficient)
+      .unit("1/K")
+      .doc("beta of the linear resistivity law kappa(T) = kappa / (1 + beta (T - T_ref)); 0: constant");
+  s.add("conductivity_table_temperature", &P::conductivity_table_temperature)
+      .unit("K")
+      .doc(
+          "tabulated kappa(T): temperatures, strictly increasing (>= 2 points; empty: the linear law). Replaces conductivity / "
+          "resistivity_coefficient");
+  s.add("conductivity_table_values", &P::conductivity_table_values)
+      .unit("S/m")
       .doc("tabulated kappa(T): conductivities at conductivity_table_temperature (piecewise linear, constant beyond the ends)");
   s.add("temperature_field", &P::temperature_field)
-      .doc("evaluate kappa(T) per branch at the mean of its particles' `temperature` field (written by heat_conduction or temperature_history) instead of at `temperature`");
-  s.add("resolve_temperature_change", &P::resolve_temperature_change).unit("K").positive()
+      .doc(
+          "evaluate kappa(T) per branch at the mean of its particles' `temperature` field (written by heat_conduction or "
+          "temperature_history) instead of at `temperature`");
+  s.add("resolve_temperature_change", &P::resolve_temperature_change)
+      .unit("K")
+      .positive()
       .doc("default clock with temperature_field: re-solve when a particle's temperature changed by more than this since the last solve");
-  s.add("resolve_every", &P::resolve_every).min(0).doc("default clock: also re-solve every this many mechanical steps (0: only on the events)");
+  s.add("resolve_every", &P::resolve_every)
+      .min(0)
+      .doc("default clock: also re-solve every this many mechanical steps (0: only on the events)");
   s.add("voltage_signal", &P::voltage_signal)
       .doc("take the voltage from this signal at every solve (written by a controller, e.g. temperature_controller); \"\" = `voltage`");
   s.add("high", &P::high).doc("electrode held at `voltage`: a particle-set name or \"wall:<name>\"");
   s.add("low", &P::low).doc("electrode held at 0 V: a particle-set name or \"wall:<name>\"");
-  s.add("empty_electrode", &P::empty_electrode).choices({"error", "open"})
+  s.add("empty_electrode", &P::empty_electrode)
+      .choices({"error", "open"})
       .doc("an electrode set that holds no particle: a set-up error, or an open circuit (R = +inf; percolation ensembles)");
   s.add("voltage", &P::voltage).unit("V").positive().doc("potential difference between the electrodes");
-  s.add("current", &P::current).unit("A").nonnegative().doc("> 0: inject this current at `high` (one equipotential electrode) instead of holding the voltage; `low` stays at 0 V");
-  s.add("length", &P::length).unit("m").nonnegative().doc("L of kappa_eff = I L / (dV A); 0: distance between the electrodes' particle centroids");
-  s.add("length_mode", &P::length_mode).choices({"electrode_centroids", "sample_height"})
-      .doc("L when length = 0: the distance of the electrodes' particle centroids, or the sample height (Eq. 28 as "
-           "written: the extent of the particles, surfaces included, along the axis from the low to the high electrode)");
-  s.add("area", &P::area).unit("m^2").nonnegative().doc("A of kappa_eff; 0: cross-section of the first cylinder wall (else kappa_eff is not reported)");
-  s.add("branches", &P::branches).choices({"all", "bonds"})
+  s.add("current", &P::current)
+      .unit("A")
+      .nonnegative()
+      .doc("> 0: inject this current at `high` (one equipotential electrode) instead of holding the voltage; `low` stays at 0 V");
+  s.add("length", &P::length)
+      .unit("m")
+      .nonnegative()
+      .doc("L of kappa_eff = I L / (dV A); 0: distance between the electrodes' particle centroids");
+  s.add("length_mode", &P::length_mode)
+      .choices({"electrode_centroids", "sample_height"})
+      .doc(
+          "L when length = 0: the distance of the electrodes' particle centroids, or the sample height (Eq. 28 as "
+          "written: the extent of the particles, surfaces included, along the axis from the low to the high electrode)");
+  s.add("area", &P::area)
+      .unit("m^2")
+      .nonnegative()
+      .doc("A of kappa_eff; 0: cross-section of the first cylinder wall (else kappa_eff is not reported)");
+  s.add("branches", &P::branches)
+      .choices({"all", "bonds"})
       .doc("all: contacts, necks and intact bonds conduct; bonds: only intact bonds (cohesive-beam solids, seed 001)");
-  s.add("solver", &P::solver).choices({"direct", "cg_ic", "cg_jacobi", "amg", "pseudo_transient"})
-      .doc("sparse Cholesky; CG with incomplete-Cholesky / Jacobi preconditioner; hypre BoomerAMG-PCG (all iterative ones warm-started); seed 000's pseudo-transient iteration");
+  s.add("solver", &P::solver)
+      .choices({"direct", "cg_ic", "cg_jacobi", "amg", "pseudo_transient"})
+      .doc(
+          "sparse Cholesky; CG with incomplete-Cholesky / Jacobi preconditioner; hypre BoomerAMG-PCG (all iterative ones warm-started); "
+          "seed 000's pseudo-transient iteration");
   s.add("tolerance", &P::tolerance).unit("1").positive().doc("CG / AMG relative residual");
-  s.add("amg_spread_min_rows", &P::amg_spread_min_rows).unit("1").positive()
-      .doc("amg on several MPI ranks: outside sweep stages, spread solves of at least this many unknowns over the ranks (README, network solves across MPI ranks)");
+  s.add("amg_spread_min_rows", &P::amg_spread_min_rows)
+      .unit("1")
+      .positive()
+      .doc(
+          "amg on several MPI ranks: outside sweep stages, spread solves of at least this many unknowns over the ranks (README, network "
+          "solves across MPI ranks)");
   s.add("specific_capacity", &P::specific_capacity).unit("F/kg").positive().doc("pseudo_transient: c in C_i = m_i c (numerical only)");
-  s.add("pseudo_dt", &P::pseudo_dt).unit("s").nonnegative().doc("pseudo_transient: pseudo time step (0: pseudo_dt_fraction x the true limit 2/lambda_max)");
+  s.add("pseudo_dt", &P::pseudo_dt)
+      .unit("s")
+      .nonnegative()
+      .doc("pseudo_transient: pseudo time step (0: pseudo_dt_fraction x the true limit 2/lambda_max)");
   s.add("pseudo_dt_fraction", &P::pseudo_dt_fraction).unit("1").positive().doc("pseudo_transient: fraction of the true stability limit");
   s.add("beta", &P::beta).unit("1").positive().doc("pseudo_transient: stop when the change indicator (Eq. 14) falls below beta");
-  s.add("indicator", &P::indicator).choices({"range", "per_node"}).doc("pseudo_transient: Eq. 14 per node as printed, or normalised by the voltage (note §7.6)");
-  s.add("allow_unstable", &P::allow_unstable).doc("pseudo_transient: run a step above the true limit (divergence is then detected and stops the run)");
-  s.add("resolve_distance", &P::resolve_distance).unit("m").nonnegative().doc("default clock: re-solve when a particle moved this far (0: 0.05 x smallest radius)");
-  s.add("contact_radius", &P::contact_radius).choices({"hertz", "geometric"}).doc("holm: a = sqrt(R* delta) (Hertz) or the lens radius of the overlap");
-  s.add("neck", &P::neck).choices({"law", "coble", "cv"}).doc("sintered_neck: neck radius from the contact law's neck_radius column (else Coble), or Coble / constant volume from the overlap");
-  s.add("hemisphere", &P::hemisphere).choices({"reading_a", "reading_b", "reading_c", "fe_table"}).doc("sintered_neck: hemisphere law of Eq. 19 (see conductance_kernels.hpp)");
+  s.add("indicator", &P::indicator)
+      .choices({"range", "per_node"})
+      .doc("pseudo_transient: Eq. 14 per node as printed, or normalised by the voltage (note §7.6)");
+  s.add("allow_unstable", &P::allow_unstable)
+      .doc("pseudo_transient: run a step above the true limit (divergence is then detected and stops the run)");
+  s.add("resolve_distance", &P::resolve_distance)
+      .unit("m")
+      .nonnegative()
+      .doc("default clock: re-solve when a particle moved this far (0: 0.05 x smallest radius)");
+  s.add("contact_radius", &P::contact_radius)
+      .choices({"hertz", "geometric"})
+      .doc("holm: a = sqrt(R* delta) (Hertz) or the lens radius of the overlap");
+  s.add("neck", &P::neck)
+      .choices({"law", "coble", "cv"})
+      .doc(
+          "sintered_neck: neck radius from the contact law's neck_radius column (else Coble), or Coble / constant volume from the overlap");
+  s.add("hemisphere", &P::hemisphere)
+      .choices({"reading_a", "reading_b", "reading_c", "fe_table"})
+      .doc("sintered_neck: hemisphere law of Eq. 19 (see conductance_kernels.hpp)");
   s.add("gb_epsilon", &P::gb_epsilon).unit("1").positive().doc("sintered_neck: conductivity ratio of the grain-boundary layer (Eq. 26)");
-  s.add("gb_thickness", &P::gb_thickness).unit("m").nonnegative().doc("sintered_neck: grain-boundary layer thickness delta_gb (0: no layer)");
+  s.add("gb_thickness", &P::gb_thickness)
+      .unit("m")
+      .nonnegative()
+      .doc("sintered_neck: grain-boundary layer thickness delta_gb (0: no layer)");
   s.add("gbf_correction", &P::gbf_correction).doc("sintered_neck: grain-boundary-fraction correction of the necks (Eq. 22-25)");
   s.add("resistivity", &P::resistivity).unit("Ohm m").nonnegative().doc("transmission_surface: rho_e (0: 1/conductivity)");
-  s.add("alpha_constant", &P::alpha_constant).unit("1").nonnegative().doc("transmission_surface: hold alpha fixed and f(e) = 1 (0: the alpha(n), f(e) model)");
+  s.add("alpha_constant", &P::alpha_constant)
+      .unit("1")
+      .nonnegative()
+      .doc("transmission_surface: hold alpha fixed and f(e) = 1 (0: the alpha(n), f(e) model)");
   s.add("unit_conductance", &P::unit_conductance).unit("S").positive().doc("touching / tunnelling: conductance of a touching pair");
-  s.add("touch_tolerance", &P::touch_tolerance).unit("m").nonnegative().doc("touching, transmission_surface: pairs with a gap up to this count as touching branches");
-  s.add("touch_tolerance_relative", &P::touch_tolerance_relative).unit("1").nonnegative()
-      .doc("touching, transmission_surface: the gap tolerance as a fraction of the mean particle radius at the stage start (> 0 overrides touch_tolerance; kept in the checkpoint)");
+  s.add("touch_tolerance", &P::touch_tolerance)
+      .unit("m")
+      .nonnegative()
+      .doc("touching, transmission_surface: pairs with a gap up to this count as touching branches");
+  s.add("touch_tolerance_relative", &P::touch_tolerance_relative)
+      .unit("1")
+      .nonnegative()
+      .doc(
+          "touching, transmission_surface: the gap tolerance as a fraction of the mean particle radius at the stage start (> 0 overrides "
+          "touch_tolerance; kept in the checkpoint)");
   s.add("tunnel_g0", &P::tunnel_g0).unit("S").positive().doc("tunnelling: prefactor g0");
   s.add("tunnel_length", &P::tunnel_length).unit("m").positive().doc("tunnelling: decay length xi");
   s.add("tunnel_cutoff", &P::tunnel_cutoff).unit("m").nonnegative().doc("tunnelling: largest gap that conducts");
   s.add("displacement_field", &P::displacement_field)
-      .doc("touching, tunnelling: 3-component particle field of displacements [m] added (linearised) to the pair gaps, e.g. ptc_displacement of ptc_self_heating; \"\" = none");
-  s.add("open_conductance", &P::open_conductance).unit("S").nonnegative()
-      .doc("touching: conductance of a pair of the graph whose gap after the displacement exceeds touch_tolerance (an opened contact's polymer film); 0 = none");
+      .doc(
+          "touching, tunnelling: 3-component particle field of displacements [m] added (linearised) to the pair gaps, e.g. "
+          "ptc_displacement of ptc_self_heating; \"\" = none");
+  s.add("open_conductance", &P::open_conductance)
+      .unit("S")
+      .nonnegative()
+      .doc(
+          "touching: conductance of a pair of the graph whose gap after the displacement exceeds touch_tolerance (an opened contact's "
+          "polymer film); 0 = none");
   return s;
 }
 
@@ -181,9 +266,8 @@ ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
   try {
     if (tabulated) {
       if (p.conductivity_table_temperature.size() != p.conductivity_table_values.size())
-        throw ConfigError("", "expected as many conductivities as temperatures, found " +
-                                  std::to_string(p.conductivity_table_values.size()) + " and " +
-                                  std::to_string(p.conductivity_table_temperature.size()));
+        throw ConfigError("", "expected as many conductivities as temperatures, found " + std::to_string(p.conductivity_table_values.size()) +
+                                  " and " + std::to_string(p.conductivity_table_temperature.size()));
       law_ = el::ConductivityTable(p.conductivity_table_temperature, p.conductivity_table_values);
     } else {
       law_ = el::LinearResistivityLaw{p.conductivity, p.resistivity_coefficient, p.reference_temperature};
@@ -194,9 +278,9 @@ ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
     throw ConfigError(tabulated ? "/conductivity_table_values" : "/resistivity_coefficient",
                       "kappa(T) at the evaluation temperature: " + why);
   }
-  branch_ = BranchModel{p.model, p.contact_radius, p.neck, p.hemisphere, p.gb_epsilon, p.gb_thickness, p.gbf_correction,
-                        p.alpha_constant, p.touch_tolerance, p.unit_conductance, p.tunnel_g0, p.tunnel_length, p.tunnel_cutoff,
-                        p.displacement_field, p.open_conductance};
+  branch_ = BranchModel{p.model,        p.contact_radius, p.neck,           p.hemisphere,         p.gb_epsilon,
+                        p.gb_thickness, p.gbf_correction, p.alpha_constant, p.touch_tolerance,    p.unit_conductance,
+                        p.tunnel_g0,    p.tunnel_length,  p.tunnel_cutoff,  p.displacement_field, p.open_conductance};
   if (!p.displacement_field.empty() && p.model != "touching" && p.model != "tunnelling")
     throw ConfigError("/displacement_field", "a displacement field needs model touching or tunnelling, found '" + p.model + "'");
   LaplacianOptions o;
@@ -236,9 +320,7 @@ void ElectricalNetwork::bind(State& s) {
   default_clock_ = Clock{};
   default_clock_.kind = Clock::Kind::OnEvent;
   default_clock_.trigger.bond_broke = true;
-  default_clock_.trigger.moved_beyond = p_.resolve_distance > 0.0 ? p_.resolve_distance
-                                        : std::isfinite(rmin)     ? 0.05 * rmin
-                                                                  : 1.0;
+  default_clock_.trigger.moved_beyond = p_.resolve_distance > 0.0 ? p_.resolve_distance : std::isfinite(rmin) ? 0.05 * rmin : 1.0;
   if (p_.temperature_field) {
     default_clock_.trigger.field = "temperature";
     default_clock_.trigger.field_change = p_.resolve_temperature_change;
@@ -314,9 +396,8 @@ BuiltNet particle_centred_net(const InteractionGraph& g, const std::vector<doubl
 /// is exactly the particle-centred network (star-mesh theorem); on a straight chain the
 /// factor is 1, so both topologies agree there. Electrode particles keep a centre node and
 /// their star.
-BuiltNet contact_centred_net(const State& s, const InteractionGraph& g, const std::vector<double>& G,
-                             const std::vector<double>& share, const std::vector<Index>& high, const std::vector<Index>& low,
-                             const Params& p) {
+BuiltNet contact_centred_net(const State& s, const InteractionGraph& g, const std::vector<double>& G, const std::vector<double>& share,
+                             const std::vector<Index>& high, const std::vector<Index>& low, const Params& p) {
   BuiltNet b;
   ResistorNet& net = b.net;
   b.centre.assign(g.nodes(), -1);
@@ -324,7 +405,10 @@ BuiltNet contact_centred_net(const State& s, const InteractionGraph& g, const st
   for (std::size_t e = 0; e < g.size(); ++e) {
     if (!(G[e] > 0.0)) continue;
     if (!std::isfinite(share[e]))
-      throw SetupError("electrical_network: the contact_centred topology needs a model with resistance inside the particles (holm, sintered_neck, transmission_surface), not '" + p.model + "'");
+      throw SetupError(
+          "electrical_network: the contact_centred topology needs a model with resistance inside the particles (holm, sintered_neck, "
+          "transmission_surface), not '" +
+          p.model + "'");
     const Index c = static_cast<Index>(net.nodes++);
     const double Ra = share[e] / G[e], Rb = (1.0 - share[e]) / G[e];
     b.star[g.a[e]].push_back({c, Ra > 0.0 ? 1.0 / Ra : kInf});
@@ -379,7 +463,8 @@ BuiltNet contact_centred_net(const State& s, const InteractionGraph& g, const st
 /// weight) for its mean potential.
 BuiltNet sphere_element_net(const State& s, const InteractionGraph& g, const BranchModel& m, const std::vector<double>& k_particle,
                             const std::vector<Index>& high, const std::vector<Index>& low, el::CapRule cap, double& negative) {
-  if (m.model != "sintered_neck") throw SetupError("electrical_network: the sphere_element topology needs model sintered_neck, not '" + m.model + "'");
+  if (m.model != "sintered_neck")
+    throw SetupError("electrical_network: the sphere_element topology needs model sintered_neck, not '" + m.model + "'");
   const auto& P = s.particles;
   const std::vector<double> a = sintered_neck_radii(m, s, g);
   BuiltNet b;
@@ -423,7 +508,8 @@ BuiltNet sphere_element_net(const State& s, const InteractionGraph& g, const Bra
     if (keeps[v]) {
       b.centre[v] = static_cast<Index>(net.nodes++);
       for (std::size_t k = 0; k < nv.size(); ++k)
-        net.add(b.centre[v], node[k], hemisphere_access_conductance(m, k_particle[v], r, a[nv[k]]), static_cast<Index>(v), static_cast<Index>(v));
+        net.add(b.centre[v], node[k], hemisphere_access_conductance(m, k_particle[v], r, a[nv[k]]), static_cast<Index>(v),
+                static_cast<Index>(v));
       continue;
     }
     const Eigen::MatrixXd K = el::sphere_patch_conductance(k_particle[v], r, u, alpha);
@@ -448,7 +534,8 @@ double applied_voltage(const State& s, const Params& p, Step step) {
     const auto it = s.marks.find("signal/" + p.voltage_signal);
     if (it != s.marks.end()) applied = it->second;
     if (!(applied >= 0.0) || !std::isfinite(applied))
-      throw PhysicsError(step, {}, "voltage", "electrical_network: the voltage signal '" + p.voltage_signal + "' is " + std::to_string(applied));
+      throw PhysicsError(step, {}, "voltage",
+                         "electrical_network: the voltage signal '" + p.voltage_signal + "' is " + std::to_string(applied));
   }
   return applied;
 }
@@ -464,8 +551,7 @@ struct NetSolution {
   Index super = 0;
   double unit_resistance = kInf;
 };
-NetSolution solve_net(const State& s, const ResistorNet& net, const Params& p, double applied, Step step,
-                      LaplacianSolver& solver) {
+NetSolution solve_net(const State& s, const ResistorNet& net, const Params& p, double applied, Step step, LaplacianSolver& solver) {
   NetSolution out;
   const bool driven = p.current > 0.0;
   const double solved_voltage = applied > 0.0 ? applied : 1.0;
@@ -508,7 +594,8 @@ NetSolution solve_net(const State& s, const ResistorNet& net, const Params& p, d
   if (!driven && !res.dirichlet_flux.empty() && res.dirichlet_flux[0] > 0.0) out.unit_resistance = solved_voltage / res.dirichlet_flux[0];
   if (!driven && applied != solved_voltage) {
     const double f = applied / solved_voltage;
-    for (double& x : res.value) if (std::isfinite(x)) x *= f;
+    for (double& x : res.value)
+      if (std::isfinite(x)) x *= f;
     for (double& x : res.flux) x *= f;
     for (double& x : res.dirichlet_flux) x *= f;
   }
@@ -542,7 +629,10 @@ std::size_t particle_potentials(const BuiltNet& b, bool particle_centred, const 
     } else {
       double num = 0.0, den = 0.0;
       for (const auto& [c, gc] : b.star[i])
-        if (std::isfinite(res.value[c])) { num += gc * res.value[c]; den += gc; }
+        if (std::isfinite(res.value[c])) {
+          num += gc * res.value[c];
+          den += gc;
+        }
       u[i] = den > 0.0 ? num / den : kNaN;
     }
     if (std::isnan(u[i])) ++floating;
@@ -602,9 +692,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   std::vector<double> G, share;
   try {  // the sphere-element topology builds its own conductances from the neck radii
     if (p_.topology != "sphere_element") G = conductances(s, g, share);
-  } catch (const ConfigError& e) {
-    throw PhysicsError(info.step, {}, "electrical conductance", e.what());
-  }
+  } catch (const ConfigError& e) { throw PhysicsError(info.step, {}, "electrical conductance", e.what()); }
   const bool allow_empty = p_.empty_electrode == "open";
   const std::vector<Index> high = electrode_nodes(s, g, p_.high, allow_empty), low = electrode_nodes(s, g, p_.low, allow_empty);
   if (high.empty() || low.empty()) {
@@ -619,15 +707,15 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
       throw SetupError("electrical_network: a particle belongs to both electrodes '" + p_.high + "' and '" + p_.low + "'");
   const bool particle_centred = p_.topology == "particle_centred";
   BuiltNet b;
-  if (particle_centred) b = particle_centred_net(g, G, share, high, low);
-  else if (p_.topology == "contact_centred") b = contact_centred_net(s, g, G, share, high, low, p_);
+  if (particle_centred)
+    b = particle_centred_net(g, G, share, high, low);
+  else if (p_.topology == "contact_centred")
+    b = contact_centred_net(s, g, G, share, high, low, p_);
   else {
     try {  // the element kernels throw ConfigError on degenerate geometry (e.g. two necks in one direction)
       b = sphere_element_net(s, g, branch_, particle_conductivities(s), high, low,
                              p_.element_cap == "rim" ? el::CapRule::Rim : el::CapRule::EqualArea, r_.negative_share);
-    } catch (const ConfigError& e) {
-      throw PhysicsError(info.step, {}, "sphere element", e.what());
-    }
+    } catch (const ConfigError& e) { throw PhysicsError(info.step, {}, "sphere element", e.what()); }
   }
   const ResistorNet& net = b.net;
   const bool driven = p_.current > 0.0;
@@ -640,12 +728,15 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   const std::size_t floating = particle_potentials(b, particle_centred, res, s.particles.fields.data("electric_potential"));
   // No spanning path: exactly zero current (round-off in the equipotential halves is not current).
   const bool spans = spanning(net.nodes, net.a, net.b, net.g, net.high, net.low);
-  if (!spans) { std::fill(q.begin(), q.end(), 0.0); power = 0.0; }
+  if (!spans) {
+    std::fill(q.begin(), q.end(), 0.0);
+    power = 0.0;
+  }
   edges_ = branch_output(s, g, sol, spans, particle_centred);
   if (driven && !spans)
     throw PhysicsError(info.step, {}, "electrical current",
-                       "electrical_network: " + std::to_string(p_.current) + " A injected at '" + p_.high +
-                           "' has no path to '" + p_.low + "' (the network is open)");
+                       "electrical_network: " + std::to_string(p_.current) + " A injected at '" + p_.high + "' has no path to '" + p_.low +
+                           "' (the network is open)");
   const double I = !spans ? 0.0 : driven ? p_.current : res.dirichlet_flux[0];
   const double I_low = !spans ? 0.0 : driven ? res.dirichlet_flux[0] : res.dirichlet_flux[1];
   const double V = driven ? res.value[sol.super] : applied;
@@ -671,7 +762,10 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   double A = p_.area;
   if (!(A > 0.0))
     for (const auto& w : s.walls)
-      if (!w.is_plane()) { A = el::kPi * w.cylinder_radius() * w.cylinder_radius(); break; }
+      if (!w.is_plane()) {
+        A = el::kPi * w.cylinder_radius() * w.cylinder_radius();
+        break;
+      }
   r_.length = L > 0.0 ? L : kNaN;
   r_.conductivity_eff = (L > 0.0 && A > 0.0) ? L / (r_.resistance * A) : kNaN;  // = I L / (dV A)
   r_.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -679,17 +773,20 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
 }
 
 std::vector<std::string> ElectricalNetwork::columns() const {
-  std::vector<std::string> c = {"electrical_current", "electrical_voltage", "electrical_current_mismatch", "electrical_resistance", "electrical_conductivity_eff",
-          "electrical_power", "electrical_power_particles", "electrical_power_mismatch", "electrical_residual", "electrical_floating_nodes",
-          "electrical_iterations", "electrical_solve_time", "electrical_length", "electrical_solves"};
+  std::vector<std::string> c = {
+      "electrical_current",          "electrical_voltage",        "electrical_current_mismatch", "electrical_resistance",
+      "electrical_conductivity_eff", "electrical_power",          "electrical_power_particles",  "electrical_power_mismatch",
+      "electrical_residual",         "electrical_floating_nodes", "electrical_iterations",       "electrical_solve_time",
+      "electrical_length",           "electrical_solves"};
   if (p_.topology == "sphere_element") c.push_back("electrical_negative_share");
   if (p_.solver == "amg") c.push_back("electrical_amg_ranks");
   return c;
 }
 
 std::vector<double> ElectricalNetwork::column_values(const State&) const {
-  std::vector<double> v = {r_.current, r_.voltage, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power, r_.power_particles, r_.power_mismatch,
-                           r_.residual, r_.floating, r_.iterations, r_.seconds, r_.length, r_.solves};
+  std::vector<double> v = {r_.current,    r_.voltage,         r_.current_mismatch, r_.resistance, r_.conductivity_eff,
+                           r_.power,      r_.power_particles, r_.power_mismatch,   r_.residual,   r_.floating,
+                           r_.iterations, r_.seconds,         r_.length,           r_.solves};
   if (p_.topology == "sphere_element") v.push_back(r_.negative_share);
   if (p_.solver == "amg") v.push_back(r_.amg_ranks);
   return v;
@@ -697,12 +794,15 @@ std::vector<double> ElectricalNetwork::column_values(const State&) const {
 
 void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
   // The held outputs (not the wall-clock solve time, which no result depends on) and the warm start.
-  std::vector<double> held = {r_.current, r_.current_mismatch, r_.resistance, r_.conductivity_eff, r_.power,
-                              r_.power_mismatch, r_.residual, r_.floating, r_.iterations, r_.length, r_.solves, r_.voltage, r_.power_particles};
+  std::vector<double> held = {r_.current,        r_.current_mismatch, r_.resistance,     r_.conductivity_eff, r_.power,
+                              r_.power_mismatch, r_.residual,         r_.floating,       r_.iterations,       r_.length,
+                              r_.solves,         r_.voltage,          r_.power_particles};
   ar.visit(prefix + "/held", held);
   if (ar.reading()) {
-    if (held.size() != 13) throw SetupError("checkpoint electrical_network state has " + std::to_string(held.size()) + " values, expected 13");
-    r_ = Result{held[0], held[1], held[2], held[3], held[4], held[5], held[6], held[7], held[8], 0.0, held[9], held[10], held[11], held[12]};
+    if (held.size() != 13)
+      throw SetupError("checkpoint electrical_network state has " + std::to_string(held.size()) + " values, expected 13");
+    r_ = Result{held[0], held[1], held[2], held[3], held[4],  held[5],  held[6],
+                held[7], held[8], 0.0,     held[9], held[10], held[11], held[12]};
   }
   if (p_.solver == "amg" && (!ar.reading() || ar.has(prefix + "/amg_ranks"))) ar.visit(prefix + "/amg_ranks", r_.amg_ranks);
   if (p_.topology == "sphere_element") ar.visit(prefix + "/negative_share", r_.negative_share);
@@ -726,8 +826,10 @@ void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
   // still writes an empty /networks/electrical group, which a restarted run must reproduce
   // (found by the SIGKILL test of the explicit heat scene). Older checkpoints: non-empty pairs.
   bool has_output = !edges_.name.empty();
-  if (!ar.reading() || ar.has(prefix + "/branch_output")) ar.visit(prefix + "/branch_output", has_output);
-  else has_output = !pairs.empty();
+  if (!ar.reading() || ar.has(prefix + "/branch_output"))
+    ar.visit(prefix + "/branch_output", has_output);
+  else
+    has_output = !pairs.empty();
   if (ar.reading()) {
     edges_ = EdgeOutput{};
     if (has_output) {

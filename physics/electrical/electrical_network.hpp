@@ -155,22 +155,22 @@ class ElectricalNetwork final : public Module {
 
   /// Results of the last solve (held between solves).
   struct Result {
-    double current = 0.0;            ///< leaving the high electrode [A]
-    double current_mismatch = 0.0;   ///< |I_high + I_low| / |I_high| [-]
-    double resistance = 0.0;         ///< dV / I [Ohm]; +inf without a spanning path
-    double conductivity_eff = 0.0;   ///< I L / (dV A) [S/m]; NaN when A is unknown
-    double power = 0.0;              ///< sum over branches of I^2 R [W]
-    double power_mismatch = 0.0;     ///< |P - dV I| / (dV I) [-]
-    double residual = 0.0;           ///< relative Kirchhoff residual of the reduced system [-]
-    double floating = 0.0;           ///< particles connected to neither electrode
+    double current = 0.0;           ///< leaving the high electrode [A]
+    double current_mismatch = 0.0;  ///< |I_high + I_low| / |I_high| [-]
+    double resistance = 0.0;        ///< dV / I [Ohm]; +inf without a spanning path
+    double conductivity_eff = 0.0;  ///< I L / (dV A) [S/m]; NaN when A is unknown
+    double power = 0.0;             ///< sum over branches of I^2 R [W]
+    double power_mismatch = 0.0;    ///< |P - dV I| / (dV I) [-]
+    double residual = 0.0;          ///< relative Kirchhoff residual of the reduced system [-]
+    double floating = 0.0;          ///< particles connected to neither electrode
     double iterations = 0.0;
     double seconds = 0.0;
-    double length = 0.0;             ///< L used in Eq. 28 [m]
+    double length = 0.0;  ///< L used in Eq. 28 [m]
     double solves = 0.0;
-    double voltage = 0.0;            ///< potential of the high electrode [V] (given, or from the injected current)
-    double power_particles = 0.0;    ///< part of `power` that heats particles (joule_power summed) [W]; the rest heats wall electrodes
-    double negative_share = 0.0;     ///< sphere_element: sum of the negative element conductances over the positive ones [-]
-    double amg_ranks = 1.0;          ///< amg: MPI ranks the last solve was spread over
+    double voltage = 0.0;          ///< potential of the high electrode [V] (given, or from the injected current)
+    double power_particles = 0.0;  ///< part of `power` that heats particles (joule_power summed) [W]; the rest heats wall electrodes
+    double negative_share = 0.0;   ///< sphere_element: sum of the negative element conductances over the positive ones [-]
+    double amg_ranks = 1.0;        ///< amg: MPI ranks the last solve was spread over
   };
   const Result& result() const { return r_; }
 
@@ -181,7 +181,7 @@ class ElectricalNetwork final : public Module {
   /// Bulk conductivity per particle [S/m]: at `temperature`, or at its `temperature` field value.
   std::vector<double> particle_conductivities(const State& s) const;
   Params p_;
-  double kappa_ = 0.0;  ///< bulk conductivity at the evaluation temperature [S/m]
+  double kappa_ = 0.0;               ///< bulk conductivity at the evaluation temperature [S/m]
   electrical::ConductivityLaw law_;  ///< kappa(T)
   BranchModel branch_;
   bool tolerance_restored_ = false;  // visit() read the resolved touch tolerance: bind() keeps it

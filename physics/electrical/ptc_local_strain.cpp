@@ -31,15 +31,17 @@ void LocalStrainSolver::factorize(std::size_t n, const SpringNetwork& net, const
   K_.resize(m, m);
   K_.setFromTriplets(t.begin(), t.end());
   ready_ = false;
-  if (m == 0) { ready_ = true; return; }
+  if (m == 0) {
+    ready_ = true;
+    return;
+  }
   ldlt_.compute(K_);
   if (ldlt_.info() != Eigen::Success)
     throw SetupError("ptc_local_strain: the spring-network matrix could not be factorised (singular: raise regularisation)");
   ready_ = true;
 }
 
-void LocalStrainSolver::solve(std::span<const double> eps0_spring, std::vector<Vec3>& displacement,
-                              std::vector<double>& opening) const {
+void LocalStrainSolver::solve(std::span<const double> eps0_spring, std::vector<Vec3>& displacement, std::vector<double>& opening) const {
   if (!ready_) throw SetupError("ptc_local_strain: solve() before factorize()");
   if (eps0_spring.size() != net_.size())
     throw SetupError("ptc_local_strain: expected " + std::to_string(net_.size()) + " spring strains, found " +
@@ -58,8 +60,7 @@ void LocalStrainSolver::solve(std::span<const double> eps0_spring, std::vector<V
   }
   const Eigen::VectorXd u = ldlt_.solve(f);
   for (std::size_t i = 0; i < n_; ++i) displacement[i] = Vec3(u[3 * i], u[3 * i + 1], u[3 * i + 2]);
-  for (std::size_t e = 0; e < net_.size(); ++e)
-    opening[e] = net_.normal[e].dot(displacement[net_.b[e]] - displacement[net_.a[e]]);
+  for (std::size_t e = 0; e < net_.size(); ++e) opening[e] = net_.normal[e].dot(displacement[net_.b[e]] - displacement[net_.a[e]]);
 }
 
 }  // namespace sparkdem::physics::ptc

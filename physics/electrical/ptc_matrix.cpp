@@ -64,7 +64,10 @@ UnitSolution solve_unit(std::size_t n, const SpringNetwork& net, const MatrixPar
   std::vector<std::int64_t> dof(n, -1);
   std::int64_t m = 0;
   for (std::size_t i = 0; i < n; ++i)
-    if (!held[i]) { dof[i] = m; m += 3; }
+    if (!held[i]) {
+      dof[i] = m;
+      m += 3;
+    }
   if (m == 0) return out;
   double kmean = 0.0;
   for (double k : net.stiffness) kmean += k;
@@ -103,8 +106,7 @@ UnitSolution solve_unit(std::size_t n, const SpringNetwork& net, const MatrixPar
   out.residual = fn > 0.0 ? (K * u - f).norm() / fn : 0.0;
   for (std::size_t i = 0; i < n; ++i)
     if (dof[i] >= 0) out.displacement[i] = Vec3(u[dof[i]], u[dof[i] + 1], u[dof[i] + 2]);
-  for (std::size_t e = 0; e < net.size(); ++e)
-    out.opening[e] = net.normal[e].dot(out.displacement[net.b[e]] - out.displacement[net.a[e]]);
+  for (std::size_t e = 0; e < net.size(); ++e) out.opening[e] = net.normal[e].dot(out.displacement[net.b[e]] - out.displacement[net.a[e]]);
   return out;
 }
 
@@ -127,15 +129,17 @@ std::vector<double> break_strains(const Contacts& c, double break_gap) {
   return out;
 }
 
-StrainPoint evaluate(std::size_t n, const Contacts& c, std::span<const double> eps_break, double eps0,
-                     double unit_conductance, std::span<const Index> high, std::span<const Index> low,
-                     LaplacianSolver& solver) {
+StrainPoint evaluate(std::size_t n, const Contacts& c, std::span<const double> eps_break, double eps0, double unit_conductance,
+                     std::span<const Index> high, std::span<const Index> low, LaplacianSolver& solver) {
   if (eps_break.size() != c.size()) throw SetupError("ptc_matrix: one break strain per contact expected");
   StrainPoint sp;
   sp.eps0 = eps0;
   std::vector<Index> a, b;
   for (std::size_t e = 0; e < c.size(); ++e)
-    if (eps0 <= eps_break[e]) { a.push_back(c.a[e]); b.push_back(c.b[e]); }
+    if (eps0 <= eps_break[e]) {
+      a.push_back(c.a[e]);
+      b.push_back(c.b[e]);
+    }
   const percolation::Metrics m = percolation::metrics(n, a, b, high, low);
   sp.spanning = m.spanning;
   sp.conducting = m.touching_pairs;
@@ -162,7 +166,10 @@ double switching_strain(std::size_t n, const Contacts& c, std::span<const double
   for (std::size_t v = 0; v < n; ++v)
     if (hi[v] && lo[v]) return kInf;  // a filler on both faces spans without contacts
   auto find = [&](Index v) {
-    while (parent[v] != v) { parent[v] = parent[parent[v]]; v = parent[v]; }
+    while (parent[v] != v) {
+      parent[v] = parent[parent[v]];
+      v = parent[v];
+    }
     return v;
   };
   std::vector<std::size_t> order(c.size());

@@ -124,9 +124,8 @@ struct StrainPoint {
   double resistance = 0.0;     ///< R_eq [Ohm] with unit_conductance per contact; +inf if not spanning
 };
 /// Connectivity and resistance at strain eps0 (one Kirchhoff solve if spanning).
-StrainPoint evaluate(std::size_t n, const Contacts& c, std::span<const double> eps_break, double eps0,
-                     double unit_conductance, std::span<const Index> high, std::span<const Index> low,
-                     LaplacianSolver& solver);
+StrainPoint evaluate(std::size_t n, const Contacts& c, std::span<const double> eps_break, double eps0, double unit_conductance,
+                     std::span<const Index> high, std::span<const Index> low, LaplacianSolver& solver);
 
 /// The exact switching strain: the largest break strain eps* such that the contacts with
 /// eps_b > eps* no longer span (the network spans for eps0 < eps*, i.e. at eps0 <= eps* under

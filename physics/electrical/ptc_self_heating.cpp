@@ -26,9 +26,14 @@ ParamSpec<PtcSelfHeating::Params> PtcSelfHeating::spec() {
   s.add("cutoff_gap", &P::cutoff_gap).unit("m").nonnegative().doc("h_max: springs join fillers with gap <= this");
   s.add("min_gap", &P::min_gap).unit("m").positive().doc("h_min: spring stiffness E_m A / max(h, h_min)");
   s.add("regularisation", &P::regularisation).nonnegative().doc("ground spring on every filler, x mean spring stiffness");
-  s.add("expansion_coefficient", &P::expansion_coefficient).unit("1/K").positive()
+  s.add("expansion_coefficient", &P::expansion_coefficient)
+      .unit("1/K")
+      .positive()
       .doc("alpha_s: linear expansion coefficient of the matrix relative to the fillers (below the melting step)");
-  s.add("expansion_coefficient_melt", &P::expansion_coefficient_melt).unit("1/K").nonnegative().doc("alpha_l above the melting step (0: alpha_s)");
+  s.add("expansion_coefficient_melt", &P::expansion_coefficient_melt)
+      .unit("1/K")
+      .nonnegative()
+      .doc("alpha_l above the melting step (0: alpha_s)");
   s.add("reference_temperature", &P::reference_temperature).unit("K").positive().doc("T_ref: eps0(T_ref) = 0");
   s.add("melting_temperature", &P::melting_temperature).unit("K").nonnegative().doc("T_m (0: no melting step)");
   s.add("melting_strain", &P::melting_strain).unit("1").nonnegative().doc("linear strain jump on melting");
@@ -37,9 +42,10 @@ ParamSpec<PtcSelfHeating::Params> PtcSelfHeating::spec() {
 }
 
 PtcSelfHeating::PtcSelfHeating(const Params& p) : p_(p) {
-  law_ = ptc::ThermalStrainLaw{p_.expansion_coefficient,
-                              p_.expansion_coefficient_melt > 0.0 ? p_.expansion_coefficient_melt : p_.expansion_coefficient,
-                              p_.reference_temperature, p_.melting_temperature, p_.melting_strain, p_.melting_width};
+  law_ = ptc::ThermalStrainLaw{
+      p_.expansion_coefficient, p_.expansion_coefficient_melt > 0.0 ? p_.expansion_coefficient_melt : p_.expansion_coefficient,
+      p_.reference_temperature, p_.melting_temperature,
+      p_.melting_strain,        p_.melting_width};
   ptc::validate(law_);
   if (p_.high.empty() != p_.low.empty()) throw SetupError("ptc_self_heating: give both electrodes high and low, or neither");
   mp_.min_gap = p_.min_gap;
@@ -75,7 +81,8 @@ void PtcSelfHeating::build(const State& s) {
       c.gap.push_back(net_.gap[e]);
       c.opening.push_back(open[e]);
     }
-    switching_strain_ = ptc::switching_strain(P.size(), c, ptc::break_strains(c, p_.break_gap), set_members(s, p_.high, "ptc_self_heating"), set_members(s, p_.low, "ptc_self_heating"));
+    switching_strain_ = ptc::switching_strain(P.size(), c, ptc::break_strains(c, p_.break_gap), set_members(s, p_.high, "ptc_self_heating"),
+                                              set_members(s, p_.low, "ptc_self_heating"));
   }
 }
 
@@ -91,7 +98,11 @@ void PtcSelfHeating::advance(State& s, const StepInfo& info) {
     if (!std::isfinite(Te))
       throw PhysicsError(info.step, {P.id[net_.a[e]], P.id[net_.b[e]]}, "temperature", "ptc_self_heating: non-finite filler temperature");
     eps[e] = ptc::thermal_strain(law_, Te);
-    if (net_.eigen_gap[e] > 0.0) { sum += eps[e]; mx = std::max(mx, eps[e]); ++cnt; }
+    if (net_.eigen_gap[e] > 0.0) {
+      sum += eps[e];
+      mx = std::max(mx, eps[e]);
+      ++cnt;
+    }
   }
   std::vector<Vec3> u;
   std::vector<double> open;
@@ -113,8 +124,12 @@ void PtcSelfHeating::advance(State& s, const StepInfo& info) {
 }
 
 std::vector<std::string> PtcSelfHeating::columns() const {
-  return {"ptc_self_heating_contacts",  "ptc_self_heating_conducting",       "ptc_self_heating_coordination",
-          "ptc_self_heating_eps0_mean", "ptc_self_heating_eps0_max",         "ptc_self_heating_switching_strain",
+  return {"ptc_self_heating_contacts",
+          "ptc_self_heating_conducting",
+          "ptc_self_heating_coordination",
+          "ptc_self_heating_eps0_mean",
+          "ptc_self_heating_eps0_max",
+          "ptc_self_heating_switching_strain",
           "ptc_self_heating_switching_temperature"};
 }
 

@@ -39,13 +39,13 @@ namespace sparkdem::physics {
 class PtcSelfHeating final : public Module {
  public:
   struct Params {
-    std::string high;               ///< electrode set (switching columns only; "" = none)
+    std::string high;  ///< electrode set (switching columns only; "" = none)
     std::string low;
-    double touch_tolerance = 2e-3;  ///< [m]
-    double break_gap = 2e-3;        ///< [m]
-    double cutoff_gap = 1.0;        ///< [m] h_max
-    double min_gap = 1e-2;          ///< [m] h_min
-    double regularisation = 1e-9;   ///< [1]
+    double touch_tolerance = 2e-3;            ///< [m]
+    double break_gap = 2e-3;                  ///< [m]
+    double cutoff_gap = 1.0;                  ///< [m] h_max
+    double min_gap = 1e-2;                    ///< [m] h_min
+    double regularisation = 1e-9;             ///< [1]
     double expansion_coefficient = 2e-4;      ///< alpha_s [1/K]
     double expansion_coefficient_melt = 0.0;  ///< alpha_l [1/K]; 0 = alpha_s
     double reference_temperature = 293.15;    ///< [K]

@@ -48,7 +48,8 @@ PtcStrain::PtcStrain(const Params& p) : p_(p) {
   std::set<std::string> seen;
   if (p_.eps0_values.empty()) errors.push_back({"/eps0_values", "expected at least one eps0, found none"});
   for (double e : p_.eps0_values) {
-    if (!(e >= 0.0) || !std::isfinite(e)) errors.push_back({"/eps0_values", "must be finite and >= 0, found " + std::to_string(e)});
+    if (!(e >= 0.0) || !std::isfinite(e))
+      errors.push_back({"/eps0_values", "must be finite and >= 0, found " + std::to_string(e)});
     else if (!add_suffix(100.0 * e, "%.2fpct", seen, suffix_))
       errors.push_back({"/eps0_values", "two values round to the same column " + suffix_.back() + " (0.01 % resolution)"});
   }
@@ -62,22 +63,20 @@ PtcStrain::PtcStrain(const Params& p) : p_(p) {
     errors.push_back({"/opening_strain", "strain_histogram_edges need opening_strain > 0, found " + std::to_string(p_.opening_strain)});
   try {
     faces_ = rkpm::parse_box_faces(p_.boundary_faces);
-  } catch (const SetupError& e) {
-    errors.push_back({"/boundary_faces", e.what()});
-  }
+  } catch (const SetupError& e) { errors.push_back({"/boundary_faces", e.what()}); }
   if (p_.surface_points % 2 != 0)
     errors.push_back({"/surface_points", "must be even (antipodal pairs), found " + std::to_string(p_.surface_points)});
-  law_ = ptc::ThermalStrainLaw{p_.expansion_coefficient,
-                              p_.expansion_coefficient_melt > 0.0 ? p_.expansion_coefficient_melt : p_.expansion_coefficient,
-                              p_.reference_temperature, p_.melting_temperature, p_.melting_strain, p_.melting_width};
+  law_ = ptc::ThermalStrainLaw{
+      p_.expansion_coefficient, p_.expansion_coefficient_melt > 0.0 ? p_.expansion_coefficient_melt : p_.expansion_coefficient,
+      p_.reference_temperature, p_.melting_temperature,
+      p_.melting_strain,        p_.melting_width};
   if (!p_.temperatures.empty()) {
     try {
       ptc::validate(law_);
-    } catch (const SetupError& e) {
-      errors.push_back({"", e.what()});
-    }
+    } catch (const SetupError& e) { errors.push_back({"", e.what()}); }
     for (double T : p_.temperatures) {
-      if (!(T > 0.0) || !std::isfinite(T)) errors.push_back({"/temperatures", "must be finite and > 0 K, found " + std::to_string(T)});
+      if (!(T > 0.0) || !std::isfinite(T))
+        errors.push_back({"/temperatures", "must be finite and > 0 K, found " + std::to_string(T)});
       else if (!add_suffix(T, "T%.2fK", seen, tsuffix_))
         errors.push_back({"/temperatures", "two temperatures round to the same column " + tsuffix_.back() + " (0.01 K resolution)"});
     }
@@ -93,65 +92,89 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
                  "eps0 h_ij (one linear solve for unit eps0); Z(eps0), rho(eps0), switching strain, contact openings");
   s.add("high", &P::high).doc("electrode particle set on one face");
   s.add("low", &P::low).doc("electrode particle set on the opposite face");
-  s.add("touch_tolerance", &P::touch_tolerance).unit("m").nonnegative()
+  s.add("touch_tolerance", &P::touch_tolerance)
+      .unit("m")
+      .nonnegative()
       .doc("touching contacts: gap <= this (paper 0.1 % of D = 2e-3 R); no eigenstrain in them");
-  s.add("break_gap", &P::break_gap).unit("m")
+  s.add("break_gap", &P::break_gap)
+      .unit("m")
       .doc("a contact stops conducting when its gap exceeds max(break_gap, initial gap); 0 = the gap becomes positive");
   s.add("cutoff_gap", &P::cutoff_gap).unit("m").nonnegative().doc("h_max: springs join fillers with gap <= this");
   s.add("min_gap", &P::min_gap).unit("m").positive().doc("h_min: spring stiffness E_m A / max(h, h_min)");
   s.add("matrix_modulus", &P::matrix_modulus).unit("Pa").positive().doc("E_m (the openings do not depend on it)");
   s.add("bond_area", &P::bond_area).unit("m^2").positive().doc("A (the openings do not depend on it)");
-  s.add("regularisation", &P::regularisation).nonnegative()
+  s.add("regularisation", &P::regularisation)
+      .nonnegative()
       .doc("ground spring on every filler, x mean spring stiffness: removes rigid-body and floppy modes");
   s.add("unit_conductance", &P::unit_conductance).unit("S").positive().doc("conductance of a conducting contact");
   s.add("length", &P::length).unit("m").nonnegative().doc("L of rho = R_eq L; 0: the box edge recorded by cpc_fillers");
   s.add("opening_strain", &P::opening_strain).nonnegative().doc("eps0 [1] of the opening statistics (paper: 1 %)");
   s.add("eps0_values", &P::eps0_values).doc("matrix eigenstrains eps0 [1] at which Z and rho are reported");
-  s.add("temperatures", &P::temperatures).unit("K")
+  s.add("temperatures", &P::temperatures)
+      .unit("K")
       .doc("temperatures at which eps0(T), Z and rho are reported, with the switching temperature (empty: no temperature columns)");
-  s.add("expansion_coefficient", &P::expansion_coefficient).unit("1/K").positive()
+  s.add("expansion_coefficient", &P::expansion_coefficient)
+      .unit("1/K")
+      .positive()
       .doc("alpha_s: linear expansion coefficient of the matrix relative to the fillers (below the melting step)");
-  s.add("expansion_coefficient_melt", &P::expansion_coefficient_melt).unit("1/K").nonnegative()
+  s.add("expansion_coefficient_melt", &P::expansion_coefficient_melt)
+      .unit("1/K")
+      .nonnegative()
       .doc("alpha_l: the same above the melting step (0: alpha_s)");
   s.add("reference_temperature", &P::reference_temperature).unit("K").positive().doc("T_ref: eps0(T_ref) = 0 (the stress-free state)");
   s.add("melting_temperature", &P::melting_temperature).unit("K").nonnegative().doc("T_m: centre of the melting step (0: no melting step)");
-  s.add("melting_strain", &P::melting_strain).unit("1").nonnegative()
+  s.add("melting_strain", &P::melting_strain)
+      .unit("1")
+      .nonnegative()
       .doc("linear strain jump on melting (about Delta V / (3 V) of the host's volume change)");
   s.add("melting_width", &P::melting_width).unit("K").nonnegative().doc("width of the smoothed melting step (0: sharp)");
   s.add("opening_histogram_edges", &P::opening_histogram_edges)
-      .doc("bin edges [1] of the relative contact opening at opening_strain (columns opening_hist_<k>, _below, _above); "
-           "empty: no histogram");
-  s.add("matrix_model", &P::matrix_model).choices({"bonded", "rkpm"})
+      .doc(
+          "bin edges [1] of the relative contact opening at opening_strain (columns opening_hist_<k>, _below, _above); "
+          "empty: no histogram");
+  s.add("matrix_model", &P::matrix_model)
+      .choices({"bonded", "rkpm"})
       .doc("bonded: axial-spring network (ptc_matrix); rkpm: the paper's meshless continuum (rkpm_matrix)");
-  s.add("poisson_ratio", &P::poisson_ratio).range(-0.99, 0.499)
+  s.add("poisson_ratio", &P::poisson_ratio)
+      .range(-0.99, 0.499)
       .doc("rkpm: matrix Poisson ratio (not given by the paper; 0.35 default, not tuned)");
-  s.add("node_spacing", &P::node_spacing).unit("m").positive()
+  s.add("node_spacing", &P::node_spacing)
+      .unit("m")
+      .positive()
       .doc("rkpm: node spacing h (fitted to the box edge; paper 12,000 nodes in a 70 R box ~ 3 R)");
   s.add("support_factor", &P::support_factor).min(1.0).doc("rkpm: support radius / node spacing (> 1)");
   s.add("quadrature_order", &P::quadrature_order).range(1, 8).doc("rkpm: Gauss points per direction per background cell");
   s.add("cell_subdivision", &P::cell_subdivision).range(1, 16).doc("rkpm: background quadrature cells per node spacing, per direction");
   s.add("surface_points", &P::surface_points).range(2, 100000).doc("rkpm: penalty surface points per sphere (even)");
-  s.add("bond_penalty", &P::bond_penalty).unit("Pa/m").nonnegative()
+  s.add("bond_penalty", &P::bond_penalty)
+      .unit("Pa/m")
+      .nonnegative()
       .doc("rkpm: sphere-matrix penalty alpha (paper 100 E with lengths in its unit; R = 1 here)");
   s.add("pin_penalty", &P::pin_penalty).positive().doc("rkpm: translation pin at the box centre, beta / (E h)");
   s.add("cg_tolerance", &P::cg_tolerance).positive().doc("rkpm: relative residual of the conjugate-gradient solve");
   s.add("cg_max_iterations", &P::cg_max_iterations).min(1).doc("rkpm: conjugate-gradient iteration limit");
-  s.add("cut_cell_depth", &P::cut_cell_depth).range(0, 8)
+  s.add("cut_cell_depth", &P::cut_cell_depth)
+      .range(0, 8)
       .doc("rkpm: octree levels splitting the quadrature cells cut by a sphere surface (0: staircase on the cells)");
-  s.add("surface_spacing", &P::surface_spacing).positive()
+  s.add("surface_spacing", &P::surface_spacing)
+      .positive()
       .doc("rkpm: penalty surface point spacing / h (at least surface_points per sphere)");
-  s.add("boundary", &P::boundary).choices({"free", "clamped", "rollers"})
+  s.add("boundary", &P::boundary)
+      .choices({"free", "clamped", "rollers"})
       .doc("rkpm: free expansion (translation pinned), clamped faces (u = 0) or rollers (u.n = 0) by penalty");
   s.add("boundary_penalty", &P::boundary_penalty).positive().doc("rkpm: clamped / rollers penalty beta / (E / h)");
   s.add("boundary_faces", &P::boundary_faces)
-      .doc("rkpm: the box faces held by clamped / rollers: \"all\" or a comma-separated list of x_lo, x_hi, y_lo, y_hi, "
-           "z_lo, z_hi (e.g. \"z_lo\": a sample held on one face)");
+      .doc(
+          "rkpm: the box faces held by clamped / rollers: \"all\" or a comma-separated list of x_lo, x_hi, y_lo, y_hi, "
+          "z_lo, z_hi (e.g. \"z_lo\": a sample held on one face)");
   s.add("strain_statistics", &P::strain_statistics)
       .doc("rkpm: max principal strain of the matrix at every volume quadrature point (means, negative fractions)");
   s.add("strain_histogram_edges", &P::strain_histogram_edges)
-      .doc("bin edges [1] of the max principal strain at eps0 = opening_strain (columns strain_total_hist_<k>, "
-           "strain_mech_hist_<k>, _below, _above; needs strain_statistics)");
-  s.add("linear_solver", &P::linear_solver).choices({"cg_ic", "cg", "ldlt", "auto"})
+      .doc(
+          "bin edges [1] of the max principal strain at eps0 = opening_strain (columns strain_total_hist_<k>, "
+          "strain_mech_hist_<k>, _below, _above; needs strain_statistics)");
+  s.add("linear_solver", &P::linear_solver)
+      .choices({"cg_ic", "cg", "ldlt", "auto"})
       .doc("rkpm: CG with incomplete Cholesky (cg_ic), Jacobi CG (cg), sparse LDLT (ldlt), auto (LDLT when small)");
   return s;
 }
@@ -167,7 +190,7 @@ struct PtcStrain::UnitResult {
   ptc::Contacts contacts;
   std::size_t matrix_size = 0;  ///< springs (bonded) or RKPM nodes
   double residual = 0.0;
-  std::vector<double> strain;   ///< the strain columns (strain_columns() values)
+  std::vector<double> strain;  ///< the strain columns (strain_columns() values)
 };
 
 PtcStrain::UnitResult PtcStrain::unit_contacts(const State& s) const {
@@ -288,9 +311,12 @@ void PtcStrain::advance(State& s, const StepInfo&) {
   if (!he.empty()) {
     std::vector<double> count(he.size() + 1, 0.0);  // bins, then below, above
     for (double v : rel) {
-      if (v < he.front()) count[he.size() - 1] += 1.0;
-      else if (v >= he.back()) count[he.size()] += 1.0;
-      else count[static_cast<std::size_t>(std::upper_bound(he.begin(), he.end(), v) - he.begin()) - 1] += 1.0;
+      if (v < he.front())
+        count[he.size() - 1] += 1.0;
+      else if (v >= he.back())
+        count[he.size()] += 1.0;
+      else
+        count[static_cast<std::size_t>(std::upper_bound(he.begin(), he.end(), v) - he.begin()) - 1] += 1.0;
     }
     for (double& v : count) v = rel.empty() ? kNaN : v / static_cast<double>(rel.size());
     held_.insert(held_.end(), count.begin(), count.end());
@@ -305,8 +331,7 @@ void PtcStrain::advance(State& s, const StepInfo&) {
       // contacts with delta < 0 open).
       std::vector<double> ebT = eb;
       if (e0 < 0.0)
-        for (std::size_t e = 0; e < c.size(); ++e)
-          ebT[e] = c.gap[e] + e0 * c.opening[e] <= std::max(p_.break_gap, c.gap[e]) ? kInf : -kInf;
+        for (std::size_t e = 0; e < c.size(); ++e) ebT[e] = c.gap[e] + e0 * c.opening[e] <= std::max(p_.break_gap, c.gap[e]) ? kInf : -kInf;
       const ptc::StrainPoint sp = ptc::evaluate(n, c, ebT, e0, p_.unit_conductance, high, low, solver_);
       held_.insert(held_.end(), {e0, sp.spanning ? 1.0 : 0.0, sp.coordination, sp.resistance * length_});
     }
@@ -323,9 +348,9 @@ void PtcStrain::advance(State& s, const StepInfo&) {
 }
 
 std::vector<std::string> PtcStrain::columns() const {
-  std::vector<std::string> c = {"ptc_strain_springs", "ptc_strain_contacts", "ptc_strain_switching_strain",
-                                "ptc_strain_switching_strain_listed", "ptc_strain_opening_mean", "ptc_strain_opening_median",
-                                "ptc_strain_opening_negative_fraction", "ptc_strain_solve_residual"};
+  std::vector<std::string> c = {
+      "ptc_strain_springs",      "ptc_strain_contacts",       "ptc_strain_switching_strain",          "ptc_strain_switching_strain_listed",
+      "ptc_strain_opening_mean", "ptc_strain_opening_median", "ptc_strain_opening_negative_fraction", "ptc_strain_solve_residual"};
   for (const auto& sfx : suffix_)
     for (const char* q : {"spanning_", "coordination_", "resistivity_"}) c.push_back(std::string("ptc_strain_") + q + sfx);
   const std::size_t m = p_.opening_histogram_edges.size();
@@ -366,8 +391,7 @@ void PtcStrain::visit(Archive& ar, const std::string& prefix) {
   ar.visit(prefix + "/held", held);
   if (ar.reading()) {
     if (held.size() != held_.size())
-      throw SetupError("checkpoint ptc_strain state has " + std::to_string(held.size()) + " values, expected " +
-                       std::to_string(held_.size()));
+      throw SetupError("checkpoint ptc_strain state has " + std::to_string(held.size()) + " values, expected " + std::to_string(held_.size()));
     held_ = held;
   }
   solver_.visit(ar, prefix + "/solver");

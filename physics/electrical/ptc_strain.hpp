@@ -95,13 +95,13 @@ class PtcStrain final : public Module {
     double opening_strain = 0.01;   ///< [1] eps0 of the opening statistics
     std::vector<double> eps0_values = {0.0, 0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.05};
     // temperature (ptc_temperature.hpp); empty temperatures: off
-    std::vector<double> temperatures;           ///< [K]
-    double expansion_coefficient = 2e-4;        ///< alpha_s [1/K] (matrix - filler mismatch)
-    double expansion_coefficient_melt = 0.0;    ///< alpha_l [1/K]; 0 = alpha_s
-    double reference_temperature = 293.15;      ///< [K] eps0 = 0
-    double melting_temperature = 0.0;           ///< T_m [K]; 0 = no melting step
-    double melting_strain = 0.0;                ///< Delta_m [1]
-    double melting_width = 0.0;                 ///< [K]
+    std::vector<double> temperatures;             ///< [K]
+    double expansion_coefficient = 2e-4;          ///< alpha_s [1/K] (matrix - filler mismatch)
+    double expansion_coefficient_melt = 0.0;      ///< alpha_l [1/K]; 0 = alpha_s
+    double reference_temperature = 293.15;        ///< [K] eps0 = 0
+    double melting_temperature = 0.0;             ///< T_m [K]; 0 = no melting step
+    double melting_strain = 0.0;                  ///< Delta_m [1]
+    double melting_width = 0.0;                   ///< [K]
     std::vector<double> opening_histogram_edges;  ///< [1] relative-opening bin edges (empty: no histogram)
     std::string matrix_model = "bonded";          ///< "bonded" | "rkpm"
     double poisson_ratio = 0.35;                  ///< [1] rkpm matrix nu (paper: not given)
@@ -114,14 +114,14 @@ class PtcStrain final : public Module {
     double pin_penalty = 1.0;                     ///< [1] beta / (E h)
     double cg_tolerance = 1e-10;                  ///< [1]
     std::int64_t cg_max_iterations = 20000;
-    std::string linear_solver = "cg_ic";          ///< rkpm: "cg_ic" | "cg" | "ldlt" | "auto"
-    std::int64_t cut_cell_depth = 2;              ///< rkpm: octree levels in cut quadrature cells
-    double surface_spacing = 0.5;                 ///< rkpm: surface point spacing / h
-    std::string boundary = "free";                ///< rkpm: "free" | "clamped" | "rollers"
-    double boundary_penalty = 100.0;              ///< rkpm: beta / (E / h) for clamped / rollers
-    std::string boundary_faces = "all";           ///< rkpm: Gamma_u, "all" or comma-separated x_lo, ..., z_hi
-    bool strain_statistics = false;               ///< rkpm: max principal strain of the matrix field (Fig. 4)
-    std::vector<double> strain_histogram_edges;   ///< [1] bin edges of that strain at eps0 = opening_strain
+    std::string linear_solver = "cg_ic";         ///< rkpm: "cg_ic" | "cg" | "ldlt" | "auto"
+    std::int64_t cut_cell_depth = 2;             ///< rkpm: octree levels in cut quadrature cells
+    double surface_spacing = 0.5;                ///< rkpm: surface point spacing / h
+    std::string boundary = "free";               ///< rkpm: "free" | "clamped" | "rollers"
+    double boundary_penalty = 100.0;             ///< rkpm: beta / (E / h) for clamped / rollers
+    std::string boundary_faces = "all";          ///< rkpm: Gamma_u, "all" or comma-separated x_lo, ..., z_hi
+    bool strain_statistics = false;              ///< rkpm: max principal strain of the matrix field (Fig. 4)
+    std::vector<double> strain_histogram_edges;  ///< [1] bin edges of that strain at eps0 = opening_strain
   };
   static ParamSpec<Params> spec();
   explicit PtcStrain(const Params& p);
@@ -144,15 +144,13 @@ class PtcStrain final : public Module {
   Clock clock_;
   double length_ = 0.0;
   LaplacianSolver solver_;
-  std::vector<std::string> suffix_;  ///< per eps0
-  std::vector<double> held_;         ///< the column values of the last evaluation (resistivity via length_)
+  std::vector<std::string> suffix_;   ///< per eps0
+  std::vector<double> held_;          ///< the column values of the last evaluation (resistivity via length_)
   ptc::ThermalStrainLaw law_;         ///< eps0(T) (used when p_.temperatures is not empty)
   std::vector<std::string> tsuffix_;  ///< per temperature
   EdgeOutput contacts_;               ///< held per-contact results of the last evaluation
   std::vector<std::string> faces_;    ///< boundary_faces, parsed
-  std::size_t histogram_columns() const {
-    return p_.opening_histogram_edges.size() >= 2 ? p_.opening_histogram_edges.size() + 1 : 0;
-  }
+  std::size_t histogram_columns() const { return p_.opening_histogram_edges.size() >= 2 ? p_.opening_histogram_edges.size() + 1 : 0; }
   std::size_t strain_columns() const {
     if (!p_.strain_statistics) return 0;
     return 4 + (p_.strain_histogram_edges.size() >= 2 ? 2 * (p_.strain_histogram_edges.size() + 1) : 0);

@@ -27,12 +27,12 @@
 namespace sparkdem::physics::ptc {
 
 struct ThermalStrainLaw {
-  double alpha_solid = 2e-4;             ///< alpha_s [1/K], > 0
-  double alpha_melt = 2e-4;              ///< alpha_l [1/K], > 0 (above the melting step)
-  double reference_temperature = 293.15; ///< T_ref [K]: eps0(T_ref) = 0
-  double melting_temperature = 0.0;      ///< T_m [K]; 0 = no melting step (alpha_s everywhere)
-  double melting_strain = 0.0;           ///< Delta_m [1] >= 0: linear strain jump on melting
-  double melting_width = 0.0;            ///< w [K] >= 0 (0: sharp)
+  double alpha_solid = 2e-4;              ///< alpha_s [1/K], > 0
+  double alpha_melt = 2e-4;               ///< alpha_l [1/K], > 0 (above the melting step)
+  double reference_temperature = 293.15;  ///< T_ref [K]: eps0(T_ref) = 0
+  double melting_temperature = 0.0;       ///< T_m [K]; 0 = no melting step (alpha_s everywhere)
+  double melting_strain = 0.0;            ///< Delta_m [1] >= 0: linear strain jump on melting
+  double melting_width = 0.0;             ///< w [K] >= 0 (0: sharp)
 };
 
 /// Throws SetupError unless alpha_s, alpha_l > 0, Delta_m >= 0, w >= 0, T_ref > 0, T_m >= 0.

@@ -36,7 +36,10 @@ void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
         p0 = p1;
         p1 = p2;
       }
-      if (n == 1) { p1 = z; p0 = 1.0; }
+      if (n == 1) {
+        p1 = z;
+        p0 = 1.0;
+      }
       dp = n * (z * p1 - p0) / (z * z - 1.0);
       const double dz = p1 / dp;
       z -= dz;
@@ -55,11 +58,17 @@ class SphereGrid {
     rmax_ = *std::max_element(r.begin(), r.end());
     lo_ = c[0];
     Vec3 hi = c[0];
-    for (const Vec3& x : c) { lo_ = lo_.cwiseMin(x); hi = hi.cwiseMax(x); }
+    for (const Vec3& x : c) {
+      lo_ = lo_.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
     cell_ = std::max(2.0 * rmax_, 1e-300);
     for (int d = 0; d < 3; ++d) {
       n_[d] = static_cast<int>((hi[d] - lo_[d]) / cell_) + 1;
-      while (n_[d] > 256) { cell_ *= 2.0; n_[d] = static_cast<int>((hi[d] - lo_[d]) / cell_) + 1; }
+      while (n_[d] > 256) {
+        cell_ *= 2.0;
+        n_[d] = static_cast<int>((hi[d] - lo_[d]) / cell_) + 1;
+      }
     }
     for (int d = 0; d < 3; ++d) n_[d] = static_cast<int>((hi[d] - lo_[d]) / cell_) + 1;
     start_.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
@@ -158,9 +167,7 @@ class BlockMatrix {
     const std::size_t p = position(I, J);
     for (int c = 0; c < 3; ++c) value_[row_start_[3 * I + c] + 3 * p + c] += s;
   }
-  void add_entry(std::int64_t I, std::int64_t J, int c, int d, double s) {
-    value_[row_start_[3 * I + c] + 3 * position(I, J) + d] += s;
-  }
+  void add_entry(std::int64_t I, std::int64_t J, int c, int d, double s) { value_[row_start_[3 * I + c] + 3 * position(I, J) + d] += s; }
   Eigen::SparseMatrix<double, Eigen::RowMajor, int> matrix() const {
     const auto n = static_cast<Eigen::Index>(3 * cols_.size());
     Eigen::SparseMatrix<double, Eigen::RowMajor, int> A(n, n);
@@ -230,8 +237,7 @@ void Approximation::grid_nodes_near(const Vec3& x, double radius, std::vector<st
       }
 }
 
-bool Approximation::shape(const Vec3& x, std::vector<std::int64_t>& ids, std::vector<double>& phi,
-                          std::vector<Vec3>* grad) const {
+bool Approximation::shape(const Vec3& x, std::vector<std::int64_t>& ids, std::vector<double>& phi, std::vector<Vec3>* grad) const {
   thread_local std::vector<std::int64_t> near;
   thread_local std::vector<Vec4> pz;
   thread_local std::vector<double> wv;
@@ -405,7 +411,8 @@ void check_params(const std::vector<Vec3>& centre, const std::vector<double>& ra
   for (const std::string& face : p.boundary_faces)
     if (std::find(kBoxFaces.begin(), kBoxFaces.end(), face) == kBoxFaces.end())
       throw SetupError("rkpm_matrix: boundary_faces must name x_lo, x_hi, y_lo, y_hi, z_lo or z_hi, found \"" + face + "\"");
-  if (p.boundary != "free" && p.boundary_faces.empty()) throw SetupError("rkpm_matrix: boundary \"" + p.boundary + "\" needs boundary_faces");
+  if (p.boundary != "free" && p.boundary_faces.empty())
+    throw SetupError("rkpm_matrix: boundary \"" + p.boundary + "\" needs boundary_faces");
   for (std::size_t k = 1; k < p.strain_edges.size(); ++k)
     if (!(p.strain_edges[k] > p.strain_edges[k - 1])) throw SetupError("rkpm_matrix: strain_edges must increase strictly");
   for (double r : radius)
@@ -565,7 +572,8 @@ double assemble_volume(BlockMatrix& K, Eigen::VectorXd& F, const Approximation& 
     pts.clear();
     for (std::size_t q = vq.cell_start[cell]; q < vq.cell_start[cell + 1]; ++q) {
       const QPoint& qp = vq.points[q];
-      if (!ap.shape(qp.x, ids, phi, &grad)) throw SetupError("rkpm_matrix: singular moment matrix at a volume point (raise support_factor)");
+      if (!ap.shape(qp.x, ids, phi, &grad))
+        throw SetupError("rkpm_matrix: singular moment matrix at a volume point (raise support_factor)");
       PointData pd;
       pd.w = qp.w;
       for (std::size_t a = 0; a < ids.size(); ++a) {
@@ -639,7 +647,8 @@ void assemble_surface(BlockMatrix& K, const Approximation& ap, const Frame& f, c
       const Vec3 x = centre[I] + radius[I] * e;
       if (!f.in_domain(x) || sg.inside(x, static_cast<std::int64_t>(I)) >= 0) continue;
       if (!ap.shape(x, ids, phi, nullptr))
-        throw SetupError("rkpm_matrix: singular moment matrix at a surface point of sphere " + std::to_string(I) + " (raise support_factor)");
+        throw SetupError("rkpm_matrix: singular moment matrix at a surface point of sphere " + std::to_string(I) +
+                         " (raise support_factor)");
       SP sp;
       for (std::size_t a = 0; a < ids.size(); ++a) {
         sp.l.push_back(local_index(local, lnodes, ids[a]));
@@ -676,8 +685,8 @@ void assemble_surface(BlockMatrix& K, const Approximation& ap, const Frame& f, c
 /// self-equilibrated thermal load). "clamped" / "rollers": beta int_{dOmega} |u|^2 (resp.
 /// (u.n)^2) dS over the box faces listed in boundary_faces (u-bar = 0), beta = boundary_penalty E / h, Gauss points on
 /// the background cells of each face (points inside a sphere dropped).
-void assemble_boundary(BlockMatrix& K, const Approximation& ap, const Frame& f, const SphereGrid& sg, std::size_t spheres,
-                       const Params& p, const Material& m) {
+void assemble_boundary(BlockMatrix& K, const Approximation& ap, const Frame& f, const SphereGrid& sg, std::size_t spheres, const Params& p,
+                       const Material& m) {
   std::vector<std::int64_t> ids;
   std::vector<double> phi;
   auto penalise = [&](const Vec3& x, double beta, const Vec3* normal, int comp_mask) {
@@ -755,9 +764,7 @@ Eigen::VectorXd solve_system(const Eigen::SparseMatrix<double, Eigen::RowMajor, 
     res.iterations = static_cast<int>(cg.iterations());
     ok = cg.info() == Eigen::Success;
   } else {
-    Eigen::ConjugateGradient<Eigen::SparseMatrix<double, Eigen::RowMajor, int>, Eigen::Lower | Eigen::Upper,
-                             Eigen::DiagonalPreconditioner<double>>
-        cg;
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double, Eigen::RowMajor, int>, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>> cg;
     cg.setTolerance(p.cg_tolerance);
     cg.setMaxIterations(p.cg_max_iterations);
     cg.compute(A);

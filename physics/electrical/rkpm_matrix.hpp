@@ -120,10 +120,10 @@ struct Params {
   int cg_max_iterations = 20000;
   std::string solver = "cg_ic";  ///< "cg_ic" (incomplete Cholesky) | "cg" (Jacobi) | "ldlt" | "auto" (LDLT up to direct_limit unknowns, else cg_ic)
   std::size_t direct_limit = 3000;
-  std::string boundary = "free";  ///< "free" (pinned translation) | "clamped" | "rollers" (box faces)
+  std::string boundary = "free";    ///< "free" (pinned translation) | "clamped" | "rollers" (box faces)
   double boundary_penalty = 100.0;  ///< beta / (E / h) [1] for clamped / rollers
   std::vector<std::string> boundary_faces{kBoxFaces.begin(), kBoxFaces.end()};  ///< faces of clamped / rollers
-  bool strain_statistics = false;   ///< evaluate the max principal strain at every volume point
+  bool strain_statistics = false;                                               ///< evaluate the max principal strain at every volume point
   std::vector<double> strain_edges;  ///< histogram bin edges, per unit eps0 [1] (empty: means only)
 };
 
@@ -171,23 +171,23 @@ class Approximation {
   Vec3 lo_ = Vec3::Zero();
   std::array<int, 3> n_{0, 0, 0};  ///< nodes per direction
   double h_ = 1.0, rho_ = 2.0;
-  std::vector<std::int64_t> id_;    ///< grid index -> kept node id or -1
-  std::vector<Vec3> position_;     ///< kept nodes
+  std::vector<std::int64_t> id_;  ///< grid index -> kept node id or -1
+  std::vector<Vec3> position_;    ///< kept nodes
 };
 
 struct Result {
   std::vector<Vec3> sphere_displacement;  ///< U_I per unit eps0 [m]
   std::vector<Vec3> node_coefficient;     ///< d_i per unit eps0 [m]
   Approximation approximation;
-  std::size_t volume_points = 0;          ///< kept volume quadrature points
-  std::size_t surface_points = 0;         ///< kept surface quadrature points (all spheres)
-  double quadrature_volume = 0.0;         ///< sum of the kept volume weights [m^3]
-  double residual = 0.0;                  ///< |K x - F| / |F| of the solve [1]
-  int iterations = 0;                     ///< CG iterations
+  std::size_t volume_points = 0;   ///< kept volume quadrature points
+  std::size_t surface_points = 0;  ///< kept surface quadrature points (all spheres)
+  double quadrature_volume = 0.0;  ///< sum of the kept volume weights [m^3]
+  double residual = 0.0;           ///< |K x - F| / |F| of the solve [1]
+  int iterations = 0;              ///< CG iterations
   std::size_t unknowns = 0;
   std::size_t nonzeros = 0;
   double assembly_seconds = 0.0, solve_seconds = 0.0;
-  StrainStatistics strain;                ///< filled if Params::strain_statistics
+  StrainStatistics strain;  ///< filled if Params::strain_statistics
   /// u(x) per unit eps0 [m] (the RKPM field; inside spheres it is the extension of the field)
   Vec3 displacement(const Vec3& x) const;
   /// grad u (row = component, column = derivative) per unit eps0 [1]

@@ -37,19 +37,22 @@ double cap_half_angle(double a_m, double R_m, CapRule rule) {
   return rule == CapRule::EqualArea ? 2.0 * std::asin(0.5 * x) : std::asin(x);
 }
 
-Eigen::MatrixXd sphere_patch_resistance(double kappa_S_per_m, double R_m, std::span<const Vec3> u,
-                                        std::span<const double> alpha_rad, const SphereElementOptions& o) {
+Eigen::MatrixXd sphere_patch_resistance(double kappa_S_per_m, double R_m, std::span<const Vec3> u, std::span<const double> alpha_rad,
+                                        const SphereElementOptions& o) {
   detail::require_positive("conductivity kappa [S/m]", kappa_S_per_m);
   detail::require_positive("sphere radius R [m]", R_m);
-  if (u.size() != alpha_rad.size()) detail::invalid("patch angles (one per direction), count", "equal to the directions", static_cast<double>(alpha_rad.size()));
-  if (!(o.l_per_radian > 0.0) || o.l_min < 1 || o.l_cap < o.l_min) detail::invalid("sphere element truncation l_per_radian", "> 0 with 1 <= l_min <= l_cap", o.l_per_radian);
+  if (u.size() != alpha_rad.size())
+    detail::invalid("patch angles (one per direction), count", "equal to the directions", static_cast<double>(alpha_rad.size()));
+  if (!(o.l_per_radian > 0.0) || o.l_min < 1 || o.l_cap < o.l_min)
+    detail::invalid("sphere element truncation l_per_radian", "> 0 with 1 <= l_min <= l_cap", o.l_per_radian);
   const std::size_t n = u.size();
   double alpha_min = kPi;
   for (double a : alpha_rad) {
     if (!(a > 0.0 && a <= 0.5 * kPi + 1e-12)) detail::invalid("cap half-angle alpha [rad]", "in (0, pi/2]", a);
     alpha_min = std::min(alpha_min, a);
   }
-  const int L = static_cast<int>(std::clamp(std::ceil(o.l_per_radian / alpha_min), static_cast<double>(o.l_min), static_cast<double>(o.l_cap)));
+  const int L = static_cast<int>(
+      std::clamp(std::ceil(o.l_per_radian / alpha_min), static_cast<double>(o.l_min), static_cast<double>(o.l_cap)));
   std::vector<std::vector<double>> beta(n);
   for (std::size_t p = 0; p < n; ++p) cap_means(alpha_rad[p], L, beta[p]);
   std::vector<double> w(static_cast<std::size_t>(L) + 1, 0.0);
@@ -71,8 +74,8 @@ Eigen::MatrixXd sphere_patch_resistance(double kappa_S_per_m, double R_m, std::s
   return H / (4.0 * kPi * kappa_S_per_m * R_m);
 }
 
-Eigen::MatrixXd sphere_patch_conductance(double kappa_S_per_m, double R_m, std::span<const Vec3> u,
-                                         std::span<const double> alpha_rad, const SphereElementOptions& o) {
+Eigen::MatrixXd sphere_patch_conductance(double kappa_S_per_m, double R_m, std::span<const Vec3> u, std::span<const double> alpha_rad,
+                                         const SphereElementOptions& o) {
   const auto n = static_cast<Eigen::Index>(u.size());
   if (n < 2) {
     if (n == 1) (void)sphere_patch_resistance(kappa_S_per_m, R_m, u, alpha_rad, o);  // validate the arguments

@@ -50,14 +50,14 @@ struct SphereElementOptions {
 /// The patch resistance kernel H [Ohm] (n x n, symmetric) of a sphere of radius R_m and
 /// conductivity kappa for caps of half-angle alpha_rad[p] in (0, pi/2] about unit directions
 /// u[p]. Throws ConfigError on invalid arguments.
-Eigen::MatrixXd sphere_patch_resistance(double kappa_S_per_m, double R_m, std::span<const Vec3> u,
-                                        std::span<const double> alpha_rad, const SphereElementOptions& o = {});
+Eigen::MatrixXd sphere_patch_resistance(double kappa_S_per_m, double R_m, std::span<const Vec3> u, std::span<const double> alpha_rad,
+                                        const SphereElementOptions& o = {});
 
 /// The element conductance matrix K [S] (n x n): J = K V for the currents J entering through the
 /// patches and the patch (mean) potentials V. n = 0 or 1 gives a zero matrix (no current can
 /// flow through a particle with one neck).
-Eigen::MatrixXd sphere_patch_conductance(double kappa_S_per_m, double R_m, std::span<const Vec3> u,
-                                         std::span<const double> alpha_rad, const SphereElementOptions& o = {});
+Eigen::MatrixXd sphere_patch_conductance(double kappa_S_per_m, double R_m, std::span<const Vec3> u, std::span<const double> alpha_rad,
+                                         const SphereElementOptions& o = {});
 
 /// How a neck of radius a becomes a cap on the sphere of radius R:
 ///  - EqualArea (default): the cap has the neck's area, 2 pi R^2 (1 - cos alpha) = pi a^2, i.e.

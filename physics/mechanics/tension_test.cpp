@@ -18,7 +18,9 @@ ParamSpec<TensionTest::Params> TensionTest::spec() {
   s.add("radius", &Params::radius).unit("m").required().positive().doc("sample radius R (stress area pi R^2)");
   s.add("pulled", &Params::pulled).required().doc("particle set moved along the axis (listed in the stage's \"sets\")");
   s.add("fixed", &Params::fixed).required().doc("particle set clamped at the other end");
-  s.add("middle_fraction", &Params::middle_fraction).unit("1").range(1e-6, 1.0)
+  s.add("middle_fraction", &Params::middle_fraction)
+      .unit("1")
+      .range(1e-6, 1.0)
       .doc("central fraction of the sample length where the strains are measured");
   return s;
 }
@@ -79,8 +81,16 @@ TensionTest::Result TensionTest::measure(const State& s) const {
   double Fp = 0.0, Ff = 0.0, sp = 0.0, sf = 0.0, np = 0.0, nf = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
     const double si = (p.position[i] - p_.axis_point).dot(a_);
-    if (fp[i] > 0.5) { Fp += p.force[i].dot(a_); sp += si; np += 1.0; }
-    if (ff[i] > 0.5) { Ff += p.force[i].dot(a_); sf += si; nf += 1.0; }
+    if (fp[i] > 0.5) {
+      Fp += p.force[i].dot(a_);
+      sp += si;
+      np += 1.0;
+    }
+    if (ff[i] > 0.5) {
+      Ff += p.force[i].dot(a_);
+      sf += si;
+      nf += 1.0;
+    }
   }
   const double d = (np > 0.0 && nf > 0.0 && sp / np < sf / nf) ? -1.0 : 1.0;
   r.force = -d * Fp;

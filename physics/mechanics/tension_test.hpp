@@ -70,10 +70,10 @@ class TensionTest final : public Module {
   struct Params {
     Vec3 axis_point = Vec3::Zero();
     Vec3 axis = Vec3::UnitZ();
-    double radius = 0.0;             ///< [m]
+    double radius = 0.0;  ///< [m]
     std::string pulled;
     std::string fixed;
-    double middle_fraction = 0.5;    ///< [1]
+    double middle_fraction = 0.5;  ///< [1]
   };
   static ParamSpec<Params> spec();
   /// Throws ConfigError (paths relative to the module) for a zero axis.

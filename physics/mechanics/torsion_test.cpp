@@ -37,7 +37,10 @@ Index reference_member(const State& s, const std::vector<double>& set) {
 double axial_centroid(const State& s, const std::vector<double>& set, const Vec3& c, const Vec3& a) {
   double z = 0.0, n = 0.0;
   for (std::size_t i = 0; i < set.size(); ++i)
-    if (set[i] > 0.5) { z += (s.particles.position[i] - c).dot(a); n += 1.0; }
+    if (set[i] > 0.5) {
+      z += (s.particles.position[i] - c).dot(a);
+      n += 1.0;
+    }
   return n > 0.0 ? z / n : kNaN;
 }
 }  // namespace
@@ -56,13 +59,21 @@ ParamSpec<TorsionTest::Params> TorsionTest::spec() {
   s.add("shear_modulus", &Params::shear_modulus).unit("Pa").positive().required().doc("G of the elastic reference G J theta / L");
   s.add("yield_shear_stress", &Params::yield_shear_stress).unit("Pa").positive().required().doc("tau_y");
   s.add("resistance_signal", &Params::resistance_signal).doc("signal holding the resistance (\"\": none)");
-  s.add("resistance_threshold", &Params::resistance_threshold).unit("1").positive()
+  s.add("resistance_threshold", &Params::resistance_threshold)
+      .unit("1")
+      .positive()
       .doc("the resistance onset is the first twist where R / R0 - 1 exceeds this");
-  s.add("resistance_jump_ratio", &Params::resistance_jump_ratio).unit("1").positive()
+  s.add("resistance_jump_ratio", &Params::resistance_jump_ratio)
+      .unit("1")
+      .positive()
       .doc("the jump onset is the first twist where R / R0 reaches this (2: R doubled)");
-  s.add("resistance_persistence", &Params::resistance_persistence).unit("rad").nonnegative()
+  s.add("resistance_persistence", &Params::resistance_persistence)
+      .unit("rad")
+      .nonnegative()
       .doc("a resistance crossing counts only if it holds over this twist span (0: unfiltered)");
-  s.add("report_twists", &Params::report_twists).unit("rad").doc("twists at which R / R0 is recorded (columns torsion_resistance_ratio_at_<twist>)");
+  s.add("report_twists", &Params::report_twists)
+      .unit("rad")
+      .doc("twists at which R / R0 is recorded (columns torsion_resistance_ratio_at_<twist>)");
   return s;
 }
 
@@ -91,8 +102,9 @@ void TorsionTest::bind(State& s) {
     m[kKey + "q0_y"] = q.y();
     m[kKey + "q0_z"] = q.z();
     m[kKey + "broken0"] = static_cast<double>(s.bonds.broken_count());
-    const double L = p_.length > 0.0 ? p_.length
-                                     : std::abs(axial_centroid(s, twisted, p_.axis_point, a_) - axial_centroid(s, clamped, p_.axis_point, a_));
+    const double L = p_.length > 0.0
+                         ? p_.length
+                         : std::abs(axial_centroid(s, twisted, p_.axis_point, a_) - axial_centroid(s, clamped, p_.axis_point, a_));
     if (!(L > 0.0)) throw SetupError("torsion_test: the end sets have no axial distance; set `length`");
     m[kKey + "length"] = L;
   }
@@ -138,11 +150,21 @@ void TorsionTest::advance(State& s, const StepInfo&) {
 }
 
 std::vector<std::string> TorsionTest::columns() const {
-  std::vector<std::string> c = {"torsion_twist", "torsion_torque", "torsion_torque_twisted_end", "torsion_shear_stress",
-                                "torsion_shear_ratio", "torsion_elastic_torque", "torsion_torque_ratio",
-                                "torsion_resistance_ratio", "torsion_break_onset_twist", "torsion_resistance_onset_twist",
-                                "torsion_separation_twist", "torsion_stiffness_ratio", "torsion_resistance_jump_twist",
-                                "torsion_resistance_rejected_rises", "torsion_resistance_rejected_jumps"};
+  std::vector<std::string> c = {"torsion_twist",
+                                "torsion_torque",
+                                "torsion_torque_twisted_end",
+                                "torsion_shear_stress",
+                                "torsion_shear_ratio",
+                                "torsion_elastic_torque",
+                                "torsion_torque_ratio",
+                                "torsion_resistance_ratio",
+                                "torsion_break_onset_twist",
+                                "torsion_resistance_onset_twist",
+                                "torsion_separation_twist",
+                                "torsion_stiffness_ratio",
+                                "torsion_resistance_jump_twist",
+                                "torsion_resistance_rejected_rises",
+                                "torsion_resistance_rejected_jumps"};
   for (double t : p_.report_twists) c.push_back(report_column(t));
   return c;
 }

@@ -18,8 +18,8 @@ ParamSpec<BoxDensityMonitor::Params> BoxDensityMonitor::spec() {
 BoxDensityMonitor::BoxDensityMonitor(const Params& p) : p_(p) {
   for (int d = 0; d < 3; ++d)
     if (!(p_.hi[d] > p_.lo[d]))
-      throw ConfigError("/hi", "expected hi > lo in every component [m], found hi[" + std::to_string(d) + "] = " +
-                                   std::to_string(p_.hi[d]) + " <= lo[" + std::to_string(d) + "] = " + std::to_string(p_.lo[d]));
+      throw ConfigError("/hi", "expected hi > lo in every component [m], found hi[" + std::to_string(d) +
+                                   "] = " + std::to_string(p_.hi[d]) + " <= lo[" + std::to_string(d) + "] = " + std::to_string(p_.lo[d]));
 }
 
 std::vector<std::string> BoxDensityMonitor::columns(const State&) const { return {"box_solid_fraction", "box_particles"}; }

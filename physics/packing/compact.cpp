@@ -37,32 +37,36 @@ double compact_solid_volume(const std::vector<Vec3>& positions, const std::vecto
   for (const auto& [i, j] : pairs) {
     const double d = (positions[j] - positions[i]).norm();
     if (d >= radii[i] + radii[j]) continue;
-    if (contains(region, lens_centre(positions[i], radii[i], positions[j], radii[j])))
-      v -= lens_volume(radii[i], radii[j], d);
+    if (contains(region, lens_centre(positions[i], radii[i], positions[j], radii[j]))) v -= lens_volume(radii[i], radii[j], d);
   }
   return v;
 }
 
 CompactMonitor::CompactMonitor(CompactParams p) : p_(std::move(p)) {
-  if (p_.bottom == p_.top)
-    throw ConfigError("/top", "expected a wall other than the bottom punch, found \"" + p_.top + "\"");
+  if (p_.bottom == p_.top) throw ConfigError("/top", "expected a wall other than the bottom punch, found \"" + p_.top + "\"");
 }
 
 ParamSpec<CompactParams> compact_spec() {
   using P = CompactParams;
   ParamSpec<P> s("compact", "object",
                  "porosity of a powder compact in a die (stage key): columns porosity = 1 - V_solid / (pi R^2 H) (spheres "
-                 "clipped to the die and the punches, sphere-sphere lens volumes subtracted), porosity_interior, porosity_mass (lenses not subtracted: mass-conserving, for sintered compacts), "
+                 "clipped to the die and the punches, sphere-sphere lens volumes subtracted), porosity_interior, porosity_mass (lenses not "
+                 "subtracted: mass-conserving, for sintered compacts), "
                  "relative_density, compact_height");
   s.add("die", &P::die).doc("the die: a cylinder wall (its current radius R)");
   s.add("bottom", &P::bottom).doc("lower punch: a plane wall normal to the die axis");
   s.add("top", &P::top).doc("upper punch: a plane wall normal to the die axis, facing the lower one");
-  s.add("interior_margin", &P::interior_margin).unit("m").nonnegative()
+  s.add("interior_margin", &P::interior_margin)
+      .unit("m")
+      .nonnegative()
       .doc("porosity_interior: region this far from every wall (0: one largest particle diameter)");
-  s.add("envelope_cell", &P::envelope_cell).unit("1").positive()
-      .doc("porosity_envelope: size of the caliper cells (slices along the axis, sectors about it) in mean particle "
-           "diameters; a cell must hold a surface particle (a compact filling the die reads 0.99 of its radius at 2, "
-           "the die radius at 3)");
+  s.add("envelope_cell", &P::envelope_cell)
+      .unit("1")
+      .positive()
+      .doc(
+          "porosity_envelope: size of the caliper cells (slices along the axis, sectors about it) in mean particle "
+          "diameters; a cell must hold a surface particle (a compact filling the die reads 0.99 of its radius at 2, "
+          "the die radius at 3)");
   return s;
 }
 
@@ -90,14 +94,12 @@ CylinderRegion compact_region(const State& s, const CompactParams& p) {
   const double zt = (pt.point + top.u * pt.normal - c.base).dot(axis);
   const double R = die.cylinder_radius();
   if (!(zt > zb) || !(R > 0.0))
-    throw SetupError("compact: empty compact region (height " + std::to_string(zt - zb) + " m, die radius " +
-                     std::to_string(R) + " m)");
+    throw SetupError("compact: empty compact region (height " + std::to_string(zt - zb) + " m, die radius " + std::to_string(R) + " m)");
   return CylinderRegion{c.base + zb * axis, axis, R, zt - zb};
 }
 
 std::vector<std::string> CompactMonitor::columns(const State&) const {
-  return {"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass", "envelope_radius",
-          "porosity_envelope"};
+  return {"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass", "envelope_radius", "porosity_envelope"};
 }
 
 double envelope_volume(const std::vector<Vec3>& positions, const std::vector<double>& radii, const CylinderRegion& region,

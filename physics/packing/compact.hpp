@@ -46,11 +46,11 @@ double compact_solid_volume(const std::vector<Vec3>& positions, const std::vecto
 /// Stage key "compact": the die (a cylinder wall) and the two punches (plane walls normal to its
 /// axis, normals pointing into the compact).
 struct CompactParams {
-  std::string die = "die";          ///< cylinder wall
-  std::string bottom = "bottom";    ///< plane wall (lower punch)
-  std::string top = "top";          ///< plane wall (upper punch)
-  double interior_margin = 0.0;     ///< [m] interior region margin from every wall; 0 = one largest diameter
-  double envelope_cell = 3.0;       ///< [mean diameters] caliper cells of porosity_envelope (envelope_volume)
+  std::string die = "die";        ///< cylinder wall
+  std::string bottom = "bottom";  ///< plane wall (lower punch)
+  std::string top = "top";        ///< plane wall (upper punch)
+  double interior_margin = 0.0;   ///< [m] interior region margin from every wall; 0 = one largest diameter
+  double envelope_cell = 3.0;     ///< [mean diameters] caliper cells of porosity_envelope (envelope_volume)
 };
 ParamSpec<CompactParams> compact_spec();
 
@@ -98,9 +98,7 @@ class CompactMonitor final : public Monitor {
   std::vector<std::string> columns(const State& s) const override;
   std::vector<double> values(const State& s) const override;
   /// The die (a cylinder) and the two punches (planes).
-  std::vector<WallUse> wall_uses() const override {
-    return {{"die", p_.die, false}, {"bottom", p_.bottom, true}, {"top", p_.top, true}};
-  }
+  std::vector<WallUse> wall_uses() const override { return {{"die", p_.die, false}, {"bottom", p_.bottom, true}, {"top", p_.top, true}}; }
 
  private:
   CompactParams p_;

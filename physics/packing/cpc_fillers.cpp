@@ -31,7 +31,10 @@ class ShellGrid {
  public:
   ShellGrid(const std::vector<Vec3>& x, double cell) : h_(cell) {
     lo_ = hi_ = x.empty() ? Vec3::Zero() : x[0];
-    for (const auto& p : x) { lo_ = lo_.cwiseMin(p); hi_ = hi_.cwiseMax(p); }
+    for (const auto& p : x) {
+      lo_ = lo_.cwiseMin(p);
+      hi_ = hi_.cwiseMax(p);
+    }
     lo_ -= Vec3::Constant(2.0 * h_);  // room for points moved slightly outside (clamped otherwise)
     hi_ += Vec3::Constant(2.0 * h_);
     for (int d = 0; d < 3; ++d) n_[d] = static_cast<int>(std::floor((hi_[d] - lo_[d]) / h_)) + 1;
@@ -65,7 +68,10 @@ class ShellGrid {
             if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= n_[0] || q[1] >= n_[1] || q[2] >= n_[2]) continue;
             for (Index i : cells_[flat(q)]) {
               const double d = (x[i] - p).norm();
-              if (d < bd || (d == bd && i < best)) { bd = d; best = i; }
+              if (d < bd || (d == bd && i < best)) {
+                bd = d;
+                best = i;
+              }
             }
           }
         }
@@ -80,9 +86,7 @@ class ShellGrid {
     for (int d = 0; d < 3; ++d) c[d] = std::clamp(static_cast<int>(std::floor((p[d] - lo_[d]) / h_)), 0, n_[d] - 1);
     return c;
   }
-  std::size_t flat(const std::array<int, 3>& c) const {
-    return (static_cast<std::size_t>(c[2]) * n_[1] + c[1]) * n_[0] + c[0];
-  }
+  std::size_t flat(const std::array<int, 3>& c) const { return (static_cast<std::size_t>(c[2]) * n_[1] + c[1]) * n_[0] + c[0]; }
   double h_;
   Vec3 lo_, hi_;
   std::array<int, 3> n_{};
@@ -117,7 +121,10 @@ std::vector<std::array<Index, 2>> contact_pairs(const std::vector<Vec3>& x, cons
 
 std::vector<Index> cluster_labels(std::size_t n, const std::vector<std::array<Index, 2>>& pairs) {
   std::vector<Index> a, b;
-  for (const auto& p : pairs) { a.push_back(p[0]); b.push_back(p[1]); }
+  for (const auto& p : pairs) {
+    a.push_back(p[0]);
+    b.push_back(p[1]);
+  }
   const std::vector<double> g(pairs.size(), 1.0);
   return component_roots(n, a, b, g);
 }
@@ -126,7 +133,10 @@ OverlapRemoval remove_overlaps(std::vector<Vec3>& x, const std::vector<double>& 
                                std::int64_t max_iterations) {
   OverlapRemoval out;
   const std::size_t n = x.size();
-  if (n == 0) { out.converged = true; return out; }
+  if (n == 0) {
+    out.converged = true;
+    return out;
+  }
   // Verlet list with a skin of half the smallest radius: pairs that may overlap before the next
   // rebuild (the tracker rebuilds when some particle moved more than half the skin).
   const double skin = 0.5 * min_radius(r);
@@ -155,7 +165,10 @@ OverlapRemoval remove_overlaps(std::vector<Vec3>& x, const std::vector<double>& 
       grad[j] -= g * u;
     }
     out.max_overlap = worst;
-    if (worst <= tolerance) { out.converged = true; break; }
+    if (worst <= tolerance) {
+      out.converged = true;
+      break;
+    }
     if (out.iterations >= max_iterations) break;
     for (std::size_t i = 0; i < n; ++i) x[i] -= gamma * grad[i];
     ++out.iterations;
@@ -163,8 +176,7 @@ OverlapRemoval remove_overlaps(std::vector<Vec3>& x, const std::vector<double>& 
   return out;
 }
 
-Aggregation aggregate(std::vector<Vec3>& x, const std::vector<double>& r, double lambda, double contact_tolerance,
-                      std::mt19937_64& rng) {
+Aggregation aggregate(std::vector<Vec3>& x, const std::vector<double>& r, double lambda, double contact_tolerance, std::mt19937_64& rng) {
   Aggregation out;
   const std::size_t n = x.size();
   if (n == 0) return out;
@@ -180,8 +192,10 @@ Aggregation aggregate(std::vector<Vec3>& x, const std::vector<double>& r, double
   ShellGrid grid(x, 2.0 * rmax);
   std::vector<Index> rest;
   for (std::size_t i = 0; i < n; ++i) {
-    if (label[i] == big) grid.insert(static_cast<Index>(i), x[i]);
-    else rest.push_back(static_cast<Index>(i));
+    if (label[i] == big)
+      grid.insert(static_cast<Index>(i), x[i]);
+    else
+      rest.push_back(static_cast<Index>(i));
   }
   // Random order: Fisher-Yates with uniform_open01 (portable, unlike std::shuffle).
   for (std::size_t k = rest.size(); k > 1; --k) {
@@ -251,11 +265,18 @@ ParamSpec<CpcFillersGenerator::Params> CpcFillersGenerator::spec() {
   s.add("radius", &P::radius).unit("m").positive().doc("filler radius R (configs use 1: lengths in units of R)");
   s.add("box_length", &P::box_length).unit("m").positive().doc("cube edge L (paper: 70 R; 60 and 80 R for finite size)");
   s.add("volume_fraction", &P::volume_fraction).unit("1").range(1e-6, 0.6).doc("phi = N 4/3 pi R^3 / L^3 (N rounded)");
-  s.add("aggregation_lambda", &P::aggregation_lambda).unit("1").nonnegative()
+  s.add("aggregation_lambda", &P::aggregation_lambda)
+      .unit("1")
+      .nonnegative()
       .doc("lambda of the aggregation step in units of R (paper's segregated case: 35); 0 = homogeneous, no aggregation");
   s.add("step", &P::step).unit("1").range(1e-6, 0.999).doc("gamma of the contact algorithm (paper: 0.4)");
-  s.add("overlap_tolerance", &P::overlap_tolerance).unit("1").positive().doc("stop at largest relative overlap 1 - r_ij/(R_i+R_j) <= this (paper: 1e-3)");
-  s.add("contact_tolerance", &P::contact_tolerance).unit("1").nonnegative()
+  s.add("overlap_tolerance", &P::overlap_tolerance)
+      .unit("1")
+      .positive()
+      .doc("stop at largest relative overlap 1 - r_ij/(R_i+R_j) <= this (paper: 1e-3)");
+  s.add("contact_tolerance", &P::contact_tolerance)
+      .unit("1")
+      .nonnegative()
       .doc("aggregation: pairs with gap <= this x (R_i + R_j) form the contact graph (paper: 1e-3)");
   s.add("max_iterations", &P::max_iterations).min(1).doc("largest number of gradient steps per contact-algorithm run (SetupError beyond)");
   s.add("material", &P::material).nonnegative().doc("material index (its density gives the masses)");
@@ -298,12 +319,13 @@ void CpcFillersGenerator::generate(State& s) {
     result_["contact_iterations_after_aggregation"] = static_cast<double>(second.iterations);
   }
   const double rho = s.materials[p_.material].density;
-  for (std::size_t i = 0; i < n; ++i)
-    s.particles.add(x[i], R, rho * 4.0 / 3.0 * kPi * R * R * R, static_cast<std::int32_t>(p_.material));
-  for (const auto& [name, point, normal] :
-       {std::tuple{"xlo", Vec3(0, 0, 0), Vec3(1, 0, 0)}, {"xhi", Vec3(L, L, L), Vec3(-1, 0, 0)},
-        std::tuple{"ylo", Vec3(0, 0, 0), Vec3(0, 1, 0)}, {"yhi", Vec3(L, L, L), Vec3(0, -1, 0)},
-        std::tuple{"bottom", Vec3(0, 0, 0), Vec3(0, 0, 1)}, {"top", Vec3(L, L, L), Vec3(0, 0, -1)}}) {
+  for (std::size_t i = 0; i < n; ++i) s.particles.add(x[i], R, rho * 4.0 / 3.0 * kPi * R * R * R, static_cast<std::int32_t>(p_.material));
+  for (const auto& [name, point, normal] : {std::tuple{"xlo", Vec3(0, 0, 0), Vec3(1, 0, 0)},
+                                            {"xhi", Vec3(L, L, L), Vec3(-1, 0, 0)},
+                                            std::tuple{"ylo", Vec3(0, 0, 0), Vec3(0, 1, 0)},
+                                            {"yhi", Vec3(L, L, L), Vec3(0, -1, 0)},
+                                            std::tuple{"bottom", Vec3(0, 0, 0), Vec3(0, 0, 1)},
+                                            {"top", Vec3(L, L, L), Vec3(0, 0, -1)}}) {
     if (s.find_wall(name)) throw SetupError(std::string("a wall named '") + name + "' already exists; cpc_fillers creates it");
     Wall w;
     w.name = name;

@@ -95,8 +95,7 @@ struct Aggregation {
 };
 /// The aggregation step (header item 3), without the final contact algorithm. lambda [1] in
 /// units of the moving particle's radius; contact_tolerance [1] defines the contact graph.
-Aggregation aggregate(std::vector<Vec3>& x, const std::vector<double>& r, double lambda, double contact_tolerance,
-                      std::mt19937_64& rng);
+Aggregation aggregate(std::vector<Vec3>& x, const std::vector<double>& r, double lambda, double contact_tolerance, std::mt19937_64& rng);
 
 }  // namespace cpc
 

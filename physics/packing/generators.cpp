@@ -34,8 +34,8 @@ void add_wall(State& s, Wall w) {
 }
 double material_density(const State& s, std::int64_t m) {
   if (m < 0 || m >= static_cast<std::int64_t>(s.materials.size()))
-    throw ConfigError("/material", "material index " + std::to_string(m) + " is not defined (" +
-                                       std::to_string(s.materials.size()) + " materials)");
+    throw ConfigError("/material",
+                      "material index " + std::to_string(m) + " is not defined (" + std::to_string(s.materials.size()) + " materials)");
   return s.materials[m].density;
 }
 void add_box_walls(State& s, const Vec3& lo, const Vec3& hi) {
@@ -63,8 +63,8 @@ double expected_count(const SizeDistributionParams& sp, std::int64_t particles, 
 /// Diameters [m] drawn from a size distribution: `particles` draws, or (particles = 0) draws
 /// until their solid volume reaches solid_volume [m^3] (sample_until_volume). `sampling`
 /// receives the requested vs sampled statistics (psd_* report keys).
-std::vector<double> sample_diameters(const SizeDistributionParams& sp, std::int64_t particles, double solid_volume,
-                                     std::mt19937_64& rng, std::map<std::string, double>& sampling) {
+std::vector<double> sample_diameters(const SizeDistributionParams& sp, std::int64_t particles, double solid_volume, std::mt19937_64& rng,
+                                     std::map<std::string, double>& sampling) {
   const SizeDistribution dist = make_distribution(sp);
   std::vector<double> d;
   if (particles > 0) {
@@ -73,17 +73,20 @@ std::vector<double> sample_diameters(const SizeDistributionParams& sp, std::int6
     d = sample_until_volume(dist, solid_volume, rng);
   }
   const DistributionReport rep = compare(dist, d);
-  sampling = {{"psd_ks_distance", rep.ks_distance},       {"psd_d10_requested", rep.requested_d[0]},
-              {"psd_d50_requested", rep.requested_d[1]}, {"psd_d90_requested", rep.requested_d[2]},
-              {"psd_d10_sampled", rep.sampled_d[0]},     {"psd_d50_sampled", rep.sampled_d[1]},
-              {"psd_d90_sampled", rep.sampled_d[2]},     {"psd_mean_d_sampled", rep.mean_d_sampled},
+  sampling = {{"psd_ks_distance", rep.ks_distance},          {"psd_d10_requested", rep.requested_d[0]},
+              {"psd_d50_requested", rep.requested_d[1]},     {"psd_d90_requested", rep.requested_d[2]},
+              {"psd_d10_sampled", rep.sampled_d[0]},         {"psd_d50_sampled", rep.sampled_d[1]},
+              {"psd_d90_sampled", rep.sampled_d[2]},         {"psd_mean_d_sampled", rep.mean_d_sampled},
               {"psd_mean_d_requested", rep.mean_d_requested}};
   return d;
 }
 /// Report keys diameter_min, diameter_max [m] of the particles.
 void add_diameter_range(const State& s, std::map<std::string, double>& r) {
   double dmin = 1e300, dmax = 0.0;
-  for (double x : s.particles.radius) { dmin = std::min(dmin, 2 * x); dmax = std::max(dmax, 2 * x); }
+  for (double x : s.particles.radius) {
+    dmin = std::min(dmin, 2 * x);
+    dmax = std::max(dmax, 2 * x);
+  }
   r["diameter_min"] = dmin;
   r["diameter_max"] = dmax;
 }
@@ -117,8 +120,7 @@ ParamSpec<LatticeGenerator::Params> LatticeGenerator::spec() {
 }
 double LatticeGenerator::estimated_particles() const {
   double n = 1.0;
-  for (int d = 0; d < 3; ++d)
-    n *= std::max(0.0, std::floor(p_.hi[d] / p_.spacing + 1e-9) - std::ceil(p_.lo[d] / p_.spacing - 1e-9) + 1.0);
+  for (int d = 0; d < 3; ++d) n *= std::max(0.0, std::floor(p_.hi[d] / p_.spacing + 1e-9) - std::ceil(p_.lo[d] / p_.spacing - 1e-9) + 1.0);
   return n;
 }
 void LatticeGenerator::validate(const State& scene, std::vector<Diagnostic>& errors) const {
@@ -145,12 +147,14 @@ void LatticeGenerator::validate(const State& scene, std::vector<Diagnostic>& err
       Vec3 normal;
       double d;
       w.distance(scratch.particles.position[i], normal, d);
-      if (d < 0.0) { if (!outside) first = scratch.particles.id[i]; ++outside; }
+      if (d < 0.0) {
+        if (!outside) first = scratch.particles.id[i];
+        ++outside;
+      }
     }
     if (outside)
-      errors.push_back({"", std::to_string(outside) + " of " + std::to_string(scratch.particles.size()) +
-                                " particles (first id " + std::to_string(first) + ") lie outside wall '" + w.name +
-                                "': the walls do not enclose the particles"});
+      errors.push_back({"", std::to_string(outside) + " of " + std::to_string(scratch.particles.size()) + " particles (first id " +
+                                std::to_string(first) + ") lie outside wall '" + w.name + "': the walls do not enclose the particles"});
   }
 }
 void LatticeGenerator::generate(State& s) {
@@ -188,7 +192,9 @@ ParamSpec<DepositGenerator::Params> DepositGenerator::spec() {
   s.add("insertion_density", &Params::insertion_density).unit("1").range(0.01, 0.35).doc("solid fraction of the loose insertion");
   s.add("settle_time", &Params::settle_time).unit("s").nonnegative().doc("fall and settling time before the die contracts");
   s.add("contraction_time", &Params::contraction_time).unit("s").positive().doc("time for the die to reach container_radius");
-  s.add("min_radius_factor", &Params::min_radius_factor).unit("1").range(0.3, 1.0)
+  s.add("min_radius_factor", &Params::min_radius_factor)
+      .unit("1")
+      .range(0.3, 1.0)
       .doc("the die may contract further, down to this x container_radius, until the target density is reached");
   s.add("gravity", &Params::gravity).unit("m/s^2").positive().doc("packing gravity (scaled for micron powders; reported)");
   s.add("ke_per_mass_below", &Params::ke_per_mass_below).unit("J/kg").positive().doc("settled threshold");
@@ -211,12 +217,15 @@ double DepositGenerator::estimated_particles() const {
 }
 void DepositGenerator::generate(State& s) {
   const double rho = material_density(s, p_.material);
-  const std::vector<double> d =
-      sample_diameters(p_.size_distribution, p_.particles,
-                       p_.target_density * kPi * p_.container_radius * p_.container_radius * p_.container_height, s.rng, sampling_);
+  const std::vector<double> d = sample_diameters(p_.size_distribution, p_.particles,
+                                                 p_.target_density * kPi * p_.container_radius * p_.container_radius * p_.container_height,
+                                                 s.rng, sampling_);
   double vsum = 0.0;
   std::vector<double> radii;
-  for (double x : d) { radii.push_back(0.5 * x); vsum += kPi / 6.0 * x * x * x; }
+  for (double x : d) {
+    radii.push_back(0.5 * x);
+    vsum += kPi / 6.0 * x * x * x;
+  }
   const double r0 = p_.initial_radius_factor * p_.container_radius;
   const double h0 = vsum / (p_.insertion_density * kPi * r0 * r0);
   if (!insert_random(s, radii, CylinderRegion{Vec3::Zero(), Vec3::UnitZ(), r0, h0}, rho, static_cast<std::int32_t>(p_.material)))
@@ -272,7 +281,9 @@ ParamSpec<FillGenerator::Params> FillGenerator::spec() {
   s.add_vec3("lo", &Params::lo).unit("m").doc("box lower corner");
   s.add_vec3("hi", &Params::hi).unit("m").doc("box upper corner");
   s.add("particles", &Params::particles).min(1).doc("number of elements N_DE");
-  s.add("mean_radius", &Params::mean_radius).unit("m").nonnegative()
+  s.add("mean_radius", &Params::mean_radius)
+      .unit("m")
+      .nonnegative()
       .doc("mean radius kept as given (density = N 4/3 pi r^3 (1+spread^2)/V, target_density unused); 0 = Eq. (1)");
   s.add("spread", &Params::spread).unit("1").range(0.0, 0.9).doc("relative half-width of the radius distribution");
   s.add("target_density", &Params::target_density).unit("1").range(0.05, 0.7).doc("packing density to reach");
@@ -282,9 +293,11 @@ ParamSpec<FillGenerator::Params> FillGenerator::spec() {
   s.add("ke_per_mass_below", &Params::ke_per_mass_below).unit("J/kg").positive().doc("settled threshold");
   s.add("max_overlap", &Params::max_overlap).unit("1").positive().doc("largest overlap / smaller radius allowed");
   s.add("material", &Params::material).nonnegative().doc("material index");
-  s.add("neighbour_gap_relative", &Params::neighbour_gap_relative).unit("1")
-      .doc("report seed 001's microstructure with neighbours at gaps <= this * r_mean: neighbour and eccentricity "
-           "histograms (Figs. 2, 4), eccentric shares, the wall density profile (< 0: off)");
+  s.add("neighbour_gap_relative", &Params::neighbour_gap_relative)
+      .unit("1")
+      .doc(
+          "report seed 001's microstructure with neighbours at gaps <= this * r_mean: neighbour and eccentricity "
+          "histograms (Figs. 2, 4), eccentric shares, the wall density profile (< 0: off)");
   return s;
 }
 FillGenerator::FillGenerator(const Params& p) : p_(p) {
@@ -330,8 +343,10 @@ void FillGenerator::generate(State& s) {
   std::vector<double> small(radii.size());
   for (std::size_t k = 0; k < radii.size(); ++k) small[k] = radii[k] * p_.initial_scale * growth_scale_;
   Region region;
-  if (p_.shape == "cylinder") region = CylinderRegion{Vec3::Zero(), Vec3::UnitZ(), p_.radius, p_.length};
-  else region = BoxRegion{p_.lo, p_.hi};
+  if (p_.shape == "cylinder")
+    region = CylinderRegion{Vec3::Zero(), Vec3::UnitZ(), p_.radius, p_.length};
+  else
+    region = BoxRegion{p_.lo, p_.hi};
   if (!insert_random(s, small, region, rho, static_cast<std::int32_t>(p_.material)))
     throw SetupError("fill: random insertion failed; lower initial_scale");
   // Masses of the full-size particles are restored by the growth module.
@@ -386,7 +401,10 @@ ParamSpec<RadiusGrowth::Params> RadiusGrowth::spec() {
   s.add("s0", &Params::s0).unit("1").positive().doc("initial scale");
   s.add("s1", &Params::s1).unit("1").positive().doc("final scale");
   s.add("duration", &Params::duration).unit("s").nonnegative().doc("growth time");
-  s.add("halt_overlap", &Params::halt_overlap).unit("1").nonnegative().doc("pause growth while the largest overlap ratio exceeds this (0 = never)");
+  s.add("halt_overlap", &Params::halt_overlap)
+      .unit("1")
+      .nonnegative()
+      .doc("pause growth while the largest overlap ratio exceeds this (0 = never)");
   return s;
 }
 void RadiusGrowth::declare(Declarations& d) const {
@@ -445,23 +463,32 @@ ParamSpec<RelaxGenerator::Params> RelaxGenerator::spec() {
   s.add("radius", &Params::radius).unit("m").positive().doc("cylinder radius (axis z through the origin)");
   s.add("length", &Params::length).unit("m").positive().doc("cylinder length along z from z = 0");
   s.add_group("size_distribution", &Params::size_distribution, size_distribution_spec(true));
-  s.add("particles", &Params::particles).nonnegative()
+  s.add("particles", &Params::particles)
+      .nonnegative()
       .doc("number of particles; with a size_distribution 0 = as many as fill target_density * container volume");
-  s.add("target_density", &Params::target_density).unit("1").range(0.05, 0.7)
+  s.add("target_density", &Params::target_density)
+      .unit("1")
+      .range(0.05, 0.7)
       .doc("solid fraction: sets the mean radius (uniform spread) or the amount of powder (size_distribution, particles = 0)");
   s.add("spread", &Params::spread).unit("1").range(0.0, 0.9).doc("radii uniform in r(1 +- spread) (no size_distribution)");
   s.add("stiffness", &Params::stiffness).unit("J").positive().doc("k of the potential w(q)");
   s.add("max_iterations", &Params::max_iterations).min(1).doc("FIRE iteration limit");
   s.add("force_tolerance", &Params::force_tolerance).unit("1").positive().doc("stop when max|F| < tol k / r_mean");
   s.add("max_step", &Params::max_step).unit("1").positive().doc("largest move per iteration / radius");
-  s.add("max_overlap", &Params::max_overlap).unit("1").nonnegative()
+  s.add("max_overlap", &Params::max_overlap)
+      .unit("1")
+      .nonnegative()
       .doc("also stop once the largest overlap / smaller radius (pairs and walls) is at most this; 0 = off");
-  s.add("density", &Params::density).unit("kg/m^3").positive()
+  s.add("density", &Params::density)
+      .unit("kg/m^3")
+      .positive()
       .doc("particle density for the masses of later stages (set it to the material's; `material` only labels the particles)");
   s.add("material", &Params::material).nonnegative().doc("material index");
-  s.add("neighbour_gap_relative", &Params::neighbour_gap_relative).unit("1")
-      .doc("report seed 001's microstructure with neighbours at gaps <= this * r_mean: neighbour and eccentricity "
-           "histograms (Figs. 2, 4), eccentric shares, the wall density profile (< 0: off)");
+  s.add("neighbour_gap_relative", &Params::neighbour_gap_relative)
+      .unit("1")
+      .doc(
+          "report seed 001's microstructure with neighbours at gaps <= this * r_mean: neighbour and eccentricity "
+          "histograms (Figs. 2, 4), eccentric shares, the wall density profile (< 0: off)");
   return s;
 }
 
@@ -592,8 +619,8 @@ void RelaxGenerator::generate(State& s) {
     if (tracker.needs_rebuild(p.position, p.radius, skin)) {
       pairs = find_pairs(p.position, p.radius, skin);
       tracker.mark_built(p.position, p.radius);
-      build_incidence(N, pairs.size(), [&](std::size_t r) { return pairs[r][0]; }, [&](std::size_t r) { return pairs[r][1]; },
-                      inc_start, inc_row);
+      build_incidence(
+          N, pairs.size(), [&](std::size_t r) { return pairs[r][0]; }, [&](std::size_t r) { return pairs[r][1]; }, inc_start, inc_row);
       fpair.resize(pairs.size());
       // Wall candidates: within r + skin of the wall at the build (valid until the next rebuild,
       // as the pairs); the others have q > 1 against that wall and feel no force from it.
@@ -611,15 +638,18 @@ void RelaxGenerator::generate(State& s) {
     double om = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : om) if (par::worth(np, par::kHeavy))
     for (std::int64_t r = 0; r < np; ++r)
-      om = std::max(om, relax_pair(k, p.position[pairs[r][0]], p.position[pairs[r][1]], p.radius[pairs[r][0]],
-                                   p.radius[pairs[r][1]], fpair[r]).overlap);
+      om = std::max(
+          om,
+          relax_pair(k, p.position[pairs[r][0]], p.position[pairs[r][1]], p.radius[pairs[r][0]], p.radius[pairs[r][1]], fpair[r]).overlap);
     double fm = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : fm, om) if (par::worth(n, par::kHeavy))
     for (std::int64_t i = 0; i < n; ++i) {
       Vec3 f = Vec3::Zero();
       for (std::int64_t c = inc_start[i]; c < inc_start[i + 1]; ++c) {
-        if (inc_row[c] >= 0) f += fpair[inc_row[c]];
-        else f -= fpair[~inc_row[c]];
+        if (inc_row[c] >= 0)
+          f += fpair[inc_row[c]];
+        else
+          f -= fpair[~inc_row[c]];
       }
       for (std::size_t w = 0; w < nw; ++w) {
         if (!near_wall[i * nw + w]) continue;
@@ -639,12 +669,19 @@ void RelaxGenerator::generate(State& s) {
   auto converged = [&]() { return fmax <= ftol || (p_.max_overlap > 0.0 && overlap_max <= p_.max_overlap); };
   for (it = 0; it < p_.max_iterations && !converged(); ++it) {
     double P = 0.0, vn = 0.0, fn = 0.0;
-    for (std::size_t i = 0; i < N; ++i) { P += F[i].dot(v_[i]); vn += v_[i].squaredNorm(); fn += F[i].squaredNorm(); }
+    for (std::size_t i = 0; i < N; ++i) {
+      P += F[i].dot(v_[i]);
+      vn += v_[i].squaredNorm();
+      fn += F[i].squaredNorm();
+    }
     vn = std::sqrt(vn);
     fn = std::sqrt(fn);
     const double mix = P > 0.0 ? alpha : 1.0, vf = P > 0.0 ? alpha * vn / fn : 0.0;
     if (P > 0.0) {
-      if (++since_neg > 5) { dt = std::min(dt * 1.1, dt_max); alpha *= 0.99; }
+      if (++since_neg > 5) {
+        dt = std::min(dt * 1.1, dt_max);
+        alpha *= 0.99;
+      }
     } else {
       dt *= 0.5;
       alpha = 0.1;
@@ -654,8 +691,10 @@ void RelaxGenerator::generate(State& s) {
     // semi-implicit Euler with a displacement cap of max_step * r.
 #pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
     for (std::int64_t i = 0; i < n; ++i) {
-      if (mix < 1.0) v_[i] = (1.0 - mix) * v_[i] + vf * F[i];
-      else v_[i].setZero();
+      if (mix < 1.0)
+        v_[i] = (1.0 - mix) * v_[i] + vf * F[i];
+      else
+        v_[i].setZero();
       v_[i] += dt * F[i];
       Vec3 dx = dt * v_[i];
       const double cap = p_.max_step * p.radius[i];

@@ -29,10 +29,10 @@ inline std::vector<std::string> container_wall_names() { return {"die", "bottom"
 class LatticeGenerator final : public Generator {
  public:
   struct Params {
-    Vec3 lo = Vec3::Zero();            ///< [m]
-    Vec3 hi = Vec3::Ones();            ///< [m]
-    double spacing = 1.0;              ///< [m]
-    double diameter = 0.5;             ///< [m]
+    Vec3 lo = Vec3::Zero();  ///< [m]
+    Vec3 hi = Vec3::Ones();  ///< [m]
+    double spacing = 1.0;    ///< [m]
+    double diameter = 0.5;   ///< [m]
     std::int64_t material = 0;
   };
   static ParamSpec<Params> spec();
@@ -54,19 +54,19 @@ class DepositGenerator final : public Generator {
  public:
   struct Params {
     SizeDistributionParams size_distribution;
-    double container_radius = 61.8e-6;     ///< final die radius [m]
-    double container_height = 202e-6;      ///< bed height that sets the amount of powder [m]
-    double target_density = 0.65;          ///< [1] tap density to reach
-    std::int64_t particles = 0;            ///< 0: as many as fill target_density * pi R^2 H
-    double initial_radius_factor = 1.5;    ///< [1] die radius at insertion / final radius
-    double insertion_density = 0.25;       ///< [1] solid fraction of the loose insertion column
-    double settle_time = 2e-4;             ///< [s] fall and settling before the die contracts
-    double contraction_time = 2e-4;        ///< [s] time for the die to reach container_radius
-    double min_radius_factor = 0.9;        ///< [1] smallest die radius / container_radius
-    double gravity = 9.81e4;               ///< [m/s^2] packing gravity (scaled; reported)
-    double ke_per_mass_below = 1e-8;       ///< [J/kg] settled when kinetic energy / mass is below
-    double max_overlap = 0.01;             ///< [1] largest overlap / smaller radius allowed
-    double damping_rate = 0.0;             ///< [1/s] background drag during settling (0 = off)
+    double container_radius = 61.8e-6;   ///< final die radius [m]
+    double container_height = 202e-6;    ///< bed height that sets the amount of powder [m]
+    double target_density = 0.65;        ///< [1] tap density to reach
+    std::int64_t particles = 0;          ///< 0: as many as fill target_density * pi R^2 H
+    double initial_radius_factor = 1.5;  ///< [1] die radius at insertion / final radius
+    double insertion_density = 0.25;     ///< [1] solid fraction of the loose insertion column
+    double settle_time = 2e-4;           ///< [s] fall and settling before the die contracts
+    double contraction_time = 2e-4;      ///< [s] time for the die to reach container_radius
+    double min_radius_factor = 0.9;      ///< [1] smallest die radius / container_radius
+    double gravity = 9.81e4;             ///< [m/s^2] packing gravity (scaled; reported)
+    double ke_per_mass_below = 1e-8;     ///< [J/kg] settled when kinetic energy / mass is below
+    double max_overlap = 0.01;           ///< [1] largest overlap / smaller radius allowed
+    double damping_rate = 0.0;           ///< [1/s] background drag during settling (0 = off)
     std::int64_t material = 0;
   };
   static ParamSpec<Params> spec();
@@ -137,17 +137,17 @@ class FillGenerator final : public Generator {
 class RelaxGenerator final : public Generator {
  public:
   struct Params {
-    std::string shape = "box";             ///< box | cylinder
-    Vec3 lo = Vec3::Zero();                ///< [m] box
-    Vec3 hi = Vec3::Ones() * 1e-3;         ///< [m] box
-    double radius = 5e-4;                  ///< [m] cylinder radius (axis z through the origin)
-    double length = 1e-3;                  ///< [m] cylinder length along z from z = 0
+    std::string shape = "box";      ///< box | cylinder
+    Vec3 lo = Vec3::Zero();         ///< [m] box
+    Vec3 hi = Vec3::Ones() * 1e-3;  ///< [m] box
+    double radius = 5e-4;           ///< [m] cylinder radius (axis z through the origin)
+    double length = 1e-3;           ///< [m] cylinder length along z from z = 0
     /// type "none": radii uniform in r(1 +- spread); otherwise diameters drawn from it, unscaled
     SizeDistributionParams size_distribution = no_size_distribution();
-    std::int64_t particles = 1000;         ///< with a size distribution, 0 = fill target_density * V
-    double target_density = 0.6;           ///< [1] solid volume / container volume
-    double spread = 0.125;                 ///< [1] radii uniform in r(1 +- spread)
-    double stiffness = 1.0;                ///< [J] k of w(q) (the minimum does not depend on it)
+    std::int64_t particles = 1000;  ///< with a size distribution, 0 = fill target_density * V
+    double target_density = 0.6;    ///< [1] solid volume / container volume
+    double spread = 0.125;          ///< [1] radii uniform in r(1 +- spread)
+    double stiffness = 1.0;         ///< [J] k of w(q) (the minimum does not depend on it)
     std::int64_t max_iterations = 200000;
     double force_tolerance = 1e-6;         ///< [1] stop when max |F| < tol k / r_mean
     double max_step = 0.05;                ///< [1] largest displacement per iteration / radius
@@ -186,9 +186,9 @@ class RelaxGenerator final : public Generator {
 class RadiusGrowth final : public Module {
  public:
   struct Params {
-    double s0 = 0.5, s1 = 1.0;   ///< [1]
-    double duration = 1.0;       ///< [s]
-    double halt_overlap = 0.0;   ///< [1]
+    double s0 = 0.5, s1 = 1.0;  ///< [1]
+    double duration = 1.0;      ///< [s]
+    double halt_overlap = 0.0;  ///< [1]
   };
   static ParamSpec<Params> spec();
   explicit RadiusGrowth(const Params& p) : p_(p) {}

@@ -30,8 +30,8 @@ double distance_to_boundary(const Region& region, const Vec3& x) {
 NeighbourStats neighbour_stats(const std::vector<Vec3>& positions, const std::vector<double>& radii, double gap_relative,
                                const Region& region, double e_face) {
   if (positions.size() != radii.size())
-    throw ConfigError("", "neighbour_stats: " + std::to_string(positions.size()) + " positions but " +
-                              std::to_string(radii.size()) + " radii");
+    throw ConfigError("",
+                      "neighbour_stats: " + std::to_string(positions.size()) + " positions but " + std::to_string(radii.size()) + " radii");
   if (!(gap_relative >= 0.0) || !std::isfinite(gap_relative))
     throw ConfigError("", "neighbour_stats: gap tolerance must be >= 0 (fraction of the mean radius)");
   if (!(e_face > 0.0)) throw ConfigError("", "neighbour_stats: eccentricity threshold must be > 0");
@@ -77,8 +77,8 @@ NeighbourStats neighbour_stats(const std::vector<Vec3>& positions, const std::ve
   return st;
 }
 
-DensityProfile wall_density_profile(const std::vector<Vec3>& positions, const std::vector<double>& radii,
-                                    const Region& region, double bin_width, double end_margin, double interior_margin) {
+DensityProfile wall_density_profile(const std::vector<Vec3>& positions, const std::vector<double>& radii, const Region& region,
+                                    double bin_width, double end_margin, double interior_margin) {
   if (!(bin_width > 0.0) || !(end_margin >= 0.0) || !(interior_margin >= 0.0))
     throw ConfigError("", "wall_density_profile: bin width must be > 0 and margins >= 0 [m]");
   validate(region);

@@ -38,12 +38,12 @@ NeighbourStats neighbour_stats(const std::vector<Vec3>& positions, const std::ve
 /// region is used up. Exact sphere-region volumes (sphere_volume_in_region), overlaps not
 /// subtracted.
 struct DensityProfile {
-  double bin_width = 0.0;        ///< [m]
-  std::vector<double> density;   ///< [-] per layer, first = at the wall
-  double interior = 0.0;         ///< [-]
+  double bin_width = 0.0;             ///< [m]
+  std::vector<double> density;        ///< [-] per layer, first = at the wall
+  double interior = 0.0;              ///< [-]
   double max_deviation_beyond = 0.0;  ///< max |density - interior| over layers starting >= interior_margin [-]
 };
-DensityProfile wall_density_profile(const std::vector<Vec3>& positions, const std::vector<double>& radii,
-                                    const Region& region, double bin_width, double end_margin, double interior_margin);
+DensityProfile wall_density_profile(const std::vector<Vec3>& positions, const std::vector<double>& radii, const Region& region,
+                                    double bin_width, double end_margin, double interior_margin);
 
 }  // namespace sparkdem::physics

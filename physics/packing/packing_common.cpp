@@ -72,8 +72,8 @@ SizeDistribution make_distribution(const SizeDistributionParams& p) {
   return make_table(d, f, p.basis == "volume" ? SizeBasis::volume : SizeBasis::number);
 }
 
-bool insert_random(State& s, const std::vector<double>& radii_in, const Region& region, double density,
-                   std::int32_t material, std::size_t max_attempts) {
+bool insert_random(State& s, const std::vector<double>& radii_in, const Region& region, double density, std::int32_t material,
+                   std::size_t max_attempts) {
   std::vector<double> radii = radii_in;
   std::sort(radii.begin(), radii.end(), std::greater<>());
   if (radii.empty()) return true;
@@ -81,8 +81,10 @@ bool insert_random(State& s, const std::vector<double>& radii_in, const Region& 
   const double h = 2.0 * rmax;
   // Bounding box of the region.
   Vec3 lo, hi;
-  if (const auto* b = std::get_if<BoxRegion>(&region)) { lo = b->lo; hi = b->hi; }
-  else {
+  if (const auto* b = std::get_if<BoxRegion>(&region)) {
+    lo = b->lo;
+    hi = b->hi;
+  } else {
     const auto& c = std::get<CylinderRegion>(region);
     const Vec3 top = c.base + c.height * c.axis;
     lo = c.base.cwiseMin(top) - Vec3::Constant(c.radius);
@@ -118,7 +120,10 @@ bool insert_random(State& s, const std::vector<double>& radii_in, const Region& 
             if (it == grid.end()) continue;
             for (Index j : it->second) {
               const double c2 = r + p.radius[j];
-              if ((p.position[j] - x).squaredNorm() < c2 * c2) { ok = false; break; }
+              if ((p.position[j] - x).squaredNorm() < c2 * c2) {
+                ok = false;
+                break;
+              }
             }
           }
       if (!ok) continue;
@@ -145,7 +150,10 @@ double bed_height(const State& s, const Vec3& floor_point, const Vec3& axis) {
                                   static_cast<std::int64_t>(std::floor(rel.dot(e2) / w)));
     const double t = rel.dot(axis) + p.radius[i];
     auto it = top.find(k);
-    if (it == top.end()) top.emplace(k, t); else it->second = std::max(it->second, t);
+    if (it == top.end())
+      top.emplace(k, t);
+    else
+      it->second = std::max(it->second, t);
   }
   double sum = 0.0;
   for (const auto& [k, t] : top) sum += t;
@@ -155,7 +163,10 @@ double bed_height(const State& s, const Vec3& floor_point, const Vec3& axis) {
 Region container_region(const State& s) {
   const Wall* cyl = nullptr;
   for (const auto& w : s.walls)
-    if (!w.is_plane()) { cyl = &w; break; }
+    if (!w.is_plane()) {
+      cyl = &w;
+      break;
+    }
   if (cyl) {
     const auto& c = std::get<CylinderShape>(cyl->shape);
     double zlo = -std::numeric_limits<double>::infinity(), zhi = std::numeric_limits<double>::infinity();
@@ -257,9 +268,7 @@ std::map<std::string, double> packing_report(const State& s, double neighbour_ga
     r["interior_margin"] = margin;
     const auto ci = coordination_in_region(p.position, p.radius, pairs, 1e-9, inner);
     r["coordination_interior"] = ci.mean;
-  } catch (const ConfigError&) {
-    r["packing_density_interior"] = std::nan("");
-  }
+  } catch (const ConfigError&) { r["packing_density_interior"] = std::nan(""); }
   const auto c = coordination(p.position, p.radius, pairs, 1e-9);
   r["coordination_mean"] = c.mean;
   r["rattlers"] = static_cast<double>(c.rattlers);
@@ -274,12 +283,11 @@ std::map<std::string, double> packing_report(const State& s, double neighbour_ga
   return r;
 }
 
-
 std::map<std::string, std::vector<double>> packing_arrays(const State& s, double neighbour_gap_relative) {
   if (neighbour_gap_relative < 0.0 || s.particles.size() == 0) return {};
   const NeighbourStats n = neighbour_stats(s.particles.position, s.particles.radius, neighbour_gap_relative, container_region(s));
-  return {{"neighbour_histogram", n.histogram}, {"eccentricity_histogram", n.eccentricity_histogram},
-          {"density_profile", profile(s).density}};
+  return {
+      {"neighbour_histogram", n.histogram}, {"eccentricity_histogram", n.eccentricity_histogram}, {"density_profile", profile(s).density}};
 }
 
 std::vector<int> packing_histogram(const State& s) {
@@ -293,8 +301,7 @@ std::vector<std::string> PackingMonitor::columns(const State&) const {
 std::vector<double> PackingMonitor::values(const State& s) const {
   if (s.particles.size() == 0) return {0.0, 0.0, 0.0};
   const auto r = packing_report(s);
-  return {r.at("packing_density"), r.at("packing_density_interior"),
-          r.count("coordination_interior") ? r.at("coordination_interior") : 0.0};
+  return {r.at("packing_density"), r.at("packing_density_interior"), r.count("coordination_interior") ? r.at("coordination_interior") : 0.0};
 }
 
 }  // namespace sparkdem::physics

@@ -18,17 +18,16 @@ namespace sparkdem::physics {
 
 /// JSON-facing parameters of a size distribution (nested object "size_distribution").
 struct SizeDistributionParams {
-  std::string type = "lognormal";            ///< lognormal | table | uniform
-  double d50 = 4.2e-6;                       ///< [m] lognormal median (number basis)
-  double sigma = 0.43;                       ///< [1] sigma of ln d
-  double d_min = 1.5e-6;                     ///< [m] truncation / uniform lower bound
-  double d_max = 20e-6;                      ///< [m] truncation / uniform upper bound
-  std::vector<double> diameters;             ///< [m] table diameters
-  std::vector<double> cumulative_fraction;   ///< [1] table cumulative fractions
-  std::string basis = "number";              ///< number | volume (table)
-  std::string csv;                           ///< CSV file "diameter_m,cumulative_fraction" (replaces the inline table)
+  std::string type = "lognormal";           ///< lognormal | table | uniform
+  double d50 = 4.2e-6;                      ///< [m] lognormal median (number basis)
+  double sigma = 0.43;                      ///< [1] sigma of ln d
+  double d_min = 1.5e-6;                    ///< [m] truncation / uniform lower bound
+  double d_max = 20e-6;                     ///< [m] truncation / uniform upper bound
+  std::vector<double> diameters;            ///< [m] table diameters
+  std::vector<double> cumulative_fraction;  ///< [1] table cumulative fractions
+  std::string basis = "number";             ///< number | volume (table)
+  std::string csv;                          ///< CSV file "diameter_m,cumulative_fraction" (replaces the inline table)
 };
-
 
 /// optional = true: `type` also takes "none" (the default): no distribution, the owner's own
 /// radii (relax: uniform spread).
@@ -46,8 +45,8 @@ SizeDistribution make_distribution(const SizeDistributionParams& p);
 
 /// Random sequential insertion of spheres (largest first) without overlap inside a region.
 /// Returns false if some sphere found no place after max_attempts tries.
-bool insert_random(State& s, const std::vector<double>& radii, const Region& region, double density,
-                   std::int32_t material, std::size_t max_attempts = 20000);
+bool insert_random(State& s, const std::vector<double>& radii, const Region& region, double density, std::int32_t material,
+                   std::size_t max_attempts = 20000);
 
 /// Container of the walls: the first cylinder with the planes normal to its axis, or the box of
 /// the axis-aligned planes. An open top is closed at the bed height (see bed_height()).

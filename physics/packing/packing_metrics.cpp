@@ -22,14 +22,12 @@ std::string fmt(double x) {
 
 void check_particles(const std::vector<Vec3>& positions, const std::vector<double>& radii) {
   if (positions.size() != radii.size())
-    throw ConfigError("", "positions (" + std::to_string(positions.size()) + ") and radii (" +
-                              std::to_string(radii.size()) + ") differ in length");
+    throw ConfigError(
+        "", "positions (" + std::to_string(positions.size()) + ") and radii (" + std::to_string(radii.size()) + ") differ in length");
   for (std::size_t i = 0; i < radii.size(); ++i) {
     if (!std::isfinite(radii[i]) || radii[i] <= 0.0)
-      throw ConfigError("", "radius of particle " + std::to_string(i) + " must be positive and finite [m], found " +
-                                fmt(radii[i]));
-    if (!positions[i].allFinite())
-      throw ConfigError("", "position of particle " + std::to_string(i) + " is not finite");
+      throw ConfigError("", "radius of particle " + std::to_string(i) + " must be positive and finite [m], found " + fmt(radii[i]));
+    if (!positions[i].allFinite()) throw ConfigError("", "position of particle " + std::to_string(i) + " is not finite");
   }
 }
 
@@ -224,16 +222,15 @@ double sphere_in_box(const Vec3& c, double r, const BoxRegion& b) {
 /// Sphere (centre c, radius r) inside a finite cylinder.
 double sphere_in_cylinder(const Vec3& c, double r, const CylinderRegion& cyl) {
   const Vec3 v = c - cyl.base;
-  const double h = v.dot(cyl.axis);              // axial coordinate of the centre
-  const double q = (v - h * cyl.axis).norm();    // distance of the centre from the axis
+  const double h = v.dot(cyl.axis);            // axial coordinate of the centre
+  const double q = (v - h * cyl.axis).norm();  // distance of the centre from the axis
   const double big_r = cyl.radius;
   if (h + r <= 0.0 || h - r >= cyl.height || q - r >= big_r) return 0.0;
   const double a = std::max(-r, -h), b = std::min(r, cyl.height - h);  // axial offsets inside
-  if (q + r <= big_r) return slab_volume(r, a, b);                      // clear of the curved wall
+  if (q + r <= big_r) return slab_volume(r, a, b);                     // clear of the curved wall
   // Cut by the curved wall: V = int_a^b lens(rho(t), R, q) dt, breakpoints where the slice
   // circle starts to cross the wall (rho = |R - q|) or contains the whole cross-section (rho = R + q).
-  return integrate_slices(r, a, b, {std::abs(big_r - q), big_r + q},
-                          [&](double rho) { return lens_area(rho, big_r, q); });
+  return integrate_slices(r, a, b, {std::abs(big_r - q), big_r + q}, [&](double rho) { return lens_area(rho, big_r, q); });
 }
 
 double sphere_in_region_unchecked(const Vec3& c, double r, const Region& region) {
@@ -242,8 +239,7 @@ double sphere_in_region_unchecked(const Vec3& c, double r, const Region& region)
 }
 
 bool contains_unchecked(const Region& region, const Vec3& p) {
-  if (const auto* b = std::get_if<BoxRegion>(&region))
-    return (p.array() >= b->lo.array()).all() && (p.array() <= b->hi.array()).all();
+  if (const auto* b = std::get_if<BoxRegion>(&region)) return (p.array() >= b->lo.array()).all() && (p.array() <= b->hi.array()).all();
   const auto& cyl = std::get<CylinderRegion>(region);
   const Vec3 v = p - cyl.base;
   const double h = v.dot(cyl.axis);
@@ -252,10 +248,8 @@ bool contains_unchecked(const Region& region, const Vec3& p) {
 
 /// Shared coordination counter; `counted[i]` selects the particles entering the statistics.
 CoordinationStats coordination_impl(const std::vector<Vec3>& positions, const std::vector<double>& radii,
-                                    const std::vector<std::array<Index, 2>>& pairs, double tol,
-                                    const std::vector<bool>& counted) {
-  if (!std::isfinite(tol) || tol < 0.0)
-    throw ConfigError("", "relative gap tolerance must be >= 0 and finite, found " + fmt(tol));
+                                    const std::vector<std::array<Index, 2>>& pairs, double tol, const std::vector<bool>& counted) {
+  if (!std::isfinite(tol) || tol < 0.0) throw ConfigError("", "relative gap tolerance must be >= 0 and finite, found " + fmt(tol));
   const std::size_t n = positions.size();
   std::vector<int> z(n, 0);
   for (std::size_t k = 0; k < pairs.size(); ++k) {
@@ -311,8 +305,7 @@ double region_volume(const Region& region) {
 
 Region shrink(const Region& region, double margin) {
   validate(region);
-  if (!std::isfinite(margin) || margin < 0.0)
-    throw ConfigError("", "shrink margin must be >= 0 and finite [m], found " + fmt(margin));
+  if (!std::isfinite(margin) || margin < 0.0) throw ConfigError("", "shrink margin must be >= 0 and finite [m], found " + fmt(margin));
   Region out;
   if (const auto* b = std::get_if<BoxRegion>(&region)) {
     out = BoxRegion{(b->lo.array() + margin).matrix(), (b->hi.array() - margin).matrix()};
@@ -322,9 +315,7 @@ Region shrink(const Region& region, double margin) {
   }
   try {
     validate(out);
-  } catch (const ConfigError&) {
-    throw ConfigError("", "shrink margin " + fmt(margin) + " m leaves an empty region");
-  }
+  } catch (const ConfigError&) { throw ConfigError("", "shrink margin " + fmt(margin) + " m leaves an empty region"); }
   return out;
 }
 
@@ -340,8 +331,7 @@ double sphere_volume_in_region(const Vec3& centre, double radius, const Region& 
   return sphere_in_region_unchecked(centre, radius, region);
 }
 
-double solid_volume_in_region(const std::vector<Vec3>& positions, const std::vector<double>& radii,
-                              const Region& region) {
+double solid_volume_in_region(const std::vector<Vec3>& positions, const std::vector<double>& radii, const Region& region) {
   validate(region);
   check_particles(positions, radii);
   double v = 0.0;
@@ -356,13 +346,11 @@ double packing_density(const std::vector<Vec3>& positions, const std::vector<dou
 CoordinationStats coordination(const std::vector<Vec3>& positions, const std::vector<double>& radii,
                                const std::vector<std::array<Index, 2>>& pairs, double gap_tolerance_relative) {
   check_particles(positions, radii);
-  return coordination_impl(positions, radii, pairs, gap_tolerance_relative,
-                           std::vector<bool>(positions.size(), true));
+  return coordination_impl(positions, radii, pairs, gap_tolerance_relative, std::vector<bool>(positions.size(), true));
 }
 
 CoordinationStats coordination_in_region(const std::vector<Vec3>& positions, const std::vector<double>& radii,
-                                         const std::vector<std::array<Index, 2>>& pairs,
-                                         double gap_tolerance_relative, const Region& region) {
+                                         const std::vector<std::array<Index, 2>>& pairs, double gap_tolerance_relative, const Region& region) {
   check_particles(positions, radii);
   validate(region);
   std::vector<bool> counted(positions.size());

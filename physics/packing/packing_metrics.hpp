@@ -25,10 +25,10 @@ struct BoxRegion {
 /// Finite circular cylinder: points x with 0 <= (x - base).axis <= height and distance to the
 /// axis <= radius.
 struct CylinderRegion {
-  Vec3 base = Vec3::Zero();        ///< point on the axis at the bottom face [m]
-  Vec3 axis = Vec3::UnitZ();       ///< unit vector from bottom to top [-] (|axis| = 1 within 1e-6)
-  double radius = 0.0;             ///< [m]
-  double height = 0.0;             ///< [m]
+  Vec3 base = Vec3::Zero();   ///< point on the axis at the bottom face [m]
+  Vec3 axis = Vec3::UnitZ();  ///< unit vector from bottom to top [-] (|axis| = 1 within 1e-6)
+  double radius = 0.0;        ///< [m]
+  double height = 0.0;        ///< [m]
 };
 
 using Region = std::variant<BoxRegion, CylinderRegion>;
@@ -57,8 +57,7 @@ double sphere_volume_in_region(const Vec3& centre, double radius, const Region& 
 /// Solid volume [m^3] inside the region: sum over spheres of sphere_volume_in_region. Sphere-sphere
 /// overlaps are NOT subtracted (they are < 1 % of the radius in a valid packing, so the lens
 /// volumes are a negligible correction).
-double solid_volume_in_region(const std::vector<Vec3>& positions, const std::vector<double>& radii,
-                              const Region& region);
+double solid_volume_in_region(const std::vector<Vec3>& positions, const std::vector<double>& radii, const Region& region);
 
 /// Packing density [-] = solid_volume_in_region / region_volume.
 double packing_density(const std::vector<Vec3>& positions, const std::vector<double>& radii, const Region& region);
@@ -79,15 +78,14 @@ CoordinationStats coordination(const std::vector<Vec3>& positions, const std::ve
 /// contacts with particles outside still count); use a shrunk region to exclude wall-affected
 /// particles.
 CoordinationStats coordination_in_region(const std::vector<Vec3>& positions, const std::vector<double>& radii,
-                                         const std::vector<std::array<Index, 2>>& pairs,
-                                         double gap_tolerance_relative, const Region& region);
+                                         const std::vector<std::array<Index, 2>>& pairs, double gap_tolerance_relative, const Region& region);
 
 /// Overlap statistics over the overlapping pairs, overlap delta = r_i + r_j - |x_i - x_j| > 0.
 struct OverlapStats {
-  double max_relative = 0.0;     ///< max over pairs of delta / min(r_i, r_j) [-] (0 if none)
-  Index i = -1, j = -1;          ///< the pair reaching max_relative (-1 if none)
-  double mean_relative = 0.0;    ///< mean of delta / min(r_i, r_j) over OVERLAPPING pairs only [-]
-  std::size_t n_overlapping = 0; ///< number of overlapping pairs
+  double max_relative = 0.0;      ///< max over pairs of delta / min(r_i, r_j) [-] (0 if none)
+  Index i = -1, j = -1;           ///< the pair reaching max_relative (-1 if none)
+  double mean_relative = 0.0;     ///< mean of delta / min(r_i, r_j) over OVERLAPPING pairs only [-]
+  std::size_t n_overlapping = 0;  ///< number of overlapping pairs
 };
 
 OverlapStats overlap_stats(const std::vector<Vec3>& positions, const std::vector<double>& radii,

@@ -29,19 +29,17 @@ double phi_sf(double z) { return 0.5 * std::erfc(z / std::numbers::sqrt2); }
 ///   e = Phi(z) - p,  u = e sqrt(2 pi) exp(z^2 / 2),  z <- z - u / (1 + z u / 2),
 /// which brings it to about full double precision.
 double inverse_phi_lower(double p) {
-  static constexpr double a[] = {-3.969683028665376e+01, 2.209460984245205e+02, -2.759285104469687e+02,
+  static constexpr double a[] = {-3.969683028665376e+01, 2.209460984245205e+02,  -2.759285104469687e+02,
                                  1.383577518672690e+02,  -3.066479806614716e+01, 2.506628277459239e+00};
-  static constexpr double b[] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02,
-                                 6.680131188771972e+01,  -1.328068155288572e+01};
+  static constexpr double b[] = {-5.447609879822406e+01, 1.615858368580409e+02, -1.556989798598866e+02, 6.680131188771972e+01,
+                                 -1.328068155288572e+01};
   static constexpr double c[] = {-7.784894002430293e-03, -3.223964580411365e-01, -2.400758277161838e+00,
                                  -2.549732539343734e+00, 4.374664141464968e+00,  2.938163982698783e+00};
-  static constexpr double d[] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00,
-                                 3.754408661907416e+00};
+  static constexpr double d[] = {7.784695709041462e-03, 3.224671290700398e-01, 2.445134137142996e+00, 3.754408661907416e+00};
   double z;
   if (p < 0.02425) {
     const double q = std::sqrt(-2.0 * std::log(p));
-    z = (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) /
-        ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0);
+    z = (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) / ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1.0);
   } else {
     const double q = p - 0.5;
     const double r = q * q;
@@ -139,8 +137,7 @@ double cdf(const Prepared& p, double d, bool left) {
       if (d >= p.d.back()) return 1.0;
       const std::size_t k = static_cast<std::size_t>(std::upper_bound(p.d.begin(), p.d.end(), d) - p.d.begin()) - 1;
       const double d0 = p.d[k], d1 = p.d[k + 1];
-      const double s = p.volume ? (1.0 / (d0 * d0) - 1.0 / (d * d)) / (1.0 / (d0 * d0) - 1.0 / (d1 * d1))
-                                : (d - d0) / (d1 - d0);
+      const double s = p.volume ? (1.0 / (d0 * d0) - 1.0 / (d * d)) / (1.0 / (d0 * d0) - 1.0 / (d1 * d1)) : (d - d0) / (d1 - d0);
       return p.n[k] + (p.n[k + 1] - p.n[k]) * std::clamp(s, 0.0, 1.0);
     }
     case SizeDistributionKind::lognormal: {
@@ -180,8 +177,7 @@ double quantile(const Prepared& p, double u) {
     case SizeDistributionKind::lognormal: {
       // truncated inverse CDF: Phi(z) = Phi(z_lo) + u mass  (or, in the upper tail,
       // Q(z) = Q(z_lo) - u mass with z = -Phi^-1(Q))
-      const double z = p.upper ? -inverse_phi(phi_sf(p.z_lo) - u * p.mass)
-                               : inverse_phi(phi_cdf(p.z_lo) + u * p.mass);
+      const double z = p.upper ? -inverse_phi(phi_sf(p.z_lo) - u * p.mass) : inverse_phi(phi_cdf(p.z_lo) + u * p.mass);
       return std::clamp(std::exp(p.mu + p.sigma * z), p.lo, p.hi);
     }
     case SizeDistributionKind::uniform:
@@ -225,8 +221,7 @@ void validate_table(const SizeDistribution& s, std::vector<Diagnostic>& out) {
   const auto& f = s.cumulative_fraction;
   if (d.empty()) out.push_back({"/diameters", "needs at least one point"});
   if (f.size() != d.size())
-    out.push_back({"/cumulative_fraction", "has " + std::to_string(f.size()) + " values but /diameters has " +
-                                               std::to_string(d.size())});
+    out.push_back({"/cumulative_fraction", "has " + std::to_string(f.size()) + " values but /diameters has " + std::to_string(d.size())});
   for (std::size_t k = 0; k < d.size(); ++k) {
     const std::string path = "/diameters/" + std::to_string(k);
     if (!std::isfinite(d[k]) || d[k] <= 0.0)
@@ -239,12 +234,10 @@ void validate_table(const SizeDistribution& s, std::vector<Diagnostic>& out) {
     if (!std::isfinite(f[k]) || f[k] < 0.0 || f[k] > 1.0 + kFractionTolerance)
       out.push_back({path, "cumulative fraction must be in [0, 1], found " + fmt(f[k])});
     else if (k > 0 && std::isfinite(f[k - 1]) && f[k] < f[k - 1])
-      out.push_back({path, "cumulative fractions must be non-decreasing, found " + fmt(f[k]) + " after " +
-                               fmt(f[k - 1])});
+      out.push_back({path, "cumulative fractions must be non-decreasing, found " + fmt(f[k]) + " after " + fmt(f[k - 1])});
   }
   if (!f.empty() && !(std::abs(f.back() - 1.0) <= kFractionTolerance))
-    out.push_back({"/cumulative_fraction", "fractions must add up to 1: last cumulative fraction is " +
-                                               fmt(f.back()) + " (tolerance 1e-6)"});
+    out.push_back({"/cumulative_fraction", "fractions must add up to 1: last cumulative fraction is " + fmt(f.back()) + " (tolerance 1e-6)"});
 }
 
 void validate_lognormal(const SizeDistribution& s, std::vector<Diagnostic>& out) {
@@ -281,8 +274,7 @@ void validate_uniform(const SizeDistribution& s, std::vector<Diagnostic>& out) {
 
 }  // namespace
 
-SizeDistribution make_table(std::vector<double> diameters, std::vector<double> cumulative_fraction,
-                            SizeBasis basis) {
+SizeDistribution make_table(std::vector<double> diameters, std::vector<double> cumulative_fraction, SizeBasis basis) {
   SizeDistribution s;
   s.kind = SizeDistributionKind::table;
   s.diameters = std::move(diameters);
@@ -325,10 +317,18 @@ SizeDistribution uniform_about_mean(double r_mean, double spread) {
 void validate(const SizeDistribution& dist) {
   std::vector<Diagnostic> out;
   switch (dist.kind) {
-    case SizeDistributionKind::table: validate_table(dist, out); break;
-    case SizeDistributionKind::lognormal: validate_lognormal(dist, out); break;
-    case SizeDistributionKind::uniform: validate_uniform(dist, out); break;
-    default: out.push_back({"/kind", "unknown size distribution kind"}); break;
+    case SizeDistributionKind::table:
+      validate_table(dist, out);
+      break;
+    case SizeDistributionKind::lognormal:
+      validate_lognormal(dist, out);
+      break;
+    case SizeDistributionKind::uniform:
+      validate_uniform(dist, out);
+      break;
+    default:
+      out.push_back({"/kind", "unknown size distribution kind"});
+      break;
   }
   if (!out.empty()) throw ConfigError(std::move(out));
 }
@@ -347,12 +347,9 @@ double uniform_open01(std::mt19937_64& rng) {
   return (static_cast<double>(rng() >> 11) + 0.5) * two_pow_minus_53;
 }
 
-double sample_diameter(const SizeDistribution& dist, std::mt19937_64& rng) {
-  return quantile(prepare(dist), uniform_open01(rng));
-}
+double sample_diameter(const SizeDistribution& dist, std::mt19937_64& rng) { return quantile(prepare(dist), uniform_open01(rng)); }
 
-std::vector<double> sample_until_volume(const SizeDistribution& dist, double solid_volume_m3, std::mt19937_64& rng,
-                                        std::size_t max_count) {
+std::vector<double> sample_until_volume(const SizeDistribution& dist, double solid_volume_m3, std::mt19937_64& rng, std::size_t max_count) {
   if (!std::isfinite(solid_volume_m3) || solid_volume_m3 < 0.0)
     throw ConfigError("", "solid volume must be >= 0 and finite [m^3], found " + fmt(solid_volume_m3));
   const Prepared p = prepare(dist);
@@ -367,8 +364,8 @@ std::vector<double> sample_until_volume(const SizeDistribution& dist, double sol
       break;
     }
     if (out.size() >= max_count)
-      throw SetupError("size distribution needs more than " + std::to_string(max_count) +
-                       " particles to reach a solid volume of " + fmt(solid_volume_m3) + " m^3");
+      throw SetupError("size distribution needs more than " + std::to_string(max_count) + " particles to reach a solid volume of " +
+                       fmt(solid_volume_m3) + " m^3");
     out.push_back(d);
     total += v;
   }
@@ -380,8 +377,7 @@ DistributionReport compare(const SizeDistribution& dist, const std::vector<doubl
   if (sampled_diameters.empty()) throw ConfigError("", "no sampled diameters to compare");
   for (std::size_t i = 0; i < sampled_diameters.size(); ++i)
     if (!std::isfinite(sampled_diameters[i]) || sampled_diameters[i] <= 0.0)
-      throw ConfigError("/" + std::to_string(i), "sampled diameter must be positive and finite [m], found " +
-                                                     fmt(sampled_diameters[i]));
+      throw ConfigError("/" + std::to_string(i), "sampled diameter must be positive and finite [m], found " + fmt(sampled_diameters[i]));
   std::vector<double> x = sampled_diameters;
   std::sort(x.begin(), x.end());
   const std::size_t n = x.size();

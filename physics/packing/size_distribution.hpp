@@ -44,17 +44,15 @@ struct SizeDistribution {
   double d50 = 0.0;    ///< lognormal: median (number) diameter [m]
   double sigma = 0.0;  ///< lognormal: standard deviation of ln d [-]
 
-  double d_min = 0.0;                                       ///< lognormal truncation / uniform lower bound [m]
+  double d_min = 0.0;                                      ///< lognormal truncation / uniform lower bound [m]
   double d_max = std::numeric_limits<double>::infinity();  ///< lognormal truncation / uniform upper bound [m]
 };
 
 /// Tabulated distribution; validated (throws ConfigError).
-SizeDistribution make_table(std::vector<double> diameters, std::vector<double> cumulative_fraction,
-                            SizeBasis basis);
+SizeDistribution make_table(std::vector<double> diameters, std::vector<double> cumulative_fraction, SizeBasis basis);
 /// Lognormal number distribution, median d50 [m], sigma of ln d [-], optionally truncated to
 /// [d_min, d_max] [m]; validated (throws ConfigError).
-SizeDistribution make_lognormal(double d50, double sigma, double d_min = 0.0,
-                                double d_max = std::numeric_limits<double>::infinity());
+SizeDistribution make_lognormal(double d50, double sigma, double d_min = 0.0, double d_max = std::numeric_limits<double>::infinity());
 /// Diameters uniform on [d_min, d_max] [m]; validated (throws ConfigError).
 SizeDistribution make_uniform(double d_min, double d_max);
 /// Radii uniform on [r_mean (1 - spread), r_mean (1 + spread)], i.e. diameters uniform on
@@ -91,19 +89,19 @@ double sample_diameter(const SizeDistribution& dist, std::mt19937_64& rng);
 /// has advanced past that draw either way). solid_volume_m3 = 0 gives an empty vector.
 /// Throws ConfigError for a negative or non-finite volume, SetupError if more than max_count
 /// particles would be needed.
-std::vector<double> sample_until_volume(const SizeDistribution& dist, double solid_volume_m3,
-                                        std::mt19937_64& rng, std::size_t max_count = 10'000'000);
+std::vector<double> sample_until_volume(const SizeDistribution& dist, double solid_volume_m3, std::mt19937_64& rng,
+                                        std::size_t max_count = 10'000'000);
 
 /// Requested vs sampled distribution. Quantiles are number quantiles.
 struct DistributionReport {
-  std::vector<double> quantiles;    ///< probabilities {0.1, 0.5, 0.9} [-]
-  std::vector<double> requested_d;  ///< requested d10, d50, d90 (number basis) [m]
-  std::vector<double> sampled_d;    ///< sampled d10, d50, d90: smallest sample with F_n >= p [m]
-  double ks_distance = 0.0;         ///< sup_d |F_n(d) - N(d)| [-] (Kolmogorov-Smirnov statistic)
-  double mean_d_requested = 0.0;    ///< number-mean diameter of the requested distribution [m]
-  double mean_d_sampled = 0.0;      ///< arithmetic mean of the samples [m]
+  std::vector<double> quantiles;       ///< probabilities {0.1, 0.5, 0.9} [-]
+  std::vector<double> requested_d;     ///< requested d10, d50, d90 (number basis) [m]
+  std::vector<double> sampled_d;       ///< sampled d10, d50, d90: smallest sample with F_n >= p [m]
+  double ks_distance = 0.0;            ///< sup_d |F_n(d) - N(d)| [-] (Kolmogorov-Smirnov statistic)
+  double mean_d_requested = 0.0;       ///< number-mean diameter of the requested distribution [m]
+  double mean_d_sampled = 0.0;         ///< arithmetic mean of the samples [m]
   double volume_mean_d_sampled = 0.0;  ///< De Brouckere (volume-weighted) mean D[4,3] = sum d^4 / sum d^3 [m]
-  std::size_t n = 0;                ///< number of samples
+  std::size_t n = 0;                   ///< number of samples
 };
 
 /// Compares sampled diameters [m] with the requested number distribution. Throws ConfigError for

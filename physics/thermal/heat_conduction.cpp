@@ -31,7 +31,6 @@ std::vector<std::string> split_names(const std::string& s) {
   return out;
 }
 
-
 std::string num(double x) { return format_number(x); }
 }  // namespace
 
@@ -40,25 +39,39 @@ ParamSpec<HeatConduction::Params> HeatConduction::spec() {
   ParamSpec<P> s("heat_conduction", "module",
                  "transient heat conduction on the interaction graph with Joule heating, fixed-temperature sets, prescribed "
                  "flux and ambient loss; explicit (own stable step) or implicit; energy balance in the time series");
-  s.add("model", &P::model).choices({"transmission_surface", "sintered_neck", "batchelor_obrien"})
+  s.add("model", &P::model)
+      .choices({"transmission_surface", "sintered_neck", "batchelor_obrien"})
       .doc("branch conductance: lambda S_ij / l_ij (seed 001), sintered neck hemispheres (+ layer), or 2 lambda a (Batchelor-O'Brien)");
   s.add("conductivity", &P::conductivity).unit("W/(m K)").positive().required().doc("thermal conductivity lambda of the solid");
-  s.add("density", &P::density).unit("kg/m^3").positive().required().doc("true density rho of the solid (heat capacity; mass scaling never enters it)");
+  s.add("density", &P::density)
+      .unit("kg/m^3")
+      .positive()
+      .required()
+      .doc("true density rho of the solid (heat capacity; mass scaling never enters it)");
   s.add("specific_heat", &P::specific_heat).unit("J/(kg K)").positive().required().doc("specific heat c");
-  s.add("capacity", &P::capacity).choices({"sphere", "volume_fraction", "domain"})
+  s.add("capacity", &P::capacity)
+      .choices({"sphere", "volume_fraction", "domain"})
       .doc("heat capacity: rho c V_sphere; / f_v,i (GranOO, seed 001 Eq. 13); or scaled so the capacities sum to rho c domain_volume");
-  s.add("domain_volume", &P::domain_volume).unit("m^3").nonnegative()
+  s.add("domain_volume", &P::domain_volume)
+      .unit("m^3")
+      .nonnegative()
       .doc("volume of the continuum domain (capacity 'domain'; also the denominator of the logged ratio sum V_i / f_v,i / V_d)");
-  s.add("initial_temperature", &P::initial_temperature).unit("K").nonnegative()
+  s.add("initial_temperature", &P::initial_temperature)
+      .unit("K")
+      .nonnegative()
       .doc("temperature of every particle at the stage start (0: keep the particles' temperature)");
   s.add("joule_heating", &P::joule_heating).doc("add heat_fraction x the field joule_power (needs electrical_network in the stage)");
   s.add("heat_fraction", &P::heat_fraction).unit("1").range(0.0, 1.0).doc("eta: fraction of the electrical power turned into heat");
   s.add("fixed_sets", &P::fixed_sets).doc("comma-separated particle sets held at fixed_temperatures");
   s.add("fixed_temperatures", &P::fixed_temperatures).unit("K").doc("one temperature per fixed set");
   s.add("flux_sets", &P::flux_sets).doc("comma-separated particle sets receiving flux_powers");
-  s.add("flux_powers", &P::flux_powers).unit("W").doc("heat flow into each flux set (split in proportion to the heat capacities; < 0 extracts)");
+  s.add("flux_powers", &P::flux_powers)
+      .unit("W")
+      .doc("heat flow into each flux set (split in proportion to the heat capacities; < 0 extracts)");
   s.add("conductivity_sets", &P::conductivity_sets)
-      .doc("comma-separated particle sets of another material: their conductivity is conductivity_factors x lambda (series halves per branch)");
+      .doc(
+          "comma-separated particle sets of another material: their conductivity is conductivity_factors x lambda (series halves per "
+          "branch)");
   s.add("conductivity_factors", &P::conductivity_factors).unit("1").doc("one factor > 0 per conductivity set");
   s.add("loss_set", &P::loss_set).doc("particles losing heat to the ambient: a set name, \"all\", or \"\" (adiabatic)");
   s.add("convection_coefficient", &P::convection_coefficient).unit("W/(m^2 K)").nonnegative().doc("h of the convective loss");
@@ -67,13 +80,20 @@ ParamSpec<HeatConduction::Params> HeatConduction::spec() {
   s.add("loss_area_fraction", &P::loss_area_fraction).unit("1").range(0.0, 1.0).doc("exposed area of a loss particle / 4 pi r^2");
   s.add("report_sets", &P::report_sets)
       .doc("comma-separated particle sets: one column heat_temperature_mean_<set> each, the capacity-weighted mean temperature of the set");
-  s.add("scheme", &P::scheme).choices({"explicit", "implicit"}).doc("forward Euler on its own stable step, or backward Euler (sparse LDL^T)");
-  s.add("safety", &P::safety).unit("1").range(0.0, 1.0).doc("explicit: fraction of the Gershgorin bound min C_i / sum_j G_ij used as the stable step");
+  s.add("scheme", &P::scheme)
+      .choices({"explicit", "implicit"})
+      .doc("forward Euler on its own stable step, or backward Euler (sparse LDL^T)");
+  s.add("safety", &P::safety)
+      .unit("1")
+      .range(0.0, 1.0)
+      .doc("explicit: fraction of the Gershgorin bound min C_i / sum_j G_ij used as the stable step");
   s.add("solver", &P::solver).choices({"direct", "cg_ic", "cg_jacobi"}).doc("implicit: linear solver");
   s.add("tolerance", &P::tolerance).unit("1").positive().doc("implicit with CG: relative residual");
   s.add("expansion_coefficient", &P::expansion_coefficient).unit("1/K").doc("alpha_T: radii follow each particle's temperature (0: off)");
   s.add("reference_temperature", &P::reference_temperature).unit("K").positive().doc("T_0 of the reference radii");
-  s.add("contact_radius", &P::contact_radius).choices({"hertz", "geometric"}).doc("batchelor_obrien: a = sqrt(R* delta) or the lens radius");
+  s.add("contact_radius", &P::contact_radius)
+      .choices({"hertz", "geometric"})
+      .doc("batchelor_obrien: a = sqrt(R* delta) or the lens radius");
   s.add("neck", &P::neck).choices({"law", "coble", "cv"}).doc("sintered_neck: neck radius source");
   s.add("hemisphere", &P::hemisphere).choices({"reading_a", "reading_b", "reading_c", "fe_table"}).doc("sintered_neck: hemisphere law");
   s.add("gb_epsilon", &P::gb_epsilon).unit("1").positive().doc("sintered_neck: conductivity ratio of a neck layer");
@@ -81,8 +101,12 @@ ParamSpec<HeatConduction::Params> HeatConduction::spec() {
   s.add("gbf_correction", &P::gbf_correction).doc("sintered_neck: grain-boundary-fraction correction");
   s.add("alpha_constant", &P::alpha_constant).unit("1").nonnegative().doc("transmission_surface: fixed alpha (0: alpha(n), f(e))");
   s.add("touch_tolerance", &P::touch_tolerance).unit("m").nonnegative().doc("transmission_surface: gap up to which a pair conducts");
-  s.add("touch_tolerance_relative", &P::touch_tolerance_relative).unit("1").nonnegative()
-      .doc("touching, transmission_surface: the gap tolerance as a fraction of the mean particle radius at the stage start (> 0 overrides touch_tolerance; kept in the checkpoint)");
+  s.add("touch_tolerance_relative", &P::touch_tolerance_relative)
+      .unit("1")
+      .nonnegative()
+      .doc(
+          "touching, transmission_surface: the gap tolerance as a fraction of the mean particle radius at the stage start (> 0 overrides "
+          "touch_tolerance; kept in the checkpoint)");
   return s;
 }
 
@@ -100,11 +124,10 @@ HeatConduction::HeatConduction(const Params& p) : p_(p) {
   report_names_ = split_names(p.report_sets);
   for (std::size_t k = 0; k < report_names_.size(); ++k)
     for (std::size_t j = 0; j < k; ++j)
-      if (report_names_[j] == report_names_[k])
-        d.push_back({"/report_sets", "set '" + report_names_[k] + "' is listed twice"});
+      if (report_names_[j] == report_names_[k]) d.push_back({"/report_sets", "set '" + report_names_[k] + "' is listed twice"});
   if (fixed_names_.size() != p.fixed_temperatures.size())
-    d.push_back({"/fixed_temperatures", "expected one temperature per fixed set (" + std::to_string(fixed_names_.size()) +
-                                            "), found " + std::to_string(p.fixed_temperatures.size())});
+    d.push_back({"/fixed_temperatures", "expected one temperature per fixed set (" + std::to_string(fixed_names_.size()) + "), found " +
+                                            std::to_string(p.fixed_temperatures.size())});
   for (std::size_t k = 0; k < p.fixed_temperatures.size(); ++k)
     if (!(p.fixed_temperatures[k] > 0.0) || !std::isfinite(p.fixed_temperatures[k]))
       d.push_back({"/fixed_temperatures/" + std::to_string(k), "expected a finite temperature > 0 K, found " + num(p.fixed_temperatures[k])});
@@ -126,7 +149,7 @@ HeatConduction::HeatConduction(const Params& p) : p_(p) {
   branch_.alpha_constant = p.alpha_constant;
   branch_.touch_tolerance = p.touch_tolerance;
   LaplacianOptions o;
-  o.method = p.solver == "cg_ic" ? LaplacianMethod::CgIncompleteCholesky
+  o.method = p.solver == "cg_ic"       ? LaplacianMethod::CgIncompleteCholesky
              : p.solver == "cg_jacobi" ? LaplacianMethod::CgDiagonal
                                        : LaplacianMethod::Direct;
   o.tolerance = p.tolerance;
@@ -159,7 +182,10 @@ std::uint64_t geometry_key(const State& s) {
   std::uint64_t h = 1469598103934665603ull;
   auto mix = [&h](const void* data, std::size_t bytes) {
     const auto* c = static_cast<const unsigned char*>(data);
-    for (std::size_t k = 0; k < bytes; ++k) { h ^= c[k]; h *= 1099511628211ull; }
+    for (std::size_t k = 0; k < bytes; ++k) {
+      h ^= c[k];
+      h *= 1099511628211ull;
+    }
   };
   const auto& p = s.particles;
   if (!p.position.empty()) mix(p.position.data(), p.position.size() * sizeof(Vec3));
@@ -179,9 +205,7 @@ const HeatConduction::Network& HeatConduction::network(const State& s) const {
   std::vector<double> share;
   try {
     net_.g = branch_conductances(branch_, s, g, std::vector<double>(g.size(), p_.conductivity), share);
-  } catch (const ConfigError& e) {
-    throw PhysicsError(s.step, {}, "thermal conductance", e.what());
-  }
+  } catch (const ConfigError& e) { throw PhysicsError(s.step, {}, "thermal conductance", e.what()); }
   if (!factor_names_.empty()) {  // series halves: G / (s_a / f_a + (1 - s_a) / f_b)
     const auto& p = s.particles;
     std::vector<double> f(g.nodes(), 1.0);
@@ -430,10 +454,10 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
 }
 
 std::vector<std::string> HeatConduction::columns() const {
-  std::vector<std::string> c = {"heat_temperature_mean", "heat_temperature_min", "heat_temperature_max", "heat_electrical_energy",
-                                "heat_joule_energy", "heat_flux_energy", "heat_lost_energy", "heat_fixed_energy", "heat_stored_energy",
-                                "heat_balance_error", "heat_stable_dt", "heat_capacity_total", "heat_capacity_ratio",
-                                "heat_temperature_std", "heat_isolated_particles"};
+  std::vector<std::string> c = {"heat_temperature_mean", "heat_temperature_min", "heat_temperature_max",   "heat_electrical_energy",
+                                "heat_joule_energy",     "heat_flux_energy",     "heat_lost_energy",       "heat_fixed_energy",
+                                "heat_stored_energy",    "heat_balance_error",   "heat_stable_dt",         "heat_capacity_total",
+                                "heat_capacity_ratio",   "heat_temperature_std", "heat_isolated_particles"};
   for (const auto& n : report_names_) c.push_back("heat_temperature_mean_" + n);
   return c;
 }
@@ -462,8 +486,9 @@ std::vector<double> HeatConduction::column_values(const State& s) const {
   const double expected = e_.joule + e_.flux - e_.lost - e_.fixed;
   const double scale = std::abs(e_.joule) + std::abs(e_.flux) + std::abs(e_.lost) + std::abs(e_.fixed);
   const double err = scale > 0.0 ? std::abs(stored - expected) / scale : std::abs(stored);
-  std::vector<double> v = {ct / csum, tmin, tmax, e_.electrical, e_.joule, e_.flux, e_.lost, e_.fixed, stored, err,
-                           stable_dt(s), csum, capacity_ratio_, std::sqrt(var / csum), isolated};
+  std::vector<double> v = {ct / csum, tmin,   tmax, e_.electrical, e_.joule, e_.flux,         e_.lost,
+                           e_.fixed,  stored, err,  stable_dt(s),  csum,     capacity_ratio_, std::sqrt(var / csum),
+                           isolated};
   for (const auto& name : report_names_) {  // capacity-weighted mean temperature of each reported set
     const auto& f = set_field(s, name, "heat_conduction");
     double cs = 0.0, cts = 0.0;

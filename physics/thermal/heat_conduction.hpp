@@ -79,18 +79,18 @@ class HeatConduction final : public Module {
     double density = 0.0;        ///< rho [kg/m^3] (true density; mass scaling never enters C)
     double specific_heat = 0.0;  ///< c [J/(kg K)]
     std::string capacity = "sphere";
-    double domain_volume = 0.0;  ///< [m^3]
+    double domain_volume = 0.0;        ///< [m^3]
     double initial_temperature = 0.0;  ///< [K]; 0 keeps the particles' temperature
     bool joule_heating = false;
-    double heat_fraction = 1.0;  ///< eta [-]
-    std::string fixed_sets;      ///< comma-separated set names
+    double heat_fraction = 1.0;              ///< eta [-]
+    std::string fixed_sets;                  ///< comma-separated set names
     std::vector<double> fixed_temperatures;  ///< [K], one per fixed set
     std::string flux_sets;
     std::vector<double> flux_powers;  ///< [W], one per flux set
     std::string loss_set;
-    std::string conductivity_sets;            ///< comma-separated set names
+    std::string conductivity_sets;             ///< comma-separated set names
     std::vector<double> conductivity_factors;  ///< [-] one per conductivity set: lambda_i = f lambda
-    double convection_coefficient = 0.0;  ///< h [W/(m^2 K)]
+    double convection_coefficient = 0.0;       ///< h [W/(m^2 K)]
     double emissivity = 0.0;
     double ambient_temperature = 293.15;  ///< [K]
     double loss_area_fraction = 0.5;
@@ -99,7 +99,7 @@ class HeatConduction final : public Module {
     double safety = 0.9;
     std::string solver = "direct";
     double tolerance = 1e-12;
-    double expansion_coefficient = 0.0;  ///< [1/K]
+    double expansion_coefficient = 0.0;     ///< [1/K]
     double reference_temperature = 293.15;  ///< [K]
     // branch model details (same meaning as in electrical_network)
     std::string contact_radius = "hertz";

@@ -31,12 +31,18 @@ ParamSpec<TemperatureHistory::Params> TemperatureHistory::spec() {
                       "r = r_ref (1 + alpha_T (T - T_0)) with constant mass; column `temperature`");
   s.add("time", &Params::time).unit("s").required().doc("table times, physical seconds from the stage start, strictly increasing");
   s.add("temperature", &Params::temperature).unit("K").required().doc("temperature at each time (> 0)");
-  s.add("expansion_coefficient", &Params::expansion_coefficient).unit("1/K")
+  s.add("expansion_coefficient", &Params::expansion_coefficient)
+      .unit("1/K")
       .doc("alpha_T, linear thermal expansion coefficient (0: radii unchanged)");
   s.add("start_from_current", &Params::start_from_current)
-      .doc("replace the first tabulated temperature by the particles' mean temperature at the stage start (cooling a state taken hot, e.g. a snapshot)");
-  s.add("reference_temperature", &Params::reference_temperature).unit("K").positive()
-      .doc("T_0: the radii when the reference radii are first captured are the radii at this temperature (keep it the same in every stage)");
+      .doc(
+          "replace the first tabulated temperature by the particles' mean temperature at the stage start (cooling a state taken hot, e.g. "
+          "a snapshot)");
+  s.add("reference_temperature", &Params::reference_temperature)
+      .unit("K")
+      .positive()
+      .doc(
+          "T_0: the radii when the reference radii are first captured are the radii at this temperature (keep it the same in every stage)");
   return s;
 }
 
@@ -48,8 +54,8 @@ TemperatureHistory::TemperatureHistory(const Params& p) : p_(p) {
                                      std::to_string(p.temperature.size())});
   for (std::size_t k = 1; k < p.time.size(); ++k)
     if (!(p.time[k] > p.time[k - 1]))
-      d.push_back({"/time/" + std::to_string(k), "expected times increasing strictly, found " + num(p.time[k]) + " s after " +
-                                                     num(p.time[k - 1]) + " s"});
+      d.push_back({"/time/" + std::to_string(k),
+                   "expected times increasing strictly, found " + num(p.time[k]) + " s after " + num(p.time[k - 1]) + " s"});
   for (std::size_t k = 0; k < p.temperature.size(); ++k) {
     if (!(p.temperature[k] > 0.0) || !std::isfinite(p.temperature[k]))
       d.push_back({"/temperature/" + std::to_string(k), "expected a finite temperature > 0 K, found " + num(p.temperature[k])});
@@ -83,8 +89,9 @@ void TemperatureHistory::bind(State& s) {
     for (double x : f) sum += x;
     const double mean = sum / static_cast<double>(f.size());
     if (!(mean > 0.0))
-      throw SetupError("temperature_history: start_from_current needs the particles' temperature, but the state has none "
-                       "(no earlier stage prescribed one)");
+      throw SetupError(
+          "temperature_history: start_from_current needs the particles' temperature, but the state has none "
+          "(no earlier stage prescribed one)");
     table_.front() = mean;
   }
   if (p_.expansion_coefficient != 0.0) thermal::capture_reference_radii(s, p_.reference_temperature, "temperature_history");

@@ -78,9 +78,9 @@ class TemperatureHistory final : public Module {
  private:
   void apply(State& s, double T);
   Params p_;
-  double current_ = 0.0;  ///< temperature last written [K]
+  double current_ = 0.0;       ///< temperature last written [K]
   std::vector<double> table_;  ///< the temperature table as used (start_from_current: first value replaced; checkpointed)
-  bool restored_ = false; ///< set by visit() when reading: bind() leaves the restored state alone
+  bool restored_ = false;      ///< set by visit() when reading: bind() leaves the restored state alone
 };
 
 }  // namespace sparkdem::physics

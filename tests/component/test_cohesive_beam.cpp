@@ -32,8 +32,8 @@ using physics::CohesiveBeam;
 
 namespace {
 
-constexpr double kR = 1e-3;      // element radius [m]
-constexpr double kE = 1e9;       // beam Young's modulus [Pa]
+constexpr double kR = 1e-3;  // element radius [m]
+constexpr double kE = 1e9;   // beam Young's modulus [Pa]
 constexpr double kNu = 0.25;
 constexpr double kRatio = 0.5;
 constexpr double kRho = 7800.0;
@@ -62,15 +62,13 @@ BondForces evaluate(const State& s, const CohesiveBeam& law) {
   return law(detail::bond_geometry(s.particles, s.bonds, 0), BondMotion{}, 0.0, nullptr);
 }
 
-const double L0 = 2 * kR, rmu = kRatio * kR, S = kPi * rmu * rmu, I = kPi * std::pow(rmu, 4) / 4, I0 = 2 * I,
-             G = kE / (2 * (1 + kNu));
+const double L0 = 2 * kR, rmu = kRatio * kR, S = kPi * rmu * rmu, I = kPi * std::pow(rmu, 4) / 4, I0 = 2 * I, G = kE / (2 * (1 + kNu));
 
 Quat about(const Vec3& axis, double angle) { return Quat(Eigen::AngleAxisd(angle, axis.normalized())); }
 
 }  // namespace
 
-TEST_CASE("cohesive beam: pure tension, torsion and bending match the Euler-Bernoulli closed forms to 1e-10",
-          "[beam][bonds]") {
+TEST_CASE("cohesive beam: pure tension, torsion and bending match the Euler-Bernoulli closed forms to 1e-10", "[beam][bonds]") {
   const CohesiveBeam law(beam_params());
   SECTION("tension: F = E S dL / L0 along the axis, no moments") {
     State s = bonded_pair();
@@ -118,8 +116,7 @@ TEST_CASE("cohesive beam: pure tension, torsion and bending match the Euler-Bern
   }
 }
 
-TEST_CASE("cohesive beam: rigid motions load nothing, any deformation is balanced, forces are -grad U",
-          "[beam][bonds]") {
+TEST_CASE("cohesive beam: rigid motions load nothing, any deformation is balanced, forces are -grad U", "[beam][bonds]") {
   const CohesiveBeam law(beam_params());
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -298,8 +295,7 @@ TEST_CASE("torsion_test on a twisted chain of beams: twist = w t, torque = G I0 
   CHECK((s.particles.position[kN - 1] - Vec3(0, 0, 2 * kR * (kN - 1))).norm() < 1e-12 * kR);
 }
 
-TEST_CASE("cohesive beam stable step: below the stability limit measured by bisection, and not far below",
-          "[beam][bonds][stability]") {
+TEST_CASE("cohesive beam stable step: below the stability limit measured by bisection, and not far below", "[beam][bonds][stability]") {
   // Two free elements joined by a beam, every mode excited (random velocities and spins); a
   // step is stable when the energy stays bounded over 20,000 steps. The 12-dof eigenproblem of
   // this pair gives 2 / omega_max = 1.23 x our Gershgorin estimate (numpy, see bond_model.hpp).
@@ -318,7 +314,8 @@ TEST_CASE("cohesive beam stable step: below the stability limit measured by bise
     auto ke = [&]() {
       double e = 0.0;
       for (std::size_t k = 0; k < 2; ++k)
-        e += 0.5 * s.particles.mass[k] * s.particles.velocity[k].squaredNorm() + 0.5 * s.particles.inertia[k] * s.particles.omega[k].squaredNorm();
+        e += 0.5 * s.particles.mass[k] * s.particles.velocity[k].squaredNorm() +
+             0.5 * s.particles.inertia[k] * s.particles.omega[k].squaredNorm();
       return e;
     };
     const double e0 = ke();
@@ -328,9 +325,7 @@ TEST_CASE("cohesive beam stable step: below the stability limit measured by bise
     test::NullObserver obs;
     try {
       sim.run_stage(c, obs);
-    } catch (const std::exception&) {
-      return std::numeric_limits<double>::infinity();
-    }
+    } catch (const std::exception&) { return std::numeric_limits<double>::infinity(); }
     const double e = ke() + bonds.elastic_energy(s.particles, s.bonds);
     return std::isfinite(e) ? e / e0 : std::numeric_limits<double>::infinity();
   };

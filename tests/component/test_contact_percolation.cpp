@@ -27,8 +27,8 @@ using namespace sparkdem;
 using namespace sparkdem::physics;
 
 namespace {
-constexpr double kR = 1.0;      // [m] lengths in units of R, as in the paper's configs
-constexpr double kTol = 2e-3;   // [m] touch tolerance 0.1 % of D
+constexpr double kR = 1.0;     // [m] lengths in units of R, as in the paper's configs
+constexpr double kTol = 2e-3;  // [m] touch tolerance 0.1 % of D
 
 /// Sphere chain along x from x = kR (touching the face x = 0) with centre spacing `spacing`,
 /// at height (y, z) = (y, 0).
@@ -79,7 +79,7 @@ std::map<std::string, double> evaluate(State& s, double L, bool clusters = true,
 
 TEST_CASE("contact_percolation: spanning of hand-built chains", "[cpc][electrical]") {
   const int n = 6;
-  const double spacing = 2 * kR * (1 - 5e-4);  // overlapping by 0.05 % of D
+  const double spacing = 2 * kR * (1 - 5e-4);   // overlapping by 0.05 % of D
   const double L = 2 * kR + (n - 1) * spacing;  // last sphere reaches the face x = L
   SECTION("a straight chain from face to face spans: R = (n - 1) / g") {
     State s;
@@ -173,12 +173,12 @@ TEST_CASE("contact_percolation: series-parallel networks of unit conductances", 
     // E - F. The two 2-conductance paths in parallel give 1: R = 1 + 1 + 1 = 3.
     const double d = spacing, q = d / std::sqrt(2.0);
     State s;
-    test::add_sphere(s, Vec3(kR, 0, 0), kR, 1000.0);                          // A
-    test::add_sphere(s, Vec3(kR + d, 0, 0), kR, 1000.0);                      // B
-    test::add_sphere(s, Vec3(kR + d + q, q, 0), kR, 1000.0);                  // C
-    test::add_sphere(s, Vec3(kR + d + q, -q, 0), kR, 1000.0);                 // D
-    test::add_sphere(s, Vec3(kR + d + 2 * q, 0, 0), kR, 1000.0);              // E
-    test::add_sphere(s, Vec3(kR + 2 * d + 2 * q, 0, 0), kR, 1000.0);          // F
+    test::add_sphere(s, Vec3(kR, 0, 0), kR, 1000.0);                  // A
+    test::add_sphere(s, Vec3(kR + d, 0, 0), kR, 1000.0);              // B
+    test::add_sphere(s, Vec3(kR + d + q, q, 0), kR, 1000.0);          // C
+    test::add_sphere(s, Vec3(kR + d + q, -q, 0), kR, 1000.0);         // D
+    test::add_sphere(s, Vec3(kR + d + 2 * q, 0, 0), kR, 1000.0);      // E
+    test::add_sphere(s, Vec3(kR + 2 * d + 2 * q, 0, 0), kR, 1000.0);  // F
     const double L = 2 * kR + 2 * d + 2 * q;
     faces(s, L);
     auto c = evaluate(s, L);

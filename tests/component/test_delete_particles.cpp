@@ -72,7 +72,10 @@ TEST_CASE("deleting particles keeps the particle, contact and bond tables consis
   REQUIRE(members.size() == 25);
   std::vector<bool> remove(n0, false);
   std::set<Id> gone;
-  for (Index i : members) { remove[i] = true; gone.insert(s.particles.id[i]); }
+  for (Index i : members) {
+    remove[i] = true;
+    gone.insert(s.particles.id[i]);
+  }
   // Rows expected to go: those with an end in the plane. Contacts: 25 in-plane pairs x 2 in-plane
   // directions = 40 within the plane + 2 x 25 to the neighbouring planes = 90; bonds (x pairs):
   // 2 x 25 = 50.

@@ -199,15 +199,13 @@ TEST_CASE("electrical_network: simple cubic lattice with the transmission surfac
   SECTION("the full alpha(n), f(e) model: the boundary elements change it (reported)") {
     const auto r = solve(s, p);
     const double err = r.resistance / (rho * l / A) - 1.0;
-    WARN("transmission surface alpha(n), f(e) on a " << n << "x" << n << "x" << m
-                                                     << " lattice: R / (rho l / A) - 1 = " << err);
+    WARN("transmission surface alpha(n), f(e) on a " << n << "x" << n << "x" << m << " lattice: R / (rho l / A) - 1 = " << err);
     CHECK(std::isfinite(err));
     CHECK(std::abs(err) > 1e-3);  // the face, edge and corner elements do change it
   }
 }
 
-TEST_CASE("electrical_network: Kirchhoff and power balance on a random polydisperse packing; solvers agree",
-          "[electrical]") {
+TEST_CASE("electrical_network: Kirchhoff and power balance on a random polydisperse packing; solvers agree", "[electrical]") {
   State s;
   random_packing(s, 400, 7, 0.5, 1.0, 12 * kR);
   ElectricalNetwork::Params p = holm_params();
@@ -302,7 +300,10 @@ double slab_mass_porosity(const State& s, double z0, double z1, int n, double& a
   const auto& P = s.particles;
   double lo = 1e300, hi = -1e300;
   for (std::size_t i = 0; i < P.size(); ++i)
-    for (int d = 0; d < 2; ++d) { lo = std::min(lo, P.position[i][d] - P.radius[i]); hi = std::max(hi, P.position[i][d] + P.radius[i]); }
+    for (int d = 0; d < 2; ++d) {
+      lo = std::min(lo, P.position[i][d] - P.radius[i]);
+      hi = std::max(hi, P.position[i][d] + P.radius[i]);
+    }
   area = (hi - lo) * (hi - lo);
   const double hx = (hi - lo) / n, hz = (z1 - z0) / n;
   double covered = 0.0;
@@ -329,7 +330,10 @@ double set_centroid_z(const State& s, const std::string& set) {
   const auto& f = s.particles.fields.data("set/" + set);
   double z = 0.0, k = 0.0;
   for (std::size_t i = 0; i < f.size(); ++i)
-    if (f[i] > 0.5) { z += s.particles.position[i].z(); k += 1.0; }
+    if (f[i] > 0.5) {
+      z += s.particles.position[i].z();
+      k += 1.0;
+    }
   return z / k;
 }
 }  // namespace

@@ -147,8 +147,8 @@ TEST_CASE("heat_conduction: a chain with fixed ends and uniform Joule heating re
         CHECK(test::relative_error(Tx - 300.0 + 1.0, P * k * (n - 1 - k) / (2 * G) + 1.0) <= 1e-12);  // same closed form
         worst = std::max(worst, std::abs(T[k] - Tx) / (thermal::parabolic_rod_temperature(300.0, q, L, kLambda, L / 2) - 300.0));
       }
-      INFO("largest deviation from the parabola / its peak rise: " << worst << " (peak rise "
-                                                                    << thermal::parabolic_rod_temperature(300.0, q, L, kLambda, L / 2) - 300.0 << " K)");
+      INFO("largest deviation from the parabola / its peak rise: "
+           << worst << " (peak rise " << thermal::parabolic_rod_temperature(300.0, q, L, kLambda, L / 2) - 300.0 << " K)");
       CHECK(worst <= 1e-9);
       // The heat generated leaves through the fixed ends: stored ~ 0 at steady state growth.
       const auto cols = heat.columns();
@@ -168,13 +168,14 @@ TEST_CASE("heat_conduction: adiabatic Joule heating of a random packing stores e
     DYNAMIC_SECTION(scheme) {
       State s;
       rng.seed(11);
-      for (int k = 0; k < 400; ++k)
-        test::add_sphere(s, Vec3(U(rng), U(rng), U(rng)) * L, 1.5 * (40e-6 + 20e-6 * U(rng)), kRho);
+      for (int k = 0; k < 400; ++k) test::add_sphere(s, Vec3(U(rng), U(rng), U(rng)) * L, 1.5 * (40e-6 + 20e-6 * U(rng)), kRho);
       set_temperatures(s, std::vector<double>(s.particles.size(), 293.15));
       SetSelector lo, hi;
       lo.kind = hi.kind = SetSelector::Kind::Box;
-      lo.lo = Vec3(-1, -1, -1); lo.hi = Vec3(1, 1, 1.2e-4);
-      hi.lo = Vec3(-1, -1, L - 1.2e-4); hi.hi = Vec3(1, 1, 1);
+      lo.lo = Vec3(-1, -1, -1);
+      lo.hi = Vec3(1, 1, 1.2e-4);
+      hi.lo = Vec3(-1, -1, L - 1.2e-4);
+      hi.hi = Vec3(1, 1, 1);
       assign_set(s, "bottom", lo);
       assign_set(s, "top", hi);
       ElectricalNetwork::Params ep;
@@ -206,8 +207,7 @@ TEST_CASE("heat_conduction: adiabatic Joule heating of a random packing stores e
   }
 }
 
-TEST_CASE("heat_conduction: an explicit step above the stable one is refused; with the override the blow-up is caught",
-          "[thermal][heat]") {
+TEST_CASE("heat_conduction: an explicit step above the stable one is refused; with the override the blow-up is caught", "[thermal][heat]") {
   auto scene = [](State& s) {
     test::add_sphere(s, Vec3::Zero(), 1e-4, kRho);
     test::add_sphere(s, Vec3(2e-4 - 1e-7, 0, 0), 1e-4, kRho);
@@ -268,9 +268,12 @@ TEST_CASE("heat_conduction: report_sets gives the capacity-weighted mean tempera
   set_temperatures(s, T0);
   SetSelector lower, upper, none;
   lower.kind = upper.kind = none.kind = SetSelector::Kind::Box;
-  lower.lo = Vec3(-1, -1, -1); lower.hi = Vec3(1, 1, 0.5 * L);
-  upper.lo = Vec3(-1, -1, 0.5 * L); upper.hi = Vec3(1, 1, 1);
-  none.lo = Vec3(5, 5, 5); none.hi = Vec3(6, 6, 6);
+  lower.lo = Vec3(-1, -1, -1);
+  lower.hi = Vec3(1, 1, 0.5 * L);
+  upper.lo = Vec3(-1, -1, 0.5 * L);
+  upper.hi = Vec3(1, 1, 1);
+  none.lo = Vec3(5, 5, 5);
+  none.hi = Vec3(6, 6, 6);
   assign_set(s, "lower", lower);
   assign_set(s, "upper", upper);
   assign_set(s, "nothing", none);
@@ -297,8 +300,14 @@ TEST_CASE("heat_conduction: report_sets gives the capacity-weighted mean tempera
   double cl = 0.0, ctl = 0.0, cu = 0.0, ctu = 0.0;
   std::size_t nl = 0;
   for (std::size_t i = 0; i < T.size(); ++i) {
-    if (in_lower[i] > 0.5) { cl += C[i]; ctl += C[i] * T[i]; ++nl; }
-    else { cu += C[i]; ctu += C[i] * T[i]; }
+    if (in_lower[i] > 0.5) {
+      cl += C[i];
+      ctl += C[i] * T[i];
+      ++nl;
+    } else {
+      cu += C[i];
+      ctu += C[i] * T[i];
+    }
   }
   REQUIRE(nl > 50);
   REQUIRE(nl < T.size() - 50);

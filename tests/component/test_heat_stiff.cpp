@@ -90,7 +90,7 @@ TEST_CASE("heat_conduction: conductivity factors put the two sides of a branch i
       sim.run_stage(test::frozen_stage(1e-6, 0), obs);
       const double lam = StiffScene::lambda, harmonic = 2.0 * lam * f * lam / (lam + f * lam);
       const double G = model == "batchelor_obrien" ? 2.0 * harmonic * std::sqrt(0.5 * r * overlap)
-                                                    : harmonic * 4.0 * r * r / (2 * r - overlap);
+                                                   : harmonic * 4.0 * r * r / (2 * r - overlap);
       CHECK(test::relative_error(heat.stable_dt(s), 0.9 * C / G) <= 1e-12);
     }
   }
@@ -103,9 +103,10 @@ TEST_CASE("heat_conduction: conductivity factors put the two sides of a branch i
   }
 }
 
-TEST_CASE("heat_conduction: stiff network (contrast 1e8, 10 um sphere on 1 mm ones): explicit on its substeps and implicit at "
-          "1e3 x its step agree within the implicit scheme's error bound",
-          "[thermal][heat][stiff]") {
+TEST_CASE(
+    "heat_conduction: stiff network (contrast 1e8, 10 um sphere on 1 mm ones): explicit on its substeps and implicit at "
+    "1e3 x its step agree within the implicit scheme's error bound",
+    "[thermal][heat][stiff]") {
   // The scene's numbers (closed forms from the geometry).
   CHECK(test::relative_error(StiffScene::g_ll() / StiffScene::g_ins(), 1e8) <= 1e-9);
   const double s_exp = StiffScene::explicit_stable_dt();
@@ -142,8 +143,7 @@ TEST_CASE("heat_conduction: stiff network (contrast 1e8, 10 um sphere on 1 mm on
   //    G_ins / C = 1.8e-9 1/s). Explicit: left Riemann sum of a monotone integrand on h, error
   //    <= h (T2(t) - T2(0)) / int = 1.3e-4 (band 1e-3); implicit: right sum on H, error <= 0.13
   //    (H x 16 K / 20 K s) plus the BE error of T2 (band 0.15).
-  const double rise_exact =
-      StiffScene::g_ins() / C * (modal.integral(T0, t)[StiffScene::L2] - 300.0 * t);
+  const double rise_exact = StiffScene::g_ins() / C * (modal.integral(T0, t)[StiffScene::L2] - 300.0 * t);
   INFO("L3 rise: reference " << rise_exact << " K, explicit " << ex.T[StiffScene::L3] - 300.0 << " K, implicit "
                              << im.T[StiffScene::L3] - 300.0 << " K, modal " << exact[StiffScene::L3] - 300.0 << " K");
   CHECK(rise_exact > 3e-8);
@@ -157,8 +157,8 @@ TEST_CASE("heat_conduction: stiff network (contrast 1e8, 10 um sphere on 1 mm on
   for (int i : {StiffScene::L0, StiffScene::L1, StiffScene::L2}) {
     const double bound = E * amp[i];
     INFO("sphere L" << i << ": |implicit - exact| = " << std::abs(im.T[i] - exact[i]) << " K <= bound " << bound
-                    << " K; |explicit - exact| = " << std::abs(ex.T[i] - exact[i]) << " K; |explicit - implicit| = "
-                    << std::abs(ex.T[i] - im.T[i]) << " K");
+                    << " K; |explicit - exact| = " << std::abs(ex.T[i] - exact[i])
+                    << " K; |explicit - implicit| = " << std::abs(ex.T[i] - im.T[i]) << " K");
     CHECK(std::abs(im.T[i] - exact[i]) <= bound);
     CHECK(std::abs(ex.T[i] - exact[i]) <= 0.01 * bound);  // FE error ~ (h / H) x the BE error
     CHECK(std::abs(ex.T[i] - im.T[i]) <= 1.001 * bound);
@@ -170,9 +170,10 @@ TEST_CASE("heat_conduction: stiff network (contrast 1e8, 10 um sphere on 1 mm on
   CHECK(test::relative_error(Cv.dot(im.T), Cv.dot(T0)) <= 1e-13);
 }
 
-TEST_CASE("heat_conduction: on the stiff network an explicit step above the bound is refused, and the override's blow-up "
-          "names the step, the tiny sphere and the temperature",
-          "[thermal][heat][stiff]") {
+TEST_CASE(
+    "heat_conduction: on the stiff network an explicit step above the bound is refused, and the override's blow-up "
+    "names the step, the tiny sphere and the temperature",
+    "[thermal][heat][stiff]") {
   const double s_exp = StiffScene::explicit_stable_dt();
   Clock one;
   one.kind = Clock::Kind::EveryStep;

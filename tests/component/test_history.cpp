@@ -89,7 +89,7 @@ TEST_CASE("Contact state and particle fields follow a permutation", "[history]")
   t.remap_after_permutation(p.id);
   for (std::size_t k = 0; k < p.size(); ++k) {
     CHECK(p.id[k] == static_cast<Id>(perm[k]));
-    CHECK(p.mass[k] == 1.0 + perm[k]);  // core arrays follow
+    CHECK(p.mass[k] == 1.0 + perm[k]);                      // core arrays follow
     CHECK(p.fields.data("heat")[2 * k] == 10.0 * p.id[k]);  // declared fields follow (exact)
     CHECK(p.fields.data("heat")[2 * k + 1] == -1.0 * p.id[k]);
   }
@@ -153,13 +153,13 @@ struct Sample {
 /// really permutes them. Returns per-step samples by id.
 std::vector<Sample> sheared_stack(double skin, Step sort_every, State& s, double& max_shear, bool forget = false) {
   const double r = 1e-3, rho = 2500.0, d0 = 2.0 * r - 1e-6;  // pair overlaps of 1 um
-  const Vec3 x1(0.0, 0.0, r - 1e-6);                              // on the floor, 1 um overlap
+  const Vec3 x1(0.0, 0.0, r - 1e-6);                         // on the floor, 1 um overlap
   const Vec3 top_offset(0.3e-3, 0.1e-3, 0.0);
   const Vec3 x0 = x1 + top_offset + Vec3(0, 0, std::sqrt(d0 * d0 - top_offset.squaredNorm()));
-  test::add_sphere(s, x0, r, rho);                                // id 0: on top of 1, off-centre
-  test::add_sphere(s, x1, r, rho);                                // id 1
-  test::add_sphere(s, x1 + Vec3(-d0, 0.0, 0.0), r, rho);          // id 2: on the floor, left of 1
-  s.particles.velocity[2] = Vec3(0.01, 0.02, 0.0);                // pushes into 1 and slides along y
+  test::add_sphere(s, x0, r, rho);                        // id 0: on top of 1, off-centre
+  test::add_sphere(s, x1, r, rho);                        // id 1
+  test::add_sphere(s, x1 + Vec3(-d0, 0.0, 0.0), r, rho);  // id 2: on the floor, left of 1
+  s.particles.velocity[2] = Vec3(0.01, 0.02, 0.0);        // pushes into 1 and slides along y
   s.walls.push_back(test::plane_wall("floor", Vec3::Zero(), Vec3::UnitZ()));
   const ContactModelT<HertzMindlin> law({1e7, 0.3, 0.5, 0.4});
   Gravity gravity({Vec3(0, 0, -9.81)});
@@ -184,8 +184,7 @@ std::vector<Sample> sheared_stack(double skin, Step sort_every, State& s, double
     }
     out.push_back(std::move(smp));
     auto& c = s.contacts;  // the same State, non-const access for state()
-    for (std::size_t q = 0; q < c.size(); ++q)
-      max_shear = std::max(max_shear, Vec3(c.state(q)[0], c.state(q)[1], c.state(q)[2]).norm());
+    for (std::size_t q = 0; q < c.size(); ++q) max_shear = std::max(max_shear, Vec3(c.state(q)[0], c.state(q)[1], c.state(q)[2]).norm());
   });
   StageConfig cfg = test::stage(2e-6, 4000, skin);
   cfg.sort_every_rebuilds = sort_every;
@@ -204,9 +203,9 @@ TEST_CASE("Tangential history survives rebuilds and spatial sorts (end to end)",
   const auto rb = sheared_stack(1e-15, 1, b, shear_b);
   REQUIRE(ra.size() == rb.size());
   CHECK(a.rebuilds == 1);
-  CHECK(b.rebuilds >= 3900);        // (nearly) every one of the 4000 steps rebuilt the list
+  CHECK(b.rebuilds >= 3900);                          // (nearly) every one of the 4000 steps rebuilt the list
   CHECK(b.particles.id != std::vector<Id>{0, 1, 2});  // the sort did permute the particles
-  CHECK(shear_a > 1e-9);            // the tangential springs were loaded (the test is not empty)
+  CHECK(shear_a > 1e-9);                              // the tangential springs were loaded (the test is not empty)
   CHECK(shear_b == Approx(shear_a).epsilon(1e-12));
   // The trajectories agree to 1e-12 relative (scale: the largest value of each quantity).
   double xs = 0.0, vs = 0.0, ws = 0.0, dx = 0.0, dv = 0.0, dw = 0.0;
@@ -221,8 +220,8 @@ TEST_CASE("Tangential history survives rebuilds and spatial sorts (end to end)",
     }
   REQUIRE(vs > 0.0);
   REQUIRE(ws > 0.0);
-  WARN("history: max rel. deviation x " << dx / xs << ", v " << dv / vs << ", omega " << dw / ws
-                                        << "; rebuilds " << b.rebuilds << "; max |xi| " << shear_a << " m");
+  WARN("history: max rel. deviation x " << dx / xs << ", v " << dv / vs << ", omega " << dw / ws << "; rebuilds " << b.rebuilds
+                                        << "; max |xi| " << shear_a << " m");
   CHECK(dx <= 1e-12 * xs);
   CHECK(dv <= 1e-12 * vs);
   CHECK(dw <= 1e-12 * ws);

@@ -151,10 +151,12 @@ TEST_CASE("Interaction graph equals the brute-force build", "[graph]") {
     std::size_t mismatched = 0;
     for (const auto& [k, v] : rm) {
       const auto it = fm.find(k);
-      if (it == fm.end()) { ++mismatched; continue; }
-      const EdgeData& w = it->second;
-      if (!close(w.distance, v.distance) || !close(w.overlap, v.overlap) || !close(w.radius, v.radius) || w.row != v.row)
+      if (it == fm.end()) {
         ++mismatched;
+        continue;
+      }
+      const EdgeData& w = it->second;
+      if (!close(w.distance, v.distance) || !close(w.overlap, v.overlap) || !close(w.radius, v.radius) || w.row != v.row) ++mismatched;
     }
     CHECK(mismatched == 0);
     // Each unordered pair at most once, whatever its kind.
@@ -163,8 +165,11 @@ TEST_CASE("Interaction graph equals the brute-force build", "[graph]") {
     CHECK(pairs.size() == fast.size());
     // Particle pairs ordered by global id, wall edges (particle, wall node).
     for (std::size_t e = 0; e < fast.size(); ++e) {
-      if (fast.kind[e] == EdgeKind::Wall) { CHECK(!fast.is_wall_node(fast.a[e])); CHECK(fast.is_wall_node(fast.b[e])); }
-      else CHECK(s.particles.id[fast.a[e]] < s.particles.id[fast.b[e]]);
+      if (fast.kind[e] == EdgeKind::Wall) {
+        CHECK(!fast.is_wall_node(fast.a[e]));
+        CHECK(fast.is_wall_node(fast.b[e]));
+      } else
+        CHECK(s.particles.id[fast.a[e]] < s.particles.id[fast.b[e]]);
     }
   }
 
@@ -191,14 +196,19 @@ TEST_CASE("Interaction graph equals the brute-force build", "[graph]") {
         CHECK(g.radius[e] == 0.0);
         if (!rows.count(key)) ++near_beyond_skin;  // found by the graph's own search, not the table
         break;
-      case EdgeKind::Bond: CHECK(key != pk.bond_broken); break;
+      case EdgeKind::Bond:
+        CHECK(key != pk.bond_broken);
+        break;
       case EdgeKind::Wall:
-        if (g.overlap[e] <= 0.0) { ++wall_gap; CHECK(g.radius[e] == 0.0); }
+        if (g.overlap[e] <= 0.0) {
+          ++wall_gap;
+          CHECK(g.radius[e] == 0.0);
+        }
         break;
     }
   }
-  INFO("contacts " << contacts << " necks beyond near gap " << neck_far << " near not in table " << near_beyond_skin
-                   << " wall gaps " << wall_gap);
+  INFO("contacts " << contacts << " necks beyond near gap " << neck_far << " near not in table " << near_beyond_skin << " wall gaps "
+                   << wall_gap);
   CHECK(contacts > 20);
   CHECK(neck_far > 0);
   CHECK(near_beyond_skin > 0);

@@ -17,7 +17,7 @@ using namespace sparkdem;
 TEST_CASE("mass_scaling and mass_floor_radius scale the fines during the stage and are undone after it", "[mass_scaling]") {
   constexpr double kRho = 2500.0, kPi = 3.14159265358979323846;
   State s;
-  test::add_sphere(s, Vec3(0, 0, 0), 1e-3, kRho, Vec3(0.01, 0, 0));       // fine
+  test::add_sphere(s, Vec3(0, 0, 0), 1e-3, kRho, Vec3(0.01, 0, 0));        // fine
   test::add_sphere(s, Vec3(3.9e-3, 0, 0), 3e-3, kRho, Vec3(-0.01, 0, 0));  // coarse, overlapping the fine
   const std::vector<double> m0 = s.particles.mass, i0 = s.particles.inertia;
   physics::LinearSpringDashpot::Params hp;

@@ -57,7 +57,7 @@ TEST_CASE("find_pairs equals brute force for polydisperse sets (ratios 15, 50)",
       const auto ref = normalised(find_pairs_brute_force(x, r, skin));
       // Exact comparison of the two sets (integer pairs); the list must be non-trivial.
       REQUIRE(ref.size() > n);
-      CHECK(st.levels >= 4);  // several size levels are really exercised (log2 15 ~ 3.9)
+      CHECK(st.levels >= 4);                                              // several size levels are really exercised (log2 15 ~ 3.9)
       CHECK(std::adjacent_find(fast.begin(), fast.end()) == fast.end());  // each pair once
       CHECK(fast == ref);
       // After random motion of up to 3 rmin (the cells and levels are rebuilt from scratch).

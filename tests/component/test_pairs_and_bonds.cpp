@@ -76,7 +76,9 @@ struct CountingContact {
 /// `break_at` (never if 0).
 struct CountingBond {
   static constexpr std::string_view kName = "counting_bond";
-  struct Params { double break_at = 0.0; };
+  struct Params {
+    double break_at = 0.0;
+  };
   static std::vector<std::string> state_columns() { return {"calls", "only_bond"}; }
   explicit CountingBond(const Params& p) : p_(p) {}
   BondForces operator()(const BondGeometry& g, const BondMotion&, double, double* st) const {
@@ -103,7 +105,11 @@ class Bonder final : public Module {
     const int c = s.contacts.column("calls");
     for (std::size_t r = 0; r < s.contacts.size(); ++r)
       if (s.contacts.state(r)[c] >= at_) rows.push_back(r);
-    if (!rows.empty()) { bond_contacts(s, rows); done_ = true; bonded_step = info.step; }
+    if (!rows.empty()) {
+      bond_contacts(s, rows);
+      done_ = true;
+      bonded_step = info.step;
+    }
   }
   Step bonded_step = -1;
 
@@ -153,7 +159,7 @@ TEST_CASE("a persistent neck stays in the contact table at negative overlap beyo
   const auto rows = rows_of_pair(s, s.contacts);
   REQUIRE(rows.size() == 1);
   const double* st = s.contacts.state(rows[0]);
-  CHECK(st[0] > 0.0);                                        // the neck is alive
+  CHECK(st[0] > 0.0);                                                 // the neck is alive
   CHECK(st[1] == Approx(static_cast<double>(steps + 1)).epsilon(0));  // evaluated at every pass (+ set-up)
   // Force on particle i (the one with the smaller id, at -x) = k * overlap * n, n = j -> i = -x:
   // attractive, towards +x.
@@ -173,8 +179,7 @@ TEST_CASE("a non-persistent law drops the pair once it leaves the neighbour cand
   CHECK(s.particles.force[0].norm() == 0.0);
 }
 
-TEST_CASE("a bond persists beyond the cut-off until it breaks, with the law's force and action = reaction",
-          "[bonds][contracts]") {
+TEST_CASE("a bond persists beyond the cut-off until it breaks, with the law's force and action = reaction", "[bonds][contracts]") {
   State s;
   two_spheres(s, 1.95 * kR);
   ContactModelT<CountingContact> law{{}};

@@ -21,9 +21,13 @@ namespace {
 /// A module that records every call it gets.
 class Mock final : public Module {
  public:
-  Mock(std::string name, Phase phase, Clock clock, std::vector<std::string> reads = {},
-       std::vector<std::string> writes = {}, std::vector<FieldInfo> fields = {})
-      : name_(std::move(name)), phase_(phase), clock_(clock), reads_(std::move(reads)), writes_(std::move(writes)),
+  Mock(std::string name, Phase phase, Clock clock, std::vector<std::string> reads = {}, std::vector<std::string> writes = {},
+       std::vector<FieldInfo> fields = {})
+      : name_(std::move(name)),
+        phase_(phase),
+        clock_(clock),
+        reads_(std::move(reads)),
+        writes_(std::move(writes)),
         fields_(std::move(fields)) {}
   std::string name() const override { return name_; }
   Phase phase() const override { return phase_; }
@@ -82,7 +86,7 @@ TEST_CASE("EveryNSteps(N) runs at global steps N, 2N, ... with dt = N dt", "[sch
   for (std::size_t k = 0; k < m.calls.size(); ++k) {
     const Step expect = 3 * static_cast<Step>(k + 1);
     CHECK(m.calls[k].step == expect);
-    CHECK(m.calls[k].dt == Approx(3.0 * dt).epsilon(1e-15));     // Clock::dt, exact up to rounding
+    CHECK(m.calls[k].dt == Approx(3.0 * dt).epsilon(1e-15));       // Clock::dt, exact up to rounding
     CHECK(m.calls[k].time == Approx(expect * dt).epsilon(1e-12));  // end of the call's window
   }
 }
@@ -147,7 +151,7 @@ TEST_CASE("build_step_plan: set-up errors and writer-before-reader order", "[sch
     CHECK(position_of(plan, "writer") < position_of(plan, "reader"));
     CHECK(position_of(plan, "reader") < position_of(plan, "last"));
     CHECK(position_of(plan, "writer") > position_of(plan, "integrate_second_half"));  // coupling after mechanics
-    CHECK(plan.items.size() == 7 + 3);  // the 7 mechanical items + 3 modules
+    CHECK(plan.items.size() == 7 + 3);                                                // the 7 mechanical items + 3 modules
   }
 }
 
@@ -193,8 +197,7 @@ std::vector<Step> steps_of(const Mock& m) {
 }
 }  // namespace
 
-TEST_CASE("OnEvent: a module runs on the stage's initial state, then when a particle moved beyond a distance",
-          "[scheduler][contracts]") {
+TEST_CASE("OnEvent: a module runs on the stage's initial state, then when a particle moved beyond a distance", "[scheduler][contracts]") {
   Bench b;
   b.s.particles.velocity[0] = Vec3(1.0, 0, 0);  // 1 m/s, no forces: 1e-6 m per step of 1e-6 s
   Trigger t;
@@ -234,8 +237,7 @@ TEST_CASE("OnEvent: a field changed by more than a threshold, and a maximum inte
   CHECK(steps_of(ticker) == std::vector<Step>{0, 5, 10});
 }
 
-TEST_CASE("AdaptiveSubsteps follows a shrinking stable step, and a fixed clock above it stops the run",
-          "[scheduler][contracts]") {
+TEST_CASE("AdaptiveSubsteps follows a shrinking stable step, and a fixed clock above it stops the run", "[scheduler][contracts]") {
   const double dt = 1e-6;
   SECTION("adaptive") {
     Bench b;
@@ -259,7 +261,7 @@ TEST_CASE("AdaptiveSubsteps follows a shrinking stable step, and a fixed clock a
         CHECK(m.calls[c].dt <= dt / (1.0 + static_cast<double>(n - 1) / 4.0) * (1 + 1e-12));  // never above the stable step
         sum += m.calls[c].dt;
       }
-      CHECK(sum == Approx(dt).epsilon(1e-14));                         // the substeps tile the step
+      CHECK(sum == Approx(dt).epsilon(1e-14));  // the substeps tile the step
       CHECK(m.calls[c - 1].time == Approx(static_cast<double>(n) * dt).epsilon(1e-12));
     }
     CHECK(m.calls.size() == static_cast<std::size_t>(total));

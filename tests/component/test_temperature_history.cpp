@@ -100,7 +100,7 @@ TEST_CASE("thermal expansion is a function of T: no drift after 40 heating and c
   Simulation sim(s, law);
   sim.add_module(&th);
   StageConfig cfg = test::stage(1e-6, 4000, 2e-5);
-  cfg.time_scale = 1e5;  // 0.1 s per step: 50 steps per ramp
+  cfg.time_scale = 1e5;         // 0.1 s per step: 50 steps per ramp
   cfg.sort_every_rebuilds = 3;  // permutations too
   auto T_of = [&](double t) { return physics::thermal::table_temperature(p.time, p.temperature, t); };
   double worst = 0.0, worst_I = 0.0;
@@ -186,9 +186,9 @@ TEST_CASE("temperature_history reports every table problem at once with its path
     std::map<std::string, std::string> by_path;
     for (const auto& d : e.diagnostics()) by_path[d.path] = d.message;
     CHECK(e.diagnostics().size() == 3);
-    CHECK(by_path.count("/temperature"));      // 2 temperatures for 3 times
-    CHECK(by_path.count("/time/2"));           // 1 s after 2 s
-    CHECK(by_path.count("/temperature/1"));    // -5 K
+    CHECK(by_path.count("/temperature"));    // 2 temperatures for 3 times
+    CHECK(by_path.count("/time/2"));         // 1 s after 2 s
+    CHECK(by_path.count("/temperature/1"));  // -5 K
     CHECK(by_path["/temperature/1"].find("-5") != std::string::npos);
   }
   p.time = {};

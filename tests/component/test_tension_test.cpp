@@ -57,8 +57,7 @@ physics::TensionTest make_module(const Vec3& p, const Vec3& axis, double R, doub
 
 }  // namespace
 
-TEST_CASE("tension_test: an affine deformation returns its axial and lateral strains and nu exactly",
-          "[tension][mechanics]") {
+TEST_CASE("tension_test: an affine deformation returns its axial and lateral strains and nu exactly", "[tension][mechanics]") {
   // x = p + F (x0 - p) + t a with F = I + eps_a a a^T + eps_l (I - a a^T): the axial fit (with
   // intercept) returns eps_a whatever the rigid axial translation t, the radial fit eps_l; both
   // are exact in exact arithmetic, so the tolerance is rounding: |error| <= 1e-12 on the
@@ -97,7 +96,10 @@ TEST_CASE("tension_test: an affine deformation returns its axial and lateral str
     const auto& ft = s.particles.fields.data("set/top");
     const auto& fb = s.particles.fields.data("set/bottom");
     double nt = 0, nb = 0;
-    for (std::size_t i = 0; i < s.particles.size(); ++i) { nt += ft[i]; nb += fb[i]; }
+    for (std::size_t i = 0; i < s.particles.size(); ++i) {
+      nt += ft[i];
+      nb += fb[i];
+    }
     REQUIRE(nt > 5);
     REQUIRE(nb > 5);
     const Vec3 b = a.unitOrthogonal();
@@ -150,8 +152,7 @@ TEST_CASE("tension_test: configuration and set-up errors", "[tension][mechanics]
   CHECK_THROWS_AS(m.bind(s), SetupError);  // the sets are not defined
 }
 
-TEST_CASE("local_damping leaves prescribed particles alone: their force is the reported reaction",
-          "[tension][mechanics][damping]") {
+TEST_CASE("local_damping leaves prescribed particles alone: their force is the reported reaction", "[tension][mechanics][damping]") {
   // One free and one prescribed particle with the same force and velocity: the free one loses
   // alpha |F| sign(v) per component, the prescribed one keeps its force exactly.
   State s;

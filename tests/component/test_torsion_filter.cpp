@@ -25,11 +25,11 @@ struct Script {
 
 /// R/R0 at twist step k (theta = k mrad).
 double scripted_ratio(int k) {
-  if (k >= 30 && k < 34) return 2.5;   // spike: falls back after 4 mrad
-  if (k >= 90) return -1.0;            // separated: the network reports R < 0 (no path)
-  if (k >= 70) return 3.0;             // doubled
-  if (k >= 50) return 1.5;             // sustained rise
-  return 1.0 + 1e-4 * k;               // elastic drift, below the 1 % threshold
+  if (k >= 30 && k < 34) return 2.5;  // spike: falls back after 4 mrad
+  if (k >= 90) return -1.0;           // separated: the network reports R < 0 (no path)
+  if (k >= 70) return 3.0;            // doubled
+  if (k >= 50) return 1.5;            // sustained rise
+  return 1.0 + 1e-4 * k;              // elastic drift, below the 1 % threshold
 }
 
 Script run_script(double persistence) {

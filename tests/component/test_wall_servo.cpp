@@ -28,7 +28,6 @@ ContactModelT<physics::HertzMindlin> frozen_sphere_under_punch(State& s, double 
 }
 }  // namespace
 
-
 TEST_CASE("a pressure-controlled punch settles on its target force", "[walls]") {
   // One frozen sphere (r = 1 mm) on a floor; a punch starts 0.1 mm above it and is driven to
   // p = 1e5 Pa over A = 1e-6 m^2, i.e. F = 0.1 N. Servo: u_dot = v_max (F_t - F)/F_t.

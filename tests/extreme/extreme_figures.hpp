@@ -9,8 +9,7 @@
 
 namespace sparkdem::test {
 
-inline void append_extreme_figure(const std::string& case_name, const std::string& figure, double value,
-                                  const std::string& unit) {
+inline void append_extreme_figure(const std::string& case_name, const std::string& figure, double value, const std::string& unit) {
   const char* path = std::getenv("SPARKDEM_EXTREME_CSV");
   if (!path || !*path) return;
   if (std::FILE* f = std::fopen(path, "a")) {
@@ -21,7 +20,7 @@ inline void append_extreme_figure(const std::string& case_name, const std::strin
 
 }  // namespace sparkdem::test
 
-#define EXTREME_FIGURE(case_name, figure, value, unit)                                              \
+#define EXTREME_FIGURE(case_name, figure, value, unit)                                             \
   do {                                                                                             \
     const double extreme_v_ = (value);                                                             \
     WARN("[extreme] " << (case_name) << ": " << (figure) << " = " << extreme_v_ << " " << (unit)); \

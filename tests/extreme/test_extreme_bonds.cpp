@@ -88,7 +88,8 @@ TEST_CASE("extreme B1: a cohesive-beam block loaded until every bond breaks", "[
   auto ke = [&]() {
     double e = 0.0;
     for (std::size_t i = 0; i < s.particles.size(); ++i)
-      e += 0.5 * s.particles.mass[i] * s.particles.velocity[i].squaredNorm() + 0.5 * s.particles.inertia[i] * s.particles.omega[i].squaredNorm();
+      e += 0.5 * s.particles.mass[i] * s.particles.velocity[i].squaredNorm() +
+           0.5 * s.particles.inertia[i] * s.particles.omega[i].squaredNorm();
     return e;
   };
   const double k0 = ke();

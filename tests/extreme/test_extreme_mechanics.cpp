@@ -60,8 +60,7 @@ Energy hertz_energy(const State& s, double es) {
     e.kinetic += 0.5 * p.mass[i] * p.velocity[i].squaredNorm() + 0.5 * p.inertia[i] * p.omega[i].squaredNorm();
     for (std::size_t j = i + 1; j < p.size(); ++j) {
       const double d = p.radius[i] + p.radius[j] - (p.position[i] - p.position[j]).norm();
-      if (d > 0.0)
-        e.elastic += 8.0 / 15.0 * es * std::sqrt(p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j])) * std::pow(d, 2.5);
+      if (d > 0.0) e.elastic += 8.0 / 15.0 * es * std::sqrt(p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j])) * std::pow(d, 2.5);
     }
     for (const Wall& w : s.walls) {
       Vec3 n;
@@ -98,8 +97,7 @@ double median_seconds(const std::function<void()>& f, int reps) {
 // ---------------------------------------------------------------------------------------------
 // M1
 // ---------------------------------------------------------------------------------------------
-TEST_CASE("extreme M1: size ratios 15 and 50 in one packing - no contact missed over a dynamic run, search cost",
-          "[extreme][neighbor]") {
+TEST_CASE("extreme M1: size ratios 15 and 50 in one packing - no contact missed over a dynamic run, search cost", "[extreme][neighbor]") {
   // Expectation: runs; at every 20th step every pair touching by the O(N^2) reference is in the
   // contact table (exact set inclusion: 0 missed, over more than 1,000 ratio-50 and 2,000
   // ratio-15 contacts), and the cell search on this packing costs at most 5 x that of a
@@ -129,7 +127,12 @@ TEST_CASE("extreme M1: size ratios 15 and 50 in one packing - no contact missed 
   for (int k = 0; k < 12;) {  // medium spheres on the large ones
     const std::size_t host = k % 2;
     const Vec3 c = x[host] + (65 * r0 - 1e-4 * r0) * dir();
-    if (free_of(c, 15 * r0, host)) { x.push_back(c); r.push_back(15 * r0); host_of.push_back(host); ++k; }
+    if (free_of(c, 15 * r0, host)) {
+      x.push_back(c);
+      r.push_back(15 * r0);
+      host_of.push_back(host);
+      ++k;
+    }
   }
   const double a_large = 2 * 4 * kPi * 2500.0, a_medium = 12 * 4 * kPi * 225.0;  // host surface weights
   for (int k = 0, tries = 0; k < 2400 && tries < 200000; ++tries) {
@@ -137,11 +140,21 @@ TEST_CASE("extreme M1: size ratios 15 and 50 in one packing - no contact missed 
                                                                : 2 + static_cast<std::size_t>(u(rng) * 12);
     host = std::min<std::size_t>(host, 13);
     const Vec3 c = x[host] + (r[host] + r0 - 1e-4 * r0) * dir();
-    if (free_of(c, r0, host)) { x.push_back(c); r.push_back(r0); host_of.push_back(host); ++k; }
+    if (free_of(c, r0, host)) {
+      x.push_back(c);
+      r.push_back(r0);
+      host_of.push_back(host);
+      ++k;
+    }
   }
   for (int k = 0, tries = 0; k < 600 && tries < 200000; ++tries) {
     const Vec3 c(-60 * r0 + 220 * r0 * u(rng), -60 * r0 + 120 * r0 * u(rng), -60 * r0 + 120 * r0 * u(rng));
-    if (free_of(c, r0, static_cast<std::size_t>(-1))) { x.push_back(c); r.push_back(r0); host_of.push_back(x.size() - 1); ++k; }
+    if (free_of(c, r0, static_cast<std::size_t>(-1))) {
+      x.push_back(c);
+      r.push_back(r0);
+      host_of.push_back(x.size() - 1);
+      ++k;
+    }
   }
   REQUIRE(x.size() > 2900);
   // Every satellite moves towards its host at 0.02 m/s plus 0.005 m/s at random (restitution
@@ -191,9 +204,9 @@ TEST_CASE("extreme M1: size ratios 15 and 50 in one packing - no contact missed 
   const StageResult res = sim.run_stage(cfg, obs);
   CHECK(checks == 100);
   CHECK(touching_max > 300);
-  CHECK(big_small > 1000);       // ratio-50 pairs checked (summed over the 100 checks)
-  CHECK(medium_small > 2000);    // ratio-15 pairs checked
-  CHECK(st.levels >= 3);          // the three sizes sit on different levels
+  CHECK(big_small > 1000);     // ratio-50 pairs checked (summed over the 100 checks)
+  CHECK(medium_small > 2000);  // ratio-15 pairs checked
+  CHECK(st.levels >= 3);       // the three sizes sit on different levels
   CHECK(missed == 0);
   CHECK(t_poly <= 5.0 * t_mono);
   EXTREME_FIGURE("M1 size ratio 15 and 50", "contacts missed over 100 checks", static_cast<double>(missed), "");
@@ -203,7 +216,8 @@ TEST_CASE("extreme M1: size ratios 15 and 50 in one packing - no contact missed 
   EXTREME_FIGURE("M1 size ratio 15 and 50", "search time poly / mono", t_poly / t_mono, "");
   EXTREME_FIGURE("M1 size ratio 15 and 50", "search time per particle", t_poly / static_cast<double>(x.size()) * 1e6, "us");
   EXTREME_FIGURE("M1 size ratio 15 and 50", "brute force / cell search", t_brute / t_poly, "");
-  EXTREME_FIGURE("M1 size ratio 15 and 50", "candidate pairs per particle", static_cast<double>(cand.size()) / static_cast<double>(x.size()), "");
+  EXTREME_FIGURE("M1 size ratio 15 and 50", "candidate pairs per particle",
+                 static_cast<double>(cand.size()) / static_cast<double>(x.size()), "");
   EXTREME_FIGURE("M1 size ratio 15 and 50", "particle-steps per second", res.particle_steps_per_second, "1/s");
 }
 
@@ -263,18 +277,17 @@ double energy_excursion(double dt, Step steps, double* drift_rel_total = nullptr
   c.log_every = 10;
   try {
     sim.run_stage(c, obs);
-  } catch (const std::exception&) {
-    return std::numeric_limits<double>::infinity();
-  }
+  } catch (const std::exception&) { return std::numeric_limits<double>::infinity(); }
   if (drift_rel_total) *drift_rel_total = std::abs(hertz_energy(s, es).total() - e0) / e0;
   return std::isfinite(worst) ? worst / e_vib : std::numeric_limits<double>::infinity();
 }
 
 }  // namespace
 
-TEST_CASE("extreme M2: E = 1e12 Pa - stable-step estimate against the bisected limit, energy at 0.9 of it, refusal and "
-          "caught blow-up above the limit",
-          "[extreme][stability]") {
+TEST_CASE(
+    "extreme M2: E = 1e12 Pa - stable-step estimate against the bisected limit, energy at 0.9 of it, refusal and "
+    "caught blow-up above the limit",
+    "[extreme][stability]") {
   // Expectation: the estimate (Rayleigh and Gershgorin on the contact network) lies below the
   // limit measured by bisection and above 0.35 of it, its network part (no Rayleigh step) above
   // 0.9 of it; the bisected limit agrees with the linear normal-mode analysis of the lattice
@@ -372,9 +385,10 @@ TEST_CASE("extreme M2: E = 1e12 Pa - stable-step estimate against the bisected l
 // ---------------------------------------------------------------------------------------------
 // M3
 // ---------------------------------------------------------------------------------------------
-TEST_CASE("extreme M3: mass scaling 1e6 in a quasi-static compression - the static answer is unchanged, the step is "
-          "1000 x larger",
-          "[extreme][mass_scaling]") {
+TEST_CASE(
+    "extreme M3: mass scaling 1e6 in a quasi-static compression - the static answer is unchanged, the step is "
+    "1000 x larger",
+    "[extreme][mass_scaling]") {
   // Expectation: runs; the stable step with masses x 1e6 is exactly 1000 x the unscaled one
   // (1e-12); a 4 x 4 x 4 simple cubic column lattice (r = 1 mm, E = 70 GPa, frictionless,
   // e = 0.5) pressed by a servo punch to p = 1 MPa settles at the closed-form Hertz heights
@@ -429,8 +443,8 @@ TEST_CASE("extreme M3: mass scaling 1e6 in a quasi-static compression - the stat
   const Wall& floor = *s.find_wall("z_lo");
   const double height = 2 * r * n - top.u;  // punch plane height
   const double err = std::abs((2 * r * n - height) - compression) / compression;
-  INFO("compression " << 2 * r * n - height << " m, closed form " << compression << " m; punch force " << top.normal_force
-                      << " N, floor " << floor.normal_force << " N, target " << P * area << " N");
+  INFO("compression " << 2 * r * n - height << " m, closed form " << compression << " m; punch force " << top.normal_force << " N, floor "
+                      << floor.normal_force << " N, target " << P * area << " N");
   CHECK(err < 0.01);
   CHECK(test::relative_error(top.normal_force, P * area) < 0.01);
   CHECK(test::relative_error(floor.normal_force, P * area) < 0.01);
@@ -499,9 +513,7 @@ TEST_CASE("extreme M4: pressure punch with no particle under it is refused, with
     try {
       (void)run_scene(empty, "punch0");
       FAIL("the punch with nothing under it was accepted");
-    } catch (const SetupError& e) {
-      what = e.what();
-    } catch (const ConfigError& e) {
+    } catch (const SetupError& e) { what = e.what(); } catch (const ConfigError& e) {
       what = std::string("ConfigError: ") + e.what();
     }
     INFO(what);
@@ -562,8 +574,7 @@ TEST_CASE("extreme M4: pressure punch with no particle under it is refused, with
 // ---------------------------------------------------------------------------------------------
 // M5
 // ---------------------------------------------------------------------------------------------
-TEST_CASE("extreme M5: overlapping initial particles are reported, and refused, relaxed or allowed as configured",
-          "[extreme][overlap]") {
+TEST_CASE("extreme M5: overlapping initial particles are reported, and refused, relaxed or allowed as configured", "[extreme][overlap]") {
   // Two spheres (r = 1 mm) overlapping by 20 % of r, plus a third one sunk 10 % into the floor.
   const double r = 1e-3, rho = 2500.0;
   auto build = [&](State& s) {
@@ -677,6 +688,7 @@ TEST_CASE("extreme M5: overlapping initial particles are reported, and refused, 
     sc["stages"][1]["initial_overlap_limit"] = 0.01;
     const json rel = run_scene(sc, "overlap_relax");
     CHECK(rel["stages"][1]["initial_overlap"]["max_ratio_after"].get<double>() <= 0.01);
-    EXTREME_FIGURE("M5 initial overlap 0.2 r", "relax sweeps, 27-sphere lattice", rel["stages"][1]["initial_overlap"]["relax_sweeps"].get<double>(), "");
+    EXTREME_FIGURE("M5 initial overlap 0.2 r", "relax sweeps, 27-sphere lattice",
+                   rel["stages"][1]["initial_overlap"]["relax_sweeps"].get<double>(), "");
   }
 }

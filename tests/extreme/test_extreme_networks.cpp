@@ -35,15 +35,19 @@ using namespace sparkdem;
 
 namespace {
 
-const std::vector<LaplacianMethod> kMethods = {LaplacianMethod::Direct, LaplacianMethod::CgIncompleteCholesky,
-                                               LaplacianMethod::CgDiagonal, LaplacianMethod::Amg};
+const std::vector<LaplacianMethod> kMethods = {LaplacianMethod::Direct, LaplacianMethod::CgIncompleteCholesky, LaplacianMethod::CgDiagonal,
+                                               LaplacianMethod::Amg};
 
 struct Net {
   std::size_t nodes = 0;
   std::vector<Index> a, b;
   std::vector<double> g;
   std::vector<Index> high, low;
-  void edge(Index x, Index y, double c) { a.push_back(x); b.push_back(y); g.push_back(c); }
+  void edge(Index x, Index y, double c) {
+    a.push_back(x);
+    b.push_back(y);
+    g.push_back(c);
+  }
   LaplacianProblem problem() const {
     LaplacianProblem p;
     p.nodes = nodes;
@@ -72,19 +76,25 @@ long double reference_conductance(const Net& n) {
       if (role[p] != 0) continue;
       auto& row = A[static_cast<std::size_t>(idx[p])];
       row[static_cast<std::size_t>(idx[p])] += c;
-      if (role[q] == 0) row[static_cast<std::size_t>(idx[q])] -= c;
-      else if (role[q] == 1) row[static_cast<std::size_t>(m)] += c;  // u_q = 1
+      if (role[q] == 0)
+        row[static_cast<std::size_t>(idx[q])] -= c;
+      else if (role[q] == 1)
+        row[static_cast<std::size_t>(m)] += c;  // u_q = 1
     }
   }
   for (int k = 0; k < m; ++k) {
     int piv = k;
     for (int i = k + 1; i < m; ++i)
-      if (std::fabs(A[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)]) > std::fabs(A[static_cast<std::size_t>(piv)][static_cast<std::size_t>(k)])) piv = i;
+      if (std::fabs(A[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)]) >
+          std::fabs(A[static_cast<std::size_t>(piv)][static_cast<std::size_t>(k)]))
+        piv = i;
     std::swap(A[static_cast<std::size_t>(k)], A[static_cast<std::size_t>(piv)]);
     for (int i = k + 1; i < m; ++i) {
-      const long double f = A[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] / A[static_cast<std::size_t>(k)][static_cast<std::size_t>(k)];
+      const long double f = A[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] /
+                            A[static_cast<std::size_t>(k)][static_cast<std::size_t>(k)];
       if (f == 0.0L) continue;
-      for (int j = k; j <= m; ++j) A[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] -= f * A[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)];
+      for (int j = k; j <= m; ++j)
+        A[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] -= f * A[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)];
     }
   }
   std::vector<long double> u(static_cast<std::size_t>(m));
@@ -97,7 +107,9 @@ long double reference_conductance(const Net& n) {
   long double I = 0.0L;
   for (std::size_t e = 0; e < n.g.size(); ++e) {
     const auto x = static_cast<std::size_t>(n.a[e]), y = static_cast<std::size_t>(n.b[e]);
-    auto val = [&](std::size_t v) -> long double { return role[v] == 1 ? 1.0L : role[v] == 2 ? 0.0L : u[static_cast<std::size_t>(idx[v])]; };
+    auto val = [&](std::size_t v) -> long double {
+      return role[v] == 1 ? 1.0L : role[v] == 2 ? 0.0L : u[static_cast<std::size_t>(idx[v])];
+    };
     if (role[x] == 1 && role[y] != 1) I += n.g[e] * (1.0L - val(y));
     if (role[y] == 1 && role[x] != 1) I += n.g[e] * (1.0L - val(x));
   }
@@ -125,8 +137,7 @@ Net contrast_lattice(int k, std::uint64_t seed) {
 
 }  // namespace
 
-TEST_CASE("extreme E1: conductance contrast 1e12 - every solver against an extended-precision reference",
-          "[extreme][electrical]") {
+TEST_CASE("extreme E1: conductance contrast 1e12 - every solver against an extended-precision reference", "[extreme][electrical]") {
   // Expectation: the direct solver within 1e-9 of the long-double reference; the iterative ones
   // (PCG with IC / Jacobi, AMG-PCG) stop on a relative residual of 1e-10 of the reduced system,
   // which bounds the error of R by about cond x 1e-10: they are checked within 1e-6 and their
@@ -141,8 +152,8 @@ TEST_CASE("extreme E1: conductance contrast 1e12 - every solver against an exten
     LaplacianSolver solver(o);
     const EffectiveResistance r = effective_resistance(solver, n.problem(), n.high, n.low, 1.0);
     const double err = std::abs(r.conductance - ref) / ref;
-    INFO(laplacian_method_name(m) << ": G = " << r.conductance << " S, reference " << ref << " S, error " << err
-                                  << ", iterations " << r.solve.iterations);
+    INFO(laplacian_method_name(m) << ": G = " << r.conductance << " S, reference " << ref << " S, error " << err << ", iterations "
+                                  << r.solve.iterations);
     CHECK(std::isfinite(r.resistance));
     CHECK(std::abs(r.current + r.current_low) <= 1e-6 * std::abs(r.current));
     CHECK(err < (m == LaplacianMethod::Direct ? 1e-9 : 1e-6));
@@ -175,8 +186,7 @@ TEST_CASE("extreme E1: conductance contrast 1e12 - every solver against an exten
   EXTREME_FIGURE("E1 contrast 1e12", "series-parallel closed form error (direct)", std::abs(r.conductance - g_exact) / g_exact, "");
 }
 
-TEST_CASE("extreme E2: floating clusters are reported and carry no current, the spanning part is exact",
-          "[extreme][electrical]") {
+TEST_CASE("extreme E2: floating clusters are reported and carry no current, the spanning part is exact", "[extreme][electrical]") {
   // Network: a spanning chain high(0) - 2 - 3 - low(1) of 1 S each; a floating triangle 4-5-6
   // (no electrode); a pair 7-8 hanging on node 10, a second node of the high electrode, and
   // touching nothing else (a cluster on one electrode only); an isolated node 9.
@@ -298,7 +308,8 @@ void cluster(State& s) {
   auto satellites = [&](Index host, int count, double temp) {
     for (int k = 0; k < count;) {
       const Vec3 dir = Vec3(g(rng), g(rng), g(rng)).normalized();
-      const Vec3 c = s.particles.position[static_cast<std::size_t>(host)] + (s.particles.radius[static_cast<std::size_t>(host)] + rs - 0.01 * rs) * dir;
+      const Vec3 c = s.particles.position[static_cast<std::size_t>(host)] +
+                     (s.particles.radius[static_cast<std::size_t>(host)] + rs - 0.01 * rs) * dir;
       if (!free_at(c, rs, host)) continue;
       test::add_sphere(s, c, rs, kRhoT);
       T.push_back(temp);
@@ -472,8 +483,7 @@ TEST_CASE("extreme T1: explicit heat at and above its stable step on a cluster w
   EXTREME_FIGURE("T1 explicit heat, size ratio 50", "blow-up caught at step (2.5 x)", static_cast<double>(over.fail_step), "");
 }
 
-TEST_CASE("extreme T2: implicit heat at 1e3 x the explicit stable step on a cluster with size ratio 50",
-          "[extreme][thermal]") {
+TEST_CASE("extreme T2: implicit heat at 1e3 x the explicit stable step on a cluster with size ratio 50", "[extreme][thermal]") {
   // Expectation: 30 steps of H = 1000 x the explicit stable step (t = 15 s, 0.2 of the slow
   // mode's time) equal the backward-Euler recurrence (1e-9 of the range), stay within
   // [300, 600] K (BE is monotone), conserve sum C T (1e-12), and differ from the exact solution

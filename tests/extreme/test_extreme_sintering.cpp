@@ -129,8 +129,7 @@ TEST_CASE("extreme S1: sintering contact at zero neck radius - the Maxwell updat
   EXTREME_FIGURE("S1 zero neck radius", "overlap after 20000 steps from touching", h_end / r, "r");
 }
 
-TEST_CASE("extreme S2: a neck larger than the smaller particle is capped at r_min in the law and the conductance",
-          "[extreme][sintering]") {
+TEST_CASE("extreme S2: a neck larger than the smaller particle is capped at r_min in the law and the conductance", "[extreme][sintering]") {
   // Expectation: a small sphere (r) on a large one (10 r) with a neck state of 3 r: after one
   // step the neck is r (the cap) and the force finite; the Coble neck of a deep overlap exceeds
   // r (the kernel does not cap: documented), the constant-volume neck returns exactly r; the
@@ -165,11 +164,11 @@ TEST_CASE("extreme S2: a neck larger than the smaller particle is capped at r_mi
   // The kernel leaves the cap to its caller (a = 3 r gives more than a = r through the large
   // particle's hemisphere); the branch model must cap: a pair overlapping by 0.9 r with the
   // Coble neck (1.8 r) and no grain-boundary-fraction correction gets the conductance of a = r.
-  using physics::electrical::HemisphereLaw;
   using physics::electrical::GrainBoundaryLayer;
+  using physics::electrical::HemisphereLaw;
   const double kappa = 1e6;
-  const double g_cap = physics::electrical::sintered_neck_conductance(HemisphereLaw::reading_a(), GrainBoundaryLayer::none(),
-                                                                      kappa, kappa, r, R, r);
+  const double g_cap = physics::electrical::sintered_neck_conductance(HemisphereLaw::reading_a(), GrainBoundaryLayer::none(), kappa, kappa,
+                                                                      r, R, r);
   State two;
   test::add_sphere(two, Vec3(0, 0, 0), r, kRho);
   test::add_sphere(two, Vec3(r + R - 0.9 * r, 0, 0), R, kRho);
@@ -194,9 +193,10 @@ TEST_CASE("extreme S2: a neck larger than the smaller particle is capped at r_mi
   EXTREME_FIGURE("S2 neck > smaller particle", "Coble neck at h = 0.9 r_min / r_min (uncapped)", coble / r, "");
 }
 
-TEST_CASE("extreme S3: sintering at 0.99 of the melting point - Arrhenius neck growth follows the closed form, stops at "
-          "the equilibrium neck",
-          "[extreme][sintering]") {
+TEST_CASE(
+    "extreme S3: sintering at 0.99 of the melting point - Arrhenius neck growth follows the closed form, stops at "
+    "the equilibrium neck",
+    "[extreme][sintering]") {
   // Expectation: two free NiAl spheres (r = 1 um) at T = 0.99 T_m = 1935 K (time scale 2e5: the
   // late stage, eta ~ a^4, takes about a physical second): D_gb is exp(Q/R (1/T_1 - 1/T_2)) = 3.7e3 x the value at 0.6 T_m; the rate
   // dh/dt = F_s(a) / eta(a) of the closed form holds within 5 % on the growth phase, the neck
@@ -207,8 +207,7 @@ TEST_CASE("extreme S3: sintering at 0.99 of the melting point - Arrhenius neck g
   p.min_neck_fraction = 0.01;
   const Sintering law(p);
   auto neck_of = [&](double h) { return 1.43 * std::sqrt(r * r - (r - 0.5 * h) * (r - 0.5 * h)); };
-  const double d_eff = kernel::gb_effective_diffusivity(p.gb_diffusivity_prefactor, p.gb_activation_energy, p.gb_width,
-                                                        p.atomic_volume, T);
+  const double d_eff = kernel::gb_effective_diffusivity(p.gb_diffusivity_prefactor, p.gb_activation_energy, p.gb_width, p.atomic_volume, T);
   auto rate = [&](double h) {
     const double a = neck_of(h);
     const double eta = std::numbers::pi * std::pow(a, 4) / (8.0 * d_eff);
@@ -250,8 +249,8 @@ TEST_CASE("extreme S3: sintering at 0.99 of the melting point - Arrhenius neck g
   c.log_every = 500;
   const StageResult res = sim.run_stage(c, obs);
   const double a_end = s.contacts.state(0)[Sintering::kNeck];
-  INFO("dt " << res.dt << " s, worst rate error " << worst_rate << " over " << growth_samples << " samples, a_end/a_eq "
-             << a_end / a_eq << ", t(a_eq) " << t_eq << " s (physical)");
+  INFO("dt " << res.dt << " s, worst rate error " << worst_rate << " over " << growth_samples << " samples, a_end/a_eq " << a_end / a_eq
+             << ", t(a_eq) " << t_eq << " s (physical)");
   CHECK(monotone == 1);
   CHECK(growth_samples >= 10);
   CHECK(worst_rate < 0.05);

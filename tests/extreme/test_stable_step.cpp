@@ -62,9 +62,7 @@ double peak_kinetic_energy(const StepScene& sc, double dt, Step steps) {
   c.log_every = 10;
   try {
     sim.run_stage(c, obs);
-  } catch (const std::exception&) {
-    return std::numeric_limits<double>::infinity();
-  }
+  } catch (const std::exception&) { return std::numeric_limits<double>::infinity(); }
   return std::isfinite(peak) ? peak : std::numeric_limits<double>::infinity();
 }
 
@@ -222,8 +220,7 @@ TEST_CASE("stable step S1/S2: random Hooke packing, mu = 0 and 0.5 - estimate be
   CHECK(lim1 <= lim0 * (1.0 + 1e-3));
 }
 
-TEST_CASE("stable step S3: hot sintered cluster with viscous necks - estimate below the bisected limit",
-          "[extreme][stability]") {
+TEST_CASE("stable step S3: hot sintered cluster with viscous necks - estimate below the bisected limit", "[extreme][stability]") {
   // 27 spheres (r = 1 um) overlapping 2 % of r at 1500 K: every pair gets a persistent neck of
   // at least 0.1 r at once; Maxwell dashpots and the numerical damping (ratio 0.3) act.
   const double r = 1e-6;

@@ -95,7 +95,6 @@ struct Options {
   fs::path source = SPARKDEM_SOURCE_DIR;
 };
 
-
 struct Tally {
   std::map<std::string, long long> outcomes;
   std::map<std::string, std::map<std::string, long long>> by_seed;
@@ -126,8 +125,8 @@ void write_report(const Options& o, const Tally& t, double seconds, const json& 
   for (const auto& b : t.bugs) (void)b, ++bugs;
   j["bug_count"] = bugs;
   if (!o.out.empty()) std::ofstream(o.out) << j.dump(2) << "\n";
-  std::cout << o.mode << ": " << t.cases << " cases in " << seconds << " s, outcomes " << json(t.outcomes).dump()
-            << ", bugs " << bugs << "\n";
+  std::cout << o.mode << ": " << t.cases << " cases in " << seconds << " s, outcomes " << json(t.outcomes).dump() << ", bugs " << bugs
+            << "\n";
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -193,8 +192,12 @@ int run_loader(const Options& o) {
     const auto j = loader_case(seeds, o.seed, k, what);
     const fs::path keep = o.work / "bugs" / ("loader_case_" + std::to_string(k) + ".json");
     if (j) std::ofstream(keep) << j->dump(1);
-    t.bugs.push_back({{"case", k}, {"seed_file", seed_name(k)}, {"mutation", what}, {"outcome", outcome},
-                      {"message", message.substr(0, 3000)}, {"input", keep.string()}});
+    t.bugs.push_back({{"case", k},
+                      {"seed_file", seed_name(k)},
+                      {"mutation", what},
+                      {"outcome", outcome},
+                      {"message", message.substr(0, 3000)},
+                      {"input", keep.string()}});
     std::cout << "BUG case " << k << " (" << seed_name(k) << "): " << what.substr(0, 300) << " -> " << outcome << "\n" << std::flush;
   };
   long long next = first;
@@ -213,7 +216,9 @@ int run_loader(const Options& o) {
       ::dup2(null_fd, STDERR_FILENO);
       rlimit lim{static_cast<rlim_t>(kAddressSpace), static_cast<rlim_t>(kAddressSpace)};
       ::setrlimit(RLIMIT_AS, &lim);
-      auto say = [&](const std::string& line) { if (::write(fd[1], line.data(), line.size()) < 0) ::_exit(99); };
+      auto say = [&](const std::string& line) {
+        if (::write(fd[1], line.data(), line.size()) < 0) ::_exit(99);
+      };
       for (long long k = next; k < last; ++k) {
         std::string what;
         say("S " + std::to_string(k) + "\n");
@@ -228,9 +233,7 @@ int run_loader(const Options& o) {
         int code = fuzz::kOk;
         try {
           (void)io::load_scenario(*j, registry(), base);
-        } catch (const ConfigError&) {
-          code = fuzz::kConfig;
-        } catch (const SetupError&) {
+        } catch (const ConfigError&) { code = fuzz::kConfig; } catch (const SetupError&) {
           code = fuzz::kSetup;
         } catch (const std::exception& e) {
           code = fuzz::kOther;
@@ -238,7 +241,8 @@ int run_loader(const Options& o) {
         }
         ::alarm(0);
         if (code == fuzz::kOther) {
-          for (char& c : message) if (c == '\n') c = ' ';
+          for (char& c : message)
+            if (c == '\n') c = ' ';
           say("B " + std::to_string(k) + " " + std::to_string(code) + " " + message.substr(0, 2000) + "\n");
         } else {
           say("E " + std::to_string(k) + " " + std::to_string(code) + "\n");
@@ -255,7 +259,10 @@ int run_loader(const Options& o) {
       char tag;
       long long k;
       is >> tag >> k;
-      if (tag == 'S') { started = k; return; }
+      if (tag == 'S') {
+        started = k;
+        return;
+      }
       int code;
       is >> code;
       started = -1;
@@ -269,8 +276,8 @@ int run_loader(const Options& o) {
       }
       t.add(seed_name(k), r);
       if (o.only < 0 && t.cases % 10000 == 0)
-        std::cout << "  " << t.cases << " cases, " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()
-                  << " s\n" << std::flush;
+        std::cout << "  " << t.cases << " cases, " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n"
+                  << std::flush;
       if (tag == 'B') {
         std::string msg;
         std::getline(is, msg);
@@ -322,8 +329,8 @@ int run_loader(const Options& o) {
 
 /// Seed scenes of the checkpoint fuzzer: one per kind of state (tests/scenario/data).
 const std::vector<std::string>& checkpoint_scenes() {
-  static const std::vector<std::string> s = {"crash_pour.json",   "hot_press_small.json", "joule_press_small.json",
-                                             "torsion_small.json", "tension_small.json",   "cpc_small.json",
+  static const std::vector<std::string> s = {"crash_pour.json",    "hot_press_small.json",  "joule_press_small.json",
+                                             "torsion_small.json", "tension_small.json",    "cpc_small.json",
                                              "sweep_fall.json",    "restart_contracts.json"};
   return s;
 }
@@ -336,8 +343,9 @@ int run_checkpoint(const Options& o) {
     fs::remove_all(dir);
     fs::create_directories(dir);
     seeds.push_back(fuzz::make_checkpoint_seed(registry(), o.source / "tests/scenario/data", name, dir, 20 * o.time_limit));
-    std::cout << "seed " << name << ": checkpoint at step " << seeds.back().step << ", " << seeds.back().model.size()
-              << " datasets, " << seeds.back().bytes.size() << " bytes\n" << std::flush;
+    std::cout << "seed " << name << ": checkpoint at step " << seeds.back().step << ", " << seeds.back().model.size() << " datasets, "
+              << seeds.back().bytes.size() << " bytes\n"
+              << std::flush;
   }
   const double seed_secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_seed).count();
   Tally t;
@@ -362,20 +370,25 @@ int run_checkpoint(const Options& o) {
     if (is_bug(r)) {
       const fs::path keep = o.work / "bugs" / ("checkpoint_case_" + std::to_string(k) + ".h5");
       fs::copy_file(file, keep, fs::copy_options::overwrite_existing);
-      t.bugs.push_back({{"case", k}, {"seed_scene", s.name}, {"mutation", what}, {"outcome", class_name(r)},
-                        {"message", r.message.substr(0, 3000)}, {"input", keep.string()}});
+      t.bugs.push_back({{"case", k},
+                        {"seed_scene", s.name},
+                        {"mutation", what},
+                        {"outcome", class_name(r)},
+                        {"message", r.message.substr(0, 3000)},
+                        {"input", keep.string()}});
       std::cout << "BUG case " << k << " (" << s.name << "): " << what << " -> " << class_name(r) << "\n" << std::flush;
     }
     if (o.only < 0 && (k + 1) % 1000 == 0)
-      std::cout << "  " << (k + 1) << " cases, " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()
-                << " s\n" << std::flush;
+      std::cout << "  " << (k + 1) << " cases, " << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n"
+                << std::flush;
   }
   std::error_code ec;
   fs::remove_all(out, ec);
   t.outcomes["mutation not writable (not run)"] = mutation_failed;
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   json seeds_j = json::array();
-  for (const auto& s : seeds) seeds_j.push_back({{"scene", s.name}, {"step", s.step}, {"datasets", s.model.size()}, {"bytes", s.bytes.size()}});
+  for (const auto& s : seeds)
+    seeds_j.push_back({{"scene", s.name}, {"step", s.step}, {"datasets", s.model.size()}, {"bytes", s.bytes.size()}});
   write_report(o, t, secs, {{"seeds", seeds_j}, {"seed_setup_s", seed_secs}});
   return t.bugs.empty() ? 0 : 1;
 }
@@ -385,20 +398,29 @@ int run_checkpoint(const Options& o) {
 int main(int argc, char** argv) {
   Options o;
   if (argc < 2) {
-    std::cerr << "usage: sparkdem_fuzz loader|checkpoint --cases N [--seed S] [--work DIR] [--out FILE] [--time-limit SEC] [--only K] [--source DIR]\n";
+    std::cerr << "usage: sparkdem_fuzz loader|checkpoint --cases N [--seed S] [--work DIR] [--out FILE] [--time-limit SEC] [--only K] "
+                 "[--source DIR]\n";
     return 2;
   }
   o.mode = argv[1];
   for (int k = 2; k + 1 < argc; k += 2) {
     const std::string a = argv[k], v = argv[k + 1];
-    if (a == "--cases") o.cases = std::stoll(v);
-    else if (a == "--seed") o.seed = std::stoull(v);
-    else if (a == "--work") o.work = v;
-    else if (a == "--out") o.out = v;
-    else if (a == "--time-limit") o.time_limit = static_cast<unsigned>(std::stoul(v));
-    else if (a == "--only") o.only = std::stoll(v);
-    else if (a == "--max-seconds") o.max_seconds = std::stod(v);
-    else if (a == "--source") o.source = v;
+    if (a == "--cases")
+      o.cases = std::stoll(v);
+    else if (a == "--seed")
+      o.seed = std::stoull(v);
+    else if (a == "--work")
+      o.work = v;
+    else if (a == "--out")
+      o.out = v;
+    else if (a == "--time-limit")
+      o.time_limit = static_cast<unsigned>(std::stoul(v));
+    else if (a == "--only")
+      o.only = std::stoll(v);
+    else if (a == "--max-seconds")
+      o.max_seconds = std::stod(v);
+    else if (a == "--source")
+      o.source = v;
     else {
       std::cerr << "unknown option " << a << "\n";
       return 2;

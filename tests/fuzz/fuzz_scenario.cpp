@@ -31,7 +31,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // Relative file names (CSV tables, snapshots) resolve against a directory that does not exist.
     (void)sparkdem::io::load_scenario(j, reg, "/nonexistent-sparkdem-fuzz");
   } catch (const sparkdem::ConfigError&) {
-  } catch (const sparkdem::SetupError&) {
-  }
+  } catch (const sparkdem::SetupError&) {}
   return 0;
 }

@@ -103,7 +103,6 @@ int rank0(int ranks) {
   return failures == 0 ? 0 : 1;
 }
 
-
 }  // namespace
 
 int main(int argc, char** argv) {

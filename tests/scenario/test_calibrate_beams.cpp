@@ -88,9 +88,15 @@ TEST_CASE("calibrate: a bad calibration file is rejected with every problem at o
                     {"max_iterations", 0},
                     {"write", "p.json"},
                     {"colour", "red"}};
-  const std::vector<std::string> paths = {"/scenario", "/stage", "/targets/young_modulus", "/targets/poisson_ratio",
-                                          "/targets/tensile_strength", "/initial/young_modulus", "/tolerance",
-                                          "/max_iterations", "/colour"};
+  const std::vector<std::string> paths = {"/scenario",
+                                          "/stage",
+                                          "/targets/young_modulus",
+                                          "/targets/poisson_ratio",
+                                          "/targets/tensile_strength",
+                                          "/initial/young_modulus",
+                                          "/tolerance",
+                                          "/max_iterations",
+                                          "/colour"};
   try {
     io::parse_calibration(bad, tmp.path);
     FAIL("no ConfigError");
@@ -121,8 +127,11 @@ TEST_CASE("calibrate: a bad calibration file is rejected with every problem at o
     scene["bonds"]["params"].erase("failure");
     const fs::path sf = test::write_scene(tmp.path, "scene.json", scene);
     io::CalibrationSpec spec = io::parse_calibration(
-        {{"scenario", sf.string()}, {"stage", "nope"}, {"targets", {{"young_modulus", 1e9}, {"poisson_ratio", 0.2}, {"tensile_strength", 1e6}}},
-         {"initial", {{"radius_ratio", 0.5}, {"young_modulus", 1e9}}}, {"write", "p.json"}},
+        {{"scenario", sf.string()},
+         {"stage", "nope"},
+         {"targets", {{"young_modulus", 1e9}, {"poisson_ratio", 0.2}, {"tensile_strength", 1e6}}},
+         {"initial", {{"radius_ratio", 0.5}, {"young_modulus", 1e9}}},
+         {"write", "p.json"}},
         tmp.path);
     io::CalibrationOptions opt;
     opt.outdir = tmp.path / "out2";

@@ -29,24 +29,28 @@ constexpr double kSpeed = 9.81 * 100 * 1e-4;  // g t [m/s]
 
 /// Spheres on a 2 x 2 x 2 lattice, 5 mm apart (2 mm diameter: no contact), no walls; `checks`.
 json fall_scene(const std::vector<json>& checks) {
-  return {{"name", "free_fall_checks"},
-          {"seed", 1},
-          {"materials", {{{"name", "glass"}, {"density", 2500}}}},
-          {"contact", {{"law", "hertz_mindlin"}, {"params", {{"youngs_modulus", 1e6}, {"poisson_ratio", 0.3},
-                                                             {"restitution", 0.5}, {"friction", 0.3}}}}},
-          {"stages",
-           {{{"name", "create"}, {"type", "lattice"},
-             {"generator", {{"lo", {0.0, 0.0, 0.0}}, {"hi", {0.006, 0.006, 0.006}}, {"spacing", 0.005}, {"diameter", 0.002}}}},
-            {{"name", "fall"}, {"type", "dynamics"}, {"dt", 1e-4},
-             {"modules", {{"gravity", {{"acceleration", {0, 0, -9.81}}}}}},
-             {"stop", {{"steps", 100}}},
-             {"output", {{"timeseries_every", 50}}}}}},
-          {"checks", json(checks)}};
+  return {
+      {"name", "free_fall_checks"},
+      {"seed", 1},
+      {"materials", {{{"name", "glass"}, {"density", 2500}}}},
+      {"contact",
+       {{"law", "hertz_mindlin"}, {"params", {{"youngs_modulus", 1e6}, {"poisson_ratio", 0.3}, {"restitution", 0.5}, {"friction", 0.3}}}}},
+      {"stages",
+       {{{"name", "create"},
+         {"type", "lattice"},
+         {"generator", {{"lo", {0.0, 0.0, 0.0}}, {"hi", {0.006, 0.006, 0.006}}, {"spacing", 0.005}, {"diameter", 0.002}}}},
+        {{"name", "fall"},
+         {"type", "dynamics"},
+         {"dt", 1e-4},
+         {"modules", {{"gravity", {{"acceleration", {0, 0, -9.81}}}}}},
+         {"stop", {{"steps", 100}}},
+         {"output", {{"timeseries_every", 50}}}}}},
+      {"checks", json(checks)}};
 }
 
 json speed_check(double reference, double tolerance, const std::string& column = "max_speed") {
-  return {{"name", "fall_speed"}, {"stage", "fall"}, {"column", column}, {"reference", reference}, {"tolerance", tolerance},
-          {"source", "g t, exact for velocity Verlet"}};
+  return {{"name", "fall_speed"},   {"stage", "fall"},        {"column", column},
+          {"reference", reference}, {"tolerance", tolerance}, {"source", "g t, exact for velocity Verlet"}};
 }
 
 struct Cli {
@@ -126,9 +130,10 @@ TEST_CASE("a banded check outside its band: outputs complete, exit 5, the check 
     const json& c = s["checks"]["fall_speed"];
     CHECK(c["within_tolerance"] == false);
     CHECK(std::abs(c["error_rel"].get<double>() - (kSpeed / 0.1 - 1.0)) <= 1e-12);
-    const std::string expected = "check 'fall_speed' failed: value 0.0981 against reference 0.1: relative error -1.9 %, "
-                                 "outside the band +-1 % by 0.9 % of the reference (|value - reference| = 0.0019, "
-                                 "the band allows 0.001)";
+    const std::string expected =
+        "check 'fall_speed' failed: value 0.0981 against reference 0.1: relative error -1.9 %, "
+        "outside the band +-1 % by 0.9 % of the reference (|value - reference| = 0.0019, "
+        "the band allows 0.001)";
     CHECK(contains(r.err, expected));
     CHECK(contains(r.err, report_only ? "warning: " : "error: "));
     CHECK(contains(read_text(tmp.path / "out" / "run.log"), expected));

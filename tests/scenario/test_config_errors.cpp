@@ -72,8 +72,7 @@ bool contains(const std::string& s, const std::string& part) { return s.find(par
 
 /// The scenario file `scene` must be rejected by check and run with exit code 2 and every
 /// (path, message fragment) pair on stderr; run must not create its output directory.
-void expect_cli_rejects(const fs::path& scene, const std::vector<std::pair<std::string, std::string>>& expected,
-                        const fs::path& dir) {
+void expect_cli_rejects(const fs::path& scene, const std::vector<std::pair<std::string, std::string>>& expected, const fs::path& dir) {
   for (const std::string sub : {"check", "run"}) {
     const fs::path out = dir / ("out_" + sub);
     const CliResult r = cli(sub + " '" + scene.string() + "'" + (sub == "run" ? " --quiet -o '" + out.string() + "'" : ""), dir);
@@ -258,9 +257,7 @@ TEST_CASE("unreadable and malformed scenario files exit with code 2", "[config_e
     try {
       (void)sparkdem::io::read_json_file(bad);
       FAIL("accepted");
-    } catch (const ConfigError& e) {
-      CHECK(contains(e.what(), "line 3, column 11"));
-    }
+    } catch (const ConfigError& e) { CHECK(contains(e.what(), "line 3, column 11")); }
     expect_cli_rejects(bad, {{"/", "is not valid JSON"}, {"/", "line 3, column 11"}}, dir.path);
   }
   SECTION("a number beyond the double range is invalid JSON, not an internal error") {
@@ -297,7 +294,8 @@ TEST_CASE("bond, clock and create_bonds errors are reported together with their 
                       {"/stages/1/time_scale", "found 0"}});
 }
 
-TEST_CASE("$include merges a JSON file into an object, keys beside it override, a bad include names its path", "[config_errors][scenario]") {
+TEST_CASE("$include merges a JSON file into an object, keys beside it override, a bad include names its path",
+          "[config_errors][scenario]") {
   ScratchDir dir;
   json scene = valid_scene();
   // The contact law's parameters come from a material file in a subdirectory, which itself
@@ -313,8 +311,7 @@ TEST_CASE("$include merges a JSON file into an object, keys beside it override, 
   const auto sc = sparkdem::io::load_scenario(scene, registry(), dir.path);
   json expected = params;
   expected["friction"] = 0.125;
-  for (auto it = expected.begin(); it != expected.end(); ++it)
-    CHECK(sc.resolved["contact"]["params"][it.key()] == it.value());
+  for (auto it = expected.begin(); it != expected.end(); ++it) CHECK(sc.resolved["contact"]["params"][it.key()] == it.value());
   // A missing file and a non-object file: both reported, with their JSON paths.
   sparkdem::test::write_scene(dir.path, "list.json", json::array({1, 2}));
   scene["contact"]["params"] = {{"$include", "nowhere.json"}};

@@ -71,16 +71,25 @@ std::pair<double, double> touching_network_currents(const fs::path& frame_file, 
     }
   // Nodes joined to an electrode through the network (the others float: no equation).
   std::vector<std::vector<std::size_t>> adj(n);
-  for (const auto& [i, j] : edges) { adj[i].push_back(j); adj[j].push_back(i); }
+  for (const auto& [i, j] : edges) {
+    adj[i].push_back(j);
+    adj[j].push_back(i);
+  }
   std::vector<char> reached(n, 0);
   std::vector<std::size_t> stack;
   for (std::size_t i = 0; i < n; ++i)
-    if (hi[i] > 0.5 || lo[i] > 0.5) { reached[i] = 1; stack.push_back(i); }
+    if (hi[i] > 0.5 || lo[i] > 0.5) {
+      reached[i] = 1;
+      stack.push_back(i);
+    }
   while (!stack.empty()) {
     const std::size_t i = stack.back();
     stack.pop_back();
     for (std::size_t j : adj[i])
-      if (!reached[j]) { reached[j] = 1; stack.push_back(j); }
+      if (!reached[j]) {
+        reached[j] = 1;
+        stack.push_back(j);
+      }
   }
   std::vector<long> row(n, -1);  // unknown index of each free reached node
   long m = 0;
@@ -93,8 +102,10 @@ std::pair<double, double> touching_network_currents(const fs::path& frame_file, 
     for (const auto& [p, q] : {std::pair{i, j}, std::pair{j, i}}) {
       if (row[p] < 0) continue;
       A(row[p], row[p]) += 1.0;
-      if (row[q] >= 0) A(row[p], row[q]) -= 1.0;
-      else b(row[p]) += fixed(q);
+      if (row[q] >= 0)
+        A(row[p], row[q]) -= 1.0;
+      else
+        b(row[p]) += fixed(q);
     }
   const Eigen::VectorXd u = A.partialPivLu().solve(b);
   auto volt = [&](std::size_t i) { return row[i] >= 0 ? u(row[i]) : fixed(i); };
@@ -131,7 +142,7 @@ TEST_CASE("cpc_fillers + contact_percolation through the scenario", "[cpc][scena
     const auto [I_hi, I_lo] = touching_network_currents(out / "frames/frame_000000.h5", 0.002);
     INFO("independent solve: I = " << I_hi << " A out of the 1 V electrode, " << I_lo << " A into the 0 V one");
     CHECK(std::abs(I_lo - I_hi) <= 1e-12 + 1e-9 * std::abs(I_hi));  // Kirchhoff: what leaves one electrode enters the other
-    CHECK((I_hi > 1e-6) == (spanning == 1.0));  // a path of <= N unit conductances carries >= 1/N A; none: round-off
+    CHECK((I_hi > 1e-6) == (spanning == 1.0));                      // a path of <= N unit conductances carries >= 1/N A; none: round-off
     if (spanning == 1.0) {
       const double R = 1.0 / I_hi;  // [Ohm] 1 V across unit conductances
       CHECK(std::abs(f["electrical_resistance"].get<double>() / R - 1.0) < 1e-9);
@@ -150,8 +161,7 @@ TEST_CASE("cpc_fillers: a seeds sweep gives the spanning fraction", "[cpc][scena
   test::ScratchDir tmp("sparkdem_cpc_sweep");
   json sc = first_stage_only(test::load_data("cpc_small.json"));
   sc["stages"][0]["generator"]["volume_fraction"] = 0.2;
-  sc["stages"][0]["sweep"] = {{"seeds", {1, 2, 3, 4}},
-                              {"collect", {"contact_percolation_spanning", "contact_percolation_conductivity"}}};
+  sc["stages"][0]["sweep"] = {{"seeds", {1, 2, 3, 4}}, {"collect", {"contact_percolation_spanning", "contact_percolation_conductivity"}}};
   const json s = run(sc, tmp.path / "out");
   std::ifstream in(tmp.path / "out" / "sweep_fillers.csv");
   REQUIRE(in.good());

@@ -114,8 +114,8 @@ Counters crash_type(const CrashScene& c, int trials, int min_killed, int min_res
   const fs::path scene = tmp.path / "scene.json";
   std::ofstream(scene) << c.scene().dump(2);
   const Reference ref = reference_run(scene, tmp.path / "ref", tmp.path);
-  INFO(c.label << ": reference run " << ref.seconds << " s, " << ref.frames.size() << " frames, "
-               << ref.checkpoint_steps.size() << " checkpoints");
+  INFO(c.label << ": reference run " << ref.seconds << " s, " << ref.frames.size() << " frames, " << ref.checkpoint_steps.size()
+               << " checkpoints");
   REQUIRE(ref.frames.size() >= 4);
   REQUIRE(ref.checkpoint_steps.size() >= 3);
   const auto seed = 20240601u + static_cast<std::uint32_t>(std::hash<std::string>{}(c.label) % 1000);
@@ -124,8 +124,7 @@ Counters crash_type(const CrashScene& c, int trials, int min_killed, int min_res
     const fs::path dir = tmp.path / ("round" + std::to_string(round));
     fs::create_directories(dir);
     const Counters r = kill_trials(scene, ref, dir, trials, seed + 7919u * static_cast<std::uint32_t>(round), c.kill_from);
-    WARN(c.label << ": round " << round << ", " << trials << " crash trials: " << r.text() << "; reference run "
-                 << ref.seconds << " s");
+    WARN(c.label << ": round " << round << ", " << trials << " crash trials: " << r.text() << "; reference run " << ref.seconds << " s");
     n.trials += r.trials;
     n.killed += r.killed;
     n.completed += r.completed;
@@ -147,7 +146,8 @@ TEST_CASE("SIGKILL at 8 random moments, pour: reported frames readable, last che
   CHECK(n.killed >= 5);     // killed mid-way
   CHECK(n.restarted >= 2);  // restarted from the last checkpoint and compared bit for bit
 }
-TEST_CASE("SIGKILL at 8 random moments, packing generator: reported frames readable, last checkpoint restarted bit-exactly", "[crash][scenario]") {
+TEST_CASE("SIGKILL at 8 random moments, packing generator: reported frames readable, last checkpoint restarted bit-exactly",
+          "[crash][scenario]") {
   const Counters n = crash_type(crash_scenes().at(1), 8, 5, 2);
   CHECK(n.killed >= 5);     // killed mid-way
   CHECK(n.restarted >= 2);  // restarted from the last checkpoint and compared bit for bit
@@ -157,7 +157,8 @@ TEST_CASE("SIGKILL at 8 random moments, hot press: reported frames readable, las
   CHECK(n.killed >= 5);     // killed mid-way
   CHECK(n.restarted >= 2);  // restarted from the last checkpoint and compared bit for bit
 }
-TEST_CASE("SIGKILL at 8 random moments, Joule press: reported frames readable, last checkpoint restarted bit-exactly", "[crash][scenario]") {
+TEST_CASE("SIGKILL at 8 random moments, Joule press: reported frames readable, last checkpoint restarted bit-exactly",
+          "[crash][scenario]") {
   const Counters n = crash_type(crash_scenes().at(3), 8, 5, 2);
   CHECK(n.killed >= 5);     // killed mid-way
   CHECK(n.restarted >= 2);  // restarted from the last checkpoint and compared bit for bit
@@ -165,22 +166,26 @@ TEST_CASE("SIGKILL at 8 random moments, Joule press: reported frames readable, l
 // This test found a lost-output bug: after a restart from a checkpoint taken after a solve with no
 // particle-centred branch, the frames lacked the (empty) /networks/electrical group the
 // uninterrupted run writes. electrical_network now checkpoints `branch_output`.
-TEST_CASE("SIGKILL at 8 random moments, explicit heat conduction: reported frames readable, last checkpoint restarted bit-exactly", "[crash][scenario]") {
+TEST_CASE("SIGKILL at 8 random moments, explicit heat conduction: reported frames readable, last checkpoint restarted bit-exactly",
+          "[crash][scenario]") {
   const Counters n = crash_type(crash_scenes().at(4), 8, 5, 2);
   CHECK(n.killed >= 5);     // killed mid-way
   CHECK(n.restarted >= 2);  // restarted from the last checkpoint and compared bit for bit
 }
-TEST_CASE("SIGKILL at 8 random moments, cohesive beams in torsion: reported frames readable, last checkpoint restarted bit-exactly", "[crash][scenario]") {
+TEST_CASE("SIGKILL at 8 random moments, cohesive beams in torsion: reported frames readable, last checkpoint restarted bit-exactly",
+          "[crash][scenario]") {
   const Counters n = crash_type(crash_scenes().at(5), 8, 5, 2);
   CHECK(n.killed >= 5);     // killed mid-way
   CHECK(n.restarted >= 2);  // restarted from the last checkpoint and compared bit for bit
 }
-TEST_CASE("SIGKILL at 8 random moments, cpc percolation and ptc: reported frames readable, last checkpoint restarted bit-exactly", "[crash][scenario]") {
+TEST_CASE("SIGKILL at 8 random moments, cpc percolation and ptc: reported frames readable, last checkpoint restarted bit-exactly",
+          "[crash][scenario]") {
   const Counters n = crash_type(crash_scenes().at(6), 8, 5, 2);
   CHECK(n.killed >= 5);     // killed mid-way
   CHECK(n.restarted >= 2);  // restarted from the last checkpoint and compared bit for bit
 }
-TEST_CASE("SIGKILL at 8 random moments, multi-stage pipeline: reported frames readable, last checkpoint restarted bit-exactly", "[crash][scenario]") {
+TEST_CASE("SIGKILL at 8 random moments, multi-stage pipeline: reported frames readable, last checkpoint restarted bit-exactly",
+          "[crash][scenario]") {
   const Counters n = crash_type(crash_scenes().at(7), 8, 5, 2);
   CHECK(n.killed >= 5);     // killed mid-way
   CHECK(n.restarted >= 2);  // restarted from the last checkpoint and compared bit for bit
@@ -202,8 +207,7 @@ TEST_CASE("SIGKILL at 50 random moments of every scenario type: reported frames 
   }
 }
 
-TEST_CASE("a damaged checkpoint given to --restart or from_snapshot exits with code 4 and says what is wrong",
-          "[crash][scenario]") {
+TEST_CASE("a damaged checkpoint given to --restart or from_snapshot exits with code 4 and says what is wrong", "[crash][scenario]") {
   sparkdem::test::ScratchDir tmp("sparkdem_crash_cli");
   // A short run for a genuine checkpoint and final state.
   json j = json::parse(read_text(scene_file()));
@@ -249,8 +253,8 @@ TEST_CASE("a damaged checkpoint given to --restart or from_snapshot exits with c
       CHECK_FALSE(fs::exists(out / "frames"));
     }
     json snap = j;
-    snap["stages"] = json::array({{{"name", "go"}, {"type", "dynamics"}, {"from_snapshot", file.string()}, {"dt", 2e-5},
-                                   {"stop", {{"steps", 10}}}}});
+    snap["stages"] = json::array(
+        {{{"name", "go"}, {"type", "dynamics"}, {"from_snapshot", file.string()}, {"dt", 2e-5}, {"stop", {{"steps", 10}}}}});
     const fs::path snap_scene = tmp.path / "snap.json";
     std::ofstream(snap_scene) << snap.dump(2);
     for (const auto& args : {std::vector<std::string>{"run", snap_scene.string(), "-o", (tmp.path / "snap_out").string()},

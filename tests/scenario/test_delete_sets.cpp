@@ -33,14 +33,17 @@ json run(const json& scene, const fs::path& out, const std::optional<fs::path>& 
 /// stage a stage "cut" that deletes the slots (steps 0) and a stage "fall" under gravity.
 json notched_scene() {
   json j = test::load_data("gen_relax_small.json");
-  j["particle_sets"] = {
-      {"slot_left", {{"type", "box"}, {"lo", {-1, -1, 0.004}}, {"hi", {0.003, 1, 0.006}}}},
-      {"slot_right", {{"type", "box"}, {"lo", {0.007, -1, 0.004}}, {"hi", {1, 1, 0.006}}}},
-      {"floor", {{"type", "bottom_layer"}, {"thickness", 0.001}}}};
-  j["stages"].push_back({{"name", "cut"}, {"type", "dynamics"}, {"dt_fraction", 0.3},
-                         {"delete_sets", {"slot_left", "slot_right"}}, {"stop", {{"steps", 0}}}});
-  j["stages"].push_back({{"name", "fall"}, {"type", "dynamics"}, {"dt_fraction", 0.3}, {"sets", {"floor"}},
-                         {"modules", {{"gravity", {{"acceleration", {0, 0, -9.81}}}}}}, {"stop", {{"steps", 400}}}});
+  j["particle_sets"] = {{"slot_left", {{"type", "box"}, {"lo", {-1, -1, 0.004}}, {"hi", {0.003, 1, 0.006}}}},
+                        {"slot_right", {{"type", "box"}, {"lo", {0.007, -1, 0.004}}, {"hi", {1, 1, 0.006}}}},
+                        {"floor", {{"type", "bottom_layer"}, {"thickness", 0.001}}}};
+  j["stages"].push_back(
+      {{"name", "cut"}, {"type", "dynamics"}, {"dt_fraction", 0.3}, {"delete_sets", {"slot_left", "slot_right"}}, {"stop", {{"steps", 0}}}});
+  j["stages"].push_back({{"name", "fall"},
+                         {"type", "dynamics"},
+                         {"dt_fraction", 0.3},
+                         {"sets", {"floor"}},
+                         {"modules", {{"gravity", {{"acceleration", {0, 0, -9.81}}}}}},
+                         {"stop", {{"steps", 400}}}});
   return j;
 }
 

@@ -51,7 +51,7 @@ TEST_CASE("electrical_network writes branch currents, conductances and powers to
   REQUIRE(pairs.size() == 2 * (n - 1));
   double P = 0.0;
   for (std::size_t e = 0; e < current.size(); ++e) {
-    CHECK(std::abs(std::abs(current[e]) - I) <= 1e-12 * I);         // series: the same current everywhere
+    CHECK(std::abs(std::abs(current[e]) - I) <= 1e-12 * I);  // series: the same current everywhere
     CHECK(std::abs(power[e] - current[e] * current[e] / g[e]) <= 1e-12 * power[e]);
     P += power[e];
   }

@@ -61,8 +61,10 @@ TEST_CASE("restart reader: seeded mutations of re-sealed checkpoints give a type
       const ChildResult r = fuzz::restart_case(seed, file, dir / "out", kTimeLimit);
       ++cases;
       ++outcomes[fuzz::class_name(r)];
-      if (r.kind == ChildResult::Kind::Exited && r.exit_code == fuzz::kOk) ++completed;
-      else if (!fuzz::is_bug(r)) ++typed;
+      if (r.kind == ChildResult::Kind::Exited && r.exit_code == fuzz::kOk)
+        ++completed;
+      else if (!fuzz::is_bug(r))
+        ++typed;
       INFO(name << ", case " << k << ": " << what << "\n-> " << fuzz::class_name(r) << "\n" << r.message);
       CHECK_FALSE(fuzz::is_bug(r));
     }
@@ -90,12 +92,17 @@ TEST_CASE("restart reader: the mutated checkpoints that crashed, hung or threw u
     test::CkptItem& it = m.at(name);
     const std::size_t w = it.dims.size() >= 2 ? static_cast<std::size_t>(it.dims[1]) : 1;
     it.dims[0] = r;
-    if (it.kind == Kind::Float) it.f.resize(r * w, it.f.empty() ? 0.0 : it.f[0]);
-    else it.i.resize(r * w, it.i.empty() ? 0 : it.i[0]);
+    if (it.kind == Kind::Float)
+      it.f.resize(r * w, it.f.empty() ? 0.0 : it.f[0]);
+    else
+      it.i.resize(r * w, it.i.empty() ? 0 : it.i[0]);
   };
   const std::vector<Recipe> pour = {
       {"huge dataset declared, never written (was std::bad_alloc / std::length_error)",
-       [](test::CkptModel& m) { m.at("state/particles/position").dims = {hsize_t{1} << 40, 3}; m.at("state/particles/position").unwritten = true; }},
+       [](test::CkptModel& m) {
+         m.at("state/particles/position").dims = {hsize_t{1} << 40, 3};
+         m.at("state/particles/position").unwritten = true;
+       }},
       {"a radius set to 0 (was SIGSEGV in the neighbour grid)", [](test::CkptModel& m) { m.at("state/particles/radius").f[0] = 0.0; }},
       {"particle ids with twice the rows of the other arrays (was SIGABRT)",
        [&](test::CkptModel& m) { rows(m, "state/particles/id", 2 * m.at("state/particles/id").i.size()); }},
@@ -107,7 +114,8 @@ TEST_CASE("restart reader: the mutated checkpoints that crashed, hung or threw u
       {"field list with a huge component count (was a hang)",
        [](test::CkptModel& m) { m.at("state/particles/fields/_list").s = "a|9999|u|1\n"; }},
       {"a wall geometry with 0 rows (was SIGSEGV)", [&](test::CkptModel& m) { rows(m, "state/walls/floor/geometry", 0); }},
-      {"a contact hand-over key without its count (was SIGSEGV)", [&](test::CkptModel& m) {
+      {"a contact hand-over key without its count (was SIGSEGV)",
+       [&](test::CkptModel& m) {
          test::CkptItem& k = m.at("state/contacts/handover/keys");
          k.kind = Kind::Int;
          k.dims = {1};
@@ -119,15 +127,16 @@ TEST_CASE("restart reader: the mutated checkpoints that crashed, hung or threw u
        [](test::CkptModel& m) { m.at("state/particles/fields/radius_ref").f[23] = std::numeric_limits<double>::infinity(); }},
   };
   const std::vector<Recipe> torsion = {
-      {"a scheduler mark renamed (was std::out_of_range from map::at)", [](test::CkptModel& m) {
+      {"a scheduler mark renamed (was std::out_of_range from map::at)",
+       [](test::CkptModel& m) {
          std::string& s = m.at("state/marks/names").s;
          const auto at = s.find("/broken");
          REQUIRE(at != std::string::npos);
          s[at + 1] = 'B';
        }},
   };
-  for (const auto& [name, recipes] : {std::pair{"crash_pour.json", pour}, std::pair{"torsion_small.json", torsion},
-                                      std::pair{"hot_press_small.json", hot_press}}) {
+  for (const auto& [name, recipes] :
+       {std::pair{"crash_pour.json", pour}, std::pair{"torsion_small.json", torsion}, std::pair{"hot_press_small.json", hot_press}}) {
     const fs::path dir = tmp.path / fs::path(name).stem();
     fs::create_directories(dir);
     fuzz::CkptSeed seed = fuzz::make_checkpoint_seed(registry(), data_dir(), name, dir, 20 * kTimeLimit);
@@ -139,9 +148,12 @@ TEST_CASE("restart reader: the mutated checkpoints that crashed, hung or threw u
       const ChildResult res = fuzz::restart_case(seed, file, dir / "out", kTimeLimit);
       INFO(name << ": " << r.what << "\n-> " << fuzz::class_name(res) << "\n" << res.message);
       // The marks case may legitimately complete (a lost mark only makes the module run again).
-      if (std::string(r.what).rfind("a scheduler mark", 0) == 0) CHECK_FALSE(fuzz::is_bug(res));
-      else if (std::string(r.what).rfind("a reference radius", 0) == 0) CHECK(fuzz::class_name(res) == "PhysicsError");
-      else CHECK(fuzz::class_name(res) == "SetupError");
+      if (std::string(r.what).rfind("a scheduler mark", 0) == 0)
+        CHECK_FALSE(fuzz::is_bug(res));
+      else if (std::string(r.what).rfind("a reference radius", 0) == 0)
+        CHECK(fuzz::class_name(res) == "PhysicsError");
+      else
+        CHECK(fuzz::class_name(res) == "SetupError");
     }
   }
 }

@@ -91,13 +91,9 @@ void fuzz_file(const fs::path& file) {
     try {
       (void)sparkdem::io::load_scenario(j, registry(), file.parent_path());
       ++accepted;
-    } catch (const sparkdem::ConfigError&) {
+    } catch (const sparkdem::ConfigError&) { ++rejected; } catch (const sparkdem::SetupError&) {
       ++rejected;
-    } catch (const sparkdem::SetupError&) {
-      ++rejected;
-    } catch (const std::exception& e) {
-      failure = std::string("untyped exception: ") + e.what();
-    }
+    } catch (const std::exception& e) { failure = std::string("untyped exception: ") + e.what(); }
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (secs > 1.0) failure += " took " + std::to_string(secs) + " s";
 
@@ -121,15 +117,18 @@ void fuzz_shard(std::size_t shard) {
 }
 }  // namespace
 
-TEST_CASE("the scenario loader survives 500 seeded mutations of every example scene (shard 1 of 3: every third seed file)", "[fuzz][scenario]") {
+TEST_CASE("the scenario loader survives 500 seeded mutations of every example scene (shard 1 of 3: every third seed file)",
+          "[fuzz][scenario]") {
   fuzz_shard(0);
 }
 
-TEST_CASE("the scenario loader survives 500 seeded mutations of every example scene (shard 2 of 3: every third seed file)", "[fuzz][scenario]") {
+TEST_CASE("the scenario loader survives 500 seeded mutations of every example scene (shard 2 of 3: every third seed file)",
+          "[fuzz][scenario]") {
   fuzz_shard(1);
 }
 
-TEST_CASE("the scenario loader survives 500 seeded mutations of every example scene (shard 3 of 3: every third seed file)", "[fuzz][scenario]") {
+TEST_CASE("the scenario loader survives 500 seeded mutations of every example scene (shard 3 of 3: every third seed file)",
+          "[fuzz][scenario]") {
   static_assert(kShards == 3, "one test case per shard");
   fuzz_shard(2);
 }

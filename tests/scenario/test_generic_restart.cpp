@@ -147,7 +147,9 @@ void check_case(const Case& c) {
 std::vector<Case> all_cases() {
   json relax_then_fall = load_data("gen_relax_small.json");
   relax_then_fall["stages"].push_back(
-      {{"name", "fall"}, {"type", "dynamics"}, {"dt_fraction", 0.3},
+      {{"name", "fall"},
+       {"type", "dynamics"},
+       {"dt_fraction", 0.3},
        {"modules", {{"gravity", {{"acceleration", {0, 0, -9.81}}}}, {"mock_c", {{"clock", {{"kind", "substeps"}, {"n", 3}}}}}}},
        {"stop", {{"steps", 600}}}});
   json scaled_press = load_data("hot_press_small.json");
@@ -159,9 +161,15 @@ std::vector<Case> all_cases() {
   element_press["particle_sets"] = {{"el_top", {{"type", "top_layer"}, {"thickness", 0.001}}},
                                     {"el_bottom", {{"type", "bottom_layer"}, {"thickness", 0.001}}}};
   element_press["stages"][1]["sets"] = {"el_top", "el_bottom"};
-  element_press["stages"][1]["modules"]["electrical_network"] = {
-      {"model", "sintered_neck"}, {"neck", "cv"}, {"hemisphere", "fe_table"}, {"topology", "sphere_element"}, {"conductivity", 1e6},
-      {"high", "el_top"}, {"low", "el_bottom"}, {"empty_electrode", "open"}, {"clock", {{"kind", "every_n_steps"}, {"n", 500}}}};
+  element_press["stages"][1]["modules"]["electrical_network"] = {{"model", "sintered_neck"},
+                                                                 {"neck", "cv"},
+                                                                 {"hemisphere", "fe_table"},
+                                                                 {"topology", "sphere_element"},
+                                                                 {"conductivity", 1e6},
+                                                                 {"high", "el_top"},
+                                                                 {"low", "el_bottom"},
+                                                                 {"empty_electrode", "open"},
+                                                                 {"clock", {{"kind", "every_n_steps"}, {"n", 500}}}};
   json explicit_heat = load_data("joule_press_small.json");
   explicit_heat["stages"][1]["modules"]["heat_conduction"]["scheme"] = "explicit";
   explicit_heat["stages"][1]["modules"]["heat_conduction"]["model"] = "transmission_surface";
@@ -180,7 +188,8 @@ std::vector<Case> all_cases() {
     st["modules"]["ptc_strain"]["strain_histogram_edges"] = json::array({-0.01, 0.0, 0.005, 0.01, 0.02});
   }
   return {
-      {"lattice + bonded pull with event, adaptive and every-N mock modules, electrical network, time scaling", load_data("restart_contracts.json"), 1, 180},
+      {"lattice + bonded pull with event, adaptive and every-N mock modules, electrical network, time scaling",
+       load_data("restart_contracts.json"), 1, 180},
       {"deposit generator (settling, die contraction)", with_steps(load_data("gen_deposit_small.json"), 0, 3000), 0, 1777},
       {"fill generator (radius growth)", with_steps(load_data("gen_fill_small.json"), 0, 3000), 0, 1777},
       {"relax generator then dynamics with substepping module", relax_then_fall, 1, 413},
@@ -190,16 +199,19 @@ std::vector<Case> all_cases() {
        load_data("hot_press_small.json"), 1, 2333},
       {"hot press with mass scaling and a mass floor (per-particle factors in the checkpoint)", scaled_press, 1, 2333},
       {"hot press with the sphere-element electrical network", element_press, 1, 2333},
-      {"coupled Joule press: temperature_controller, electrical_network on a voltage signal with kappa(T), implicit heat_conduction with losses and expansion",
+      {"coupled Joule press: temperature_controller, electrical_network on a voltage signal with kappa(T), implicit heat_conduction with "
+       "losses and expansion",
        load_data("joule_press_small.json"), 1, 1777},
       {"explicit heat_conduction on adaptive substeps, electrical every 7 steps", explicit_heat, 1, 1777},
-      {"cohesive-beam pin twisted through bond failure: rotating prescribed set, local_damping, electrical_network on the intact bonds, torsion_test",
+      {"cohesive-beam pin twisted through bond failure: rotating prescribed set, local_damping, electrical_network on the intact bonds, "
+       "torsion_test",
        with_steps(load_data("torsion_small.json"), 1, 600), 1, 263},
       {"bonded tension test: cohesive_beam, prescribed sets, tension_test reference field, local_damping",
        with_steps(load_data("tension_small.json"), 1, 600), 1, 233},
       {"cpc_fillers configuration, then Hertz settling with electrical_network and contact_percolation on every-N clocks",
        load_data("cpc_small.json"), 1, 113},
-      {"self-heating PTC element: ptc_self_heating (factorised network, displacement field), electrical_network with displacement_field, implicit heat_conduction with losses",
+      {"self-heating PTC element: ptc_self_heating (factorised network, displacement field), electrical_network with displacement_field, "
+       "implicit heat_conduction with losses",
        with_steps(load_data("ptc_self_heating_small.json"), 1, 90), 1, 37},
       {"cpc_fillers then Hertz settling with ptc_strain on the RKPM continuum matrix (recomputed on its clock)", cpc_rkpm, 1, 26},
   };
@@ -221,7 +233,9 @@ bool starts_with(std::string_view s, std::string_view p) { return s.substr(0, p.
 void run_group(std::size_t g) {
   for (const Case& c : all_cases())
     for (std::string_view p : kGroups.at(g))
-      if (starts_with(c.label, p)) DYNAMIC_SECTION(c.label) { check_case(c); }
+      if (starts_with(c.label, p)) DYNAMIC_SECTION(c.label) {
+          check_case(c);
+        }
 }
 
 }  // namespace

@@ -92,10 +92,10 @@ TEST_CASE("hot press configuration errors carry their JSON paths", "[thermal][co
     scene["stages"][1]["compact"] = {{"die", "bottom"}, {"bottom", "botom"}, {"top", "die"}};
     const auto e = errors_of(scene);
     INFO(e.size() << " errors");
-    CHECK(e.count("/stages/1/compact/die"));      // a plane given as the die
-    CHECK(e.count("/stages/1/compact/bottom"));   // no such wall (did you mean "bottom"?)
+    CHECK(e.count("/stages/1/compact/die"));     // a plane given as the die
+    CHECK(e.count("/stages/1/compact/bottom"));  // no such wall (did you mean "bottom"?)
     CHECK(e.at("/stages/1/compact/bottom").find("did you mean \"bottom\"") != std::string::npos);
-    CHECK(e.count("/stages/1/compact/top"));      // a cylinder given as a punch
+    CHECK(e.count("/stages/1/compact/top"));  // a cylinder given as a punch
   }
   SECTION("compact: negative margin, unknown key") {
     scene["stages"][1]["compact"]["interior_margin"] = -1.0;

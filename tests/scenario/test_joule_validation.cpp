@@ -30,9 +30,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace sparkdem;
 
-json load_config(const std::string& name) {
-  return json::parse(std::ifstream(fs::path(SPARKDEM_SOURCE_DIR) / "configs" / name));
-}
+json load_config(const std::string& name) { return json::parse(std::ifstream(fs::path(SPARKDEM_SOURCE_DIR) / "configs" / name)); }
 
 json run(const json& scene, const fs::path& out) {
   io::Scenario sc = io::load_scenario(scene, test::registry(), fs::path(SPARKDEM_SOURCE_DIR) / "configs");
@@ -52,8 +50,7 @@ const json& stage_named(const json& summary, const std::string& name) {
 
 }  // namespace
 
-TEST_CASE("joule rod, N = 400: mean rise = dV^2 t / (R_DEM rho c V) exactly, energy balance closed",
-          "[joule][heat][scenario]") {
+TEST_CASE("joule rod, N = 400: mean rise = dV^2 t / (R_DEM rho c V) exactly, energy balance closed", "[joule][heat][scenario]") {
   json scene = load_config("joule_rod.json");
   json& gen = scene["stages"][0]["generator"];
   REQUIRE(scene["stages"][0]["type"] == "relax");
@@ -81,10 +78,9 @@ TEST_CASE("joule rod, N = 400: mean rise = dV^2 t / (R_DEM rho c V) exactly, ene
   const double R = f["electrical_resistance"].get<double>();
   const double dT = f["heat_temperature_mean"].get<double>() - he["initial_temperature"].get<double>();
   const double dT_bk = dV * dV * t / (R * rho * c * V_g);
-  INFO("R_DEM = " << R << " Ohm, R_th = " << R_th << " Ohm (" << 100.0 * (R / R_th - 1.0) << " %); rise " << dT
-                  << " K, analytic " << dT_ref << " K (" << 100.0 * (dT / dT_ref - 1.0) << " %), with R_DEM " << dT_bk
-                  << " K; relax " << stage_named(s, "cook")["wall_time_s"] << " s, joule " << stage_named(s, "joule")["wall_time_s"]
-                  << " s");
+  INFO("R_DEM = " << R << " Ohm, R_th = " << R_th << " Ohm (" << 100.0 * (R / R_th - 1.0) << " %); rise " << dT << " K, analytic " << dT_ref
+                  << " K (" << 100.0 * (dT / dT_ref - 1.0) << " %), with R_DEM " << dT_bk << " K; relax "
+                  << stage_named(s, "cook")["wall_time_s"] << " s, joule " << stage_named(s, "joule")["wall_time_s"] << " s");
   CHECK(std::abs(dT / dT_bk - 1.0) <= 1e-9);
   CHECK(f["heat_balance_error"].get<double>() <= 1e-12);
   // The scenario's check evaluates the rise against the reference written into it before the run.

@@ -33,8 +33,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace sparkdem;
 
-const std::vector<std::string> kCorePlan = {"integrate_first_half", "walls",        "neighbors",
-                                            "zero_forces",          "contact_pairs", "contact_walls"};
+const std::vector<std::string> kCorePlan = {"integrate_first_half", "walls", "neighbors", "zero_forces", "contact_pairs", "contact_walls"};
 
 std::vector<std::string> plan_with(const std::vector<std::string>& force_modules) {
   std::vector<std::string> p = kCorePlan;
@@ -92,7 +91,10 @@ void prepare_stages(io::Scenario& sc, F check) {
     if (st.generator) st.generator->generate(s);
     Simulation sim(s, sc.law_of(st));
     std::vector<Module*> mods;
-    for (auto& m : st.modules) { sim.add_module(m.get()); mods.push_back(m.get()); }
+    for (auto& m : st.modules) {
+      sim.add_module(m.get());
+      mods.push_back(m.get());
+    }
     sim.prepare(st.cfg);
     check(k, s, sim, mods);
   }
@@ -132,7 +134,9 @@ TEST_CASE("pour.json allocates only the law's wall history and plans only gravit
 TEST_CASE("a fill stage adds exactly the radius-growth fields and module", "[pays_nothing][scenario]") {
   json j = read_json(fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data/restart_pour.json");
   j["walls"] = json::array();
-  j["stages"] = json::array({{{"name", "fill"}, {"type", "fill"}, {"dt_fraction", 0.2},
+  j["stages"] = json::array({{{"name", "fill"},
+                              {"type", "fill"},
+                              {"dt_fraction", 0.2},
                               {"generator", {{"shape", "box"}, {"lo", {0, 0, 0}}, {"hi", {0.01, 0.01, 0.01}}, {"particles", 40}}},
                               {"stop", {{"steps", 10}}}}});
   io::Scenario sc = load(j);
@@ -140,8 +144,8 @@ TEST_CASE("a fill stage adds exactly the radius-growth fields and module", "[pay
     const std::set<std::string> fields = field_set(s);
     CHECK(fields == declared_fields(s, *sc.law, mods));
     CHECK(fields == std::set<std::string>{"radius_growth/mass_final", "radius_growth/radius_final", "radius_growth/scale",
-                                          "wall_state/bottom", "wall_state/top", "wall_state/xhi", "wall_state/xlo",
-                                          "wall_state/yhi", "wall_state/ylo"});
+                                          "wall_state/bottom", "wall_state/top", "wall_state/xhi", "wall_state/xlo", "wall_state/yhi",
+                                          "wall_state/ylo"});
     CHECK(s.particles.size() == 40);
     CHECK(sim.plan().names() == plan_with({"radius_growth"}));
   });
@@ -156,8 +160,8 @@ TEST_CASE("a short CLI pour stores and writes no optional field beyond the wall 
   j["stages"].push_back({{"name", "coast"}, {"type", "dynamics"}, {"dt", 2e-5}, {"stop", {{"steps", 10}}}});
   const fs::path scene = tmp.path / "scene.json", out = tmp.path / "out";
   std::ofstream(scene) << j.dump(2);
-  const std::string cmd = "OMP_NUM_THREADS=1 '" + std::string(SPARKDEM_BINARY) + "' run '" + scene.string() + "' -o '" +
-                          out.string() + "' --quiet 2> '" + (tmp.path / "err.txt").string() + "'";
+  const std::string cmd = "OMP_NUM_THREADS=1 '" + std::string(SPARKDEM_BINARY) + "' run '" + scene.string() + "' -o '" + out.string() +
+                          "' --quiet 2> '" + (tmp.path / "err.txt").string() + "'";
   const int rc = std::system(cmd.c_str());
   REQUIRE(WIFEXITED(rc));
   REQUIRE(WEXITSTATUS(rc) == 0);

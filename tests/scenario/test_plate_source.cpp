@@ -78,7 +78,8 @@ TEST_CASE("plate FD reference: control-point values converge at second order", "
   CHECK(ref.at("P1c").extrapolated < ref.at("P2").extrapolated);  // the far corner is the least drained
 }
 
-TEST_CASE("plate with a central source (N = 2000): discrete maximum principle, FD ordering of the control points", "[plate][scenario][electrical]") {
+TEST_CASE("plate with a central source (N = 2000): discrete maximum principle, FD ordering of the control points",
+          "[plate][scenario][electrical]") {
   // A small plate: N = 2000 (mean radius ~0.5 mm, about 2.5 diameters through the depth). It
   // checks the chain (relax packing, cylinder source set, transmission_surface network, probe) against two
   // properties that hold for any resistor network with positive conductances between a 1 V source

@@ -30,8 +30,8 @@ TEST_CASE("seed 001 cylinder at N = 5000: the packing reaches its target, Kirchh
   fs::remove_all(dir);
   fs::create_directories(dir);
   std::ofstream(dir / "scene.json") << scene.dump(1);
-  const std::string cmd = std::string(SPARKDEM_BINARY) + " run " + (dir / "scene.json").string() + " -o " +
-                          (dir / "out").string() + " --quiet --threads 1";
+  const std::string cmd = std::string(SPARKDEM_BINARY) + " run " + (dir / "scene.json").string() + " -o " + (dir / "out").string() +
+                          " --quiet --threads 1";
   REQUIRE(std::system(cmd.c_str()) == 0);
   const json s = json::parse(std::ifstream(dir / "out" / "summary.json"));
   fs::remove_all(dir);
@@ -49,8 +49,7 @@ TEST_CASE("seed 001 cylinder at N = 5000: the packing reaches its target, Kirchh
   const double r_dem = fin["electrical_resistance"].get<double>();
   const double r_th = rho_e * (l_d - 2.0 * r_mean) / (M_PI * r_d * r_d);
   const double error = r_dem / r_th - 1.0;
-  INFO("R_DEM = " << r_dem << " Ohm, R_th = " << r_th << " Ohm, error = " << 100.0 * error << " %, r_mean = " << r_mean
-                  << " m");
+  INFO("R_DEM = " << r_dem << " Ohm, R_th = " << r_th << " Ohm, error = " << 100.0 * error << " %, r_mean = " << r_mean << " m");
 
   // The network itself: Kirchhoff at both electrodes, power = V I, almost no floating particle.
   CHECK(fin["electrical_current_mismatch"].get<double>() < 1e-9);

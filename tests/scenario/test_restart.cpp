@@ -44,9 +44,8 @@ struct ScratchDir : sparkdem::test::ScratchDir {
 /// Runs `sparkdem <args>` with OMP_NUM_THREADS=threads (and the environment assignments `env`, each
 /// followed by a space); returns the exit code.
 int run_cli(const std::string& args, int threads, const fs::path& dir, const std::string& env = "") {
-  const std::string cmd = env + "OMP_WAIT_POLICY=PASSIVE OMP_NUM_THREADS=" + std::to_string(threads) + " '" +
-                          std::string(SPARKDEM_BINARY) + "' " + args + " > '" + (dir / "stdout.txt").string() +
-                          "' 2> '" + (dir / "stderr.txt").string() + "'";
+  const std::string cmd = env + "OMP_WAIT_POLICY=PASSIVE OMP_NUM_THREADS=" + std::to_string(threads) + " '" + std::string(SPARKDEM_BINARY) +
+                          "' " + args + " > '" + (dir / "stdout.txt").string() + "' 2> '" + (dir / "stderr.txt").string() + "'";
   const int rc = std::system(cmd.c_str());
   if (rc == -1 || !WIFEXITED(rc)) return -1;
   const int code = WEXITSTATUS(rc);
@@ -67,9 +66,7 @@ double max_shear(const fs::path& file) {
   return m;
 }
 
-std::int64_t stored_int(const fs::path& file, const std::string& name) {
-  return sparkdem::io::H5File::open_read(file).read_int64(name);
-}
+std::int64_t stored_int(const fs::path& file, const std::string& name) { return sparkdem::io::H5File::open_read(file).read_int64(name); }
 
 json summary_of(const fs::path& dir) {
   std::ifstream in(dir / "summary.json");
@@ -136,7 +133,11 @@ TEST_CASE("multi-stage restart: checkpoints in the first and in the second dynam
   CHECK(summary_of(A)["steps"] == 3300);
   CHECK(max_shear(A / "final_state.h5") > 1e-9);
 
-  struct Case { int stage; int every; std::int64_t stage_step0; };
+  struct Case {
+    int stage;
+    int every;
+    std::int64_t stage_step0;
+  };
   for (const Case c : {Case{1, 1100, 0}, Case{2, 2300, 1800}}) {
     DYNAMIC_SECTION("checkpoint in stage " << c.stage << " at global step " << c.every) {
       json scene = base;
@@ -178,8 +179,7 @@ TEST_CASE("restart inside a fill stage: radius growth, wall history and until co
   sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
 }
 
-TEST_CASE("restart from a checkpoint at a stage's last step writes the uninterrupted closing frame",
-          "[restart][scenario]") {
+TEST_CASE("restart from a checkpoint at a stage's last step writes the uninterrupted closing frame", "[restart][scenario]") {
   ScratchDir tmp;
   // The checkpoint falls on the pour's last step, so the resumed stage takes no step and writes its
   // closing frame from the restored state: its contact forces must be the stored ones (they were

@@ -48,14 +48,16 @@ struct Window {
 Window supply_window(const fs::path& results, double stage, double from) {
   const auto f = io::H5File::open_read(results);
   auto col = [&](const std::string& n) { return f.read_doubles("/timeseries/" + n); };
-  const auto st = col("stage"), step = col("step"), t = col("physical_time"), V = col("electrical_voltage"),
-             I = col("electrical_current"), stored = col("heat_stored_energy"), lost = col("heat_lost_energy");
+  const auto st = col("stage"), step = col("step"), t = col("physical_time"), V = col("electrical_voltage"), I = col("electrical_current"),
+             stored = col("heat_stored_energy"), lost = col("heat_lost_energy");
   Window w;
   std::size_t first = st.size(), last = 0;
   for (std::size_t k = 0; k < st.size(); ++k) {
     if (st[k] != stage || step[k] < from) continue;
-    if (first == st.size()) first = k;
-    else w.supplied += 0.5 * (V[k] * I[k] + V[last] * I[last]) * (t[k] - t[last]);
+    if (first == st.size())
+      first = k;
+    else
+      w.supplied += 0.5 * (V[k] * I[k] + V[last] * I[last]) * (t[k] - t[last]);
     last = k;
     ++w.rows;
   }

@@ -60,8 +60,8 @@ struct Cli {
 /// `sparkdem <args>` on one thread; stdout discarded, stderr kept.
 Cli cli(const std::string& args, const fs::path& dir) {
   const fs::path err = dir / "stderr.txt";
-  const std::string cmd = "OMP_WAIT_POLICY=PASSIVE OMP_NUM_THREADS=1 '" + std::string(SPARKDEM_BINARY) + "' " + args +
-                          " > /dev/null 2> '" + err.string() + "'";
+  const std::string cmd = "OMP_WAIT_POLICY=PASSIVE OMP_NUM_THREADS=1 '" + std::string(SPARKDEM_BINARY) + "' " + args + " > /dev/null 2> '" +
+                          err.string() + "'";
   const int rc = std::system(cmd.c_str());
   Cli r;
   if (rc != -1 && WIFEXITED(rc)) r.code = WEXITSTATUS(rc);
@@ -219,8 +219,8 @@ TEST_CASE("snapshots of a free fall at three times and a sweep over them", "[swe
   REQUIRE(sw["rows"].size() == 3);
   const auto csv = read_csv(A / "sweep_more.csv");
   REQUIRE(csv.size() == 4);
-  CHECK(csv[0] == std::vector<std::string>{"item", "snapshot", "snapshot_step", "snapshot_time", "snapshot_value", "status",
-                                           "step", "time", "kinetic_energy_per_mass", "max_speed"});
+  CHECK(csv[0] == std::vector<std::string>{"item", "snapshot", "snapshot_step", "snapshot_time", "snapshot_value", "status", "step", "time",
+                                           "kinetic_energy_per_mass", "max_speed"});
   for (std::size_t k = 0; k < 3; ++k) {
     INFO("item " << k);
     const json& row = sw["rows"][k];
@@ -385,8 +385,10 @@ TEST_CASE("an ensemble of five seeds of a fill: rows, mean and spread", "[sweeps
   for (std::size_t k = 0; k < 5; ++k)
     for (std::size_t c = 3; c < csv[0].size(); ++c) {
       const json& v = sw["rows"][k]["values"].at(csv[0][c]);
-      if (v.is_number()) CHECK(std::stod(csv[k + 1][c]) == v.get<double>());
-      else CHECK(csv[k + 1][c] == "nan");
+      if (v.is_number())
+        CHECK(std::stod(csv[k + 1][c]) == v.get<double>());
+      else
+        CHECK(csv[k + 1][c] == "nan");
     }
   // The main state after the ensemble is the state before it: no particles.
   CHECK(sum["particles"] == 0);
@@ -413,8 +415,8 @@ TEST_CASE("a sweep of the gravity on a free fall: v = g t in every row", "[sweep
   sweep_stage.erase("snapshots");
   sweep_stage["name"] = "g";
   sweep_stage["stop"]["steps"] = 200;
-  sweep_stage["sweep"] = {{"parameter", "/modules/gravity/acceleration/2"}, {"values", g_values},
-                          {"collect", {"max_speed", "kinetic_energy_per_mass", "step"}}};
+  sweep_stage["sweep"] = {
+      {"parameter", "/modules/gravity/acceleration/2"}, {"values", g_values}, {"collect", {"max_speed", "kinetic_energy_per_mass", "step"}}};
   json after = scene["stages"][3];
   after.erase("modules");  // no gravity: the particles stay at rest unless a sweep item moved them
   after["stop"]["steps"] = 10;
@@ -549,7 +551,8 @@ TEST_CASE("a calibrating sweep over snapshots: scan, search to the closed form, 
   REQUIRE(r_at_1e6 > 0.0);
   // R is inverse in kappa: each scan value gives R = r_at_1e6 * 1e6 / value (1e-12).
   for (std::size_t r = 0; r < 4; ++r)
-    CHECK(std::abs(rows[r]["values"]["electrical_resistance"].get<double>() / (r_at_1e6 * 1e6 / rows[r]["value"].get<double>()) - 1.0) < 1e-12);
+    CHECK(std::abs(rows[r]["values"]["electrical_resistance"].get<double>() / (r_at_1e6 * 1e6 / rows[r]["value"].get<double>()) - 1.0) <
+          1e-12);
   const double expect = 1e6 * r_at_1e6 / 0.01;
   CHECK(rows[4]["phase"] == "search");
   const json& cal = sw["calibration"];

@@ -144,8 +144,8 @@ TEST_CASE("an output directory LINK/../out is written at its physical path", "[s
       CHECK(csv[k][5] == "completed");
       for (std::size_t c = 6; c < 10; ++c) CHECK(std::isfinite(std::stod(csv[k][c])));
       const double t1 = std::stod(csv[k][7]);
-      CHECK(std::abs(std::stod(csv[k][9]) - kG * t1) <= 1e-10 * kG * t1);   // max_speed
-      CHECK(std::abs(t1 - (std::stod(csv[k][3]) + 100 * kDt)) <= 1e-12);  // 100 steps after the snapshot
+      CHECK(std::abs(std::stod(csv[k][9]) - kG * t1) <= 1e-10 * kG * t1);  // max_speed
+      CHECK(std::abs(t1 - (std::stod(csv[k][3]) + 100 * kDt)) <= 1e-12);   // 100 steps after the snapshot
     }
 
     // Every file the summary names lies in the physical directory.

@@ -147,7 +147,10 @@ IntactRows intact_rows(const fs::path& csv) {
 /// Least-squares slope k of y = k x through the origin [N m / rad].
 double slope(const std::vector<double>& x, const std::vector<double>& y) {
   double xx = 0.0, xy = 0.0;
-  for (std::size_t k = 0; k < x.size(); ++k) { xx += x[k] * x[k]; xy += x[k] * y[k]; }
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    xx += x[k] * x[k];
+    xy += x[k] * y[k];
+  }
   return xy / xx;
 }
 

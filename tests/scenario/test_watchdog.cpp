@@ -165,17 +165,22 @@ json hooke(double kn) { return {{"law", "linear_spring_dashpot"}, {"params", {{"
 
 }  // namespace
 
-TEST_CASE("watchdog speed: a sphere falling from rest is stopped at the first check after n g dt > max_speed",
-          "[watchdog]") {
+TEST_CASE("watchdog speed: a sphere falling from rest is stopped at the first check after n g dt > max_speed", "[watchdog]") {
   test::ScratchDir tmp("sparkdem_watchdog");
   // g = 10 m/s^2, dt = 1e-4 s: v_n = n 1e-3 m/s passes 0.0505 m/s at n = 51; checks every 10 steps.
-  json scene = {{"name", "fall"}, {"materials", material()}, {"contact", hooke(1.0)},
-                {"stages", {{{"name", "create"}, {"type", "lattice"},
-                             {"generator", {{"lo", {0, 0, 0}}, {"hi", {0, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.002}}}},
-                            {{"name", "fall"}, {"type", "dynamics"}, {"dt", 1e-4},
-                             {"modules", {{"gravity", {{"acceleration", {0, 0, -10}}}}}},
-                             {"watchdog", {{"max_speed", 0.0505}, {"snapshot_every_checks", 1}}},
-                             {"stop", {{"steps", 200}}}}}}};
+  json scene = {{"name", "fall"},
+                {"materials", material()},
+                {"contact", hooke(1.0)},
+                {"stages",
+                 {{{"name", "create"},
+                   {"type", "lattice"},
+                   {"generator", {{"lo", {0, 0, 0}}, {"hi", {0, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.002}}}},
+                  {{"name", "fall"},
+                   {"type", "dynamics"},
+                   {"dt", 1e-4},
+                   {"modules", {{"gravity", {{"acceleration", {0, 0, -10}}}}}},
+                   {"watchdog", {{"max_speed", 0.0505}, {"snapshot_every_checks", 1}}},
+                   {"stop", {{"steps", 200}}}}}}};
   const PhysicsError e = run_failing(scene, tmp.path / "a");
   CHECK(e.step() == 60);
   CHECK(e.quantity() == "velocity");
@@ -188,18 +193,24 @@ TEST_CASE("watchdog speed: a sphere falling from rest is stopped at the first ch
   check_restart_reproduces(scene, tmp.path / "a", e, tmp.path / "b");
 }
 
-TEST_CASE("watchdog overlap: two spheres driven into each other are stopped past half the smaller radius, naming both",
-          "[watchdog]") {
+TEST_CASE("watchdog overlap: two spheres driven into each other are stopped past half the smaller radius, naming both", "[watchdog]") {
   test::ScratchDir tmp("sparkdem_watchdog");
   // r = 1.0025 mm at 2 mm spacing: h0 = 5e-6 m; sphere 1 driven at 0.1 m/s, dt = 1e-5 s:
   // h_n = 5e-6 + n 1e-6 m, h_n / r > 0.5 from n = 497; the check at step 500 sees 505e-6 / 1.0025e-3.
-  json scene = {{"name", "squeeze"}, {"materials", material()}, {"contact", hooke(1e3)},
+  json scene = {{"name", "squeeze"},
+                {"materials", material()},
+                {"contact", hooke(1e3)},
                 {"particle_sets", {{"left", {{"type", "ids"}, {"ids", {0}}}}, {"right", {{"type", "ids"}, {"ids", {1}}}}}},
-                {"stages", {{{"name", "create"}, {"type", "lattice"},
-                             {"generator", {{"lo", {0, 0, 0}}, {"hi", {0.002, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.002005}}}},
-                            {{"name", "squeeze"}, {"type", "dynamics"}, {"dt", 1e-5}, {"sets", {"left", "right"}},
-                             {"prescribe", {{"left", {0, 0, 0}}, {"right", {-0.1, 0, 0}}}},
-                             {"stop", {{"steps", 1000}}}}}}};
+                {"stages",
+                 {{{"name", "create"},
+                   {"type", "lattice"},
+                   {"generator", {{"lo", {0, 0, 0}}, {"hi", {0.002, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.002005}}}},
+                  {{"name", "squeeze"},
+                   {"type", "dynamics"},
+                   {"dt", 1e-5},
+                   {"sets", {"left", "right"}},
+                   {"prescribe", {{"left", {0, 0, 0}}, {"right", {-0.1, 0, 0}}}},
+                   {"stop", {{"steps", 1000}}}}}}};
   const PhysicsError e = run_failing(scene, tmp.path / "a");
   CHECK(e.step() == 500);
   CHECK(e.quantity() == "overlap");
@@ -232,22 +243,35 @@ struct BondedPair {
     return std::abs((b - std::sqrt(b * b - 4.0)) / 2.0);
   }
   static json scene() {
-    return {{"name", "bonded_pair"}, {"materials", material()}, {"contact", hooke(1e3)},
+    return {{"name", "bonded_pair"},
+            {"materials", material()},
+            {"contact", hooke(1e3)},
             {"bonds", {{"law", "spring_bond"}, {"params", {{"normal_stiffness", k}}}}},
             {"particle_sets", {{"kicked", {{"type", "ids"}, {"ids", {0}}}}}},
-            {"stages", {{{"name", "create"}, {"type", "lattice"},
-                         {"generator", {{"lo", {0, 0, 0}}, {"hi", {0.002, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.002}}}},
-                        {{"name", "kick"}, {"type", "dynamics"}, {"dt", 1e-9}, {"sets", {"kicked"}},
-                         {"prescribe", {{"kicked", {1e-10, 0, 0}}}}, {"stop", {{"steps", 1}}}},
-                        {{"name", "unstable"}, {"type", "dynamics"}, {"dt", dt()}, {"allow_unstable_dt", true},
-                         {"create_bonds", {{"gap_tolerance", 1e-6}}}, {"stop", {{"steps", 2000}}}}}}};
+            {"stages",
+             {{{"name", "create"},
+               {"type", "lattice"},
+               {"generator", {{"lo", {0, 0, 0}}, {"hi", {0.002, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.002}}}},
+              {{"name", "kick"},
+               {"type", "dynamics"},
+               {"dt", 1e-9},
+               {"sets", {"kicked"}},
+               {"prescribe", {{"kicked", {1e-10, 0, 0}}}},
+               {"stop", {{"steps", 1}}}},
+              {{"name", "unstable"},
+               {"type", "dynamics"},
+               {"dt", dt()},
+               {"allow_unstable_dt", true},
+               {"create_bonds", {{"gap_tolerance", 1e-6}}},
+               {"stop", {{"steps", 2000}}}}}}};
   }
 };
 }  // namespace
 
-TEST_CASE("watchdog energy: a bonded pair stepped above the stable step is stopped by its kinetic-energy growth "
-          "before any sphere moves its radius in a step",
-          "[watchdog]") {
+TEST_CASE(
+    "watchdog energy: a bonded pair stepped above the stable step is stopped by its kinetic-energy growth "
+    "before any sphere moves its radius in a step",
+    "[watchdog]") {
   test::ScratchDir tmp("sparkdem_watchdog");
   const json scene = BondedPair::scene();
   const PhysicsError e = run_failing(scene, tmp.path / "a");
@@ -276,19 +300,27 @@ TEST_CASE("watchdog energy: a bonded pair stepped above the stable step is stopp
   CHECK(v.step() > e.step());
 }
 
-TEST_CASE("watchdog non-finite: NaN or Inf in a checked field stops the run naming the field and the particle; "
-          "NaN in the electric potential (floating) does not",
-          "[watchdog]") {
+TEST_CASE(
+    "watchdog non-finite: NaN or Inf in a checked field stops the run naming the field and the particle; "
+    "NaN in the electric potential (floating) does not",
+    "[watchdog]") {
   test::ScratchDir tmp("sparkdem_watchdog");
   auto scene = [](const std::string& field, const std::string& check, const std::string& value) {
-    return json{{"name", "inject"}, {"materials", material()}, {"contact", hooke(1e3)},
-                {"stages", {{{"name", "create"}, {"type", "lattice"},
-                             {"generator", {{"lo", {0, 0, 0}}, {"hi", {0.002, 0.002, 0}}, {"spacing", 0.002}, {"diameter", 0.002}}}},
-                            {{"name", "run"}, {"type", "dynamics"}, {"dt", 1e-5},
-                             {"modules", {{"gravity", {{"acceleration", {0, 0, -9.81}}}},
-                                          {"test_injector", {{"field", field}, {"check", check}, {"value", value}, {"step", 33}, {"id", 2}}}}},
-                             {"watchdog", {{"snapshot_every_checks", 1}}},
-                             {"stop", {{"steps", 100}}}}}}};
+    return json{{"name", "inject"},
+                {"materials", material()},
+                {"contact", hooke(1e3)},
+                {"stages",
+                 {{{"name", "create"},
+                   {"type", "lattice"},
+                   {"generator", {{"lo", {0, 0, 0}}, {"hi", {0.002, 0.002, 0}}, {"spacing", 0.002}, {"diameter", 0.002}}}},
+                  {{"name", "run"},
+                   {"type", "dynamics"},
+                   {"dt", 1e-5},
+                   {"modules",
+                    {{"gravity", {{"acceleration", {0, 0, -9.81}}}},
+                     {"test_injector", {{"field", field}, {"check", check}, {"value", value}, {"step", 33}, {"id", 2}}}}},
+                   {"watchdog", {{"snapshot_every_checks", 1}}},
+                   {"stop", {{"steps", 100}}}}}}};
   };
   const json t_nan = scene("temperature", "finite", "nan");
   const PhysicsError e = run_failing(t_nan, tmp.path / "a");
@@ -312,11 +344,14 @@ TEST_CASE("watchdog non-finite: NaN or Inf in a checked field stops the run nami
 TEST_CASE("watchdog: a state that fails it at the stage start is refused before step 0", "[watchdog]") {
   test::ScratchDir tmp("sparkdem_watchdog");
   // Two spheres of radius 1.6 mm created 2 mm apart: overlap 1.2 mm = 75 % of the radius.
-  json scene = {{"name", "refused"}, {"materials", material()}, {"contact", hooke(1e3)},
-                {"stages", {{{"name", "create"}, {"type", "lattice"},
-                             {"generator", {{"lo", {0, 0, 0}}, {"hi", {0.002, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.0032}}}},
-                            {{"name", "run"}, {"type", "dynamics"}, {"dt", 1e-6},
-                             {"stop", {{"steps", 100}}}}}}};
+  json scene = {{"name", "refused"},
+                {"materials", material()},
+                {"contact", hooke(1e3)},
+                {"stages",
+                 {{{"name", "create"},
+                   {"type", "lattice"},
+                   {"generator", {{"lo", {0, 0, 0}}, {"hi", {0.002, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.0032}}}},
+                  {{"name", "run"}, {"type", "dynamics"}, {"dt", 1e-6}, {"stop", {{"steps", 100}}}}}}};
   const PhysicsError e = run_failing(scene, tmp.path / "a");
   CHECK(e.step() == 0);
   CHECK(e.quantity() == "overlap");
@@ -326,8 +361,7 @@ TEST_CASE("watchdog: a state that fails it at the stage start is refused before 
   CHECK(!fs::exists(tmp.path / "a" / "checkpoint_before_failure.h5"));
 }
 
-TEST_CASE("watchdog negative: the frictional pour runs to its end with the default watchdog, well inside its bounds",
-          "[watchdog]") {
+TEST_CASE("watchdog negative: the frictional pour runs to its end with the default watchdog, well inside its bounds", "[watchdog]") {
   test::ScratchDir tmp("sparkdem_watchdog");
   json scene = test::load_data("crash_pour.json");
   scene["stages"][1]["output"] = {{"timeseries_every", 10}};

@@ -114,9 +114,9 @@ TEST_CASE("results.xdmf of a multi-stage run: one grid per time, strictly increa
 
   // One frame per (stage, step): the closing frames of settle (step 300 = its last frame_every
   // step), cut (500) and probe (no steps) are the state of the frame before them, written once.
-  const std::vector<std::pair<std::string, std::int64_t>> expected{
-      {"create", 0}, {"settle", 0}, {"settle", 100}, {"settle", 200}, {"settle", 300},
-      {"cut", 300},  {"cut", 400},  {"cut", 500},    {"probe", 500}};
+  const std::vector<std::pair<std::string, std::int64_t>> expected{{"create", 0},   {"settle", 0},   {"settle", 100},
+                                                                   {"settle", 200}, {"settle", 300}, {"cut", 300},
+                                                                   {"cut", 400},    {"cut", 500},    {"probe", 500}};
   std::vector<std::pair<std::string, std::int64_t>> got;
   for (const XdmfGrid& g : grids) got.emplace_back(g.stage, g.step);
   CHECK(got == expected);

@@ -38,18 +38,28 @@ constexpr int kOk = 0, kSetup = 10, kPhysics = 11, kConfig = 12, kInterrupted = 
 
 inline std::string class_name(const ChildResult& r) {
   switch (r.kind) {
-    case ChildResult::Kind::Crashed: return "crash (signal " + std::to_string(r.signal) + ")";
-    case ChildResult::Kind::TimedOut: return "hang (time limit)";
-    case ChildResult::Kind::Exited: break;
+    case ChildResult::Kind::Crashed:
+      return "crash (signal " + std::to_string(r.signal) + ")";
+    case ChildResult::Kind::TimedOut:
+      return "hang (time limit)";
+    case ChildResult::Kind::Exited:
+      break;
   }
   switch (r.exit_code) {
-    case kOk: return "ok";
-    case kSetup: return "SetupError";
-    case kPhysics: return "PhysicsError";
-    case kConfig: return "ConfigError";
-    case kInterrupted: return "Interrupted";
-    case kOther: return "untyped exception";
-    default: return "exit " + std::to_string(r.exit_code);
+    case kOk:
+      return "ok";
+    case kSetup:
+      return "SetupError";
+    case kPhysics:
+      return "PhysicsError";
+    case kConfig:
+      return "ConfigError";
+    case kInterrupted:
+      return "Interrupted";
+    case kOther:
+      return "untyped exception";
+    default:
+      return "exit " + std::to_string(r.exit_code);
   }
 }
 
@@ -98,8 +108,8 @@ struct CkptSeed {
 
 /// Runs a scene to its end (or from `restart`) in a child process, so this process never starts
 /// OpenMP workers (it forks).
-inline void run_scene_in_child(const Registry& reg, const json& scene, const fs::path& base, const fs::path& out,
-                               unsigned time_limit, const std::optional<fs::path>& restart = {}) {
+inline void run_scene_in_child(const Registry& reg, const json& scene, const fs::path& base, const fs::path& out, unsigned time_limit,
+                               const std::optional<fs::path>& restart = {}) {
   const ChildResult r = run_in_child(
       [&] {
         return classify([&] {
@@ -119,8 +129,8 @@ inline void run_scene_in_child(const Registry& reg, const json& scene, const fs:
 
 /// A genuine checkpoint of tests/scenario/data/<name> 40 steps before the end of its last stage;
 /// the unmutated checkpoint is restarted once (it must complete).
-inline CkptSeed make_checkpoint_seed(const Registry& reg, const fs::path& data_dir, const std::string& name,
-                                     const fs::path& dir, unsigned time_limit) {
+inline CkptSeed make_checkpoint_seed(const Registry& reg, const fs::path& data_dir, const std::string& name, const fs::path& dir,
+                                     unsigned time_limit) {
   CkptSeed s;
   s.name = name;
   s.scene = json::parse(std::ifstream(data_dir / name));

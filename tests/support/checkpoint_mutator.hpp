@@ -33,11 +33,11 @@ namespace sparkdem::test {
 struct CkptItem {
   enum class Kind { Float, Int, String };
   Kind kind = Kind::Float;
-  std::vector<hsize_t> dims;  ///< empty: scalar dataspace
-  std::vector<double> f;      ///< Float values (row-major)
+  std::vector<hsize_t> dims;    ///< empty: scalar dataspace
+  std::vector<double> f;        ///< Float values (row-major)
   std::vector<std::int64_t> i;  ///< Int values
-  std::string s;              ///< String (empty: null dataspace)
-  bool unwritten = false;     ///< declared with `dims` but no data written (storage never allocated)
+  std::string s;                ///< String (empty: null dataspace)
+  bool unwritten = false;       ///< declared with `dims` but no data written (storage never allocated)
 };
 using CkptModel = std::map<std::string, CkptItem>;  ///< by path without the leading '/'
 
@@ -56,8 +56,10 @@ inline void collect(hid_t file, const std::string& group, std::vector<std::strin
     const hid_t o = H5Oopen(file, child.c_str(), H5P_DEFAULT);
     const H5I_type_t t = H5Iget_type(o);
     H5Oclose(o);
-    if (t == H5I_GROUP) collect(file, child, out);
-    else if (t == H5I_DATASET) out.push_back(child.substr(1));
+    if (t == H5I_GROUP)
+      collect(file, child, out);
+    else if (t == H5I_DATASET)
+      out.push_back(child.substr(1));
   }
   H5Gclose(g);
 }
@@ -145,8 +147,7 @@ inline void write_checkpoint_model(const CkptModel& m, const std::filesystem::pa
       if (!it.s.empty()) data = it.s.data();
     } else {
       type = H5Tcopy(it.kind == CkptItem::Kind::Float ? H5T_IEEE_F64LE : H5T_STD_I64LE);
-      space = it.dims.empty() ? H5Screate(H5S_SCALAR)
-                              : H5Screate_simple(static_cast<int>(it.dims.size()), it.dims.data(), nullptr);
+      space = it.dims.empty() ? H5Screate(H5S_SCALAR) : H5Screate_simple(static_cast<int>(it.dims.size()), it.dims.data(), nullptr);
       const std::size_t n = it.dims.empty() ? 1 : ckpt_detail::count(it.dims);
       const std::size_t have = it.kind == CkptItem::Kind::Float ? it.f.size() : it.i.size();
       if (!it.unwritten && n > 0) {
@@ -157,8 +158,7 @@ inline void write_checkpoint_model(const CkptModel& m, const std::filesystem::pa
     const hid_t d = space < 0 ? -1 : H5Dcreate2(f, ("/" + name).c_str(), type, space, lcpl, H5P_DEFAULT, H5P_DEFAULT);
     if (d < 0) error = "cannot create dataset " + name;
     if (d >= 0 && data != nullptr) {
-      const hid_t mem = it.kind == CkptItem::Kind::String ? type
-                        : it.kind == CkptItem::Kind::Float ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
+      const hid_t mem = it.kind == CkptItem::Kind::String ? type : it.kind == CkptItem::Kind::Float ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
       if (H5Dwrite(d, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) error = "cannot write dataset " + name;
     }
     if (d >= 0) H5Dclose(d);
@@ -223,8 +223,14 @@ class CheckpointMutator {
       }
       case 1: {
         const std::size_t at = offset();
-        const std::uint64_t words[] = {0, ~0ULL, 0x7fffffffffffffffULL, 0x8000000000000000ULL, 0xffffffffULL, 0x100000000ULL,
-                                       1ULL << 40, static_cast<std::uint64_t>(rng_())};
+        const std::uint64_t words[] = {0,
+                                       ~0ULL,
+                                       0x7fffffffffffffffULL,
+                                       0x8000000000000000ULL,
+                                       0xffffffffULL,
+                                       0x100000000ULL,
+                                       1ULL << 40,
+                                       static_cast<std::uint64_t>(rng_())};
         const std::uint64_t w = words[pick(8)];
         const std::size_t width = std::size_t{1} << pick(4);  // 1, 2, 4 or 8 bytes
         for (std::size_t q = 0; q < width && at + q < b.size(); ++q) b[at + q] = static_cast<unsigned char>(w >> (8 * q));
@@ -279,44 +285,76 @@ class CheckpointMutator {
   }
   double odd_double(double v) {
     switch (pick(16)) {
-      case 0: return std::numeric_limits<double>::quiet_NaN();
-      case 1: return std::numeric_limits<double>::infinity();
-      case 2: return -std::numeric_limits<double>::infinity();
-      case 3: return 0.0;
-      case 4: return -0.0;
-      case 5: return 1e308;
-      case 6: return -1e308;
-      case 7: return 4.9e-324;
-      case 8: return -v;
-      case 9: return v * 1e10;
-      case 10: return v * 1e-10;
-      case 11: return std::nextafter(v, 1e300);
-      case 12: return -1.0;
-      case 13: return 1e19;
-      case 14: return 9.3e18;
-      default: return static_cast<double>(static_cast<std::int64_t>(rng_() % 2001) - 1000);
+      case 0:
+        return std::numeric_limits<double>::quiet_NaN();
+      case 1:
+        return std::numeric_limits<double>::infinity();
+      case 2:
+        return -std::numeric_limits<double>::infinity();
+      case 3:
+        return 0.0;
+      case 4:
+        return -0.0;
+      case 5:
+        return 1e308;
+      case 6:
+        return -1e308;
+      case 7:
+        return 4.9e-324;
+      case 8:
+        return -v;
+      case 9:
+        return v * 1e10;
+      case 10:
+        return v * 1e-10;
+      case 11:
+        return std::nextafter(v, 1e300);
+      case 12:
+        return -1.0;
+      case 13:
+        return 1e19;
+      case 14:
+        return 9.3e18;
+      default:
+        return static_cast<double>(static_cast<std::int64_t>(rng_() % 2001) - 1000);
     }
   }
   std::int64_t odd_int(std::int64_t v, const CkptModel& m) {
     std::int64_t n = 0;
     if (auto it = m.find("state/particles/id"); it != m.end()) n = static_cast<std::int64_t>(it->second.i.size());
     switch (pick(16)) {
-      case 0: return 0;
-      case 1: return -1;
-      case 2: return 1;
-      case 3: return std::numeric_limits<std::int64_t>::min();
-      case 4: return std::numeric_limits<std::int64_t>::max();
-      case 5: return v + 1;
-      case 6: return v - 1;
-      case 7: return v * 2;
-      case 8: return -v;
-      case 9: return n;
-      case 10: return n + 1;
-      case 11: return std::int64_t{1} << 31;
-      case 12: return std::int64_t{1} << 32;
-      case 13: return std::int64_t{1} << 62;
-      case 14: return static_cast<std::int64_t>(rng_());
-      default: return static_cast<std::int64_t>(pick(2 * static_cast<std::size_t>(n) + 4));
+      case 0:
+        return 0;
+      case 1:
+        return -1;
+      case 2:
+        return 1;
+      case 3:
+        return std::numeric_limits<std::int64_t>::min();
+      case 4:
+        return std::numeric_limits<std::int64_t>::max();
+      case 5:
+        return v + 1;
+      case 6:
+        return v - 1;
+      case 7:
+        return v * 2;
+      case 8:
+        return -v;
+      case 9:
+        return n;
+      case 10:
+        return n + 1;
+      case 11:
+        return std::int64_t{1} << 31;
+      case 12:
+        return std::int64_t{1} << 32;
+      case 13:
+        return std::int64_t{1} << 62;
+      case 14:
+        return static_cast<std::int64_t>(rng_());
+      default:
+        return static_cast<std::int64_t>(pick(2 * static_cast<std::size_t>(n) + 4));
     }
   }
   static std::size_t rows_of(const CkptItem& it) { return it.dims.empty() ? 1 : static_cast<std::size_t>(it.dims[0]); }
@@ -378,8 +416,13 @@ class CheckpointMutator {
         const std::size_t total = it.kind == Kind::Float ? it.f.size() : it.i.size();
         const hsize_t widths[] = {1, 2, 3, 4, 7, 13};
         switch (pick(4)) {
-          case 0: it.dims = {}; resize_values(it, 1); return "make " + n + " a scalar";
-          case 1: it.dims = {static_cast<hsize_t>(total)}; return "make " + n + " 1-D";
+          case 0:
+            it.dims = {};
+            resize_values(it, 1);
+            return "make " + n + " a scalar";
+          case 1:
+            it.dims = {static_cast<hsize_t>(total)};
+            return "make " + n + " 1-D";
           case 2: {
             const hsize_t c = widths[pick(6)];
             it.dims = {static_cast<hsize_t>(total / c), c};
@@ -397,7 +440,8 @@ class CheckpointMutator {
         if (it.kind == Kind::Float) {
           it.kind = Kind::Int;
           it.i.assign(it.f.size(), 0);
-          for (std::size_t k = 0; k < it.f.size(); ++k) it.i[k] = std::isfinite(it.f[k]) && std::abs(it.f[k]) < 9e18 ? static_cast<std::int64_t>(it.f[k]) : 0;
+          for (std::size_t k = 0; k < it.f.size(); ++k)
+            it.i[k] = std::isfinite(it.f[k]) && std::abs(it.f[k]) < 9e18 ? static_cast<std::int64_t>(it.f[k]) : 0;
           return "make " + n + " integer";
         }
         if (it.kind == Kind::Int && pick(2)) {
@@ -449,10 +493,12 @@ class CheckpointMutator {
             s.resize(cut);
             return "cut string " + n + " to " + std::to_string(cut) + " bytes";
           }
-          case 1: s.clear(); return "empty string " + n;
+          case 1:
+            s.clear();
+            return "empty string " + n;
           case 2: {
-            const char* inserts[] = {"\n", "|", "||", "\n\n", "x|y|z|w\n", "a|99999999999999999999|u|1\n", "a|-5|u|1\n", "{", "}",
-                                     " ", "\0", "-1", "99999999999999999999999", "nan"};
+            const char* inserts[] = {"\n", "|", "||", "\n\n", "x|y|z|w\n", "a|99999999999999999999|u|1\n", "a|-5|u|1\n",
+                                     "{",  "}", " ",  "\0",   "-1",        "99999999999999999999999",      "nan"};
             const std::string ins = inserts[pick(14)];
             const std::size_t at = pick(s.size() + 1);
             s.insert(at, ins.empty() ? std::string(1, '\0') : ins);

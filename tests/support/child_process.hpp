@@ -110,9 +110,7 @@ inline ChildResult run_in_child(const std::function<int()>& body, unsigned time_
   ::close(pipe_fd[0]);
   int status = 0;
   pid_t w;
-  do {
-    w = ::waitpid(pid, &status, 0);
-  } while (w < 0 && errno == EINTR);
+  do { w = ::waitpid(pid, &status, 0); } while (w < 0 && errno == EINTR);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (WIFSIGNALED(status)) {
     r.signal = WTERMSIG(status);

@@ -95,9 +95,7 @@ inline pid_t spawn_sparkdem(const std::vector<std::string>& args, const fs::path
 inline Outcome wait_for(pid_t pid, steady::time_point start) {
   int status = 0;
   pid_t r;
-  do {
-    r = waitpid(pid, &status, 0);
-  } while (r < 0 && errno == EINTR);
+  do { r = waitpid(pid, &status, 0); } while (r < 0 && errno == EINTR);
   REQUIRE(r == pid);
   Outcome o;
   o.seconds = std::chrono::duration<double>(steady::now() - start).count();
@@ -316,9 +314,8 @@ struct Counters {
   std::size_t frames_checked = 0;
   std::string text() const {
     return std::to_string(killed) + " killed (" + std::to_string(killed_before_checkpoint) + " before any checkpoint, " +
-           std::to_string(with_tmp) + " with a half-written .tmp file left), " + std::to_string(completed) +
-           " finished first, " + std::to_string(restarted) + " restarted; " + std::to_string(frames_checked) +
-           " reported frames checked";
+           std::to_string(with_tmp) + " with a half-written .tmp file left), " + std::to_string(completed) + " finished first, " +
+           std::to_string(restarted) + " restarted; " + std::to_string(frames_checked) + " reported frames checked";
   }
 };
 
@@ -327,8 +324,8 @@ struct Counters {
 /// [0, 1)), each checked (frames, index files,
 /// checkpoint) and, when a checkpoint is left, restarted (in place on even trials, into a new
 /// directory on odd ones) and compared with the reference final state.
-inline Counters kill_trials(const fs::path& scene, const Reference& ref, const fs::path& scratch, int trials,
-                            std::uint32_t seed, double kill_from = 0.0) {
+inline Counters kill_trials(const fs::path& scene, const Reference& ref, const fs::path& scratch, int trials, std::uint32_t seed,
+                            double kill_from = 0.0) {
   Counters c;
   c.trials = trials;
   // Kill moments are spread over the run's duration, taken as the shortest seen so far (the
@@ -344,7 +341,8 @@ inline Counters kill_trials(const fs::path& scene, const Reference& ref, const f
     const auto delay = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::duration<double>(run_time * fraction));
     const Outcome o = run_and_kill({"run", scene.string(), "-o", out.string(), "--quiet"}, dir / "stderr.txt", delay);
     INFO("trial " << trial << ": killed after " << delay.count() << " us, " << (o.killed ? "killed" : "exited"));
-    if (o.killed) ++c.killed;
+    if (o.killed)
+      ++c.killed;
     else {
       REQUIRE(o.exit_code == 0);
       ++c.completed;

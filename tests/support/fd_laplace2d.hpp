@@ -49,7 +49,7 @@ struct Edge {
 struct Problem {
   double lx = 0.0, ly = 0.0;
   Edge xlo, xhi, ylo, yhi;
-  bool disc = false;         ///< a circular hole with phi = disc_value on its boundary
+  bool disc = false;  ///< a circular hole with phi = disc_value on its boundary
   double cx = 0.0, cy = 0.0, radius = 0.0;
   std::function<double(double, double)> disc_value;
 };
@@ -58,16 +58,15 @@ struct Problem {
 struct Solution {
   int nx = 0, ny = 0;
   double h = 0.0;
-  std::vector<double> phi;          ///< (nx + 1) (ny + 1) values, index i + (nx + 1) j
+  std::vector<double> phi;  ///< (nx + 1) (ny + 1) values, index i + (nx + 1) j
   int unknowns = 0;
-  int cut_arms = 0;                 ///< stencil arms shortened by the Shortley–Weller treatment
+  int cut_arms = 0;  ///< stencil arms shortened by the Shortley–Weller treatment
   double node(int i, int j) const { return phi[static_cast<std::size_t>(i + (nx + 1) * j)]; }
   /// phi at (x, y): bilinear interpolation in the grid cell (exact at nodes). Throws
   /// std::domain_error outside the rectangle or when a corner of the cell lies in the disc.
   double at(double x, double y) const {
     const double lx = nx * h, ly = ny * h, eps = 1e-9 * h;
-    if (x < -eps || y < -eps || x > lx + eps || y > ly + eps)
-      throw std::domain_error("fd::Solution::at: point outside the rectangle");
+    if (x < -eps || y < -eps || x > lx + eps || y > ly + eps) throw std::domain_error("fd::Solution::at: point outside the rectangle");
     const double u = std::clamp(x / h, 0.0, static_cast<double>(nx)), v = std::clamp(y / h, 0.0, static_cast<double>(ny));
     int i = std::min(static_cast<int>(std::floor(u + 1e-9)), nx - 1), j = std::min(static_cast<int>(std::floor(v + 1e-9)), ny - 1);
     const double a = u - i, b = v - j;
@@ -177,8 +176,10 @@ inline Solution solve(const Problem& pb, int nx) {
         diag += cm + cp;
         const double c[2] = {cm, cp};
         for (int a = 0; a < 2; ++a) {
-          if (col[a] >= 0) trip.emplace_back(row, col[a], -c[a]);
-          else rhs[row] += c[a] * val[a];
+          if (col[a] >= 0)
+            trip.emplace_back(row, col[a], -c[a]);
+          else
+            rhs[row] += c[a] * val[a];
         }
       };
       direction(i - 1, j, i + 1, j, 1.0, 0.0);
@@ -205,8 +206,8 @@ inline Solution solve(const Problem& pb, int nx) {
 /// change sign) the band is |f1 - f2| + |f2 - f3|.
 struct Richardson {
   double observed_order = 0.0;
-  double extrapolated = 0.0;   ///< with the formal order 2
-  double band = 0.0;           ///< half-width of the error band of `extrapolated`
+  double extrapolated = 0.0;  ///< with the formal order 2
+  double band = 0.0;          ///< half-width of the error band of `extrapolated`
 };
 inline Richardson richardson(double f1, double f2, double f3) {
   Richardson r;

@@ -66,34 +66,32 @@ namespace sparkdem::fv {
 
 /// Geometry [m]. notched = false gives the plain bar (the closed-form checks).
 struct NotchedBar {
-  double lx = 1.0e-3;           ///< width in x [m]
-  double depth = 1.0e-3;        ///< thickness in y [m] (the 2-D cells are this deep)
-  double lz = 7.0e-3;           ///< length along z [m]
+  double lx = 1.0e-3;     ///< width in x [m]
+  double depth = 1.0e-3;  ///< thickness in y [m] (the 2-D cells are this deep)
+  double lz = 7.0e-3;     ///< length along z [m]
   bool notched = true;
   double notch_depth = 0.225e-3;  ///< depth of each slot in x [m]
   double notch_z_lo = 3.25e-3;    ///< slot extent in z [m]
   double notch_z_hi = 3.75e-3;
-  double solid_volume() const {
-    return lx * depth * lz - (notched ? 2.0 * notch_depth * (notch_z_hi - notch_z_lo) * depth : 0.0);
-  }
+  double solid_volume() const { return lx * depth * lz - (notched ? 2.0 * notch_depth * (notch_z_hi - notch_z_lo) * depth : 0.0); }
   double notch_z_mid() const { return 0.5 * (notch_z_lo + notch_z_hi); }
 };
 
 /// 304L, as in the seed.
 struct Material {
-  double density = 7900.0;           ///< rho [kg/m^3]
-  double heat_capacity = 500.0;      ///< c [J/(kg K)]
-  double conductivity = 15.0;        ///< lambda [W/(m K)]
-  double resistivity = 0.73e-6;      ///< rho_e [Ohm m]
+  double density = 7900.0;       ///< rho [kg/m^3]
+  double heat_capacity = 500.0;  ///< c [J/(kg K)]
+  double conductivity = 15.0;    ///< lambda [W/(m K)]
+  double resistivity = 0.73e-6;  ///< rho_e [Ohm m]
 };
 
 struct Loading {
-  double z_lo = 59e-6;               ///< plane held at 0 V [m]
-  double z_hi = 7.0e-3 - 59e-6;      ///< plane held at `voltage` [m]
-  double voltage = 1.0;              ///< [V]
-  double t_end = 10e-3;              ///< heating time [s]
-  double T0 = 293.15;                ///< initial temperature [K]
-  double slab_half_width = 118e-6;   ///< notch slab |z - z_mid| <= this [m] (seed: 4 r_mean thick)
+  double z_lo = 59e-6;              ///< plane held at 0 V [m]
+  double z_hi = 7.0e-3 - 59e-6;     ///< plane held at `voltage` [m]
+  double voltage = 1.0;             ///< [V]
+  double t_end = 10e-3;             ///< heating time [s]
+  double T0 = 293.15;               ///< initial temperature [K]
+  double slab_half_width = 118e-6;  ///< notch slab |z - z_mid| <= this [m] (seed: 4 r_mean thick)
 };
 
 struct Numerics {
@@ -105,27 +103,27 @@ struct Numerics {
 
 struct Result {
   // grid
-  int nx = 0, nz = 0;          ///< cells of the solved domain (nx of the half when symmetric)
-  double h = 0.0;              ///< [m]
+  int nx = 0, nz = 0;  ///< cells of the solved domain (nx of the half when symmetric)
+  double h = 0.0;      ///< [m]
   std::size_t solid_cells = 0, potential_unknowns = 0;
   int steps = 0;
-  double dt = 0.0;             ///< [s]
+  double dt = 0.0;  ///< [s]
   // electrical
-  double current = 0.0;        ///< I through z_lo [A]
-  double current_high = 0.0;   ///< I through z_hi [A] (equals `current` to round-off)
-  double resistance = 0.0;     ///< R_eq = V / I [Ohm]
-  double power_vi = 0.0;       ///< V I [W]
-  double power_joule = 0.0;    ///< sum of the cell sources [W]
+  double current = 0.0;       ///< I through z_lo [A]
+  double current_high = 0.0;  ///< I through z_hi [A] (equals `current` to round-off)
+  double resistance = 0.0;    ///< R_eq = V / I [Ohm]
+  double power_vi = 0.0;      ///< V I [W]
+  double power_joule = 0.0;   ///< sum of the cell sources [W]
   // thermal at t_end
-  double T_slab_mean = 0.0;    ///< volume-weighted mean over the slab |z - z_mid| <= slab_half_width [K]
-  double slab_volume = 0.0;    ///< solid volume of that slab [m^3]
-  double T_max = 0.0;          ///< [K]
-  double T_notch_centre = 0.0; ///< at (lx/2, z_mid): mean of the cells touching that point [K]
-  double T_mean = 0.0;         ///< over the whole solid [K]
-  double heat_stored = 0.0;    ///< sum rho c V_cell (T - T0) [J]
-  double heat_input = 0.0;     ///< power_joule t_end [J]
-  double solid_volume = 0.0;   ///< [m^3] (whole bar)
-  double seconds = 0.0;        ///< wall time of the solve
+  double T_slab_mean = 0.0;     ///< volume-weighted mean over the slab |z - z_mid| <= slab_half_width [K]
+  double slab_volume = 0.0;     ///< solid volume of that slab [m^3]
+  double T_max = 0.0;           ///< [K]
+  double T_notch_centre = 0.0;  ///< at (lx/2, z_mid): mean of the cells touching that point [K]
+  double T_mean = 0.0;          ///< over the whole solid [K]
+  double heat_stored = 0.0;     ///< sum rho c V_cell (T - T0) [J]
+  double heat_input = 0.0;      ///< power_joule t_end [J]
+  double solid_volume = 0.0;    ///< [m^3] (whole bar)
+  double seconds = 0.0;         ///< wall time of the solve
   // fields (keep_fields): cell (i, k) at index i + nx k; NaN for void cells
   std::vector<double> phi, T;
 };
@@ -151,14 +149,17 @@ inline Result solve(const NotchedBar& g, const Material& m, const Loading& ld, c
   if (g.notched)
     for (double len : {g.notch_depth, g.notch_z_lo, g.notch_z_hi})
       if (!detail::divides(len, h)) throw std::invalid_argument("fv: h = " + std::to_string(h) + " m does not resolve the slots");
-  if (!(0.0 <= ld.z_lo && ld.z_lo < ld.z_hi && ld.z_hi <= g.lz))
-    throw std::invalid_argument("fv: need 0 <= z_lo < z_hi <= lz");
+  if (!(0.0 <= ld.z_lo && ld.z_lo < ld.z_hi && ld.z_hi <= g.lz)) throw std::invalid_argument("fv: need 0 <= z_lo < z_hi <= lz");
   if (num.steps < 2) throw std::invalid_argument("fv: steps must be >= 2");
   if (g.notched && !(g.notch_depth < lx_solved)) throw std::invalid_argument("fv: the slots cut through the bar");
 
   Result res;
   const int nx = static_cast<int>(std::lround(lx_solved / h)), nz = static_cast<int>(std::lround(g.lz / h));
-  res.nx = nx; res.nz = nz; res.h = h; res.steps = num.steps; res.dt = ld.t_end / num.steps;
+  res.nx = nx;
+  res.nz = nz;
+  res.h = h;
+  res.steps = num.steps;
+  res.dt = ld.t_end / num.steps;
   const double mirror = num.use_x_symmetry ? 2.0 : 1.0;  // extensive quantities of the whole bar
   const double A = h * g.depth, Vc = h * h * g.depth;
   const double sigma = 1.0 / m.resistivity;
@@ -178,7 +179,10 @@ inline Result solve(const NotchedBar& g, const Material& m, const Loading& ld, c
 
   // ---- potential ----
   // region: -1 beyond z_lo (phi = 0), +1 beyond z_hi (phi = V), 0 unknown
-  auto region = [&](int k) { const double z = zc(k); return z <= ld.z_lo ? -1 : (z >= ld.z_hi ? 1 : 0); };
+  auto region = [&](int k) {
+    const double z = zc(k);
+    return z <= ld.z_lo ? -1 : (z >= ld.z_hi ? 1 : 0);
+  };
   std::vector<long> pidx(ncell, -1);
   long np = 0;
   for (int k = 0; k < nz; ++k)
@@ -191,7 +195,14 @@ inline Result solve(const NotchedBar& g, const Material& m, const Loading& ld, c
   // Faces: visit each (cell, +x neighbour) and (cell, +z neighbour) once.
   // fixed_side: 0 both unknown; 1: b is beyond a plane, -1: a is; plane: -1 z_lo, +1 z_hi, 0 none.
   // frac_a: share of the face's Joule power deposited in cell a.
-  struct Face { std::size_t a, b; double G; double frac_a; double phi_fixed; int fixed_side; int plane; };
+  struct Face {
+    std::size_t a, b;
+    double G;
+    double frac_a;
+    double phi_fixed;
+    int fixed_side;
+    int plane;
+  };
   std::vector<Face> faces;
   faces.reserve(2 * ncell);
   for (int k = 0; k < nz; ++k)
@@ -205,7 +216,10 @@ inline Result solve(const NotchedBar& g, const Material& m, const Loading& ld, c
         if (!solid[b]) continue;
         const int ra = region(k), rb = region(k2);
         if (ra != 0 && rb != 0) continue;  // both equipotential: no current
-        if (ra == 0 && rb == 0) { faces.push_back({a, b, sigma * A / h, 0.5, 0.0, 0, 0}); continue; }
+        if (ra == 0 && rb == 0) {
+          faces.push_back({a, b, sigma * A / h, 0.5, 0.0, 0, 0});
+          continue;
+        }
         // one unknown, one beyond a plane (only across z faces)
         const bool a_unknown = ra == 0;
         const int rf = a_unknown ? rb : ra;
@@ -220,8 +234,10 @@ inline Result solve(const NotchedBar& g, const Material& m, const Loading& ld, c
   for (const Face& f : faces) {
     if (f.fixed_side == 0) {
       const long pa = pidx[f.a], pb = pidx[f.b];
-      tp.emplace_back(pa, pa, f.G); tp.emplace_back(pb, pb, f.G);
-      tp.emplace_back(pa, pb, -f.G); tp.emplace_back(pb, pa, -f.G);
+      tp.emplace_back(pa, pa, f.G);
+      tp.emplace_back(pb, pb, f.G);
+      tp.emplace_back(pa, pb, -f.G);
+      tp.emplace_back(pb, pa, -f.G);
     } else {
       const long pu = pidx[f.fixed_side == 1 ? f.a : f.b];
       tp.emplace_back(pu, pu, f.G);
@@ -244,8 +260,7 @@ inline Result solve(const NotchedBar& g, const Material& m, const Loading& ld, c
   std::vector<double> q(ncell, 0.0);  // W per cell
   double I_lo = 0.0, I_hi = 0.0;
   for (const Face& f : faces) {
-    const double dphi = f.fixed_side == 0 ? phi[f.a] - phi[f.b]
-                        : f.fixed_side == 1 ? phi[f.a] - f.phi_fixed : f.phi_fixed - phi[f.b];
+    const double dphi = f.fixed_side == 0 ? phi[f.a] - phi[f.b] : f.fixed_side == 1 ? phi[f.a] - f.phi_fixed : f.phi_fixed - phi[f.b];
     const double P = f.G * dphi * dphi;
     q[f.a] += f.frac_a * P;
     q[f.b] += (1.0 - f.frac_a) * P;
@@ -280,8 +295,10 @@ inline Result solve(const NotchedBar& g, const Material& m, const Loading& ld, c
         const std::size_t b = cell(i2, k2);
         if (!solid[b]) continue;
         const long ta = tidx[a], tb = tidx[b];
-        tk.emplace_back(ta, ta, kface); tk.emplace_back(tb, tb, kface);
-        tk.emplace_back(ta, tb, -kface); tk.emplace_back(tb, ta, -kface);
+        tk.emplace_back(ta, ta, kface);
+        tk.emplace_back(tb, tb, kface);
+        tk.emplace_back(ta, tb, -kface);
+        tk.emplace_back(tb, ta, -kface);
       }
     }
   SpMat K(nt, nt);
@@ -307,8 +324,14 @@ inline Result solve(const NotchedBar& g, const Material& m, const Loading& ld, c
   // (The right-hand side goes through its own vector: solve() may write its result while still
   // reading an expression that refers to th.)
   Eigen::VectorXd rhs(nt);
-  for (int s = 0; s < 4; ++s) { rhs = (mc / dtq) * th + P; th = ldlt_be.solve(rhs); }
-  for (int s = 2; s < num.steps; ++s) { rhs = (mc / dt) * th - 0.5 * (K * th) + P; th = ldlt_cn.solve(rhs); }
+  for (int s = 0; s < 4; ++s) {
+    rhs = (mc / dtq) * th + P;
+    th = ldlt_be.solve(rhs);
+  }
+  for (int s = 2; s < num.steps; ++s) {
+    rhs = (mc / dt) * th - 0.5 * (K * th) + P;
+    th = ldlt_cn.solve(rhs);
+  }
 
   // ---- outputs ----
   double stored = 0.0, tsum = 0.0, tmax = -std::numeric_limits<double>::infinity();
@@ -343,12 +366,21 @@ inline Result solve(const NotchedBar& g, const Material& m, const Loading& ld, c
     int cnt = 0;
     auto add = [&](int i, int k) {
       if (i < 0 || i >= nx || k < 0 || k >= nz || !solid[cell(i, k)]) return;
-      acc += th[tidx[cell(i, k)]]; ++cnt;
+      acc += th[tidx[cell(i, k)]];
+      ++cnt;
     };
     const double xm = 0.5 * g.lx;
     const int ii = static_cast<int>(std::lround(xm / h));  // cell boundary index (or nx with symmetry)
-    if (detail::divides(xm, h)) { add(ii - 1, kk - 1); add(ii - 1, kk); add(ii, kk - 1); add(ii, kk); }
-    else { const int ic = static_cast<int>(std::floor(xm / h)); add(ic, kk - 1); add(ic, kk); }
+    if (detail::divides(xm, h)) {
+      add(ii - 1, kk - 1);
+      add(ii - 1, kk);
+      add(ii, kk - 1);
+      add(ii, kk);
+    } else {
+      const int ic = static_cast<int>(std::floor(xm / h));
+      add(ic, kk - 1);
+      add(ic, kk);
+    }
     res.T_notch_centre = ld.T0 + acc / std::max(cnt, 1);
   }
   if (num.keep_fields) {

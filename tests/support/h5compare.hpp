@@ -33,8 +33,10 @@ inline void collect_datasets(hid_t file, const std::string& group, std::vector<s
     const hid_t o = H5Oopen(file, child.c_str(), H5P_DEFAULT);
     const H5I_type_t t = H5Iget_type(o);
     H5Oclose(o);
-    if (t == H5I_GROUP) collect_datasets(file, child, out);
-    else if (t == H5I_DATASET) out.push_back(child.substr(1));
+    if (t == H5I_GROUP)
+      collect_datasets(file, child, out);
+    else if (t == H5I_DATASET)
+      out.push_back(child.substr(1));
   }
   H5Gclose(g);
 }
@@ -73,8 +75,7 @@ inline std::map<std::string, RawDataset> read_all(const std::filesystem::path& f
 /// Datasets named in `skip` must exist in both but are compared by the caller (e.g. records
 /// holding output paths, which differ between two runs by construction).
 inline void require_identical_files(const std::filesystem::path& a, const std::filesystem::path& b,
-                                    const std::vector<std::string>& required,
-                                    const std::vector<std::string>& skip = {}) {
+                                    const std::vector<std::string>& required, const std::vector<std::string>& skip = {}) {
   const auto da = read_all(a), db = read_all(b);
   for (const std::string& must : required) {
     INFO("dataset " << must << " of " << a);
@@ -100,9 +101,8 @@ inline void require_identical_files(const std::filesystem::path& a, const std::f
 inline void require_identical_state(const std::filesystem::path& a, const std::filesystem::path& b,
                                     const std::vector<std::string>& skip = {}) {
   require_identical_files(a, b,
-                          {"state/particles/position", "state/particles/velocity", "state/particles/omega",
-                           "state/particles/orientation", "state/particles/force", "state/contacts/state",
-                           "state/contacts/id_i", "state/step", "state/rng"},
+                          {"state/particles/position", "state/particles/velocity", "state/particles/omega", "state/particles/orientation",
+                           "state/particles/force", "state/contacts/state", "state/contacts/id_i", "state/step", "state/rng"},
                           skip);
 }
 

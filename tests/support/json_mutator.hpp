@@ -88,16 +88,19 @@ class JsonMutator {
         if (!node.is_number()) return "noop";
         const double x = node.get<double>();
         const double f = std::pow(10.0, static_cast<double>(static_cast<int>(pick(25)) - 12));
-        if (pick(4) == 0) node = -x;
-        else if (node.is_number_integer() && pick(2)) node = static_cast<std::int64_t>(std::clamp(x * static_cast<double>(pick(1000)), -9e18, 9e18));
-        else node = x * f;
+        if (pick(4) == 0)
+          node = -x;
+        else if (node.is_number_integer() && pick(2))
+          node = static_cast<std::int64_t>(std::clamp(x * static_cast<double>(pick(1000)), -9e18, 9e18));
+        else
+          node = x * f;
         return "scale " + where + " to " + node.dump();
       }
       default: {  // string value from the vocabulary of names
-        static const std::vector<std::string> words = {"lattice", "deposit", "fill", "relax", "dynamics", "table",
-                                                       "lognormal", "uniform", "cylinder", "plane", "box", "velocity",
-                                                       "pressure", "fixed", "volume", "hertz_mindlin", "gravity", "",
-                                                       "floor", "die", ".", "/", "missing.h5"};
+        static const std::vector<std::string> words = {"lattice", "deposit",       "fill",    "relax", "dynamics", "table",    "lognormal",
+                                                       "uniform", "cylinder",      "plane",   "box",   "velocity", "pressure", "fixed",
+                                                       "volume",  "hertz_mindlin", "gravity", "",      "floor",    "die",      ".",
+                                                       "/",       "missing.h5"};
         const std::string w = words[pick(words.size())];
         j[at] = w;
         return "set " + where + " to \"" + w + "\"";
@@ -128,29 +131,34 @@ class JsonMutator {
         return "replace " + where + " by an array of " + std::to_string(n) + " copies";
       }
       case 1: {  // strings that look like numbers
-        static const char* texts[] = {"NaN", "nan", "-nan", "Infinity", "-Infinity", "inf", "-0", "0x10", "1e999",
-                                      "-1e999", "1e-400", "18446744073709551616", " 1", "1 ", "+1", "1,5", "0.5.5"};
+        static const char* texts[] = {"NaN", "nan",  "-nan",  "Infinity", "-Infinity", "inf",
+                                      "-0",  "0x10", "1e999", "-1e999",   "1e-400",    "18446744073709551616",
+                                      " 1",  "1 ",   "+1",    "1,5",      "0.5.5"};
         const std::string t = texts[pick(sizeof texts / sizeof *texts)];
         j[at] = t;
         return "set " + where + " to the string \"" + t + "\"";
       }
       case 2: {  // file names where files are named
         static const char* keys[] = {"$include", "csv", "from_snapshot", "size_distribution.csv", "file", "table"};
-        static const char* files[] = {"/dev/zero", "/dev/null", "/", ".", "..", "missing.json", "missing.h5",
-                                      "nested/missing.csv", ""};
+        static const char* files[] = {"/dev/zero", "/dev/null", "/", ".", "..", "missing.json", "missing.h5", "nested/missing.csv", ""};
         const std::string k = keys[pick(6)];
         std::string f = files[pick(9)];
         if (pick(10) == 0) f = std::string(5000, 'n');
         nlohmann::json& node = j[at];
-        if (node.is_object()) node[k] = f;
-        else if (!at.empty() && j[at.parent_pointer()].is_object()) j[at.parent_pointer()][k] = f;
-        else return "noop";
+        if (node.is_object())
+          node[k] = f;
+        else if (!at.empty() && j[at.parent_pointer()].is_object())
+          j[at.parent_pointer()][k] = f;
+        else
+          return "noop";
         return "set key " + k + " beside " + where + " to \"" + f.substr(0, 40) + "\"";
       }
       case 3: {  // wrap a value in an array or an object
         nlohmann::json v = j[at];
-        if (pick(2)) j[at] = nlohmann::json::array({v});
-        else j[at] = nlohmann::json{{"value", v}};
+        if (pick(2))
+          j[at] = nlohmann::json::array({v});
+        else
+          j[at] = nlohmann::json{{"value", v}};
         return "wrap " + where;
       }
       case 4: {  // swap two subtrees (when neither contains the other)
@@ -176,24 +184,42 @@ class JsonMutator {
  private:
   nlohmann::json odd_value() {
     switch (pick(22)) {
-      case 0: return "x";
-      case 1: return "";
-      case 2: return true;
-      case 3: return nullptr;
-      case 4: return 0;
-      case 5: return -1;
-      case 6: return 1e308;
-      case 7: return -1e308;
-      case 8: return std::numeric_limits<double>::infinity();
-      case 9: return std::numeric_limits<double>::quiet_NaN();
-      case 10: return std::numeric_limits<std::int64_t>::max();
-      case 11: return std::numeric_limits<std::uint64_t>::max();
-      case 12: return std::numeric_limits<std::int64_t>::min();
-      case 13: return 4.9e-324;
-      case 14: return nlohmann::json::array();
-      case 15: return nlohmann::json::object();
-      case 16: return nlohmann::json::array({1, 2, 3});
-      case 17: return nlohmann::json::array({std::nan(""), 1e308, -1});
+      case 0:
+        return "x";
+      case 1:
+        return "";
+      case 2:
+        return true;
+      case 3:
+        return nullptr;
+      case 4:
+        return 0;
+      case 5:
+        return -1;
+      case 6:
+        return 1e308;
+      case 7:
+        return -1e308;
+      case 8:
+        return std::numeric_limits<double>::infinity();
+      case 9:
+        return std::numeric_limits<double>::quiet_NaN();
+      case 10:
+        return std::numeric_limits<std::int64_t>::max();
+      case 11:
+        return std::numeric_limits<std::uint64_t>::max();
+      case 12:
+        return std::numeric_limits<std::int64_t>::min();
+      case 13:
+        return 4.9e-324;
+      case 14:
+        return nlohmann::json::array();
+      case 15:
+        return nlohmann::json::object();
+      case 16:
+        return nlohmann::json::array({1, 2, 3});
+      case 17:
+        return nlohmann::json::array({std::nan(""), 1e308, -1});
       case 18: {  // deeply nested object (within or beyond the loader's depth limit of 32)
         nlohmann::json v = 1;
         const int depth = pick(2) ? 20 : 200;
@@ -206,14 +232,18 @@ class JsonMutator {
         for (int d = 0; d < depth; ++d) v = nlohmann::json::array({v});
         return v;
       }
-      case 20: return std::string(10000, 'z');
-      default: return 0.5;
+      case 20:
+        return std::string(10000, 'z');
+      default:
+        return 0.5;
     }
   }
   void erase(nlohmann::json& j, const JsonPtr& at) {
     nlohmann::json& parent = j[at.parent_pointer()];
-    if (parent.is_object()) parent.erase(at.back());
-    else parent.erase(static_cast<std::size_t>(std::stoul(at.back())));
+    if (parent.is_object())
+      parent.erase(at.back());
+    else
+      parent.erase(static_cast<std::size_t>(std::stoul(at.back())));
   }
   std::mt19937_64 rng_;
 };

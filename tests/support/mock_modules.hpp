@@ -24,9 +24,9 @@ template <int Variant>
 class MockModule final : public Module {
  public:
   struct Params {
-    double rate = 1.0;              ///< field growth per unit time and speed^2
-    bool physical_time = false;     ///< run in the physical clock
-    double stable_dt_scale = 0.0;   ///< > 0: stable step = scale / (1 + max speed) [s]
+    double rate = 1.0;             ///< field growth per unit time and speed^2
+    bool physical_time = false;    ///< run in the physical clock
+    double stable_dt_scale = 0.0;  ///< > 0: stable step = scale / (1 + max speed) [s]
   };
   static std::string kind() { return "mock_" + std::string(1, static_cast<char>('a' + Variant)); }
   static ParamSpec<Params> spec() {
@@ -72,7 +72,10 @@ class MockModule final : public Module {
     ar.visit(prefix + "/held", held_);
     std::vector<std::int64_t> ids;
     std::vector<double> vals;
-    for (const auto& [k, v] : warm_) { ids.push_back(k); vals.push_back(v); }
+    for (const auto& [k, v] : warm_) {
+      ids.push_back(k);
+      vals.push_back(v);
+    }
     ar.visit(prefix + "/warm_ids", ids);
     ar.visit(prefix + "/warm_values", vals);
     if (ar.reading()) {
@@ -124,8 +127,10 @@ class MockNetwork final : public Module {
     const auto& lo = s.particles.fields.data("set/" + p_.low_set);
     DirichletGroup high{{}, 1.0}, low{{}, 0.0};
     for (std::size_t i = 0; i < s.particles.size(); ++i) {
-      if (hi[i] > 0.5) high.nodes.push_back(static_cast<Index>(i));
-      else if (lo[i] > 0.5) low.nodes.push_back(static_cast<Index>(i));
+      if (hi[i] > 0.5)
+        high.nodes.push_back(static_cast<Index>(i));
+      else if (lo[i] > 0.5)
+        low.nodes.push_back(static_cast<Index>(i));
     }
     if (high.nodes.empty() || low.nodes.empty()) throw SetupError("mock_network: an electrode set is empty");
     prob.dirichlet = {high, low};

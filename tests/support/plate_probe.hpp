@@ -30,17 +30,16 @@
 namespace sparkdem::plate {
 
 struct LineProbe {
-  double value = 0.0;         ///< linear least-squares fit evaluated at the point [V]
-  double mean = 0.0;          ///< plain mean of the k potentials [V] (diagnostic)
-  std::size_t count = 0;      ///< k
-  double reach = 0.0;         ///< in-plane distance of the farthest of the k centres [m]
+  double value = 0.0;     ///< linear least-squares fit evaluated at the point [V]
+  double mean = 0.0;      ///< plain mean of the k potentials [V] (diagnostic)
+  std::size_t count = 0;  ///< k
+  double reach = 0.0;     ///< in-plane distance of the farthest of the k centres [m]
 };
 
 /// The probe of the header comment. `position` holds 3 n coordinates (x, y, z per particle),
 /// `phi` n potentials. Throws std::invalid_argument with fewer than 3 usable particles or
 /// when the k centres are collinear in the plane.
-inline LineProbe probe_line(const std::vector<double>& position, const std::vector<double>& phi, double x0, double y0,
-                            std::size_t k = 24) {
+inline LineProbe probe_line(const std::vector<double>& position, const std::vector<double>& phi, double x0, double y0, std::size_t k = 24) {
   if (position.size() != 3 * phi.size()) throw std::invalid_argument("plate::probe_line: position must hold 3 values per potential");
   std::vector<std::size_t> idx;
   std::vector<double> d(phi.size());
@@ -50,9 +49,8 @@ inline LineProbe probe_line(const std::vector<double>& position, const std::vect
   }
   k = std::min(k, idx.size());
   if (k < 3) throw std::invalid_argument("plate::probe_line: fewer than 3 particles with a potential");
-  std::partial_sort(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(k), idx.end(), [&](std::size_t a, std::size_t b) {
-    return d[a] < d[b] || (d[a] == d[b] && a < b);
-  });
+  std::partial_sort(idx.begin(), idx.begin() + static_cast<std::ptrdiff_t>(k), idx.end(),
+                    [&](std::size_t a, std::size_t b) { return d[a] < d[b] || (d[a] == d[b] && a < b); });
   Eigen::MatrixXd A(k, 3);
   Eigen::VectorXd rhs(k);
   LineProbe out;
@@ -99,9 +97,9 @@ struct ControlPoint {
 };
 inline std::vector<ControlPoint> control_points(double side = 0.030, double source_radius = 0.003) {
   const double c = 0.5 * side;
-  return {{"P1", c, 0.5 * (c - source_radius)},   // halfway between the ground and the source's nearest edge
-          {"P1c", c, 0.5 * c},                     // alternative: halfway between the ground and the source centre
-          {"P2", 0.0, side}};                      // the top-left corner
+  return {{"P1", c, 0.5 * (c - source_radius)},  // halfway between the ground and the source's nearest edge
+          {"P1c", c, 0.5 * c},                   // alternative: halfway between the ground and the source centre
+          {"P2", 0.0, side}};                    // the top-left corner
 }
 
 }  // namespace sparkdem::plate

@@ -93,14 +93,17 @@ inline Index local_index(const ParticleStore& p, Id id) {
 /// n radii log-uniform in [rmin, rmin * ratio] (the first two are set to the two bounds so the
 /// full ratio is always present) and random positions in a cube [0, L]^3 sized so that the
 /// spheres' total volume is the fraction `phi` of the cube (overlaps allowed). Returns L.
-inline double random_polydisperse(std::size_t n, double rmin, double ratio, double phi, std::uint64_t seed,
-                                  std::vector<Vec3>& x, std::vector<double>& r) {
+inline double random_polydisperse(std::size_t n, double rmin, double ratio, double phi, std::uint64_t seed, std::vector<Vec3>& x,
+                                  std::vector<double>& r) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   r.resize(n);
   double vol = 0.0;
   for (std::size_t i = 0; i < n; ++i) r[i] = rmin * std::pow(ratio, u(rng));
-  if (n > 1) { r[0] = rmin; r[1] = rmin * ratio; }
+  if (n > 1) {
+    r[0] = rmin;
+    r[1] = rmin * ratio;
+  }
   for (double ri : r) vol += 4.0 / 3.0 * std::numbers::pi * ri * ri * ri;
   const double box = std::cbrt(vol / phi);
   x.resize(n);

@@ -22,9 +22,8 @@ struct ScratchDir {
   std::filesystem::path path;
   explicit ScratchDir(const std::string& prefix = "sparkdem_test") {
     static std::atomic<int> counter{0};
-    path = std::filesystem::temp_directory_path() /
-           (prefix + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" +
-            std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
+    path = std::filesystem::temp_directory_path() / (prefix + "_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + "_" +
+                                                     std::to_string(std::chrono::steady_clock::now().time_since_epoch().count()));
     std::filesystem::create_directories(path);
   }
   ~ScratchDir() {
@@ -47,8 +46,7 @@ inline const Registry& registry() {
 
 /// Load `scene` (relative paths against `base`) and run it quietly on one thread into `outdir`;
 /// the run's summary.
-inline nlohmann::json run_scene(const nlohmann::json& scene, const std::filesystem::path& base,
-                                const std::filesystem::path& outdir) {
+inline nlohmann::json run_scene(const nlohmann::json& scene, const std::filesystem::path& base, const std::filesystem::path& outdir) {
   io::Scenario sc = io::load_scenario(scene, registry(), base);
   io::RunOptions opt;
   opt.outdir = outdir;
@@ -65,8 +63,7 @@ inline nlohmann::json load_data(const std::string& name) {
 }
 
 /// Write a scene to dir/name and return the path.
-inline std::filesystem::path write_scene(const std::filesystem::path& dir, const std::string& name,
-                                         const nlohmann::json& j) {
+inline std::filesystem::path write_scene(const std::filesystem::path& dir, const std::string& name, const nlohmann::json& j) {
   const std::filesystem::path f = dir / name;
   std::ofstream(f) << j.dump(2);
   return f;

@@ -97,10 +97,10 @@ inline double be_mode_error_bound(double n) {
 /// (its rate G/C_t = 5.7e3 1/s against 0.18 1/s for the chain: the explicit step is set by it).
 /// Initial temperatures: L0 at 500 K, the others at 300 K.
 struct StiffScene {
-  static constexpr double R = 1e-3, r = 1e-5;              // [m]
+  static constexpr double R = 1e-3, r = 1e-5;                      // [m]
   static constexpr double rho = 7900.0, c = 500.0, lambda = 15.0;  // steel 304L [SI]
   static constexpr double d_ll = 20e-6, d_t = 1e-6, d_ins = 2e-9;  // overlaps [m]
-  static constexpr double factor = 1.0 / (2e6 - 1.0);     // insulator conductivity factor [-]
+  static constexpr double factor = 1.0 / (2e6 - 1.0);              // insulator conductivity factor [-]
   /// Local indices (and ids) in the order added.
   enum : int { L0 = 0, L1 = 1, L2 = 2, L3 = 3, T = 4, N = 5 };
 
@@ -151,7 +151,10 @@ struct StiffScene {
   static Eigen::MatrixXd laplacian() {
     Eigen::MatrixXd L = Eigen::MatrixXd::Zero(N, N);
     auto edge = [&](int a, int b, double g) {
-      L(a, a) += g; L(b, b) += g; L(a, b) -= g; L(b, a) -= g;
+      L(a, a) += g;
+      L(b, b) += g;
+      L(a, b) -= g;
+      L(b, a) -= g;
     };
     edge(L0, L1, g_ll());
     edge(L1, L2, g_ll());

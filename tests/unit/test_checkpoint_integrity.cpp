@@ -65,15 +65,11 @@ std::string rejection(const fs::path& file) {
   try {
     sparkdem::io::read_verified_checkpoint(file);
     FAIL("read_verified_checkpoint accepted " << file);
-  } catch (const SetupError& e) {
-    raw = e.what();
-  }
+  } catch (const SetupError& e) { raw = e.what(); }
   try {
     Hdf5Archive::for_reading(file);
     FAIL("Hdf5Archive::for_reading accepted " << file);
-  } catch (const SetupError& e) {
-    archive = e.what();
-  }
+  } catch (const SetupError& e) { archive = e.what(); }
   CHECK(raw == archive);
   CHECK_THAT(raw, Catch::Contains("checkpoint '" + file.string() + "'"));
   CHECK_THAT(raw, !Catch::Contains("HDF5"));
@@ -91,8 +87,7 @@ TEST_CASE("FNV-1a 64 matches the published test vectors", "[io][checkpoint]") {
   CHECK(hash("foobar") == 0x85944171f73967e8ULL);
   // Continuing from a state is the same as hashing the concatenation.
   const std::string foo = "foo", bar = "bar";
-  CHECK(sparkdem::io::fnv1a64(std::span(reinterpret_cast<const unsigned char*>(bar.data()), bar.size()), hash(foo)) ==
-        hash("foobar"));
+  CHECK(sparkdem::io::fnv1a64(std::span(reinterpret_cast<const unsigned char*>(bar.data()), bar.size()), hash(foo)) == hash("foobar"));
 }
 
 TEST_CASE("a committed checkpoint carries its header and stays an ordinary HDF5 file", "[io][checkpoint]") {
@@ -141,8 +136,7 @@ TEST_CASE("a committed checkpoint carries its header and stays an ordinary HDF5 
   CHECK(ids == std::vector<std::int64_t>{1, 2, 3, 5, 8, 13, 21, 34, 55, 89});
 }
 
-TEST_CASE("truncated, corrupt, empty and foreign checkpoints are rejected before HDF5 parses them",
-          "[io][checkpoint]") {
+TEST_CASE("truncated, corrupt, empty and foreign checkpoints are rejected before HDF5 parses them", "[io][checkpoint]") {
   sparkdem::test::ScratchDir dir("sparkdem_ckpt");
   const fs::path good = write_checkpoint(dir.path);
   const std::vector<unsigned char> bytes = read_bytes(good);
@@ -153,13 +147,12 @@ TEST_CASE("truncated, corrupt, empty and foreign checkpoints are rejected before
   SECTION("truncated") {
     for (const std::size_t n : {std::size_t{1}, std::size_t{10}, std::size_t{200}, kCheckpointHeaderBytes - 1}) {
       write_bytes(bad, std::vector<unsigned char>(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n)));
-      CHECK_THAT(rejection(bad), Catch::Contains("is truncated: " + std::to_string(n) +
-                                                 " bytes, shorter than its 512-byte header"));
+      CHECK_THAT(rejection(bad), Catch::Contains("is truncated: " + std::to_string(n) + " bytes, shorter than its 512-byte header"));
     }
     for (const std::size_t n : {kCheckpointHeaderBytes, kCheckpointHeaderBytes + 8, size / 2, size - 1}) {
       write_bytes(bad, std::vector<unsigned char>(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(n)));
-      CHECK_THAT(rejection(bad), Catch::Contains("is truncated: " + std::to_string(n) + " bytes, its header says " +
-                                                 std::to_string(expected_size)));
+      CHECK_THAT(rejection(bad),
+                 Catch::Contains("is truncated: " + std::to_string(n) + " bytes, its header says " + std::to_string(expected_size)));
     }
   }
   SECTION("one flipped byte in the middle") {
@@ -226,8 +219,8 @@ TEST_CASE("truncated, corrupt, empty and foreign checkpoints are rejected before
     std::vector<unsigned char> longer = bytes;
     longer.push_back(0);
     write_bytes(bad, longer);
-    CHECK_THAT(rejection(bad), Catch::Contains("is corrupt: " + std::to_string(size + 1) + " bytes, its header says " +
-                                               std::to_string(size)));
+    CHECK_THAT(rejection(bad),
+               Catch::Contains("is corrupt: " + std::to_string(size + 1) + " bytes, its header says " + std::to_string(size)));
   }
   SECTION("another format version") {
     std::vector<unsigned char> v2 = bytes;
@@ -245,12 +238,8 @@ TEST_CASE("truncated, corrupt, empty and foreign checkpoints are rejected before
     write_bytes(bad, damaged);
     CHECK_THAT(rejection(bad), Catch::Contains("has a damaged header: its padding is not all zero bytes"));
   }
-  SECTION("a missing file") {
-    CHECK_THAT(rejection(dir.path / "nope.h5"), Catch::Contains("does not exist"));
-  }
-  SECTION("a directory") {
-    CHECK_THAT(rejection(dir.path), Catch::Contains("is not a regular file"));
-  }
+  SECTION("a missing file") { CHECK_THAT(rejection(dir.path / "nope.h5"), Catch::Contains("does not exist")); }
+  SECTION("a directory") { CHECK_THAT(rejection(dir.path), Catch::Contains("is not a regular file")); }
 }
 
 TEST_CASE("a correctly sealed file whose data is not HDF5 fails cleanly in HDF5", "[io][checkpoint]") {
@@ -269,8 +258,6 @@ TEST_CASE("a correctly sealed file whose data is not HDF5 fails cleanly in HDF5"
   try {
     Hdf5Archive::for_reading(path);
     FAIL("a file of noise was opened as a checkpoint");
-  } catch (const SetupError& e) {
-    CHECK_THAT(e.what(), Catch::Contains("HDF5 file '" + path.string() + "': cannot open the file image"));
-  }
+  } catch (const SetupError& e) { CHECK_THAT(e.what(), Catch::Contains("HDF5 file '" + path.string() + "': cannot open the file image")); }
   CHECK(H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL) == 0);
 }

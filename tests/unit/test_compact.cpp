@@ -54,9 +54,10 @@ TEST_CASE("lens volume of two overlapping spheres matches numerical integration"
   // The closed form against the Simpson integral to 1e-6 relative (the integral itself is good to
   // O(h^2) ~ 1e-12, so this is loose), over
   // equal and unequal radii and shallow to deep overlaps.
-  struct C { double ri, rj, d; };
-  for (const C c : {C{1.0, 1.0, 1.9}, C{1.0, 1.0, 1.2}, C{1.0, 0.4, 1.2}, C{2e-6, 7e-6, 8.5e-6}, C{3.0, 1.0, 2.5},
-                    C{1.0, 1.0, 1.999}}) {
+  struct C {
+    double ri, rj, d;
+  };
+  for (const C c : {C{1.0, 1.0, 1.9}, C{1.0, 1.0, 1.2}, C{1.0, 0.4, 1.2}, C{2e-6, 7e-6, 8.5e-6}, C{3.0, 1.0, 2.5}, C{1.0, 1.0, 1.999}}) {
     const double v = lens_volume(c.ri, c.rj, c.d), ref = lens_numerical(c.ri, c.rj, c.d);
     INFO("r_i = " << c.ri << ", r_j = " << c.rj << ", d = " << c.d << ": " << v << " vs " << ref);
     CHECK(test::relative_error(v, ref) <= 1e-6);
@@ -119,10 +120,10 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   //   interior (margin 2.2 mm: R = 2.3 mm, z in [2.4, 6.8] mm): only A and B, 2 V - V_L.
   State s;
   const double r = 1e-3;
-  test::add_sphere(s, Vec3(0, 0, 4.0e-3), r, 5910.0);            // A
-  test::add_sphere(s, Vec3(0, 0, 5.6e-3), r, 5910.0);            // B
-  test::add_sphere(s, Vec3(3.4e-3, 0, 5.0e-3), r, 5910.0);       // C: 0.1 mm from the die wall
-  test::add_sphere(s, Vec3(-2.0e-3, 1.0e-3, 0.9e-3), r, 5910.0); // D: bottom punch at z = 0.2 mm
+  test::add_sphere(s, Vec3(0, 0, 4.0e-3), r, 5910.0);             // A
+  test::add_sphere(s, Vec3(0, 0, 5.6e-3), r, 5910.0);             // B
+  test::add_sphere(s, Vec3(3.4e-3, 0, 5.0e-3), r, 5910.0);        // C: 0.1 mm from the die wall
+  test::add_sphere(s, Vec3(-2.0e-3, 1.0e-3, 0.9e-3), r, 5910.0);  // D: bottom punch at z = 0.2 mm
   Wall die;
   die.name = "die";
   die.shape = CylinderShape{Vec3::Zero(), Vec3::UnitZ(), 5e-3};
@@ -138,7 +139,7 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   const auto cols = mon.columns(s);
   const auto vals = mon.values(s);
   REQUIRE(cols == std::vector<std::string>{"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass",
-                                              "envelope_radius", "porosity_envelope"});
+                                           "envelope_radius", "porosity_envelope"});
   const double V = sphere_volume(r), VL = lens_volume(r, r, 1.6e-3);
   const double H = 8.8e-3, R = 4.5e-3;
   const double porosity = 1.0 - (4.0 * V - VL - cap_volume(r, 0.3e-3)) / (kPi * R * R * H);

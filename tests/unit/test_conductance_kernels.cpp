@@ -45,7 +45,9 @@ struct Lattice {
 };
 Lattice cubic_lattice(int nx, int ny, int nz, double radius, const Vec3& o) {
   Lattice L;
-  L.nx = nx; L.ny = ny; L.nz = nz;
+  L.nx = nx;
+  L.ny = ny;
+  L.nz = nz;
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
@@ -55,9 +57,18 @@ Lattice cubic_lattice(int nx, int ny, int nz, double radius, const Vec3& o) {
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
-        if (i + 1 < nx) { L.a.push_back(L.id(i, j, k)); L.b.push_back(L.id(i + 1, j, k)); }
-        if (j + 1 < ny) { L.a.push_back(L.id(i, j, k)); L.b.push_back(L.id(i, j + 1, k)); }
-        if (k + 1 < nz) { L.a.push_back(L.id(i, j, k)); L.b.push_back(L.id(i, j, k + 1)); }
+        if (i + 1 < nx) {
+          L.a.push_back(L.id(i, j, k));
+          L.b.push_back(L.id(i + 1, j, k));
+        }
+        if (j + 1 < ny) {
+          L.a.push_back(L.id(i, j, k));
+          L.b.push_back(L.id(i, j + 1, k));
+        }
+        if (k + 1 < nz) {
+          L.a.push_back(L.id(i, j, k));
+          L.b.push_back(L.id(i, j, k + 1));
+        }
       }
   return L;
 }
@@ -114,8 +125,7 @@ TEST_CASE("Series law of Eq. 18 with its limits", "[electrical][conductance]") {
   CHECK_THROWS_AS(series_conductance(ki, std::nan("")), ConfigError);
 }
 
-TEST_CASE("Hemisphere conductance: readings A/B/C, FE table, Holm limit and positive floor",
-          "[electrical][conductance]") {
+TEST_CASE("Hemisphere conductance: readings A/B/C, FE table, Holm limit and positive floor", "[electrical][conductance]") {
   const double r = 20e-6;
   const double kpr = kKappa * kPiT * r;
   // Linear readings at a/r = 0.5 against K = kappa pi r (c1 a/r + c0); 1e-14 relative.
@@ -136,8 +146,7 @@ TEST_CASE("Hemisphere conductance: readings A/B/C, FE table, Holm limit and posi
     CHECK(relative_error(k, 0.01 * 4.0 * kKappa * x * r) < 1e-14);
   }
   // Above the crossing a/r = 0.08/(1.15 - 0.04/pi) = 0.07034 the linear law is untouched.
-  CHECK(relative_error(hemisphere_conductance(HemisphereLaw::reading_a(), kKappa, r, 0.0704 * r),
-                       kpr * (1.15 * 0.0704 - 0.08)) < 1e-13);
+  CHECK(relative_error(hemisphere_conductance(HemisphereLaw::reading_a(), kKappa, r, 0.0704 * r), kpr * (1.15 * 0.0704 - 0.08)) < 1e-13);
   // a = 0: no neck, no conductance, for every form (reading B would otherwise give 0.08 kappa pi r).
   CHECK(hemisphere_conductance(HemisphereLaw::reading_b(), kKappa, r, 0.0) == 0.0);
   CHECK(hemisphere_conductance(HemisphereLaw::fe_table(), kKappa, r, 0.0) == 0.0);
@@ -147,15 +156,13 @@ TEST_CASE("Hemisphere conductance: readings A/B/C, FE table, Holm limit and posi
   const double fk[] = {0.059, 0.113, 0.166, 0.216, 0.316, 0.418, 0.525, 0.642, 0.775, 0.936, 1.149, 1.293, 1.449};
   for (int k = 0; k < 13; ++k) {
     CHECK(relative_error(fe_hemisphere_normalised(fx[k]), fk[k]) < 1e-12);
-    CHECK(relative_error(hemisphere_conductance(HemisphereLaw::fe_table(), kKappa, r, fx[k] * r), kpr * fk[k]) <
-          1e-12);
+    CHECK(relative_error(hemisphere_conductance(HemisphereLaw::fe_table(), kKappa, r, fx[k] * r), kpr * fk[k]) < 1e-12);
   }
   // Midpoint of a segment: linear interpolation (1e-14).
   CHECK(relative_error(fe_hemisphere_normalised(0.35), 0.5 * (0.316 + 0.418)) < 1e-14);
   // Small a: Holm limit K -> 4 kappa a; the correction is c_b (4x/pi) = 1.58 x relative, so at
   // x = 1e-6 the ratio is 1 within 2e-6.
-  CHECK(relative_error(hemisphere_conductance(HemisphereLaw::fe_table(), kKappa, r, 1e-6 * r),
-                       4.0 * kKappa * 1e-6 * r) < 2e-6);
+  CHECK(relative_error(hemisphere_conductance(HemisphereLaw::fe_table(), kKappa, r, 1e-6 * r), 4.0 * kKappa * 1e-6 * r) < 2e-6);
   // Continuity at 0.05 from below (1e-9 relative over a step of 1e-12).
   CHECK(relative_error(fe_hemisphere_normalised(0.05 - 1e-12), 0.059) < 1e-9);
   // x > 1 is clamped at x = 1, the last segment extended: 1.449 + 0.01 (1.449 - 1.293)/0.04.
@@ -164,8 +171,7 @@ TEST_CASE("Hemisphere conductance: readings A/B/C, FE table, Holm limit and posi
   CHECK(relative_error(fe_hemisphere_normalised(1.3), k1) < 1e-12);
 
   // Every form: K > 0 and non-decreasing in a on a fine grid of a/r in (0, 1] (exact comparisons).
-  for (const auto& law : {HemisphereLaw::reading_a(), HemisphereLaw::reading_b(), HemisphereLaw::reading_c(),
-                          HemisphereLaw::fe_table()}) {
+  for (const auto& law : {HemisphereLaw::reading_a(), HemisphereLaw::reading_b(), HemisphereLaw::reading_c(), HemisphereLaw::fe_table()}) {
     double prev = 0.0;
     for (int k = 1; k <= 2000; ++k) {
       const double kk = hemisphere_conductance(law, kKappa, r, k / 2000.0 * r);
@@ -184,8 +190,7 @@ TEST_CASE("Grain-boundary layer (Eq. 26) and the sintered-neck branch (Eqs. 17-1
   const double a = 4e-6, eps = 0.16, delta = 0.23e-6;
   // K_c = eps kappa pi a^2 / delta; the seed's specific conductance eps kappa/delta = 6.82e12 S/m^2
   // (sintering-electrical.md §2.7, 3 digits: 1e-3).
-  CHECK(relative_error(grain_boundary_layer_conductance(kKappa, a, eps, delta), eps * kKappa * kPiT * a * a / delta) <
-        1e-14);
+  CHECK(relative_error(grain_boundary_layer_conductance(kKappa, a, eps, delta), eps * kKappa * kPiT * a * a / delta) < 1e-14);
   CHECK(relative_error(grain_boundary_layer_conductance(kKappa, 1.0 / std::sqrt(kPiT), eps, delta), 6.82e12) < 1e-3);
   CHECK_THROWS_AS(grain_boundary_layer_conductance(kKappa, a, 0.0, delta), ConfigError);
   CHECK_THROWS_AS(grain_boundary_layer_conductance(kKappa, a, eps, 0.0), ConfigError);
@@ -204,8 +209,8 @@ TEST_CASE("Grain-boundary layer (Eq. 26) and the sintered-neck branch (Eqs. 17-1
   // Limit K_c -> inf: a very thin layer approaches "none" with relative deviation none/K_c.
   const double thin = 1e-18;
   const double kc_thin = eps * kKappa * kPiT * a * a / thin;
-  CHECK(relative_error(sintered_neck_conductance(law, GrainBoundaryLayer::layer(eps, thin), kKappa, kKappa, ri, rj, a),
-                       none) < 1.01 * none / kc_thin + 1e-15);
+  CHECK(relative_error(sintered_neck_conductance(law, GrainBoundaryLayer::layer(eps, thin), kKappa, kKappa, ri, rj, a), none) <
+        1.01 * none / kc_thin + 1e-15);
   // Two materials: the layer uses the harmonic mean 2 k1 k2/(k1 + k2) (1e-13).
   const double k1 = 5.8e7, k2 = 1.4e6, kh = 2.0 * k1 * k2 / (k1 + k2);
   const double hi = k1 * kPiT * ri * (1.15 * a / ri - 0.08);
@@ -217,8 +222,7 @@ TEST_CASE("Grain-boundary layer (Eq. 26) and the sintered-neck branch (Eqs. 17-1
   CHECK(sintered_neck_conductance(law, GrainBoundaryLayer::none(), kKappa, kKappa, ri, rj, 0.0) == 0.0);
 }
 
-TEST_CASE("Coble and constant-volume necks: the note's table, the unequal case, the Coble limit",
-          "[electrical][conductance]") {
+TEST_CASE("Coble and constant-volume necks: the note's table, the unequal case, the Coble limit", "[electrical][conductance]") {
   // Coble a = sqrt(2 r* h), r* = 2 r_i r_j/(r_i + r_j); closed forms to 1e-14.
   const double r = 1e-5;
   CHECK(relative_error(coble_neck_radius(r, r, 0.1 * r), std::sqrt(0.2) * r) < 1e-14);
@@ -287,9 +291,17 @@ TEST_CASE("Grain-boundary-fraction correction (Eqs. 22-25)", "[electrical][condu
   // Node 11: a wall (r = +inf) with a neck 0.5 to particle 10: alpha = 1.
   std::vector<Index> ea, eb;
   std::vector<double> neck;
-  for (Index j = 1; j <= 8; ++j) { ea.push_back(0); eb.push_back(j); neck.push_back(0.9); }
-  ea.push_back(9); eb.push_back(10); neck.push_back(0.3);
-  ea.push_back(10); eb.push_back(11); neck.push_back(0.5);
+  for (Index j = 1; j <= 8; ++j) {
+    ea.push_back(0);
+    eb.push_back(j);
+    neck.push_back(0.9);
+  }
+  ea.push_back(9);
+  eb.push_back(10);
+  neck.push_back(0.3);
+  ea.push_back(10);
+  eb.push_back(11);
+  neck.push_back(0.5);
   std::vector<double> radius(12, 1.0);
   radius[10] = 2.0;
   radius[11] = kInf;
@@ -323,7 +335,8 @@ TEST_CASE("Grain-boundary-fraction correction (Eqs. 22-25)", "[electrical][condu
   for (int k = 0; k < 700; ++k) {
     const int u = pick(rng), v = pick(rng);
     if (u == v) continue;
-    ra.push_back(u); rb.push_back(v);
+    ra.push_back(u);
+    rb.push_back(v);
     rn.push_back(un(rng) * 1.2 * std::min(rad[static_cast<std::size_t>(u)], rad[static_cast<std::size_t>(v)]));
   }
   const auto al = grain_boundary_fraction_factors(ra, rb, rn, rad);
@@ -342,7 +355,8 @@ TEST_CASE("Grain-boundary-fraction correction (Eqs. 22-25)", "[electrical][condu
     }
   }
   for (int i = 0; i < n; ++i) {
-    CHECK(sum[static_cast<std::size_t>(i)] <= 4.0 * kPiT * rad[static_cast<std::size_t>(i)] * rad[static_cast<std::size_t>(i)] * (1.0 + 1e-12));
+    CHECK(sum[static_cast<std::size_t>(i)] <=
+          4.0 * kPiT * rad[static_cast<std::size_t>(i)] * rad[static_cast<std::size_t>(i)] * (1.0 + 1e-12));
     if (al[static_cast<std::size_t>(i)] < 1.0) ++corrected_nodes;
   }
   CHECK(corrected_nodes > 0);  // the test exercises both branches
@@ -442,7 +456,10 @@ TEST_CASE("Transmission surface: lattice of columns gives R = rho l / A", "[elec
   // rho (2r)/(4 r^2); each column is m - 1 branches in series, the n^2 columns are in parallel:
   // R = rho l / A, l = 2 r (m - 1), A = (2 r n)^2. Tolerance 1e-12 relative (m n^2 additions).
   const double rho = 1.6e-7;  // [Ohm m]
-  struct Case { int n, m; double r; };
+  struct Case {
+    int n, m;
+    double r;
+  };
   for (const Case c : {Case{1, 2, 1e-3}, Case{3, 5, 50e-6}, Case{4, 10, 78e-6}, Case{7, 13, 2e-5}}) {
     INFO("n = " << c.n << ", m = " << c.m);
     const Lattice L = cubic_lattice(c.n, c.n, c.m, c.r, Vec3(0.0123, 0.456, -0.0789));
@@ -489,8 +506,7 @@ TEST_CASE("Touching on/off and tunnelling with a cut-off", "[electrical][conduct
   CHECK(tunnelling_conductance(1e-6, g0, xi, cut) == 0.0);
   CHECK(relative_error(tunnelling_conductance(20e-9, g0, xi, kInf), g0 * std::exp(-40.0)) < 1e-14);  // no cut-off
   // Ratio of two gaps: exp(-2 (g2 - g1)/xi) (1e-13).
-  CHECK(relative_error(tunnelling_conductance(3e-9, g0, xi, cut) / tunnelling_conductance(1e-9, g0, xi, cut),
-                       std::exp(-4.0)) < 1e-13);
+  CHECK(relative_error(tunnelling_conductance(3e-9, g0, xi, cut) / tunnelling_conductance(1e-9, g0, xi, cut), std::exp(-4.0)) < 1e-13);
   CHECK_THROWS_AS(tunnelling_conductance(1e-9, g0, 0.0, cut), ConfigError);
   CHECK_THROWS_AS(tunnelling_conductance(1e-9, g0, xi, -1.0), ConfigError);
 }
@@ -501,8 +517,7 @@ TEST_CASE("Bulk conductivity kappa(T): linear resistivity and tabulated", "[elec
   const LinearResistivityLaw cu{5.8e7, 3.9e-3, 293.15};
   CHECK(conductivity(cu, 293.15) == 5.8e7);
   CHECK(relative_error(conductivity(cu, 393.15), 5.8e7 / (1.0 + 0.39)) < 1e-14);
-  const double r1 = 1.0 / conductivity(cu, 300.0), r2 = 1.0 / conductivity(cu, 500.0),
-               r3 = 1.0 / conductivity(cu, 700.0);
+  const double r1 = 1.0 / conductivity(cu, 300.0), r2 = 1.0 / conductivity(cu, 500.0), r3 = 1.0 / conductivity(cu, 700.0);
   CHECK(relative_error(r3 - r2, r2 - r1) < 1e-12);
   CHECK(relative_error((r2 - r1) / 200.0, 3.9e-3 / 5.8e7) < 1e-12);
   // beta = 0: constant.

@@ -99,15 +99,18 @@ Impact impact(const ContactModel& law, bool wall, double v, double dt, double t_
   test::StepObserver obs([&](const State& st, Step) {
     const auto& p = st.particles;
     t.push_back(st.time);
-    if (wall) ov.push_back(p.radius[0] - p.position[0].z());
-    else ov.push_back(p.radius[0] + p.radius[1] - (p.position[0] - p.position[1]).norm());
+    if (wall)
+      ov.push_back(p.radius[0] - p.position[0].z());
+    else
+      ov.push_back(p.radius[0] + p.radius[1] - (p.position[0] - p.position[1]).norm());
   });
   Simulation sim(s, law);
   const Step steps = static_cast<Step>(std::ceil((1.5 * t_est + 40.0 * dt) / dt)) + 40;
   sim.run_stage(test::stage(dt, steps), obs);
   const auto& p = s.particles;
   double vrel_after;
-  if (wall) vrel_after = p.velocity[0].z();
+  if (wall)
+    vrel_after = p.velocity[0].z();
   else {
     const Index a = test::local_index(p, 0), b = test::local_index(p, 1);
     vrel_after = -(p.velocity[a] - p.velocity[b]).x();
@@ -151,7 +154,8 @@ TEST_CASE("Hertz and Mindlin stiffnesses match finite differences of the forces"
     // Normal: central difference with h = 1e-4 delta; truncation ~ h^2 F'''/6 ~ 1e-9 relative.
     const double h = 1e-4 * delta;
     const double fd = (static_normal_force(law, geometry(r_eff, 1e-6, delta + h)) -
-                       static_normal_force(law, geometry(r_eff, 1e-6, delta - h))) / (2.0 * h);
+                       static_normal_force(law, geometry(r_eff, 1e-6, delta - h))) /
+                      (2.0 * h);
     CHECK(relative_error(law.normal_stiffness(g), fd) < 1e-7);
     CHECK(relative_error(kernel::hertz_stiffness(es, r_eff, delta), 2.0 * es * std::sqrt(r_eff * delta)) < 1e-12);
     // Tangential: a tangential displacement xi = vt dt from zero history (sticking, mu large)
@@ -179,8 +183,7 @@ struct PairScene {
   template <class Law>
   void run(const ContactModelT<Law>& law) {
     p.add(Vec3(0.1e-3, -0.2e-3, 0.05e-3), 1.0e-3, 1.0e-5);
-    p.add(Vec3(0.1e-3, -0.2e-3, 0.05e-3) + Vec3(0.6, -0.3, 1.1).normalized() * (1.0e-3 + 0.7e-3 - 2e-6), 0.7e-3,
-          0.4e-5);
+    p.add(Vec3(0.1e-3, -0.2e-3, 0.05e-3) + Vec3(0.6, -0.3, 1.1).normalized() * (1.0e-3 + 0.7e-3 - 2e-6), 0.7e-3, 0.4e-5);
     p.velocity[0] = Vec3(0.03, 0.11, -0.02);
     p.velocity[1] = Vec3(-0.05, 0.02, 0.07);
     p.omega[0] = Vec3(40.0, -15.0, 25.0);
@@ -196,8 +199,8 @@ struct PairScene {
 
 }  // namespace
 
-TEMPLATE_TEST_CASE("Pair and wall forces: action = reaction, zero net moment", "[contact_laws]", HertzMindlin,
-                   LinearSpringDashpot, LammpsHertzTsuji) {
+TEMPLATE_TEST_CASE("Pair and wall forces: action = reaction, zero net moment", "[contact_laws]", HertzMindlin, LinearSpringDashpot,
+                   LammpsHertzTsuji) {
   typename TestType::Params params;
   params.friction = 0.3;
   const ContactModelT<TestType> law(params);
@@ -244,8 +247,8 @@ TEMPLATE_TEST_CASE("Pair and wall forces: action = reaction, zero net moment", "
   CHECK(mw.norm() <= 1e-12 * Fw * q.radius[0]);
 }
 
-TEMPLATE_TEST_CASE("Zero or negative overlap gives zero force and clears the history", "[contact_laws]", HertzMindlin,
-                   LinearSpringDashpot, LammpsHertzTsuji) {
+TEMPLATE_TEST_CASE("Zero or negative overlap gives zero force and clears the history", "[contact_laws]", HertzMindlin, LinearSpringDashpot,
+                   LammpsHertzTsuji) {
   typename TestType::Params params;
   const ContactModelT<TestType> law(params);
   for (double gap : {0.0, 1e-9, 1e-4}) {  // exactly touching, a tiny gap, a clear gap
@@ -281,13 +284,12 @@ TEST_CASE("Head-on impact of equal spheres, Hertz e = 1: restitution and duratio
     // Tolerances (issue): restitution 1 within 1 %, duration within 1 % of the Hertz closed form.
     CHECK(relative_error(im.restitution, 1.0) < 0.01);
     CHECK(relative_error(im.duration, tc) < 0.01);
-    WARN("pair Hertz e=1 v=" << v << ": restitution error " << relative_error(im.restitution, 1.0)
-                              << ", duration error " << relative_error(im.duration, tc));
+    WARN("pair Hertz e=1 v=" << v << ": restitution error " << relative_error(im.restitution, 1.0) << ", duration error "
+                             << relative_error(im.duration, tc));
   }
 }
 
-TEST_CASE("Head-on impact of equal spheres, Hertz-Mindlin e = 0.5, 0.8: calibrated restitution",
-          "[contact_laws][impact]") {
+TEST_CASE("Head-on impact of equal spheres, Hertz-Mindlin e = 0.5, 0.8: calibrated restitution", "[contact_laws][impact]") {
   const double m = test::sphere_mass(kR, kRho), m_eff = 0.5 * m, r_eff = 0.5 * kR;
   for (double e : {0.5, 0.8}) {
     const ContactModelT<HertzMindlin> law(hm(e, 0.0));
@@ -303,8 +305,7 @@ TEST_CASE("Head-on impact of equal spheres, Hertz-Mindlin e = 0.5, 0.8: calibrat
   }
 }
 
-TEST_CASE("Head-on impact of equal spheres, linear spring-dashpot: restitution and duration",
-          "[contact_laws][impact]") {
+TEST_CASE("Head-on impact of equal spheres, linear spring-dashpot: restitution and duration", "[contact_laws][impact]") {
   const double m = test::sphere_mass(kR, kRho), m_eff = 0.5 * m;
   const double k = 2e3;  // [N/m]
   for (double e : {0.5, 0.9}) {
@@ -320,8 +321,8 @@ TEST_CASE("Head-on impact of equal spheres, linear spring-dashpot: restitution a
       // Tolerances (issue): restitution within 1 %, duration pi / sqrt(k/m* - (gamma/2m*)^2) within 1 %.
       CHECK(relative_error(im.restitution, e) < 0.01);
       CHECK(relative_error(im.duration, tc) < 0.01);
-      WARN("pair LSD e=" << e << " v=" << v << ": restitution error " << relative_error(im.restitution, e)
-                         << ", duration error " << relative_error(im.duration, tc));
+      WARN("pair LSD e=" << e << " v=" << v << ": restitution error " << relative_error(im.restitution, e) << ", duration error "
+                         << relative_error(im.duration, tc));
     }
   }
 }
@@ -338,8 +339,8 @@ TEST_CASE("Sphere-wall bounce: restitution and duration with R* = r, m* = m", "[
       // Tolerances (issue): restitution within 1 %; elastic duration within 1 % of the closed form.
       CHECK(relative_error(im.restitution, e) < 0.01);
       if (e == 1.0) CHECK(relative_error(im.duration, tc) < 0.01);
-      WARN("wall Hertz e=" << e << ": restitution error " << relative_error(im.restitution, e)
-                           << ", duration error vs elastic " << relative_error(im.duration, tc));
+      WARN("wall Hertz e=" << e << ": restitution error " << relative_error(im.restitution, e) << ", duration error vs elastic "
+                           << relative_error(im.duration, tc));
     }
   }
   SECTION("linear spring-dashpot, e = 0.7") {

@@ -86,7 +86,10 @@ TEST_CASE("cpc_fillers: contact algorithm on a random configuration", "[cpc]") {
   cpc::remove_overlaps(y, r, 0.4, 1e-3, 100000);
   cpc::remove_overlaps(z, r, 0.4, 1e-3, 100000);
   bool same = true, differ = false;
-  for (std::size_t i = 0; i < n; ++i) { same = same && (x[i] == y[i]); differ = differ || !(x[i] == z[i]); }
+  for (std::size_t i = 0; i < n; ++i) {
+    same = same && (x[i] == y[i]);
+    differ = differ || !(x[i] == z[i]);
+  }
   CHECK(same);
   CHECK(differ);
 }

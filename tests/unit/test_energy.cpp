@@ -39,8 +39,7 @@ Energy energy(const State& s, double es) {
     e.kinetic_rotational += 0.5 * p.inertia[i] * p.omega[i].squaredNorm();
     for (std::size_t j = i + 1; j < p.size(); ++j) {
       const double d = p.radius[i] + p.radius[j] - (p.position[i] - p.position[j]).norm();
-      if (d > 0.0)
-        e.elastic += 8.0 / 15.0 * es * std::sqrt(p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j])) * std::pow(d, 2.5);
+      if (d > 0.0) e.elastic += 8.0 / 15.0 * es * std::sqrt(p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j])) * std::pow(d, 2.5);
     }
     for (const Wall& w : s.walls) {
       Vec3 n;
@@ -126,9 +125,8 @@ double energy_drift(Step steps) {
   CHECK(samples_in_contact > steps / 10 / 2);
   // Frictionless contacts exert no torque: the rotational energy stays exactly 0.
   CHECK(rot == 0.0);
-  WARN("energy: " << steps << " steps, dt = " << dt << " s (Rayleigh " << dt_rayleigh << " s, dense " << dt_dense
-                  << " s; " << secs << " s wall), max |dE|/E0 = " << drift
-                  << ", final dE/E0 = " << final_dev << ", max elastic/E0 = " << emax_elastic
+  WARN("energy: " << steps << " steps, dt = " << dt << " s (Rayleigh " << dt_rayleigh << " s, dense " << dt_dense << " s; " << secs
+                  << " s wall), max |dE|/E0 = " << drift << ", final dE/E0 = " << final_dev << ", max elastic/E0 = " << emax_elastic
                   << ", rebuilds = " << s.rebuilds);
   return drift;
 }

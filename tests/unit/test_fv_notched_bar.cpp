@@ -10,7 +10,11 @@
 using namespace sparkdem;
 
 namespace {
-fv::NotchedBar plain() { fv::NotchedBar g; g.notched = false; return g; }
+fv::NotchedBar plain() {
+  fv::NotchedBar g;
+  g.notched = false;
+  return g;
+}
 /// Planes at positions no grid line passes through (the DEM's measured electrode heights).
 fv::Loading loading() {
   fv::Loading ld;
@@ -18,7 +22,12 @@ fv::Loading loading() {
   ld.z_hi = 6.9371e-3;
   return ld;
 }
-fv::Numerics grid(double h, int steps) { fv::Numerics n; n.h = h; n.steps = steps; return n; }
+fv::Numerics grid(double h, int steps) {
+  fv::Numerics n;
+  n.h = h;
+  n.steps = steps;
+  return n;
+}
 }  // namespace
 
 TEST_CASE("fv plain bar: R, Joule power and the uniform rise match the closed forms", "[fv][unit]") {

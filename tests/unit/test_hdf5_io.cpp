@@ -38,8 +38,7 @@ struct TempDir {
   TempDir() {
     static std::atomic<int> counter{0};
     const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
-    path = fs::temp_directory_path() /
-           ("sparkdem_h5_" + std::to_string(stamp) + "_" + std::to_string(counter++));
+    path = fs::temp_directory_path() / ("sparkdem_h5_" + std::to_string(stamp) + "_" + std::to_string(counter++));
     fs::create_directories(path);
   }
   ~TempDir() {
@@ -62,10 +61,18 @@ double from_bits(std::uint64_t b) {
 
 /// Values whose exact bits matter: signed zero, NaN with payload, infinities, subnormals.
 std::vector<double> tricky_doubles() {
-  return {0.0, -0.0, 1.0 / 3.0, -2.5e-300, std::numeric_limits<double>::denorm_min(),
-          std::numeric_limits<double>::max(), std::numeric_limits<double>::infinity(),
-          -std::numeric_limits<double>::infinity(), from_bits(0x7ff8dead0000beefULL), 0.1 + 0.2,
-          std::nextafter(1.0, 2.0), -1e-17};
+  return {0.0,
+          -0.0,
+          1.0 / 3.0,
+          -2.5e-300,
+          std::numeric_limits<double>::denorm_min(),
+          std::numeric_limits<double>::max(),
+          std::numeric_limits<double>::infinity(),
+          -std::numeric_limits<double>::infinity(),
+          from_bits(0x7ff8dead0000beefULL),
+          0.1 + 0.2,
+          std::nextafter(1.0, 2.0),
+          -1e-17};
 }
 
 bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
@@ -108,7 +115,7 @@ TEST_CASE("H5File writes and reads datasets, attributes and groups", "[io][hdf5]
     f.set_attribute("/g", "n", std::int64_t{42});
     f.set_attribute("/g", "n", std::int64_t{43});  // replaces
     f.set_attribute("/", "empty", std::string());
-    CHECK_THROWS_AS(f.write("/g/d1", std::vector<double>{1}), SetupError);        // exists
+    CHECK_THROWS_AS(f.write("/g/d1", std::vector<double>{1}), SetupError);          // exists
     CHECK_THROWS_AS(f.write("/bad", std::vector<double>{1, 2, 3}, 2), SetupError);  // not a multiple
     CHECK_THROWS_AS(f.set_attribute("/nope", "x", 1.0), SetupError);
     f.close();
@@ -143,7 +150,7 @@ TEST_CASE("H5File writes and reads datasets, attributes and groups", "[io][hdf5]
   CHECK_THROWS_AS(f.attribute_double("/g", "y"), SetupError);
   CHECK_THROWS_AS(f.read_doubles("/ints"), SetupError);  // wrong type class
   CHECK_THROWS_AS(f.read_int64s("/g/d1"), SetupError);
-  CHECK_THROWS_AS(f.read_double("/g/d1"), SetupError);   // two values, not one
+  CHECK_THROWS_AS(f.read_double("/g/d1"), SetupError);  // two values, not one
   CHECK_THROWS_AS(f.children("/missing"), SetupError);
 }
 
@@ -153,9 +160,7 @@ TEST_CASE("H5File errors name the file and the object", "[io][hdf5]") {
   try {
     (void)H5File::open_read(missing);
     FAIL("expected SetupError");
-  } catch (const SetupError& e) {
-    CHECK_THAT(e.what(), Catch::Contains(missing.string()));
-  }
+  } catch (const SetupError& e) { CHECK_THAT(e.what(), Catch::Contains(missing.string())); }
   const fs::path text = dir.path / "not_hdf5.h5";
   std::ofstream(text) << "not an HDF5 file\n";
   CHECK_THROWS_AS(H5File::open_read(text), SetupError);
@@ -167,9 +172,7 @@ TEST_CASE("H5File errors name the file and the object", "[io][hdf5]") {
   try {
     (void)f.read_doubles("/group/missing");
     FAIL("expected SetupError");
-  } catch (const SetupError& e) {
-    CHECK_THAT(e.what(), Catch::Contains(file.string()) && Catch::Contains("/group/missing"));
-  }
+  } catch (const SetupError& e) { CHECK_THAT(e.what(), Catch::Contains(file.string()) && Catch::Contains("/group/missing")); }
 }
 
 TEST_CASE("Hdf5Archive round-trips every item bit for bit", "[io][hdf5][restart]") {
@@ -179,8 +182,7 @@ TEST_CASE("Hdf5Archive round-trips every item bit for bit", "[io][hdf5][restart]
   std::vector<double> doubles = tricky_doubles();
   std::vector<double> rows3 = tricky_doubles();  // 12 values = 4 rows of 3
   std::vector<double> no_doubles;
-  std::vector<std::int64_t> ints{std::numeric_limits<std::int64_t>::min(), -1, 0, 1,
-                                 std::numeric_limits<std::int64_t>::max(), 7};
+  std::vector<std::int64_t> ints{std::numeric_limits<std::int64_t>::min(), -1, 0, 1, std::numeric_limits<std::int64_t>::max(), 7};
   std::vector<std::int64_t> no_ints;
   double scalar = from_bits(0xfff0000000000123ULL);  // a negative NaN with payload
   double zero = -0.0;
@@ -309,9 +311,7 @@ TEST_CASE("Hdf5Archive reading a missing item names the item and the file", "[io
   try {
     in.visit("particles/velocity", v, 3);
     FAIL("expected SetupError");
-  } catch (const SetupError& e) {
-    CHECK_THAT(e.what(), Catch::Contains("particles/velocity") && Catch::Contains(path.string()));
-  }
+  } catch (const SetupError& e) { CHECK_THAT(e.what(), Catch::Contains("particles/velocity") && Catch::Contains(path.string())); }
   double x = 0;
   CHECK_THROWS_AS(in.visit("absent", x), SetupError);
   std::string s;
@@ -414,8 +414,8 @@ TEST_CASE("ResultsWriter writes frame files, results.h5 linking them, time serie
       char file[32];
       std::snprintf(file, sizeof file, "frames/frame_%06d.h5", f);
       // write_frame returns only once the frame file is complete under its final name.
-      CHECK(w.write_frame(10 * f, 1e-3 * f, f < 2 ? "settle" : "shear", particle_fields(f, particles[f]),
-                          contact_frame(f, contacts[f])) == file);
+      CHECK(w.write_frame(10 * f, 1e-3 * f, f < 2 ? "settle" : "shear", particle_fields(f, particles[f]), contact_frame(f, contacts[f])) ==
+            file);
       CHECK(w.frames() == f + 1);
       CHECK(fs::exists(outdir / file));
       CHECK_FALSE(fs::exists(outdir / (std::string(file) + ".tmp")));
@@ -448,8 +448,7 @@ TEST_CASE("ResultsWriter writes frame files, results.h5 linking them, time serie
     CHECK(h5.attribute_string(g, "stage") == (f < 2 ? "settle" : "shear"));
     for (const FrameField& field : particle_fields(f, particles[f])) {
       const std::string p = g + "/particles/" + field.name;
-      CHECK(h5.shape(p) == std::vector<std::size_t>{static_cast<std::size_t>(particles[f]),
-                                                    static_cast<std::size_t>(field.components)});
+      CHECK(h5.shape(p) == std::vector<std::size_t>{static_cast<std::size_t>(particles[f]), static_cast<std::size_t>(field.components)});
       CHECK(same_bits(h5.read_doubles(p), field.data));
       CHECK(h5.attribute_string(p, "unit") == field.unit);
     }
@@ -458,8 +457,7 @@ TEST_CASE("ResultsWriter writes frame files, results.h5 linking them, time serie
     CHECK(h5.read_int64s(g + "/contacts/pairs") == c.pairs);
     for (const FrameField& field : c.fields) {
       const std::string p = g + "/contacts/" + field.name;
-      CHECK(h5.shape(p) == std::vector<std::size_t>{static_cast<std::size_t>(contacts[f]),
-                                                    static_cast<std::size_t>(field.components)});
+      CHECK(h5.shape(p) == std::vector<std::size_t>{static_cast<std::size_t>(contacts[f]), static_cast<std::size_t>(field.components)});
       CHECK(same_bits(h5.read_doubles(p), field.data));
       CHECK(h5.attribute_string(p, "unit") == field.unit);
     }
@@ -485,8 +483,7 @@ TEST_CASE("ResultsWriter writes frame files, results.h5 linking them, time serie
     std::snprintf(name, sizeof name, "%06d", f);
     const std::string g = std::string("frames/frame_") + name + ".h5:/particles/";
     CHECK_THAT(xdmf, Catch::Contains("<Geometry GeometryType=\"XYZ\">") && Catch::Contains(g + "position<"));
-    for (const char* field : {"radius", "velocity", "stress", "orientation"})
-      CHECK_THAT(xdmf, Catch::Contains(g + field + "<"));
+    for (const char* field : {"radius", "velocity", "stress", "orientation"}) CHECK_THAT(xdmf, Catch::Contains(g + field + "<"));
   }
   CHECK_THAT(xdmf, Catch::Contains("<Attribute Name=\"radius\" AttributeType=\"Scalar\" Center=\"Node\">"));
   CHECK_THAT(xdmf, Catch::Contains("<Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\">"));
@@ -523,8 +520,7 @@ TEST_CASE("ResultsWriter not finalized keeps its complete frames and leaves no t
   CHECK_FALSE(fs::exists(dir.path / "results.xdmf"));
   CHECK_FALSE(fs::exists(dir.path / "timeseries.csv"));
   std::vector<std::string> names;
-  for (const auto& entry : fs::recursive_directory_iterator(dir.path))
-    names.push_back(fs::relative(entry.path(), dir.path).string());
+  for (const auto& entry : fs::recursive_directory_iterator(dir.path)) names.push_back(fs::relative(entry.path(), dir.path).string());
   std::sort(names.begin(), names.end());
   CHECK(names == std::vector<std::string>{"frames", "frames/frame_000000.h5", "frames/frame_000001.h5"});
   // The frames are complete: every dataset with its data.
@@ -537,8 +533,7 @@ TEST_CASE("ResultsWriter not finalized keeps its complete frames and leaves no t
   CHECK(same_bits(f1.read_doubles("/contacts/force"), contact_frame(1, 3).fields[0].data));
 }
 
-TEST_CASE("ResultsWriter::write_index publishes the frames so far, and a new writer takes the directory over",
-          "[io][hdf5][results]") {
+TEST_CASE("ResultsWriter::write_index publishes the frames so far, and a new writer takes the directory over", "[io][hdf5][results]") {
   TempDir dir;
   {
     ResultsWriter w(dir.path);
@@ -656,8 +651,8 @@ TEST_CASE("results.xdmf times: strictly increasing, at least 1e-15 s apart, true
   CHECK(near(listed[5], 2e-3 + 2 * gap));  // 1e-16 s after a frame: pushed to a gap after the listed one
   CHECK(listed[6] == 3e-3);
   CHECK(listed[7] == big);
-  CHECK(listed[8] == up);                              // 1e4 + 1e-15 rounds to 1e4: one ulp instead
-  CHECK(listed[9] == std::nextafter(up, 2 * big));     // its true time `up` is taken: one ulp more
+  CHECK(listed[8] == up);                           // 1e4 + 1e-15 rounds to 1e4: one ulp instead
+  CHECK(listed[9] == std::nextafter(up, 2 * big));  // its true time `up` is taken: one ulp more
   for (std::size_t k = 1; k < listed.size(); ++k) CHECK(listed[k] - listed[k - 1] >= gap - 1e-18);
   CHECK(ResultsWriter::listed_times({}).empty());
 }

@@ -32,7 +32,11 @@ struct Net {
   std::size_t nodes = 0;
   std::vector<Index> a, b;
   std::vector<double> g;
-  void add(Index i, Index j, double gij) { a.push_back(i); b.push_back(j); g.push_back(gij); }
+  void add(Index i, Index j, double gij) {
+    a.push_back(i);
+    b.push_back(j);
+    g.push_back(gij);
+  }
   LaplacianProblem problem(std::vector<DirichletGroup> d) const {
     LaplacianProblem p;
     p.nodes = nodes;
@@ -76,7 +80,8 @@ Net random_graph(std::size_t n, std::size_t extra, std::uint64_t seed) {
   auto gen = [&] { return std::pow(10.0, -2.0 + 4.0 * u(rng)); };
   Net net;
   net.nodes = n;
-  for (std::size_t v = 1; v < n; ++v) net.add(static_cast<Index>(std::uniform_int_distribution<std::size_t>(0, v - 1)(rng)), static_cast<Index>(v), gen());
+  for (std::size_t v = 1; v < n; ++v)
+    net.add(static_cast<Index>(std::uniform_int_distribution<std::size_t>(0, v - 1)(rng)), static_cast<Index>(v), gen());
   for (std::size_t k = 0; k < extra; ++k) {
     const auto i = static_cast<Index>(std::uniform_int_distribution<std::size_t>(0, n - 1)(rng));
     const auto j = static_cast<Index>(std::uniform_int_distribution<std::size_t>(0, n - 1)(rng));
@@ -86,8 +91,8 @@ Net random_graph(std::size_t n, std::size_t extra, std::uint64_t seed) {
 }
 
 // The pseudo-transient method needs a capacitance per node: tests/unit/test_laplacian_solvers.cpp.
-const LaplacianMethod kMethods[] = {LaplacianMethod::Direct, LaplacianMethod::CgIncompleteCholesky,
-                                    LaplacianMethod::CgDiagonal, LaplacianMethod::Amg};
+const LaplacianMethod kMethods[] = {LaplacianMethod::Direct, LaplacianMethod::CgIncompleteCholesky, LaplacianMethod::CgDiagonal,
+                                    LaplacianMethod::Amg};
 
 LaplacianOptions with(LaplacianMethod m, double tol = 1e-13) {
   LaplacianOptions o;
@@ -99,7 +104,10 @@ LaplacianOptions with(LaplacianMethod m, double tol = 1e-13) {
 /// Net flux leaving each node through its edges.
 std::vector<double> node_outflow(const Net& net, const std::vector<double>& flux) {
   std::vector<double> out(net.nodes, 0.0);
-  for (std::size_t e = 0; e < net.a.size(); ++e) { out[net.a[e]] += flux[e]; out[net.b[e]] -= flux[e]; }
+  for (std::size_t e = 0; e < net.a.size(); ++e) {
+    out[net.a[e]] += flux[e];
+    out[net.b[e]] -= flux[e];
+  }
   return out;
 }
 
@@ -143,8 +151,11 @@ TEST_CASE("Laplacian: two parallel paths add their conductances", "[graph][lapla
   const double g1 = 2.5, g2 = 0.7, V = 1.5;
   Net net;
   net.nodes = 5;
-  net.add(0, 2, g1); net.add(2, 1, g1);
-  net.add(0, 3, g2); net.add(3, 4, g2); net.add(4, 1, g2);
+  net.add(0, 2, g1);
+  net.add(2, 1, g1);
+  net.add(0, 3, g2);
+  net.add(3, 4, g2);
+  net.add(4, 1, g2);
   const double IA = V / (2.0 / g1), IB = V / (3.0 / g2);
   for (LaplacianMethod m : kMethods) {
     LaplacianSolver solver(with(m));
@@ -176,7 +187,10 @@ TEST_CASE("Laplacian: L^3 cubic lattice between opposite faces has R = (L-1)/L^2
       for (std::size_t e = 0; e < net.a.size(); ++e) P += res.flux[e] * res.flux[e] / net.g[e];
       CHECK(relative_error(P, V * I) < 1e-12);
       // Maximum principle.
-      for (double v : res.value) { CHECK(v >= -1e-12 * V); CHECK(v <= V * (1.0 + 1e-12)); }
+      for (double v : res.value) {
+        CHECK(v >= -1e-12 * V);
+        CHECK(v <= V * (1.0 + 1e-12));
+      }
     }
   }
 }
@@ -207,8 +221,8 @@ TEST_CASE("Laplacian: Kirchhoff's current law at every free node, global balance
   // Random graph, random injected currents, three electrodes: at every free node the branch
   // currents leaving it sum to the injected current; all sources and electrode currents balance.
   Net net = random_graph(400, 800, 23);
-  net.add(5, 5, 3.0);   // a self-loop: ignored
-  net.add(6, 9, 0.0);   // a zero-conductance edge: ignored
+  net.add(5, 5, 3.0);  // a self-loop: ignored
+  net.add(6, 9, 0.0);  // a zero-conductance edge: ignored
   std::mt19937_64 rng(3);
   std::normal_distribution<double> nd(0.0, 1.0);
   std::vector<double> q(net.nodes);
@@ -237,10 +251,16 @@ TEST_CASE("Laplacian: Kirchhoff's current law at every free node, global balance
     // Conservation: what the electrodes supply plus what is injected at free nodes sums to zero
     // (a source at a Dirichlet node is ignored: the prescribed value wins).
     double sum = 0.0, scale = 0.0;
-    for (double f : res.dirichlet_flux) { sum += f; scale += std::abs(f); }
+    for (double f : res.dirichlet_flux) {
+      sum += f;
+      scale += std::abs(f);
+    }
     for (Index v : {0, 1, 2, 10, 11, 399}) CHECK(std::abs(res.value[v] - (v < 3 ? 1.0 : v < 12 ? -0.5 : 0.25)) == 0.0);
     for (std::size_t v = 3; v < net.nodes; ++v)
-      if (v != 10 && v != 11 && v != 399) { sum += q[v]; scale += std::abs(q[v]); }
+      if (v != 10 && v != 11 && v != 399) {
+        sum += q[v];
+        scale += std::abs(q[v]);
+      }
     CHECK(std::abs(sum) < 1e-10 * scale);
     CHECK(res.flux[net.a.size() - 1] == 0.0);  // g = 0 edge
   }
@@ -252,10 +272,15 @@ TEST_CASE("Laplacian: floating clusters are excluded and NaN, never singular", "
   // by a g = 0 edge only (floating).
   Net net;
   net.nodes = 11;
-  net.add(0, 2, 1.0); net.add(2, 3, 1.0); net.add(3, 1, 1.0);
-  net.add(4, 5, 2.0); net.add(5, 6, 2.0); net.add(6, 4, 2.0);
+  net.add(0, 2, 1.0);
+  net.add(2, 3, 1.0);
+  net.add(3, 1, 1.0);
+  net.add(4, 5, 2.0);
+  net.add(5, 6, 2.0);
+  net.add(6, 4, 2.0);
   net.add(0, 8, 4.0);
-  net.add(9, 10, 1.0); net.add(3, 9, 0.0);
+  net.add(9, 10, 1.0);
+  net.add(3, 9, 0.0);
   std::vector<double> q(net.nodes, 0.0);
   q[5] = 7.0;  // a source on a floating node is ignored
   for (LaplacianMethod m : kMethods) {
@@ -265,7 +290,7 @@ TEST_CASE("Laplacian: floating clusters are excluded and NaN, never singular", "
     const auto res = solver.solve(p);
     CHECK(res.floating_nodes == 6);  // 4, 5, 6, 7, 9, 10
     CHECK(res.floating_components == 3);
-    CHECK(res.free_nodes == 3);       // 2, 3, 8
+    CHECK(res.free_nodes == 3);  // 2, 3, 8
     for (Index v : {4, 5, 6, 7, 9, 10}) CHECK(std::isnan(res.value[v]));
     for (std::size_t e : {3u, 4u, 5u, 7u, 8u}) CHECK(res.flux[e] == 0.0);
     CHECK(relative_error(res.dirichlet_flux[0], 1.0) < 1e-12);
@@ -286,10 +311,10 @@ TEST_CASE("Laplacian: ill-posed or malformed problems throw typed errors", "[gra
   net.add(0, 1, 1.0);
   net.add(1, 2, 1.0);
   LaplacianSolver solver;
-  CHECK_THROWS_AS(solver.solve(net.problem({})), SetupError);          // no Dirichlet at all
-  CHECK_THROWS_AS(solver.solve(net.problem({{{}, 1.0}})), SetupError);  // only empty groups
+  CHECK_THROWS_AS(solver.solve(net.problem({})), SetupError);                        // no Dirichlet at all
+  CHECK_THROWS_AS(solver.solve(net.problem({{{}, 1.0}})), SetupError);               // only empty groups
   CHECK_THROWS_AS(solver.solve(net.problem({{{0}, 1.0}, {{0}, 2.0}})), SetupError);  // node in two groups
-  CHECK_THROWS_AS(solver.solve(net.problem({{{3}, 1.0}})), SetupError);  // node out of range
+  CHECK_THROWS_AS(solver.solve(net.problem({{{3}, 1.0}})), SetupError);              // node out of range
   Net bad = net;
   bad.g[1] = -1.0;
   CHECK_THROWS_AS(solver.solve(bad.problem({{{0}, 1.0}})), PhysicsError);
@@ -414,9 +439,9 @@ TEST_CASE("Laplacian: analysis and factorisation are reused while unchanged", "[
 
 TEST_CASE("Laplacian: laplacian_apply and the diagonal equal the assembled matrix", "[graph][laplacian]") {
   Net net = random_graph(300, 700, 41);
-  net.add(4, 4, 2.0);      // self-loop
-  net.add(7, 8, 0.0);      // zero conductance
-  net.add(7, 8, 1.25);     // parallel edges
+  net.add(4, 4, 2.0);   // self-loop
+  net.add(7, 8, 0.0);   // zero conductance
+  net.add(7, 8, 1.25);  // parallel edges
   net.add(8, 7, 0.5);
   std::mt19937_64 rng(2);
   std::normal_distribution<double> nd(0.0, 1.0);

@@ -87,8 +87,7 @@ RandomNetwork random_network(std::size_t n, std::uint64_t seed, double degree = 
 
 /// The reduced matrix A = K_uu on the nodes a solve left free (finite value, not an electrode),
 /// in ascending node order, and that list.
-Eigen::SparseMatrix<double> reduced_matrix(const RandomNetwork& net, const LaplacianResult& ref,
-                                           std::vector<Index>& free_nodes) {
+Eigen::SparseMatrix<double> reduced_matrix(const RandomNetwork& net, const LaplacianResult& ref, std::vector<Index>& free_nodes) {
   std::vector<char> fixed(net.nodes, 0);
   for (Index v : net.high) fixed[v] = 1;
   for (Index v : net.low) fixed[v] = 1;
@@ -171,8 +170,10 @@ TEST_CASE("Laplacian solvers: all five methods agree within their tolerances on 
     const auto res = solver.solve(prob);
     CHECK(res.floating_nodes == ref.floating_nodes);
     CHECK(res.free_nodes == ref.free_nodes);
-    if (c.m != LaplacianMethod::PseudoTransient) CHECK(res.relative_residual <= c.tol * 1.1 + 1e-14);
-    else CHECK(res.pseudo.change_indicator < 1e-12);
+    if (c.m != LaplacianMethod::PseudoTransient)
+      CHECK(res.relative_residual <= c.tol * 1.1 + 1e-14);
+    else
+      CHECK(res.pseudo.change_indicator < 1e-12);
     double err2 = 0.0;
     for (Index v : freev) err2 += std::pow(res.value[v] - ref.value[v], 2);
     const double bound = (res.residual_norm + ref.residual_norm) / lmin;
@@ -187,8 +188,8 @@ TEST_CASE("Laplacian solvers: all five methods agree within their tolerances on 
     CHECK(std::abs(res.dirichlet_flux[0] - ref.dirichlet_flux[0]) <= dI + 1e-12 * ref.dirichlet_flux[0]);
     // And in absolute terms: every method gets the current to 1e-6 here.
     CHECK(relative_error(res.dirichlet_flux[0], ref.dirichlet_flux[0]) < 1e-6);
-    INFO("iterations " << res.iterations << " relative residual " << res.relative_residual << " error "
-                       << std::sqrt(err2) << " bound " << bound << " seconds " << res.solve_seconds);
+    INFO("iterations " << res.iterations << " relative residual " << res.relative_residual << " error " << std::sqrt(err2) << " bound "
+                       << bound << " seconds " << res.solve_seconds);
     CHECK(res.iterations > 0);
   }
 }
@@ -228,9 +229,7 @@ TEST_CASE("Laplacian solvers: pseudo-transient converges at 0.95 of the true lim
   try {
     refuse.solve(prob);
     FAIL("a step above the limit was accepted");
-  } catch (const PhysicsError& e) {
-    CHECK(std::string(e.what()).find("not below the true stability limit") != std::string::npos);
-  }
+  } catch (const PhysicsError& e) { CHECK(std::string(e.what()).find("not below the true stability limit") != std::string::npos); }
   // ... and with allow_unstable it runs, and the divergence is detected and reported (no NaN
   // returned): well before the iteration cap.
   o.pseudo.allow_unstable = true;
@@ -254,8 +253,7 @@ TEST_CASE("Laplacian solvers: pseudo-transient converges at 0.95 of the true lim
   CHECK_THROWS_AS(LaplacianSolver(od).solve(prob), PhysicsError);
 }
 
-TEST_CASE("Laplacian solvers: pseudo-transient stops on its indicator, not on the error",
-          "[graph][laplacian][solvers][pseudo_transient]") {
+TEST_CASE("Laplacian solvers: pseudo-transient stops on its indicator, not on the error", "[graph][laplacian][solvers][pseudo_transient]") {
   // The paper's set-up: Eq. 14 per node, beta = 2e-4, at the cheap Gershgorin step (electrodes at
   // 2 V and 1 V, so no node sits near 0 V). Near convergence the change per iteration is
   // (1 - rho) x the error with rho -> 1, so the iteration stops with an error far above beta:
@@ -277,8 +275,8 @@ TEST_CASE("Laplacian solvers: pseudo-transient stops on its indicator, not on th
   for (std::size_t v = 0; v < net.nodes; ++v)
     if (std::isfinite(ref.value[v])) worst = std::max(worst, std::abs(res.value[v] - ref.value[v]) / ref.value[v]);
   const double err_I = relative_error(res.dirichlet_flux[0], ref.dirichlet_flux[0]);
-  INFO("iterations " << res.iterations << " indicator " << res.pseudo.change_indicator << " worst relative node error "
-                     << worst << " current error " << err_I << " relative residual " << res.relative_residual);
+  INFO("iterations " << res.iterations << " indicator " << res.pseudo.change_indicator << " worst relative node error " << worst
+                     << " current error " << err_I << " relative residual " << res.relative_residual);
   CHECK(worst > 10.0 * res.pseudo.change_indicator);
   CHECK(err_I > 2e-4);
   CHECK(res.relative_residual > 1e-3);
@@ -364,7 +362,8 @@ TEST_CASE("Laplacian solvers: two nodes, the pseudo-transient limit is Eq. 43 ex
   CHECK(std::abs(LaplacianSolver(o).solve(p).value[0] - (V + q / K)) < 1e-9);
 }
 
-TEST_CASE("Laplacian solvers: pseudo-transient input checks, floating clusters, warm start", "[graph][laplacian][solvers][pseudo_transient]") {
+TEST_CASE("Laplacian solvers: pseudo-transient input checks, floating clusters, warm start",
+          "[graph][laplacian][solvers][pseudo_transient]") {
   // Chain 0 - 2 - 3 - 1 between electrodes, floating triangle {4, 5, 6}, isolated 7.
   const std::vector<Index> a{0, 2, 3, 4, 5, 6}, b{2, 3, 1, 5, 6, 4};
   const std::vector<double> g{1.0, 2.0, 1.0, 5.0, 5.0, 5.0};
@@ -474,9 +473,9 @@ TEST_CASE("Effective resistance: only components touching both electrodes are so
     const auto r = effective_resistance(solver, net, high, low, 3.0);
     CHECK(r.spanning);
     CHECK(r.spanning_components == 2);
-    CHECK(r.spanning_nodes == 7);           // 0, 1, 2, 3, 4, 10, 11
-    CHECK(r.single_electrode_nodes == 2);   // 15, 16
-    CHECK(r.floating_nodes == 8);           // 5..9, 12, 13, 14
+    CHECK(r.spanning_nodes == 7);          // 0, 1, 2, 3, 4, 10, 11
+    CHECK(r.single_electrode_nodes == 2);  // 15, 16
+    CHECK(r.floating_nodes == 8);          // 5..9, 12, 13, 14
     CHECK(r.floating_components == 7);
     CHECK(relative_error(r.conductance, G) < 1e-12);
     CHECK(relative_error(r.resistance, 1.0 / G) < 1e-12);
@@ -510,8 +509,8 @@ TEST_CASE("Effective resistance: random network, all methods, the full solve and
   double P = 0.0;
   for (std::size_t e = 0; e < net.a.size(); ++e) P += r.flux[e] * r.flux[e] / net.g[e];
   CHECK(relative_error(P, r.current) < 1e-10);
-  for (LaplacianMethod m : {LaplacianMethod::CgIncompleteCholesky, LaplacianMethod::CgDiagonal, LaplacianMethod::Amg,
-                            LaplacianMethod::PseudoTransient}) {
+  for (LaplacianMethod m :
+       {LaplacianMethod::CgIncompleteCholesky, LaplacianMethod::CgDiagonal, LaplacianMethod::Amg, LaplacianMethod::PseudoTransient}) {
     INFO("method " << laplacian_method_name(m));
     LaplacianOptions o = with(m, 1e-12);
     o.pseudo.indicator = ChangeIndicator::Range;

@@ -92,7 +92,7 @@ TEST_CASE("sphere fully inside or fully outside a region", "[packing_metrics]") 
   // exact counts: 4/3 pi r^3 or 0, no quadrature involved (1e-15 relative)
   CHECK(sphere_volume_in_region(Vec3(0.005, 0.005, 0.005), r, box) == Approx(sphere_volume(r)).epsilon(1e-15));
   CHECK(sphere_volume_in_region(Vec3(0.001, 0.001, 0.001), r, box) == Approx(sphere_volume(r)).epsilon(1e-15));  // touching 3 faces
-  CHECK(sphere_volume_in_region(Vec3(-0.001, 0.005, 0.005), r, box) == Approx(0.0).margin(1e-30));  // touching from outside
+  CHECK(sphere_volume_in_region(Vec3(-0.001, 0.005, 0.005), r, box) == Approx(0.0).margin(1e-30));               // touching from outside
   CHECK(sphere_volume_in_region(Vec3(0.02, 0.02, 0.02), r, box) == Approx(0.0).margin(1e-30));
   CHECK(sphere_volume_in_region(Vec3(0.005, 0.005, 0.005), r, cyl) == Approx(sphere_volume(r)).epsilon(1e-15));
   CHECK(sphere_volume_in_region(Vec3(0.005, 0.008, 0.005), r, cyl) == Approx(sphere_volume(r)).epsilon(1e-15));  // touching wall
@@ -128,10 +128,8 @@ TEST_CASE("quadrature for spheres cut by several box faces", "[packing_metrics]"
   const double r = 1.0;
   const double v = sphere_volume(r);
   // Centre on an edge / at a corner: exactly 1/4 and 1/8 of the sphere (tolerance 1e-12 relative).
-  CHECK(sphere_volume_in_region(Vec3(0, 0, 0.5), r, BoxRegion{Vec3(0, 0, -5), Vec3(5, 5, 5)}) ==
-        Approx(v / 4.0).epsilon(1e-12));
-  CHECK(sphere_volume_in_region(Vec3(0, 0, 0), r, BoxRegion{Vec3(0, 0, 0), Vec3(5, 5, 5)}) ==
-        Approx(v / 8.0).epsilon(1e-12));
+  CHECK(sphere_volume_in_region(Vec3(0, 0, 0.5), r, BoxRegion{Vec3(0, 0, -5), Vec3(5, 5, 5)}) == Approx(v / 4.0).epsilon(1e-12));
+  CHECK(sphere_volume_in_region(Vec3(0, 0, 0), r, BoxRegion{Vec3(0, 0, 0), Vec3(5, 5, 5)}) == Approx(v / 8.0).epsilon(1e-12));
   // Eight octant boxes meeting at an arbitrary point p inside the sphere partition it: the sum of
   // the eight numerically integrated pieces is the whole sphere (1e-12 relative).
   const Vec3 c(0.0, 0.0, 0.0);
@@ -186,7 +184,9 @@ TEST_CASE("sphere cut by the curved wall of a cylinder", "[packing_metrics]") {
   // Off the axis (centre inside and outside the circle; small and large R) against the polar
   // reference with 1e6 angles. Tolerance 1e-9: the midpoint reference converges like m^-1.5 at
   // tangent rays; for these cases it agrees with a 4e6-angle run to < 4e-11.
-  struct Case { double big_r, q; };
+  struct Case {
+    double big_r, q;
+  };
   for (const Case cs : {Case{0.8, 0.5}, Case{3.0, 2.5}, Case{3.0, 3.6}, Case{0.5, 1.2}, Case{0.3, 0.1}}) {
     const Vec3 axis = Vec3(1, 2, 2).normalized();
     const Vec3 perp = Vec3(2, -1, 0).normalized();  // perpendicular to axis
@@ -228,9 +228,9 @@ TEST_CASE("simple-cubic lattice of touching spheres: density pi/6 and coordinati
   // 3 n^2 (n - 1) contacts over n^3 particles: mean 6 (n - 1) / n (exact integer ratio).
   CHECK(all.mean == Approx(6.0 * (n - 1) / n).epsilon(1e-14));
   REQUIRE(all.histogram.size() == 7);
-  CHECK(all.histogram[3] == 8);                        // corners
-  CHECK(all.histogram[4] == 12 * (n - 2));             // edges
-  CHECK(all.histogram[5] == 6 * (n - 2) * (n - 2));    // faces
+  CHECK(all.histogram[3] == 8);                      // corners
+  CHECK(all.histogram[4] == 12 * (n - 2));           // edges
+  CHECK(all.histogram[5] == 6 * (n - 2) * (n - 2));  // faces
   CHECK(all.histogram[6] == (n - 2) * (n - 2) * (n - 2));
   CHECK(all.rattlers == 0);
   // Interior particles only (centres at least one spacing from the lattice boundary).

@@ -119,7 +119,12 @@ TEST_CASE("ptc_matrix: Z, R_eq and the switching strain as contacts open one by 
   const std::vector<Index> high = {0, 4}, low = {3, 6};
   const std::size_t n = 7;
   LaplacianSolver solver;
-  struct Expect { double eps0; bool spanning; std::size_t conducting; double R; };
+  struct Expect {
+    double eps0;
+    bool spanning;
+    std::size_t conducting;
+    double R;
+  };
   const Expect table[] = {
       {0.0, true, 5, 1.0 / (1.0 / 3.0 + 1.0 / 2.0)},
       {0.01, true, 5, 1.0 / (1.0 / 3.0 + 1.0 / 2.0)},  // at eps_b the gap equals the threshold: conducts
@@ -134,8 +139,10 @@ TEST_CASE("ptc_matrix: Z, R_eq and the switching strain as contacts open one by 
     CHECK(sp.spanning == t.spanning);
     CHECK(sp.conducting == t.conducting);
     CHECK(sp.coordination == Approx(2.0 * t.conducting / n).epsilon(1e-15));
-    if (std::isinf(t.R)) CHECK(std::isinf(sp.resistance));
-    else CHECK(test::relative_error(sp.resistance, t.R) < 1e-12);
+    if (std::isinf(t.R))
+      CHECK(std::isinf(sp.resistance));
+    else
+      CHECK(test::relative_error(sp.resistance, t.R) < 1e-12);
   }
   CHECK(ptc::switching_strain(n, c, eb, high, low) == Approx(0.04).epsilon(1e-14));
   // With B's last contact never opening and A's intact forever, the network never switches.

@@ -86,8 +86,8 @@ Sintering::Params law_params() {
 double neck_of(double h) { return 1.43 * std::sqrt(kR * kR - (kR - 0.5 * h) * (kR - 0.5 * h)); }
 double rate(double h) {
   const auto p = law_params();
-  const double d_eff = p.gb_diffusivity_prefactor * std::exp(-p.gb_activation_energy / (8.314462618 * kT)) * p.gb_width *
-                       p.atomic_volume / (1.380649e-23 * kT);
+  const double d_eff = p.gb_diffusivity_prefactor * std::exp(-p.gb_activation_energy / (8.314462618 * kT)) * p.gb_width * p.atomic_volume /
+                       (1.380649e-23 * kT);
   const double a = neck_of(h);
   const double eta = std::numbers::pi * std::pow(a, 4) / (8.0 * d_eff);
   const double fs = std::numbers::pi * p.surface_energy *
@@ -152,8 +152,8 @@ TEST_CASE("Sintering pair: early-stage neck growth follows dh/dt = F_s / eta wit
     CHECK(run[k].a >= run[k - 1].a);  // the neck only grows
     CHECK(run[k].a == Approx(neck_of(run[k].h)).epsilon(1e-12));
   }
-  WARN("sintering pair: h from " << s0.h / kR << " r to " << run.back().h / kR << " r; worst growth error "
-                                 << worst_dh << ", worst rate error " << worst_rate);
+  WARN("sintering pair: h from " << s0.h / kR << " r to " << run.back().h / kR << " r; worst growth error " << worst_dh
+                                 << ", worst rate error " << worst_rate);
   CHECK(run.back().h > 3.0 * s0.h);  // the test covers a neck growing by a factor > sqrt(3)
   CHECK(worst_dh < 0.05);
   CHECK(worst_rate < 0.05);
@@ -199,7 +199,7 @@ TEST_CASE("Sintering neck: persistent beyond contact, bonded when cold", "[sinte
   // Pulled apart to a gap within one step: the neck radius is kept and the pair is still alive;
   // the force is attractive (tension in the bond).
   g.overlap = -0.001 * kR;
-  g.temperature = 300.0;  // cold: elastic bond
+  g.temperature = 300.0;     // cold: elastic bond
   m.vn = 0.011 * kR / 1e-9;  // separating
   const ContactForces f = law(g, m, 1e-9, st.data());
   CHECK(st[Sintering::kNeck] == a0);
@@ -278,8 +278,8 @@ TEST_CASE("Sintering beyond the equilibrium neck: frozen stops the dashpot, cree
       CHECK(st[Sintering::kViscous] == us0);
       CHECK(f.force.dot(g.n) == F0);
     } else {
-      const double eta = kernel::neck_viscosity(a, kernel::gb_effective_diffusivity(p.gb_diffusivity_prefactor, p.gb_activation_energy,
-                                                                                    p.gb_width, p.atomic_volume, kT));
+      const double eta = kernel::neck_viscosity(
+          a, kernel::gb_effective_diffusivity(p.gb_diffusivity_prefactor, p.gb_activation_energy, p.gb_width, p.atomic_volume, kT));
       const double kn = 2.0 * law.params().youngs_modulus / (2 * (1 - p.poisson_ratio * p.poisson_ratio)) *
                         std::sqrt(g.r_eff * (g.overlap - us0));
       const double x = kn * dt / eta, phi = -std::expm1(-x) / x;
@@ -339,7 +339,10 @@ TEST_CASE("Sintering creep stops at full density (grain-boundary fraction)", "[s
   RelativeMotion m;
   m.vt = Vec3::Zero();
   const double F0 = 1e-3, us0 = 0.85 * kR, dt = 1e-4;
-  struct Case { double stop, fraction; bool flows; };
+  struct Case {
+    double stop, fraction;
+    bool flows;
+  };
   for (const Case c : {Case{0.0, 5.0, true}, Case{1.0, 0.99, true}, Case{1.0, 1.0, false}, Case{1.0, 1.7, false}}) {
     p.creep_stop_gb_fraction = c.stop;
     const Sintering law(p);

@@ -47,10 +47,10 @@ bool has_path(const ConfigError& e, const std::string& path) {
 }
 
 // Reference standard normal quantiles (Python statistics.NormalDist().inv_cdf, AS241).
-constexpr double kZ90 = 1.2815515655446008;    // Phi^-1(0.9)
-constexpr double kZ975 = 1.9599639845400536;   // Phi^-1(0.975)
-constexpr double kZ1em10 = -6.361340902404056; // Phi^-1(1e-10)
-constexpr double kZ2m33 = -6.337957754553789;  // Phi^-1(2^-33); 1 - 2^-33 is exact in double
+constexpr double kZ90 = 1.2815515655446008;     // Phi^-1(0.9)
+constexpr double kZ975 = 1.9599639845400536;    // Phi^-1(0.975)
+constexpr double kZ1em10 = -6.361340902404056;  // Phi^-1(1e-10)
+constexpr double kZ2m33 = -6.337957754553789;   // Phi^-1(2^-33); 1 - 2^-33 is exact in double
 
 }  // namespace
 
@@ -194,8 +194,7 @@ TEST_CASE("table with F_0 > 0 puts that fraction at d_0", "[size_distribution]")
   const auto d = draw(dist, n, 5);
   // samples at the point mass are returned as d_0 itself; the continuous part puts ~1e-12 of its
   // mass within 1e-12 relative of d_0
-  const double at_d0 =
-      static_cast<double>(std::count_if(d.begin(), d.end(), [](double x) { return std::abs(x - 10e-6) <= 1e-17; })) / n;
+  const double at_d0 = static_cast<double>(std::count_if(d.begin(), d.end(), [](double x) { return std::abs(x - 10e-6) <= 1e-17; })) / n;
   // binomial SE sqrt(0.25 * 0.75 / n) = 0.00137; 5 SE
   CHECK(at_d0 == Approx(0.25).margin(5.0 * std::sqrt(0.25 * 0.75 / n)));
   CHECK(compare(dist, d).ks_distance < 0.01);  // KS handles the point mass (left limits)
@@ -313,8 +312,8 @@ TEST_CASE("sampling is deterministic for a given engine state", "[size_distribut
   const double u_expected = (static_cast<double>(14514284786278117030ULL >> 11) + 0.5) / 9007199254740992.0;
   CHECK(std::bit_cast<std::uint64_t>(uniform_open01(ref)) == std::bit_cast<std::uint64_t>(u_expected));
 
-  for (const auto& dist : {make_lognormal(20e-6, 0.5), make_uniform(1e-6, 2e-6),
-                           make_table({10e-6, 20e-6, 40e-6}, {0.1, 0.6, 1.0}, SizeBasis::volume)}) {
+  for (const auto& dist :
+       {make_lognormal(20e-6, 0.5), make_uniform(1e-6, 2e-6), make_table({10e-6, 20e-6, 40e-6}, {0.1, 0.6, 1.0}, SizeBasis::volume)}) {
     const auto a = draw(dist, 1000, 31337);
     const auto b = draw(dist, 1000, 31337);
     const auto c = draw(dist, 1000, 31338);

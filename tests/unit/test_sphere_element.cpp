@@ -34,7 +34,10 @@ void random_caps(std::size_t n, std::uint64_t seed, std::vector<Vec3>& u, std::v
     const Vec3 d = Vec3(N(rng), N(rng), N(rng)).normalized();
     bool ok = true;
     for (const Vec3& e : u) ok = ok && std::acos(std::clamp(d.dot(e), -1.0, 1.0)) > 0.5;
-    if (ok) { u.push_back(d); alpha.push_back(U(rng)); }
+    if (ok) {
+      u.push_back(d);
+      alpha.push_back(U(rng));
+    }
   }
 }
 }  // namespace

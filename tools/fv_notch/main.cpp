@@ -21,20 +21,36 @@ using nlohmann::json;
 using namespace sparkdem;
 
 json to_json(const fv::Result& r) {
-  return {{"h_m", r.h}, {"nx", r.nx}, {"nz", r.nz}, {"solid_cells", r.solid_cells},
-          {"potential_unknowns", r.potential_unknowns}, {"steps", r.steps}, {"dt_s", r.dt},
-          {"R_eq_ohm", r.resistance}, {"current_A", r.current}, {"current_high_A", r.current_high},
-          {"power_joule_W", r.power_joule}, {"power_VI_W", r.power_vi},
-          {"T_slab_mean_K", r.T_slab_mean}, {"slab_volume_m3", r.slab_volume}, {"T_max_K", r.T_max},
-          {"T_notch_centre_K", r.T_notch_centre}, {"T_mean_K", r.T_mean}, {"heat_stored_J", r.heat_stored},
-          {"heat_input_J", r.heat_input}, {"energy_balance_rel", (r.heat_stored - r.heat_input) / r.heat_input},
-          {"solid_volume_m3", r.solid_volume}, {"wall_s", r.seconds}};
+  return {{"h_m", r.h},
+          {"nx", r.nx},
+          {"nz", r.nz},
+          {"solid_cells", r.solid_cells},
+          {"potential_unknowns", r.potential_unknowns},
+          {"steps", r.steps},
+          {"dt_s", r.dt},
+          {"R_eq_ohm", r.resistance},
+          {"current_A", r.current},
+          {"current_high_A", r.current_high},
+          {"power_joule_W", r.power_joule},
+          {"power_VI_W", r.power_vi},
+          {"T_slab_mean_K", r.T_slab_mean},
+          {"slab_volume_m3", r.slab_volume},
+          {"T_max_K", r.T_max},
+          {"T_notch_centre_K", r.T_notch_centre},
+          {"T_mean_K", r.T_mean},
+          {"heat_stored_J", r.heat_stored},
+          {"heat_input_J", r.heat_input},
+          {"energy_balance_rel", (r.heat_stored - r.heat_input) / r.heat_input},
+          {"solid_volume_m3", r.solid_volume},
+          {"wall_s", r.seconds}};
 }
 
 json rich(double f1, double f2, double f3) {
   const fv::Richardson r = fv::richardson(f1, f2, f3);
-  return {{"values", {f1, f2, f3}}, {"observed_order", std::isfinite(r.observed_order) ? json(r.observed_order) : json(nullptr)},
-          {"extrapolated", r.extrapolated}, {"error_band", r.band}};
+  return {{"values", {f1, f2, f3}},
+          {"observed_order", std::isfinite(r.observed_order) ? json(r.observed_order) : json(nullptr)},
+          {"extrapolated", r.extrapolated},
+          {"error_band", r.band}};
 }
 }  // namespace
 
@@ -70,13 +86,19 @@ int main(int argc, char** argv) {
     return 2;
   }
   json out;
-  out["geometry"] = {{"lx_m", g.lx}, {"depth_m", g.depth}, {"lz_m", g.lz}, {"notched", g.notched},
-                     {"notch_depth_m", g.notch_depth}, {"notch_z_m", {g.notch_z_lo, g.notch_z_hi}},
-                     {"ligament_area_m2", (g.lx - 2 * g.notch_depth) * g.depth}, {"solid_volume_m3", g.solid_volume()}};
-  out["material"] = {{"density", m.density}, {"heat_capacity", m.heat_capacity}, {"conductivity", m.conductivity},
-                     {"resistivity", m.resistivity}};
-  out["loading"] = {{"z_lo_m", ld.z_lo}, {"z_hi_m", ld.z_hi}, {"voltage_V", ld.voltage}, {"t_end_s", ld.t_end},
-                    {"T0_K", ld.T0}, {"slab_half_width_m", ld.slab_half_width}, {"r_mean_m", r_mean}};
+  out["geometry"] = {{"lx_m", g.lx},
+                     {"depth_m", g.depth},
+                     {"lz_m", g.lz},
+                     {"notched", g.notched},
+                     {"notch_depth_m", g.notch_depth},
+                     {"notch_z_m", {g.notch_z_lo, g.notch_z_hi}},
+                     {"ligament_area_m2", (g.lx - 2 * g.notch_depth) * g.depth},
+                     {"solid_volume_m3", g.solid_volume()}};
+  out["material"] = {
+      {"density", m.density}, {"heat_capacity", m.heat_capacity}, {"conductivity", m.conductivity}, {"resistivity", m.resistivity}};
+  out["loading"] = {{"z_lo_m", ld.z_lo},   {"z_hi_m", ld.z_hi}, {"voltage_V", ld.voltage},
+                    {"t_end_s", ld.t_end}, {"T0_K", ld.T0},     {"slab_half_width_m", ld.slab_half_width},
+                    {"r_mean_m", r_mean}};
   std::vector<fv::Result> rs;
   try {
     for (int mm : grids) {
