@@ -151,7 +151,7 @@ def cmd_check(a):
     ledger = validate.load_ledger(a.ledger)
     want = {r["id"]: r for r in json.loads(json.dumps(rules.finite(committed_records())))}
     have = {r["id"]: r for r in ledger.get("perf", [])}
-    if harness.git_shallow():  # a shallow clone cannot name the commit that last changed an imported file
+    if harness.git_history_unavailable():  # a shallow clone (or no git) cannot name the commit that last changed an imported file
         for r in list(want.values()) + list(have.values()):
             if r.get("origin", "").startswith("imported"):
                 r.pop("commit", None)

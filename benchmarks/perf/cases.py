@@ -14,7 +14,6 @@ benchmarks/README.md is a record made here from a result file.
 import csv
 import json
 import os
-import subprocess
 
 from benchmarks.perf import harness
 from benchmarks.perf.harness import REPO, stats, write_csv_atomic
@@ -44,9 +43,7 @@ def num(x):
 
 def last_commit(path):
     """The last commit that changed a committed result file (its provenance when it names none)."""
-    out = subprocess.run(["git", "-C", REPO, "log", "-1", "--format=%h", "--", os.path.relpath(path, REPO)],
-                         capture_output=True, text=True)
-    return out.stdout.strip() or "uncommitted"
+    return harness.git("log", "-1", "--format=%h", "--", os.path.relpath(path, REPO)) or "uncommitted"
 
 
 def dynamics_scene(config, steps=None, frame_every=0):

@@ -20,7 +20,7 @@ from tools.ledger import binary_build, write_json_atomic
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 __all__ = ["REPO", "Context", "write_csv_atomic", "write_json_atomic", "stats", "interleave", "load_config",
-           "lammps_version", "git_head"]
+           "lammps_version", "git", "git_head", "git_history_unavailable"]
 
 
 # ---------------------------------------------------------------- files and numbers
@@ -76,14 +76,22 @@ def load_config(rel):
 
 # ---------------------------------------------------------------- the machine
 
+def git(*args):
+    """`git -C REPO ARGS...`'s stripped stdout, or "" when git is not installed (a bare CI root)."""
+    try:
+        out = subprocess.run(["git", "-C", REPO, *args], capture_output=True, text=True)
+    except OSError:
+        return ""
+    return out.stdout.strip()
+
+
 def git_head():
-    out = subprocess.run(["git", "-C", REPO, "rev-parse", "--short=12", "HEAD"], capture_output=True, text=True)
-    return out.stdout.strip() or "unknown"
+    return git("rev-parse", "--short=12", "HEAD") or "unknown"
 
 
-def git_shallow():
-    out = subprocess.run(["git", "-C", REPO, "rev-parse", "--is-shallow-repository"], capture_output=True, text=True)
-    return out.stdout.strip() == "true"
+def git_history_unavailable():
+    """True on a shallow clone or without git: the commit that last changed a file cannot be named."""
+    return git("rev-parse", "--is-shallow-repository") != "false"
 
 
 def lammps_version(lmp="lmp"):
