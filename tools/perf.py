@@ -40,7 +40,7 @@ from tools import ledger as rules
 from tools import validate
 
 REPO = harness.REPO
-DOCS = [os.path.join(REPO, "docs", "performance.md")]
+DOCS = [os.path.join(REPO, "docs", "performance.md"), os.path.join(REPO, "benchmarks", "README.md")]
 # The script that wrote each committed result file before the harness existed (origin of imported records).
 WRITTEN_BEFORE_BY = {"mechanics": "benchmarks/mechanics/run.py", "threads": "benchmarks/threads/run.py",
                      "memory": "benchmarks/memory/run.py", "sps_nial": "sparkdem run configs/sps_nial.json --threads 1",
@@ -196,7 +196,7 @@ def main(argv=None):
     p.set_defaults(fn=cmd_run)
     p = sub.add_parser("report")
     p.add_argument("--ledger", default=validate.LEDGER)
-    p.add_argument("files", nargs="*", help="docs whose perf tables to rewrite (default docs/performance.md)")
+    p.add_argument("files", nargs="*", help="docs whose perf tables to rewrite (default docs/performance.md and benchmarks/README.md)")
     p.set_defaults(fn=cmd_report)
     p = sub.add_parser("check")
     p.add_argument("--ledger", default=validate.LEDGER)
