@@ -178,6 +178,11 @@ std::string did_you_mean(const std::string& word, const std::vector<std::string>
   return bestd <= std::max<std::size_t>(1, std::min<std::size_t>(3, word.size() / 2)) ? best : "";
 }
 
+std::string suggest(const std::string& word, const std::vector<std::string>& candidates) {
+  const auto dym = did_you_mean(word, candidates);
+  return dym.empty() ? "" : " (did you mean \"" + dym + "\"?)";
+}
+
 std::string describe(const json& v) {
   if (v.is_null()) return "null";
   if (v.is_boolean()) return v.get<bool>() ? "true" : "false";

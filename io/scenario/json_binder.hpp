@@ -18,6 +18,9 @@ using nlohmann::json;
 /// Levenshtein-closest candidate within distance 3 (or ""), for "did you mean".
 std::string did_you_mean(const std::string& word, const std::vector<std::string>& candidates);
 
+/// " (did you mean \"x\"?)" with the closest candidate, or "" when none is close: the suffix of a message.
+std::string suggest(const std::string& word, const std::vector<std::string>& candidates);
+
 /// Short description of a JSON value for messages: `"abc"` (string), `12.5` (number), `an object`.
 std::string describe(const json& v);
 

@@ -252,10 +252,9 @@ void parse_sweep(const json& js, const std::string& path, const std::vector<Earl
     }
     if (j["snapshots_of"].is_string() && sw.snapshots_stage < 0) {
       const bool exists = std::any_of(earlier.begin(), earlier.end(), [&](const auto& e) { return e.name == p.snapshots_of; });
-      const auto dym = did_you_mean(p.snapshots_of, with);
       errors.push_back({sp + "/snapshots_of", exists ? "stage \"" + p.snapshots_of + "\" takes no snapshots (give it \"snapshots\")"
                                                      : "no earlier stage named \"" + p.snapshots_of + "\" takes snapshots" +
-                                                           (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") +
+                                                           suggest(p.snapshots_of, with) +
                                                            (with.empty() ? std::string("; no earlier stage takes any")
                                                                          : "; stages with snapshots: " + list_names(with))});
     }

@@ -57,8 +57,7 @@ std::unique_ptr<T> make_named(const json& c, const std::map<std::string, Registr
   const auto name = c["law"].get<std::string>();
   auto it = table.find(name);
   if (it == table.end()) {
-    const auto dym = did_you_mean(name, names_of(table));
-    errors.push_back({path + "/law", "unknown " + what + " \"" + name + "\"" + (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)") +
+    errors.push_back({path + "/law", "unknown " + what + " \"" + name + "\"" + suggest(name, names_of(table)) +
                                          "; registered: " + list_names(names_of(table))});
     return nullptr;
   }

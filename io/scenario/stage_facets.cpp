@@ -312,12 +312,6 @@ void finish_stage(StageBuild& b, std::size_t errors_at_start) {
 
 // ------------------------------------------------------------------------------------ facets
 
-/// "Did you mean" suffix of a message, or "".
-std::string suggest(const std::string& word, const std::vector<std::string>& candidates) {
-  const auto dym = did_you_mean(word, candidates);
-  return dym.empty() ? "" : " (did you mean \"" + dym + "\"?)";
-}
-
 std::vector<std::string> wall_list(const StageContext& ctx) { return {ctx.wall_names.begin(), ctx.wall_names.end()}; }
 
 /// "generator": the parameters of the generator named by `type` (always bound for a generator stage).
