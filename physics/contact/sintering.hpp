@@ -48,6 +48,16 @@
 /// = 1: full density by Eq. 23). Without it the interior of the NiAl compact creeps past full
 /// density (issue 21: mass porosity -0.18 to -0.24 in the core at the last snapshot).
 ///
+/// Power-law creep (`powerlaw_creep_rate` > 0; issue 36): dislocation creep of the necks acting in
+/// parallel with grain-boundary diffusion, so the dashpot's rates add,
+///   du_s/dt = F_e / eta_n + hdot_pl(F_e),  hdot_pl = (a / c^2) eps_dot_0(T) (F_e / (beta pi a^2 sigma_0))^n
+/// (kernel::PowerLawCreep: Storakers, Biwa & Larsson 1997; Storakers, Fleck & McMeeking 1999), on a
+/// compressive F_e only, under the same conditions as the creep beyond a_eq (hot, a neck, h below
+/// creep_overlap_limit x r_min, grain-boundary fraction below creep_stop_gb_fraction) but whatever
+/// after_equilibrium says. GB diffusion is linear in the load and stiffens as a^4; power-law creep
+/// rises as F^n a^(1-2n): the apparent exponent of the pair falls from n at small, highly loaded
+/// necks to 1 at large ones. The tangential element keeps eta_t = tangential_factor x eta_n (GB).
+///
 /// Tangential: a Maxwell element too, k_t = 8 G* sqrt(R* |h - u_s|) in series with
 /// eta_t = tangential_factor x eta_n, state = the elastic tangential force (rotated into the
 /// current tangent plane), plus damping 2 gamma sqrt(m* k_t). A pair without a neck (cold
@@ -78,6 +88,11 @@
 /// | friction, wall_friction      | 1       | Coulomb mu (contacts without a neck; walls)        |
 /// | min_neck_fraction            | 1       | smallest neck of a sintering pair / r_min         |
 /// | neck_strength                | Pa      | a neck breaks when the tension exceeds it x pi a^2 (0: never) |
+/// | powerlaw_creep_rate          | 1/s     | eps_dot_0 at powerlaw_creep_stress and _temperature (0: off) |
+/// | powerlaw_creep_stress        | Pa      | sigma_0                                           |
+/// | powerlaw_creep_exponent      | 1       | n                                                 |
+/// | powerlaw_creep_activation_energy | J/mol | Q of eps_dot_0(T) (Arrhenius about T_ref)        |
+/// | powerlaw_creep_temperature   | K       | T_ref                                             |
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -143,6 +158,36 @@ inline MaxwellFactors maxwell_factors(double k, double eta, double dt) {
   const double x = k * dt / eta;
   return {std::exp(-x), x > 1e-8 ? -std::expm1(-x) / x : 1.0 - 0.5 * x};
 }
+/// Power-law creep of a contact between two spheres [m/s] (the approach rate in physical time):
+/// Storakers, Biwa & Larsson, Int. J. Solids Struct. 34 (1997) 3061, self-similar indentation of a
+/// creeping solid, their Eq. (78) with m -> inf (no strain hardening), the material
+/// eps_dot = eps_dot_0 (sigma / sigma_0)^n, and the contact profile a^2 = c^2 D h:
+///   F / (pi a^2) = [3 (n + 2) / n] sigma_0 (adot / (3 D) / eps_dot_0)^(1/n),  D = 2 R*,
+///   c^2(n) = 1.43 exp(-0.97 / n)  (their Fig. 5: 1.43 ideally plastic, 1 at n = 3, ~0.5 linear),
+/// so, with adot = c^2 R* hdot / a,
+///   hdot = (a / c^2) eps_dot_0 (F / (beta pi a^2 sigma_0))^n,  beta(n) = 3 (n + 2) / n * 6^(-1/n)
+/// (the form of Storakers, Fleck & McMeeking, J. Mech. Phys. Solids 47 (1999) 785). Compressive
+/// force only (F <= 0: no creep); a is the neck radius of the pair.
+struct PowerLawCreep {
+  double c2;      ///< c^2(n)
+  double beta;    ///< beta(n)
+  double n;       ///< stress exponent
+  double sigma0;  ///< reference stress [Pa]
+  static PowerLawCreep of(double n, double sigma0) {
+    return {1.43 * std::exp(-0.97 / n), 3.0 * (n + 2.0) / n * std::pow(6.0, -1.0 / n), n, sigma0};
+  }
+  /// hdot [m/s] at force F [N], neck a [m] and reference strain rate eps_dot_0 [1/s] (at the temperature).
+  double rate(double F, double a, double eps_dot_0) const {
+    if (!(F > 0.0) || !(a > 0.0) || !(eps_dot_0 > 0.0)) return 0.0;
+    return a / c2 * eps_dot_0 * std::pow(F / (beta * kPi * a * a * sigma0), n);
+  }
+};
+
+/// Arrhenius reference strain rate [1/s]: eps_dot_0(T) = eps_dot_ref exp(-Q/R (1/T - 1/T_ref)).
+inline double arrhenius_rate(double rate_ref_per_s, double q_J_per_mol, double t_ref_K, double t_K) {
+  return rate_ref_per_s * std::exp(-q_J_per_mol / kGasConstant * (1.0 / t_K - 1.0 / t_ref_K));
+}
+
 /// eta = 0 (a dashpot of a neck of zero radius, eta ~ a^4): the limit x -> inf, F' = 0 and the
 /// dashpot takes the whole motion plus the released spring, du = v dt + F/k (k = 0: v dt).
 inline MaxwellStep maxwell_step(double force, double k, double eta, double v, double dt) {
@@ -182,6 +227,11 @@ struct Sintering {
     double creep_overlap_limit = 1.0;
     std::string neck_stiffness = "elastic_approach";
     double creep_stop_gb_fraction = 0.0;
+    double powerlaw_creep_rate = 0.0;
+    double powerlaw_creep_stress = 1.0e8;
+    double powerlaw_creep_exponent = 5.5;
+    double powerlaw_creep_activation_energy = 2.5e5;
+    double powerlaw_creep_temperature = 1473.15;
   };
   static ParamSpec<Params> spec() {
     using P = Params;
@@ -229,6 +279,20 @@ struct Sintering {
         .doc(
             "creep: the dashpot of a pair also stops once either particle's grain-boundary fraction sum a^2 / (4 r^2) over its necks "
             "reaches this (seed 000 Eq. 22-23: 1 = the particle's surface all grain boundary, full density); 0: never");
+    s.add("powerlaw_creep_rate", &P::powerlaw_creep_rate)
+        .unit("1/s")
+        .nonnegative()
+        .doc(
+            "eps_dot_0 of the power-law creep branch in parallel with the grain-boundary dashpot (rates add): "
+            "hdot = (a / c^2) eps_dot_0(T) (F / (beta pi a^2 sigma_0))^n, Storakers, Biwa & Larsson 1997; the strain rate at "
+            "powerlaw_creep_stress and powerlaw_creep_temperature; 0: no power-law creep");
+    s.add("powerlaw_creep_stress", &P::powerlaw_creep_stress).unit("Pa").positive().doc("sigma_0, the reference stress of eps_dot_0");
+    s.add("powerlaw_creep_exponent", &P::powerlaw_creep_exponent).unit("1").range(1.0, 20.0).doc("n, the stress exponent");
+    s.add("powerlaw_creep_activation_energy", &P::powerlaw_creep_activation_energy)
+        .unit("J/mol")
+        .nonnegative()
+        .doc("Q: eps_dot_0(T) = powerlaw_creep_rate exp(-Q/R (1/T - 1/T_ref))");
+    s.add("powerlaw_creep_temperature", &P::powerlaw_creep_temperature).unit("K").positive().doc("T_ref of powerlaw_creep_rate");
     s.add("after_equilibrium", &P::after_equilibrium)
         .choices({"frozen", "creep"})
         .doc("neck at a_eq: the dashpot stops (frozen, Kratos) or keeps creeping under load (creep); the driving force stops in both");
@@ -255,7 +319,8 @@ struct Sintering {
                                                          : RadiusKind::Rmin),
         cold_contact_(p.cold_necks == "contact"),
         creep_(p.after_equilibrium == "creep"),
-        neck_spring_(p.neck_stiffness == "neck_radius") {}
+        neck_spring_(p.neck_stiffness == "neck_radius"),
+        power_law_(kernel::PowerLawCreep::of(p.powerlaw_creep_exponent, p.powerlaw_creep_stress)) {}
 
   bool alive(const double* st) const { return st[kNeck] > 0.0; }
   /// The state column of the neck radius when the law reads the particles' grain-boundary
@@ -312,7 +377,8 @@ struct Sintering {
     const double a_eq = r_min * sin_half_;
     const bool sintering = hot && neck && a < a_eq;
     const bool dense = p_.creep_stop_gb_fraction > 0.0 && g.gb_fraction >= p_.creep_stop_gb_fraction;
-    const bool flowing = sintering || (hot && neck && creep_ && h < p_.creep_overlap_limit * r_min && !dense);
+    const bool creeping = hot && neck && h < p_.creep_overlap_limit * r_min && !dense;
+    const bool flowing = sintering || (creep_ && creeping);
     // Mechanical-time viscosity: eta / s.
     const double eta_n = flowing ? viscosity(a, T) / g.time_scale : std::numeric_limits<double>::infinity();
     const double he = h - st[kViscous];
@@ -328,10 +394,11 @@ struct Sintering {
     double us = st[kViscous];
     double fs = 0.0, us_rate = 0.0;
     if (neck) {
-      const kernel::MaxwellStep ms = kernel::maxwell_step(fe, kn, eta_n, v, dt);
+      const CreepLine c = creep_line(fe, a, T, g.time_scale, eta_n, creeping);
+      const kernel::MaxwellStep ms = kernel::maxwell_step(fe, kn, c.eta, v - c.offset, dt);
       fe = ms.force;
-      us += ms.flow;
-      us_rate = dt > 0.0 ? ms.flow / dt : 0.0;
+      us += ms.flow + c.offset * dt;
+      us_rate = dt > 0.0 ? ms.flow / dt + c.offset : 0.0;
       if (sintering) fs = kernel::sintering_force(p_.surface_energy, cos_half_, sin_half_, driving_radius(g), a);
       if (!hot && cold_contact_) fe = std::max(fe, 0.0);
     } else {
@@ -381,6 +448,26 @@ struct Sintering {
     f.tangential = ftot;
     f.force = fn * g.n + ftot;
     return f;
+  }
+
+  /// The dashpot of the normal Maxwell element as a line in F over the step: flow rate
+  /// du_s/dt = F / eta + offset (mechanical time). Without power-law creep: {eta_n, 0}. With it, the
+  /// rates add, du_s/dt = F / eta_n + hdot_pl(F), and hdot_pl is linearised at the step's F_e
+  /// (its tangent, the Newton step of the implicit update): hdot_pl(F) ~ (n r / F_e) F + (1 - n) r,
+  /// r = hdot_pl(F_e), so the element stays linear and kernel::maxwell_step integrates it exactly
+  /// with the approach rate v - offset.
+  struct CreepLine {
+    double eta;     ///< [N s/m]
+    double offset;  ///< [m/s]
+  };
+  CreepLine creep_line(double fe, double a, double t_K, double time_scale, double eta_n, bool creeping) const {
+    if (!(p_.powerlaw_creep_rate > 0.0) || !creeping || !(fe > 0.0)) return {eta_n, 0.0};
+    const double rate0 = kernel::arrhenius_rate(p_.powerlaw_creep_rate, p_.powerlaw_creep_activation_energy,
+                                                p_.powerlaw_creep_temperature, t_K);
+    const double r = time_scale * power_law_.rate(fe, a, rate0);
+    if (!(r > 0.0)) return {eta_n, 0.0};
+    const double slope = power_law_.n * r / fe;  // d hdot / dF [m/(N s)]
+    return {1.0 / (1.0 / eta_n + slope), (1.0 - power_law_.n) * r};
   }
 
   /// Particle-wall: Hertz + damping + Coulomb friction (elastic tangential spring with history).
@@ -437,6 +524,7 @@ struct Sintering {
   bool cold_contact_;
   bool creep_;
   bool neck_spring_;  ///< neck_stiffness = neck_radius
+  kernel::PowerLawCreep power_law_;
 };
 
 }  // namespace sparkdem::physics
