@@ -15,6 +15,8 @@ Wall-clock timings are left out: they are not results (summary.json, the run rec
 `pipeline/record`, every dataset or column named *wall_time* or *solve_time*).
 
     python3 -m tools.config_digest make  --sparkdem BUILD/sparkdem   # writes tests/reference/config_digests.json
+    python3 -m tools.config_digest make  --sparkdem BUILD/sparkdem --config NAME.json ...
+                                     # remakes those entries only (a change meant to alter their results)
     python3 -m tools.config_digest check --sparkdem BUILD/sparkdem [--config NAME]   # exit 1 on any difference
 
 `make` is run on a clean commit whose results are the reference (the file records the commit);
@@ -176,9 +178,18 @@ def main(argv=None):
         print(f"{name}: " + (g["skipped"] if "skipped" in g else
                              f"exit {g['exit']} run {g['run'][:12]} check {g['check'][:12]}"), flush=True)
     if a.command == "make":
-        ref = {"made_by": "tools/config_digest.py make", "binary": commit_of(a.sparkdem),
-               "rules": {"steps": STEPS, "particles": PARTICLES, "relax_iterations": RELAX_ITERATIONS,
-                         "sweep_items": SWEEP_ITEMS}, "configs": got}
+        rules = {"steps": STEPS, "particles": PARTICLES, "relax_iterations": RELAX_ITERATIONS, "sweep_items": SWEEP_ITEMS}
+        if a.config:
+            # Remake only the named configs (a change meant to alter their results): the other entries
+            # keep theirs; each remade entry names the binary that made it.
+            with open(REFERENCE) as f:
+                ref = json.load(f)
+            if ref.get("rules") != rules:
+                raise SystemExit("config_digest: the reference was made with other rules; remake every config")
+            for name, g in got.items():
+                ref["configs"][name] = dict(g, binary=commit_of(a.sparkdem))
+        else:
+            ref = {"made_by": "tools/config_digest.py make", "binary": commit_of(a.sparkdem), "rules": rules, "configs": got}
         tmp = REFERENCE + ".tmp"
         with open(tmp, "w") as f:
             json.dump(ref, f, indent=1, sort_keys=True)
