@@ -70,6 +70,7 @@ std::vector<std::string> builtin_columns(const State& s) {
     c.push_back("wall_" + w.name + "_fx");
     c.push_back("wall_" + w.name + "_fy");
     c.push_back("wall_" + w.name + "_fz");
+    c.push_back("wall_" + w.name + "_work");
   }
   return c;
 }
@@ -120,6 +121,7 @@ std::vector<double> builtin_values(const State& s, const BondModel* bonds) {
     v.push_back(w.force[0]);
     v.push_back(w.force[1]);
     v.push_back(w.force[2]);
+    v.push_back(w.work);
   }
   return v;
 }
@@ -588,7 +590,11 @@ void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_n
         rotate_prescribed(dt_used, t_new);
         break;
       case PlanItem::Kind::Walls:
-        for (auto& w : s_.walls) advance_wall(w, t_new, dt_used, t_area, time_scale_);
+        for (auto& w : s_.walls) {
+          const double u_old = w.u;
+          advance_wall(w, t_new, dt_used, t_area, time_scale_);
+          w.work += w.normal_force * (w.u - u_old);  // the force of the last pass over the step's move
+        }
         break;
       case PlanItem::Kind::Neighbors:
         update_neighbors(skin_, cfg.sort_every_rebuilds);

@@ -22,6 +22,7 @@
 #include "physics/mechanics/torsion_test.hpp"
 #include "physics/mechanics/tension_test.hpp"
 #include "physics/packing/box_density.hpp"
+#include "physics/packing/neck_statistics.hpp"
 #include "physics/packing/compact.hpp"
 #include "physics/packing/cpc_fillers.hpp"
 #include "physics/packing/generators.hpp"
@@ -58,6 +59,7 @@ void register_all(Registry& r) {
   r.generator<CpcFillersGenerator>();
   r.monitor<CompactMonitor>();
   r.monitor<BoxDensityMonitor>();
+  r.monitor<NeckMonitor>();
 }
 
 }  // namespace sparkdem::physics

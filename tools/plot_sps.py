@@ -18,7 +18,11 @@ files). Writes into OUT_DIR (default RUN_DIR):
   sps_table.csv                 per snapshot target: porosity taken, kappa_eff of each stage,
                                 measured kappa, relative error [%], the Hashin-Shtrikman upper
                                 bound kappa_b 2(1-p)/(2+p) at the porosity taken and each stage's
-                                kappa over it (> 1 violates the bound); then each stage's wall time.
+                                kappa over it (> 1 violates the bound), the snapshot's quasi-static
+                                gates (issue 36, tools/sps_outputs.GATES: kinetic energy / punch
+                                work, core - compact mass porosity, envelope / die radius, fullest
+                                and last neck bin, median a / r_min; all passed: yes/no, empty
+                                when the stage lacks "compact" or "necks"); then each stage's wall time.
 Each PNG comes with the data drawn in it, as CSV of the same name beside it:
   conductivity_vs_porosity.csv  series (stage, measured, bulk), snapshot, porosity, kappa_eff
                                 [S/m], the +-5 % band of the measured points;
@@ -47,6 +51,7 @@ import sys
 
 import numpy as np
 
+from tools import sps_outputs as so
 from tools.sps_outputs import NECK_BINS, calibration, find_stage, neck_histogram, neck_ratios, sweep_values
 
 KAPPA_COLUMN = "electrical_conductivity_eff"
@@ -290,12 +295,17 @@ def plot_calibration(d, run, plt, path, csv_path):
     return True
 
 
+QS_COLUMNS = ("ke_over_punch_work", "core_minus_compact_porosity", "envelope_over_die_radius", "neck_max_bin_percent",
+              "neck_median_a_over_rmin", "neck_last_bin_percent")
+
+
 def table(d):
     """Rows of sps_table.csv: one per snapshot target, then one per stage (wall time)."""
     stages = d["stages"]
     head = (["row", "target_porosity", "porosity_taken"] + [f"kappa_{n} [S/m]" for n in stages]
             + ["kappa_measured [S/m]"] + [f"rel_err_{n} [%]" for n in stages]
-            + ["hashin_shtrikman_upper [S/m]"] + [f"{n}_over_bound" for n in stages] + ["wall_time_s"])
+            + ["hashin_shtrikman_upper [S/m]"] + [f"{n}_over_bound" for n in stages] + [f"qs_{g}" for g in QS_COLUMNS]
+            + ["qs_gates_pass", "wall_time_s"])
     by_target = {s.get("target"): s for s in d["snap"]["taken"]}
     targets = sorted(set(by_target) | set(d["snap"].get("not_reached", [])) - {None}, reverse=True)
     out = [head]
@@ -308,7 +318,11 @@ def table(d):
                    + [f"{km:.4g}" if km else ""]
                    + [f"{100 * (k / km - 1):+.1f}" if k is not None and km else "" for k in ks])
         hs = hashin_shtrikman_upper(s["value"]) if s else None
-        out[-1] += ([f"{hs:.4g}" if hs else ""] + [f"{k / hs:.3f}" if k is not None and hs else "" for k in ks] + [""])
+        out[-1] += [f"{hs:.4g}" if hs else ""] + [f"{k / hs:.3f}" if k is not None and hs else "" for k in ks]
+        g = so.quasi_static_gates(s.get("columns", {})) if s else {}
+        verdicts = [g.get(n + "_pass") for n in so.GATES]
+        out[-1] += ([f"{g[n]:.4g}" if g.get(n) is not None else "" for n in QS_COLUMNS]
+                    + ["" if not s or None in verdicts else ("yes" if all(verdicts) else "no")] + [""])
     for st in d["summary"]["stages"]:
         out.append([f"stage {st['name']}"] + [""] * (len(head) - 2) + [f"{st.get('wall_time_s', math.nan):.2f}"])
     return out

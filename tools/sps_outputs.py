@@ -95,3 +95,42 @@ def calibration(summary, stage_name):
     if not st or "sweep" not in st:
         return None
     return st["sweep"].get("calibration")
+
+
+# Issue 36's quasi-static gates of a hot press, fixed before kappa is compared (the explicit path):
+# kinetic energy below 1e-4 of the punch work; core and compact mass porosity within 0.02; the
+# compact's envelope within 1 % of the die radius while pressed; no neck-histogram bin above 25 %
+# (seed 000 Fig. 6's axis). The median a / r_min rising with density is checked across snapshots.
+GATES = {"ke_over_punch_work": 1e-4, "core_minus_compact_porosity": 0.02, "envelope_over_die_radius": 0.99,
+         "neck_max_bin_percent": 25.0}
+
+
+def quasi_static_gates(columns, punch="top"):
+    """The gate quantities of one snapshot from its time-series columns (summary.json
+    snapshots.taken[k].columns; the stage needs the keys "compact" and "necks"), each with its
+    verdict: {name: value, name + "_pass": bool}; a quantity the stage did not monitor is None."""
+    def col(name):
+        v = columns.get(name)
+        return float(v) if v is not None else None
+
+    ke, work = col("kinetic_energy"), col(f"wall_{punch}_work")
+    core, compact = col("porosity_mass_interior"), col("porosity_mass")
+    env, die = col("envelope_radius"), col("die_radius")
+    vals = {"ke_over_punch_work": ke / work if ke is not None and work else None,
+            "core_minus_compact_porosity": core - compact if core is not None and compact is not None else None,
+            "envelope_over_die_radius": env / die if env is not None and die else None,
+            "neck_max_bin_percent": col("neck_max_bin_percent"),
+            "neck_median_a_over_rmin": col("neck_median_a_over_rmin"),
+            "neck_last_bin_percent": col("neck_last_bin_percent")}
+    out = dict(vals)
+    for name, limit in GATES.items():
+        v = vals[name]
+        if v is None:
+            out[name + "_pass"] = None
+        elif name == "core_minus_compact_porosity":
+            out[name + "_pass"] = abs(v) < limit
+        elif name == "envelope_over_die_radius":
+            out[name + "_pass"] = v >= limit
+        else:
+            out[name + "_pass"] = v <= limit
+    return out

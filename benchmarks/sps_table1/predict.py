@@ -38,8 +38,9 @@ TOLERANCE = 0.002            # absolute porosity: a tenth of the prediction band
 MAX_RUNS = 9
 
 
-def scene(k, seed, d0):
-    """configs/sps_table1_sample{k}.json with the packing seed and D_0 patched (includes made absolute)."""
+def scene(k, seed, d0, **law):
+    """configs/sps_table1_sample{k}.json with the packing seed, D_0 and any other sintering-law
+    parameters patched (includes made absolute)."""
     path = os.path.join(REPO, "configs", f"sps_table1_sample{k}.json")
     with open(path) as f:
         c = json.load(f)
@@ -47,6 +48,7 @@ def scene(k, seed, d0):
     c["seed"] = seed
     press = next(s for s in c["stages"] if s["name"] == "hot_press")
     press["contact"]["params"]["gb_diffusivity_prefactor"] = d0
+    press["contact"]["params"].update(law)
     return c
 
 

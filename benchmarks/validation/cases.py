@@ -427,8 +427,10 @@ def run_nial(config, element=False):
             ref = next((k for q, k in TABLE1.items() if abs(q - p) < 1e-9), None)
             if ref is None or idx not in gb:
                 continue
+            gates = {f"qs_{k}": v for k, v in so.quasi_static_gates(taken.get(idx, {}).get("columns", {})).items()
+                     if v is not None and not k.endswith("_pass")}
             res[f"kappa_{p:.3f}"] = fig(gb[idx], ref, porosity_taken=taken.get(idx, {}).get("value"),
-                                        kappa_without_layer=nogb.get(idx), delta_gb_calibrated_m=cal.get("value"))
+                                        kappa_without_layer=nogb.get(idx), delta_gb_calibrated_m=cal.get("value"), **gates)
         if element and 0.164 in at:
             bare, calibrated, delta = element_figures(ctx, c, out, at, at.index(0.164))
             for idx, p in enumerate(at):
@@ -456,7 +458,9 @@ NIAL = Case(
     run_nial("configs/sps_nial.json", element=True),
     [Figure(f"seed000/nial_kappa_{p:.3f}", f"kappa_{p:.3f}", NIAL_SRC, NIAL_REF + f" at porosity {p}", 0.05,
             calibrated_on=NIAL_CAL, tuned=NIAL_TUNED,
-            variants=["without the grain-boundary layer (extra.kappa_without_layer)"])
+            variants=["without the grain-boundary layer (extra.kappa_without_layer)",
+                      "quasi-static gates of the snapshot (issue 36; extra.qs_*: kinetic energy / punch work <= 1e-4, core - compact "
+                      "mass porosity within 0.02, envelope / die radius >= 0.99, fullest neck bin <= 25 %; tools/sps_outputs.GATES)"])
      for p in (0.216, 0.106, 0.050)]
     + [Figure(f"seed000/nial_element_kappa_{p:.3f}", f"element_kappa_{p:.3f}", NIAL_SRC + "; sphere-element network (issue 21)",
               NIAL_REF + f" at porosity {p}", 0.05, calibrated_on=NIAL_CAL + ", for the sphere-element network",

@@ -60,6 +60,10 @@ struct Wall {
   Vec3 force = Vec3::Zero();  ///< total force of the particles on the wall [N]
   double normal_force = 0.0;  ///< component of `force` against the inward normal (push) [N]
   bool halted = false;        ///< the motion's halt condition was met: the wall stays where it is
+  /// Work done by the wall on the particles since the run began [J]: the sum over steps of the
+  /// normal force times the step's offset increment, sum F_n (u' - u) (a punch pressing a compact
+  /// does positive work). The quasi-static gate of a press compares the kinetic energy with it.
+  double work = 0.0;
 
   bool is_plane() const { return std::holds_alternative<PlaneShape>(shape); }
   /// Inward normal at a particle centre x and signed distance from the wall to x (> 0 inside).
@@ -114,6 +118,7 @@ struct Wall {
     force = f[0];
     ar.visit(prefix + "/normal_force", normal_force);
     ar.visit(prefix + "/halted", halted);
+    if (!ar.reading() || ar.has(prefix + "/work")) ar.visit(prefix + "/work", work);  // absent before issue 36: 0
   }
 };
 

@@ -21,6 +21,11 @@ namespace fs = std::filesystem;
 namespace {
 
 json number_or_null(double x) { return std::isfinite(x) ? json(x) : json(nullptr); }
+json columns_json(const std::map<std::string, double>& columns) {
+  json j = json::object();
+  for (const auto& [name, v] : columns) j[name] = number_or_null(v);
+  return j;
+}
 double number_of(const json& j) { return j.is_number() ? j.get<double>() : std::nan(""); }
 
 /// `file` relative to `dir` when it lies inside it, else as it is.
@@ -222,7 +227,8 @@ json RunRecord::to_json() const {
                               {"value", number_or_null(r.value)},
                               {"step", r.step},
                               {"time", r.time},
-                              {"file", r.file}});
+                              {"file", r.file},
+                              {"columns", columns_json(r.columns)}});
   j["first_values"] = json::object();
   for (const auto& [k, v] : first_values) j["first_values"][std::to_string(k)] = number_or_null(v);
   j["sweep"] = sweep;
@@ -243,6 +249,8 @@ RunRecord RunRecord::from_json(const json& j) {
       s.step = x.at("step").get<Step>();
       s.time = x.at("time").get<double>();
       s.file = x.at("file").get<std::string>();
+      if (x.contains("columns"))  // absent in records written before issue 36
+        for (auto it = x.at("columns").begin(); it != x.at("columns").end(); ++it) s.columns[it.key()] = number_of(it.value());
       r.snapshots.push_back(std::move(s));
     }
     for (auto it = j.at("first_values").begin(); it != j.at("first_values").end(); ++it)
@@ -283,14 +291,17 @@ bool SnapshotObserver::taken(std::int64_t index) const {
                      [&](const SnapshotRecord& r) { return r.stage_index == stage_index_ && r.index == index; });
 }
 
-void SnapshotObserver::take(State& s, std::int64_t index, double target, double value) {
+void SnapshotObserver::take(State& s, std::int64_t index, double target, double value, const std::vector<std::string>& cols,
+                            const std::vector<double>& vals) {
   // outdir_ is the run's physical output directory (resolve_output_directory): no lexical
   // normalisation here, which would take "LINK/.." to LINK's parent instead of its target's.
   const fs::path file = fs::absolute(outdir_ / "snapshots" / (file_name_of(stage_) + "_" + std::to_string(index) + ".h5"));
   std::error_code ec;
   fs::create_directories(file.parent_path(), ec);
   if (ec) throw SetupError("snapshot directory '" + file.parent_path().string() + "': cannot create it: " + ec.message());
-  record_.snapshots.push_back({stage_index_, stage_, index, spec_.column, target, value, s.step, s.time, file.string()});
+  std::map<std::string, double> columns;
+  for (std::size_t k = 0; k < cols.size() && k < vals.size(); ++k) columns[cols[k]] = vals[k];
+  record_.snapshots.push_back({stage_index_, stage_, index, spec_.column, target, value, s.step, s.time, file.string(), std::move(columns)});
   save_(file, s);
 }
 
@@ -306,7 +317,8 @@ void SnapshotObserver::watch(State& s, const std::vector<std::string>& cols, con
   const double v = vals[static_cast<std::size_t>(it - cols.begin())];
   if (spec_.every_steps > 0) {
     const Step k = s.step - s.stage_step0;
-    if (k > 0 && k % spec_.every_steps == 0 && !taken(k / spec_.every_steps - 1)) take(s, k / spec_.every_steps - 1, std::nan(""), v);
+    if (k > 0 && k % spec_.every_steps == 0 && !taken(k / spec_.every_steps - 1))
+      take(s, k / spec_.every_steps - 1, std::nan(""), v, cols, vals);
     return;
   }
   auto first = record_.first_values.find(stage_index_);
@@ -319,7 +331,7 @@ void SnapshotObserver::watch(State& s, const std::vector<std::string>& cols, con
     const auto index = static_cast<std::int64_t>(k);
     if (taken(index)) continue;
     const double a = spec_.at[k];
-    if (v0 <= a ? v >= a : v <= a) take(s, index, a, v);
+    if (v0 <= a ? v >= a : v <= a) take(s, index, a, v, cols, vals);
   }
 }
 
@@ -331,7 +343,12 @@ json snapshots_summary(const RunRecord& record, std::int64_t stage_index, const 
   std::set<std::int64_t> have;
   for (const auto& r : record.of_stage(stage_index)) {
     have.insert(r.index);
-    json x = {{"index", r.index}, {"value", number_or_null(r.value)}, {"step", r.step}, {"time", r.time}, {"file", shown(r.file, outdir)}};
+    json x = {{"index", r.index},
+              {"value", number_or_null(r.value)},
+              {"step", r.step},
+              {"time", r.time},
+              {"file", shown(r.file, outdir)},
+              {"columns", columns_json(r.columns)}};
     if (std::isfinite(r.target)) x["target"] = r.target;
     j["taken"].push_back(x);
   }

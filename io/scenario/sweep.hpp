@@ -43,6 +43,9 @@ struct SnapshotRecord {
   Step step = 0;
   double time = 0.0;
   std::string file;  ///< absolute path of the state file
+  /// Every time-series column of the stage when taken (the snapshot's monitors: porosities, kinetic
+  /// energy, wall work, neck statistics, ...), reported in the stage's summary entry.
+  std::map<std::string, double> columns;
 };
 
 struct RunRecord {
@@ -88,7 +91,8 @@ class SnapshotObserver final : public Observer {
 
  private:
   bool taken(std::int64_t index) const;
-  void take(State& s, std::int64_t index, double target, double value);
+  void take(State& s, std::int64_t index, double target, double value, const std::vector<std::string>& cols,
+            const std::vector<double>& vals);
   Observer& inner_;
   SnapshotSpec spec_;
   std::int64_t stage_index_;
@@ -99,7 +103,8 @@ class SnapshotObserver final : public Observer {
 };
 
 /// The snapshots of a stage for its summary entry: column, taken (index, target, value, step,
-/// time, file relative to `outdir` when inside it) and the `at` values not reached.
+/// time, file relative to `outdir` when inside it, the time-series columns when taken) and the
+/// `at` values not reached.
 json snapshots_summary(const RunRecord& record, std::int64_t stage_index, const SnapshotSpec& spec, const std::filesystem::path& outdir);
 
 /// Count, mean and sample standard deviation (n - 1; null below 2 values) of each column over

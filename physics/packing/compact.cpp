@@ -52,7 +52,8 @@ ParamSpec<CompactParams> compact_spec() {
                  "porosity of a powder compact in a die (stage key): columns porosity = 1 - V_solid / (pi R^2 H) (spheres "
                  "clipped to the die and the punches, sphere-sphere lens volumes subtracted), porosity_interior, porosity_mass (lenses not "
                  "subtracted: mass-conserving, for sintered compacts), "
-                 "relative_density, compact_height");
+                 "relative_density, compact_height, envelope_radius, porosity_envelope (by mass in the sample's own envelope), "
+                 "die_radius, porosity_mass_interior");
   s.add("die", &P::die).doc("the die: a cylinder wall (its current radius R)");
   s.add("bottom", &P::bottom).doc("lower punch: a plane wall normal to the die axis");
   s.add("top", &P::top).doc("upper punch: a plane wall normal to the die axis, facing the lower one");
@@ -99,7 +100,8 @@ CylinderRegion compact_region(const State& s, const CompactParams& p) {
 }
 
 std::vector<std::string> CompactMonitor::columns(const State&) const {
-  return {"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass", "envelope_radius", "porosity_envelope"};
+  return {"porosity",      "porosity_interior", "relative_density",  "compact_height",        "porosity_mass",
+          "envelope_radius", "porosity_envelope", "die_radius", "porosity_mass_interior"};
 }
 
 double envelope_volume(const std::vector<Vec3>& positions, const std::vector<double>& radii, const CylinderRegion& region,
@@ -140,16 +142,17 @@ double envelope_volume(const std::vector<Vec3>& positions, const std::vector<dou
 std::vector<double> CompactMonitor::values(const State& s) const {
   const CylinderRegion region = compact_region(s, p_);
   const auto& p = s.particles;
-  if (p.size() == 0) return {1.0, 1.0, 0.0, region.height, 1.0, 0.0, 1.0};
+  if (p.size() == 0) return {1.0, 1.0, 0.0, region.height, 1.0, 0.0, 1.0, region.radius, 1.0};
   const auto pairs = find_pairs(p.position, p.radius, 0.0);
   const double porosity = 1.0 - compact_solid_volume(p.position, p.radius, pairs, region) / region_volume(region);
   double margin = p_.interior_margin;
   if (margin == 0.0)
     for (double r : p.radius) margin = std::max(margin, 2.0 * r);
-  double interior = std::nan("");
+  double interior = std::nan(""), interior_mass = std::nan("");
   if (margin < region.radius && 2.0 * margin < region.height) {
     const Region inner = shrink(region, margin);
     interior = 1.0 - compact_solid_volume(p.position, p.radius, pairs, inner) / region_volume(inner);
+    interior_mass = 1.0 - compact_solid_volume(p.position, p.radius, {}, inner) / region_volume(inner);
   }
   // Mass-conserving porosity: the spheres' volume without subtracting the lenses (in sintering
   // DEM the overlap stands for shrinkage; the lens material sits in the neck).
@@ -164,7 +167,7 @@ std::vector<double> CompactMonitor::values(const State& s) const {
   const double v_env = envelope_volume(p.position, p.radius, region, p_.envelope_cell);
   const double porosity_envelope = 1.0 - compact_solid_volume(p.position, p.radius, {}, all) / v_env;
   const double r_env = std::sqrt(v_env / (kPi * region.height));
-  return {porosity, interior, 1.0 - porosity, region.height, porosity_mass, r_env, porosity_envelope};
+  return {porosity, interior, 1.0 - porosity, region.height, porosity_mass, r_env, porosity_envelope, region.radius, interior_mass};
 }
 
 }  // namespace sparkdem::physics

@@ -86,7 +86,9 @@ double envelope_volume(const std::vector<Vec3>& positions, const std::vector<dou
 /// porosity_envelope = 1 - V_spheres / V_env (spheres clipped to the punches only, lenses not
 /// subtracted: by mass, in the sample's own envelope): a sample that shrinks away
 /// from the die wall on cooling is measured on its own size, as a sample taken out of the die
-/// (issue 21 item 7). Overlapping pairs are found afresh from the current positions
+/// (issue 21 item 7); die_radius = R [m] (envelope_radius / die_radius: does the compact fill
+/// its die?); porosity_mass_interior: porosity_mass of the interior region (core against
+/// compact: a uniform densification has them equal; issue 36's quasi-static gates). Overlapping pairs are found afresh from the current positions
 /// (cell-grid search, O(N); deterministic order), so bonded pairs and pairs of any law count.
 /// Registered as the monitor (stage key) "compact" in physics/register_all.cpp.
 class CompactMonitor final : public Monitor {

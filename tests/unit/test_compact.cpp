@@ -139,7 +139,7 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   const auto cols = mon.columns(s);
   const auto vals = mon.values(s);
   REQUIRE(cols == std::vector<std::string>{"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass",
-                                           "envelope_radius", "porosity_envelope"});
+                                           "envelope_radius", "porosity_envelope", "die_radius", "porosity_mass_interior"});
   const double V = sphere_volume(r), VL = lens_volume(r, r, 1.6e-3);
   const double H = 8.8e-3, R = 4.5e-3;
   const double porosity = 1.0 - (4.0 * V - VL - cap_volume(r, 0.3e-3)) / (kPi * R * R * H);
@@ -155,6 +155,9 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   const double v_env = envelope_volume(s.particles.position, s.particles.radius, compact_region(s, cp), cp.envelope_cell);
   CHECK(std::abs(vals[5] - std::sqrt(v_env / (kPi * H))) <= 1e-15);
   CHECK(std::abs(vals[6] - (1.0 - (4.0 * V - cap_volume(r, 0.3e-3)) / v_env)) <= 1e-12);
+  CHECK(std::abs(vals[7] - R) <= 1e-18);
+  // Interior by mass: A and B whole (the lens not subtracted).
+  CHECK(std::abs(vals[8] - (1.0 - 2.0 * V / (kPi * 2.3e-3 * 2.3e-3 * (H - 4.4e-3)))) <= 1e-12);
   // The die axis may point either way; the punches must face each other across it.
   std::get<CylinderShape>(s.walls[0].shape).axis = -Vec3::UnitZ();
   CHECK(std::abs(mon.values(s)[0] - porosity) <= 1e-12);
