@@ -5,8 +5,10 @@ seed000/table1_densification run (grain-boundary law alone), samples 3 (1100 C, 
 0.106) and 4 (1200 C, 30 MPa, 0.050) are hot pressed along their own cycles with the power-law
 creep branch of the sintering law (n = 5.5, Q = 250 kJ/mol, sigma_0 100 MPa, T_ref 1200 C:
 configs/materials/nial_sintering.json) at the reference strain rates RATES (eps_dot_0 [1/s]; the
-review's order-of-magnitude anchor is ~5e-2 1/s), plus sample 4 at 1e2 1/s without the full-density
-stop (creep_stop_gb_fraction 0). One CSV row per run: the cooled envelope porosity (the ledger's
+review's order-of-magnitude anchor is ~5e-2 1/s), plus sample 4 at 1e2 1/s with the full-density
+stop moved (creep_stop_gb_fraction 0 = none, 1.5, 2: the pair-wise necks overcount a particle's
+grain boundary, seed 000 Eq. 24-25). A run whose output directory in --workdir already holds a
+completed summary.json is read, not run again. One CSV row per run: the cooled envelope porosity (the ledger's
 body), the mass porosity in the die after cooling and at the end of the hold, the envelope radius,
 and which stop holds the necks at the end (stops()): the share of particles whose grain-boundary
 fraction sum a^2 / (4 r^2) reached 1 (seed 000 Eq. 22-23, the law's creep_stop_gb_fraction), and
@@ -76,12 +78,17 @@ def main():
         for k in (3, 4):
             for rate in RATES:
                 items.append((seed, d0, k, rate, "full-density stop (creep_stop_gb_fraction 1)", {}))
-        items.append((seed, d0, 4, 1e2, "no full-density stop (creep_stop_gb_fraction 0)", {"creep_stop_gb_fraction": 0.0}))
+        for stop in (0.0, 1.5, 2.0):
+            items.append((seed, d0, 4, 1e2, f"creep_stop_gb_fraction {stop:g}" + (" (no full-density stop)" if stop == 0 else ""),
+                          {"creep_stop_gb_fraction": stop}))
 
     def run(item):
         seed, d0, k, rate, variant, extra = item
-        name = f"seed{seed}_sample{k}_rate{rate:g}" + ("_nostop" if extra else "")
+        stop = extra.get("creep_stop_gb_fraction")
+        name = f"seed{seed}_sample{k}_rate{rate:g}" + ("" if stop is None else "_nostop" if stop == 0 else f"_stop{stop:g}")
         path, out = os.path.join(a.workdir, name + ".json"), os.path.join(a.workdir, name + "_out")
+        if predict.porosities(out) if os.path.exists(os.path.join(out, "summary.json")) else None:
+            return item, dict(predict.porosities(out), **stops(out))
         with open(path, "w") as f:
             json.dump(predict.scene(k, seed, d0, powerlaw_creep_rate=rate, **extra), f, indent=1)
         subprocess.run([a.sparkdem, "run", path, "-o", out, "--threads", "1", "--quiet"], check=False)
