@@ -299,6 +299,14 @@ void Simulation::rotate_prescribed(double dt, double t_stage_new) {
   }
 }
 
+void Simulation::advance_walls(double t_stage, double dt, double t_area) {
+  for (auto& w : s_.walls) {
+    const double u_old = w.u;
+    const double load = advance_wall(w, t_stage, dt, t_area, time_scale_);
+    w.work += load * (w.u - u_old);
+  }
+}
+
 void Simulation::zero_forces() {
   auto& p = s_.particles;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
@@ -590,11 +598,7 @@ void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_n
         rotate_prescribed(dt_used, t_new);
         break;
       case PlanItem::Kind::Walls:
-        for (auto& w : s_.walls) {
-          const double u_old = w.u;
-          advance_wall(w, t_new, dt_used, t_area, time_scale_);
-          w.work += w.normal_force * (w.u - u_old);  // the force of the last pass over the step's move
-        }
+        advance_walls(t_new, dt_used, t_area);
         break;
       case PlanItem::Kind::Neighbors:
         update_neighbors(skin_, cfg.sort_every_rebuilds);
@@ -645,7 +649,7 @@ void Simulation::check_module_steps(const StageConfig& cfg, double dt_used, bool
 }
 
 void Simulation::evaluate_start(double dt_used, double t_area, StageResult& res) {
-  for (auto& w : s_.walls) advance_wall(w, 0.0, dt_used, t_area, time_scale_);
+  advance_walls(0.0, dt_used, t_area);
   compute_forces(dt_used, 0.0);
   // Event-clock modules run once on the initial state (a stage of zero steps evaluates them).
   for (const PlanItem& it : plan_.items)

@@ -204,6 +204,8 @@ class Simulation {
 
  private:
   void compute_forces(double dt, double t_stage);
+  /// Every wall to stage time t_stage (motions, servos), each adding its step's work (Wall::work).
+  void advance_walls(double t_stage, double dt, double t_area);
   void zero_forces();
   void pair_forces(double dt);  ///< pair pass + per-particle gather
   /// Bond pass + gather; bonds that break are marked at `step` (the step being computed) and

@@ -60,9 +60,13 @@ struct Wall {
   Vec3 force = Vec3::Zero();  ///< total force of the particles on the wall [N]
   double normal_force = 0.0;  ///< component of `force` against the inward normal (push) [N]
   bool halted = false;        ///< the motion's halt condition was met: the wall stays where it is
-  /// Work done by the wall on the particles since the run began [J]: the sum over steps of the
-  /// normal force times the step's offset increment, sum F_n (u' - u) (a punch pressing a compact
-  /// does positive work). The quasi-static gate of a press compares the kinetic energy with it.
+  /// Work of the wall's load on the particles since the run began [J]: the sum over steps of the
+  /// load times the step's offset increment, sum F (u' - u) (a punch pressing a compact does
+  /// positive work). F is the normal force of the last force pass, except for a pressure wall,
+  /// where it is the applied load p(t) A: its servo retracts while the force overshoots and
+  /// advances while it lags, and summing that jitter with the measured force counted the servo's
+  /// own oscillation as (negative) work, -9e-5 J against +3e-5 J of compaction in the main
+  /// scenario. The quasi-static gate of a press compares the kinetic energy with it.
   double work = 0.0;
 
   bool is_plane() const { return std::holds_alternative<PlaneShape>(shape); }
@@ -139,12 +143,14 @@ inline double interpolate(const std::vector<double>& t, const std::vector<double
 ///   table:    u = u_start + D(s t),  u_dot = (D(s (t + dt)) - D(s t)) / dt   (mechanical rate)
 ///   pressure: F_target = p(s t) A
 /// with s = time_scale when motion.physical_time, else 1.
-inline void advance_wall(Wall& w, double t_stage, double dt, double area_hint, double time_scale = 1.0) {
+/// Returns the load that does the step's work (Wall::work): the target p A of a pressure wall,
+/// else the normal force of the last force pass.
+inline double advance_wall(Wall& w, double t_stage, double dt, double area_hint, double time_scale = 1.0) {
   const WallMotion& m = w.motion;
   const double s = m.physical_time ? time_scale : 1.0;
   if (w.halted) {
     w.u_dot = 0.0;
-    return;
+    return w.normal_force;
   }
   switch (m.kind) {
     case WallMotion::Kind::Fixed:
@@ -175,9 +181,10 @@ inline void advance_wall(Wall& w, double t_stage, double dt, double area_hint, d
       ratio = std::clamp(ratio, -1.0, 1.0);
       w.u_dot = m.max_speed * ratio;
       w.u += w.u_dot * dt;
-      break;
+      return target;
     }
   }
+  return w.normal_force;
 }
 
 /// Move a plane wall along its normal so that the nearest of the given spheres' surfaces is `gap`

@@ -49,6 +49,8 @@ TEST_CASE("a pressure-controlled punch settles on its target force", "[walls]") 
   sim.run_stage(cfg, obs);
   const Wall& punch = *s.find_wall("punch");
   CHECK(punch.normal_force == Approx(0.1).epsilon(5e-3));
+  // Its work is that of the applied load, p A (u - u_start), whatever the servo's jitter (to rounding).
+  CHECK(punch.work == Approx(0.1 * (punch.u - punch.u_start)).epsilon(1e-12));
   // Action = reaction: the force of the sphere on the punch is minus the contact force on the
   // (frozen, untouched-by-the-floor) sphere, to rounding (1e-12 relative).
   CHECK((s.particles.force[0] + punch.force).norm() <= 1e-12 * punch.force.norm());
