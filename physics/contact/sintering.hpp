@@ -364,26 +364,77 @@ struct Sintering {
     return std::min(g.r_i, g.r_j);
   }
 
-  ContactForces operator()(const ContactGeometry& g, const RelativeMotion& m, double dt, double* st) const {
-    if (g.wall) return wall_contact(g, m, dt, st);
-    const double T = std::isnan(g.temperature) ? p_.temperature : g.temperature;
-    const bool hot = T >= p_.sintering_start_temperature;
+  /// A dashpot as a line in F over a step: flow rate du_s/dt = F / eta + offset (creep_line).
+  struct CreepLine {
+    double eta;     ///< [N s/m]
+    double offset;  ///< [m/s]
+  };
+
+  /// The normal Maxwell element of a particle pair over the next step, from its geometry and
+  /// state alone (not from the motion): neck radius, flags, dashpot line, spring, driving force.
+  struct NormalElement {
+    double T = 0.0;         ///< pair temperature [K]
+    bool hot = false;       ///< at or above the sintering start
+    bool neck = false;      ///< a > 0
+    bool sintering = false; ///< the driving force acts (a < a_eq)
+    double a = 0.0;         ///< neck radius [m]
+    double eta_n = 0.0;     ///< grain-boundary dashpot, mechanical time [N s/m] (+inf: not flowing)
+    double r_spring = 0.0;  ///< radius of the spring's contact [m]
+    double kn = 0.0;        ///< spring [N/m]
+    CreepLine line;         ///< the dashpot as a line in F (with power-law creep)
+    double fs = 0.0;        ///< driving force [N] (attractive magnitude)
+  };
+  NormalElement normal_element(const ContactGeometry& g, const double* st) const {
+    NormalElement e;
+    e.T = std::isnan(g.temperature) ? p_.temperature : g.temperature;
+    e.hot = e.T >= p_.sintering_start_temperature;
     const double h = g.overlap;
     const double r_min = std::min(g.r_i, g.r_j);
     double a = st[kNeck];
-    if (hot && h > 0.0) a = std::max({a, geometric_neck(g.r_i, g.r_j, h), p_.min_neck_fraction * r_min});
-    a = std::min(a, r_min);
-    const bool neck = a > 0.0;
-    const double a_eq = r_min * sin_half_;
-    const bool sintering = hot && neck && a < a_eq;
+    if (e.hot && h > 0.0) a = std::max({a, geometric_neck(g.r_i, g.r_j, h), p_.min_neck_fraction * r_min});
+    e.a = std::min(a, r_min);
+    e.neck = e.a > 0.0;
+    e.sintering = e.hot && e.neck && e.a < r_min * sin_half_;
     const bool dense = p_.creep_stop_gb_fraction > 0.0 && g.gb_fraction >= p_.creep_stop_gb_fraction;
-    const bool creeping = hot && neck && h < p_.creep_overlap_limit * r_min && !dense;
-    const bool flowing = sintering || (creep_ && creeping);
+    const bool creeping = e.hot && e.neck && h < p_.creep_overlap_limit * r_min && !dense;
+    const bool flowing = e.sintering || (creep_ && creeping);
     // Mechanical-time viscosity: eta / s.
-    const double eta_n = flowing ? viscosity(a, T) / g.time_scale : std::numeric_limits<double>::infinity();
+    e.eta_n = flowing ? viscosity(e.a, e.T) / g.time_scale : std::numeric_limits<double>::infinity();
+    e.r_spring = spring_radius(g.r_eff, h - st[kViscous], e.a);
+    e.kn = 2.0 * e_star_ * e.r_spring;
+    e.line = e.neck ? creep_line(st[kElastic], e.a, e.T, g.time_scale, e.eta_n, creeping) : CreepLine{e.eta_n, 0.0};
+    if (e.sintering) e.fs = kernel::sintering_force(p_.surface_energy, cos_half_, sin_half_, driving_radius(g), e.a);
+    return e;
+  }
+
+  /// The pair's normal elastic force after a step of dt as an affine function of its approach rate
+  /// v over the step (the centres' approach plus the radii's growth, mechanical time): F_e' = f0 +
+  /// c v, exactly what operator() computes (kernel::maxwell_step is affine in v:
+  ///   F_e' = F_e e^-x - k dt phi(x) offset + k dt phi(x) v,  x = k dt / eta),
+  /// and the driving force F_s, so that the pair pushes its particles apart with f0 + c v - F_s
+  /// (numerical damping aside). c -> eta for a fast-relaxing dashpot, k dt for a frozen (elastic)
+  /// one; a cold pair without a neck is Hertz on its overlap (c = 0). The inertia-free step of
+  /// issue 36 item 1 solves the network of these lines for the particle velocities.
+  struct LinearResponse {
+    double f0 = 0.0;  ///< [N]
+    double c = 0.0;   ///< [N s/m]
+    double fs = 0.0;  ///< [N]
+  };
+  LinearResponse linear_response(const ContactGeometry& g, double dt, const double* st) const {
+    const NormalElement e = normal_element(g, st);
+    if (!e.neck) return {kernel::hertz_force(e_star_, g.r_eff, std::max(g.overlap - st[kViscous], 0.0)), 0.0, 0.0};
+    const kernel::MaxwellStep base = kernel::maxwell_step(st[kElastic], e.kn, e.line.eta, -e.line.offset, dt);
+    const kernel::MaxwellStep unit = kernel::maxwell_step(0.0, e.kn, e.line.eta, 1.0, dt);
+    return {base.force, unit.force, e.fs};
+  }
+
+  ContactForces operator()(const ContactGeometry& g, const RelativeMotion& m, double dt, double* st) const {
+    if (g.wall) return wall_contact(g, m, dt, st);
+    const NormalElement e = normal_element(g, st);
+    const bool hot = e.hot, neck = e.neck;
+    const double eta_n = e.eta_n, kn = e.kn, r_spring = e.r_spring, h = g.overlap;
+    double a = e.a;  // zero when the neck breaks below
     const double he = h - st[kViscous];
-    const double r_spring = spring_radius(g.r_eff, he, a);
-    const double kn = 2.0 * e_star_ * r_spring;
     // Approach rate of the Maxwell element: the centres' approach plus the radii's growth (thermal
     // expansion changes h at fixed centres: a neck cooled by dT pulls its particles together by
     // alpha dT (r_i + r_j), as the solid it stands for contracts).
@@ -394,12 +445,12 @@ struct Sintering {
     double us = st[kViscous];
     double fs = 0.0, us_rate = 0.0;
     if (neck) {
-      const CreepLine c = creep_line(fe, a, T, g.time_scale, eta_n, creeping);
+      const CreepLine c = e.line;
       const kernel::MaxwellStep ms = kernel::maxwell_step(fe, kn, c.eta, v - c.offset, dt);
       fe = ms.force;
       us += ms.flow + c.offset * dt;
       us_rate = dt > 0.0 ? ms.flow / dt + c.offset : 0.0;
-      if (sintering) fs = kernel::sintering_force(p_.surface_energy, cos_half_, sin_half_, driving_radius(g), a);
+      fs = e.fs;
       if (!hot && cold_contact_) fe = std::max(fe, 0.0);
     } else {
       // Cold contact without a neck: Hertz on the (elastic) overlap.
@@ -456,10 +507,6 @@ struct Sintering {
   /// (its tangent, the Newton step of the implicit update): hdot_pl(F) ~ (n r / F_e) F + (1 - n) r,
   /// r = hdot_pl(F_e), so the element stays linear and kernel::maxwell_step integrates it exactly
   /// with the approach rate v - offset.
-  struct CreepLine {
-    double eta;     ///< [N s/m]
-    double offset;  ///< [m/s]
-  };
   CreepLine creep_line(double fe, double a, double t_K, double time_scale, double eta_n, bool creeping) const {
     if (!(p_.powerlaw_creep_rate > 0.0) || !creeping || !(fe > 0.0)) return {eta_n, 0.0};
     const double rate0 = kernel::arrhenius_rate(p_.powerlaw_creep_rate, p_.powerlaw_creep_activation_energy,
