@@ -295,16 +295,12 @@ def plot_calibration(d, run, plt, path, csv_path):
     return True
 
 
-QS_COLUMNS = ("ke_over_punch_work", "core_minus_compact_porosity", "envelope_over_die_radius", "neck_max_bin_percent",
-              "neck_median_a_over_rmin", "neck_last_bin_percent")
-
-
 def table(d):
     """Rows of sps_table.csv: one per snapshot target, then one per stage (wall time)."""
     stages = d["stages"]
     head = (["row", "target_porosity", "porosity_taken"] + [f"kappa_{n} [S/m]" for n in stages]
             + ["kappa_measured [S/m]"] + [f"rel_err_{n} [%]" for n in stages]
-            + ["hashin_shtrikman_upper [S/m]"] + [f"{n}_over_bound" for n in stages] + [f"qs_{g}" for g in QS_COLUMNS]
+            + ["hashin_shtrikman_upper [S/m]"] + [f"{n}_over_bound" for n in stages] + [f"qs_{g}" for g in so.QUANTITIES]
             + ["qs_gates_pass", "wall_time_s"])
     by_target = {s.get("target"): s for s in d["snap"]["taken"]}
     targets = sorted(set(by_target) | set(d["snap"].get("not_reached", [])) - {None}, reverse=True)
@@ -321,7 +317,7 @@ def table(d):
         out[-1] += [f"{hs:.4g}" if hs else ""] + [f"{k / hs:.3f}" if k is not None and hs else "" for k in ks]
         g = so.quasi_static_gates(s.get("columns", {})) if s else {}
         verdicts = [g.get(n + "_pass") for n in so.GATES]
-        out[-1] += ([f"{g[n]:.4g}" if g.get(n) is not None else "" for n in QS_COLUMNS]
+        out[-1] += ([f"{g[n]:.4g}" if g.get(n) is not None else "" for n in so.QUANTITIES]
                     + ["" if not s or None in verdicts else ("yes" if all(verdicts) else "no")] + [""])
     for st in d["summary"]["stages"]:
         out.append([f"stage {st['name']}"] + [""] * (len(head) - 2) + [f"{st.get('wall_time_s', math.nan):.2f}"])

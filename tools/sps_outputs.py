@@ -101,8 +101,11 @@ def calibration(summary, stage_name):
 # kinetic energy below 1e-4 of the punch work; core and compact mass porosity within 0.02; the
 # compact's envelope within 1 % of the die radius while pressed; no neck-histogram bin above 25 %
 # (seed 000 Fig. 6's axis). The median a / r_min rising with density is checked across snapshots.
-GATES = {"ke_over_punch_work": 1e-4, "core_minus_compact_porosity": 0.02, "envelope_over_die_radius": 0.99,
-         "neck_max_bin_percent": 25.0}
+GATES = {"ke_over_punch_work": lambda v: v <= 1e-4, "core_minus_compact_porosity": lambda v: abs(v) < 0.02,
+         "envelope_over_die_radius": lambda v: v >= 0.99, "neck_max_bin_percent": lambda v: v <= 25.0}
+# The quantities reported per snapshot: the gated ones and the neck statistics beside them.
+QUANTITIES = ("ke_over_punch_work", "core_minus_compact_porosity", "envelope_over_die_radius", "neck_max_bin_percent",
+              "neck_median_a_over_rmin", "neck_last_bin_percent")
 
 
 def quasi_static_gates(columns, punch="top"):
@@ -123,14 +126,6 @@ def quasi_static_gates(columns, punch="top"):
             "neck_median_a_over_rmin": col("neck_median_a_over_rmin"),
             "neck_last_bin_percent": col("neck_last_bin_percent")}
     out = dict(vals)
-    for name, limit in GATES.items():
-        v = vals[name]
-        if v is None:
-            out[name + "_pass"] = None
-        elif name == "core_minus_compact_porosity":
-            out[name + "_pass"] = abs(v) < limit
-        elif name == "envelope_over_die_radius":
-            out[name + "_pass"] = v >= limit
-        else:
-            out[name + "_pass"] = v <= limit
+    for name, passes in GATES.items():
+        out[name + "_pass"] = None if vals[name] is None else passes(vals[name])
     return out

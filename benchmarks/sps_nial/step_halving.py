@@ -10,16 +10,14 @@ change at the half step, and the snapshot's quasi-static gates (tools/sps_output
         [--config configs/sps_nial_small.json] [--seed 2024] [--csv benchmarks/sps_nial/step_halving.csv]
 """
 import argparse
-import csv
 import json
 import os
 import subprocess
 
+from benchmarks.perf.harness import write_csv_atomic
 from tools import sps_outputs as so
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-GATES = ("ke_over_punch_work", "core_minus_compact_porosity", "envelope_over_die_radius", "neck_max_bin_percent",
-         "neck_median_a_over_rmin", "neck_last_bin_percent")
 
 
 def scene(config, seed, factor):
@@ -70,16 +68,11 @@ def main():
                 row["kappa_without_layer_change"] = nogb[k] / ref[1][k] - 1.0
             if factor != 1.0 and gb.get(k) and ref[2].get(k):
                 row["kappa_with_layer_change"] = gb[k] / ref[2][k] - 1.0
-            row.update({f"qs_{n}": g.get(n) for n in GATES})
+            row.update({f"qs_{n}": g.get(n) for n in so.QUANTITIES})
             rows.append(row)
     fields = ["dt_factor", "snapshot", "target", "porosity_taken", "kappa_without_layer", "kappa_with_layer", "kappa_without_layer_change",
-              "kappa_with_layer_change"] + [f"qs_{n}" for n in GATES] + ["binary"]
-    with open(a.csv + ".tmp", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=fields)
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: ("%.6g" % v if isinstance(v, float) else v) for k, v in r.items()})
-    os.replace(a.csv + ".tmp", a.csv)
+              "kappa_with_layer_change"] + [f"qs_{n}" for n in so.QUANTITIES] + ["binary"]
+    write_csv_atomic(a.csv, [{k: ("%.6g" % v if isinstance(v, float) else v) for k, v in r.items()} for r in rows], fields)
     print(open(a.csv).read())
 
 

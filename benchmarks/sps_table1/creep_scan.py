@@ -19,13 +19,14 @@ the shares of the necks frozen by it and by the overlap limit h >= r_min (creep_
         [--csv benchmarks/sps_table1/creep_scan.csv]
 """
 import argparse
-import csv
-import numpy as np
 import json
 import os
 import subprocess
 from concurrent import futures
 
+import numpy as np
+
+from benchmarks.perf.harness import write_csv_atomic
 from benchmarks.sps_table1 import predict
 
 RATES = (1e-2, 1.0, 1e2, 1e4)
@@ -86,13 +87,11 @@ def main():
         seed, d0, k, rate, variant, extra = item
         stop = extra.get("creep_stop_gb_fraction")
         name = f"seed{seed}_sample{k}_rate{rate:g}" + ("" if stop is None else "_nostop" if stop == 0 else f"_stop{stop:g}")
-        path, out = os.path.join(a.workdir, name + ".json"), os.path.join(a.workdir, name + "_out")
-        if predict.porosities(out) if os.path.exists(os.path.join(out, "summary.json")) else None:
-            return item, dict(predict.porosities(out), **stops(out))
-        with open(path, "w") as f:
-            json.dump(predict.scene(k, seed, d0, powerlaw_creep_rate=rate, **extra), f, indent=1)
-        subprocess.run([a.sparkdem, "run", path, "-o", out, "--threads", "1", "--quiet"], check=False)
-        p = predict.porosities(out)
+        out = os.path.join(a.workdir, name + "_out")
+        p = predict.porosities(out) if os.path.exists(os.path.join(out, "summary.json")) else None  # a finished run is read
+        if p is None:
+            out = predict.run_scene(a.sparkdem, a.workdir, predict.scene(k, seed, d0, powerlaw_creep_rate=rate, **extra), name)
+            p = predict.porosities(out)
         return item, dict(p, **stops(out)) if p else None
 
     with futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
@@ -100,17 +99,15 @@ def main():
     fields = ["seed", "sample", "measured", "d0_m2_s", "powerlaw_creep_rate_per_s", "variant", "porosity_envelope",
               "porosity_envelope_minus_measured", "porosity_mass", "porosity_mass_hold_end", "envelope_radius_m", "particles_gb_full",
               "necks_stopped_gb", "necks_stopped_overlap", "binary"]
-    with open(a.csv + ".tmp", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=fields)
-        w.writeheader()
-        for (seed, d0, k, rate, variant, _), p in results:
-            row = {"seed": seed, "sample": k, "measured": MEASURED[k], "d0_m2_s": "%.6g" % d0, "powerlaw_creep_rate_per_s": "%g" % rate,
-                   "variant": variant, "binary": version}
-            if p:
-                row.update({f: "%.5g" % v for f, v in p.items()})
-                row["porosity_envelope_minus_measured"] = "%+.4f" % (p["porosity_envelope"] - MEASURED[k])
-            w.writerow(row)
-    os.replace(a.csv + ".tmp", a.csv)
+    rows = []
+    for (seed, d0, k, rate, variant, _), p in results:
+        row = {"seed": seed, "sample": k, "measured": MEASURED[k], "d0_m2_s": "%.6g" % d0, "powerlaw_creep_rate_per_s": "%g" % rate,
+               "variant": variant, "binary": version}
+        if p:
+            row.update({f: "%.5g" % v for f, v in p.items()})
+            row["porosity_envelope_minus_measured"] = "%+.4f" % (p["porosity_envelope"] - MEASURED[k])
+        rows.append(row)
+    write_csv_atomic(a.csv, rows, fields)
     print(open(a.csv).read())
 
 

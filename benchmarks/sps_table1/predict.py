@@ -52,6 +52,16 @@ def scene(k, seed, d0, **law):
     return c
 
 
+def run_scene(sparkdem, workdir, sc, name, threads=1):
+    """Writes scene `sc` to WORKDIR/NAME.json and runs it into WORKDIR/NAME_out (a failed run leaves
+    its summary.json status for porosities() to read); returns the output directory."""
+    path, out = os.path.join(workdir, name + ".json"), os.path.join(workdir, name + "_out")
+    with open(path, "w") as f:
+        json.dump(sc, f, indent=1)
+    subprocess.run([sparkdem, "run", path, "-o", out, "--threads", str(threads), "--quiet"], check=False)
+    return out
+
+
 def porosities(out):
     """Porosities of the hot press's last row (cooled) and at the end of the hold, or None on a failed run."""
     with open(os.path.join(out, "summary.json")) as f:
@@ -166,14 +176,7 @@ def main():
         ap.error("--sparkdem and --workdir are needed to run")
     os.makedirs(a.workdir, exist_ok=True)
 
-    def run(sc, name):
-        path, out = os.path.join(a.workdir, name + ".json"), os.path.join(a.workdir, name + "_out")
-        with open(path, "w") as f:
-            json.dump(sc, f, indent=1)
-        subprocess.run([a.sparkdem, "run", path, "-o", out, "--threads", str(a.threads), "--quiet"], check=False)
-        return out
-
-    result, d0, _ = predict(run, a.seed)
+    result, d0, _ = predict(lambda sc, name: run_scene(a.sparkdem, a.workdir, sc, name, a.threads), a.seed)
     path = a.csv or os.path.join(a.workdir, "prediction.csv")
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)

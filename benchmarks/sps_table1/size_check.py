@@ -12,12 +12,12 @@ die cooled and at the end of the hold; then per (seed, sample) the difference 4N
         [--samples 2 4] [--runs RUNFILE] [--csv benchmarks/sps_table1/size_check.csv]
 """
 import argparse
-import csv
 import json
 import os
 import subprocess
 from concurrent import futures
 
+from benchmarks.perf.harness import write_csv_atomic
 from benchmarks.sps_table1 import predict
 from benchmarks.sps_table1.creep_scan import RUNS, calibrated_d0
 
@@ -47,11 +47,7 @@ def main():
 
     def run(item):
         seed, d0, k, f = item
-        name = f"seed{seed}_sample{k}_{'4N' if f > 1 else 'N'}"
-        path, out = os.path.join(a.workdir, name + ".json"), os.path.join(a.workdir, name + "_out")
-        with open(path, "w") as fh:
-            json.dump(scaled(predict.scene(k, seed, d0), f), fh, indent=1)
-        subprocess.run([a.sparkdem, "run", path, "-o", out, "--threads", "1", "--quiet"], check=False)
+        out = predict.run_scene(a.sparkdem, a.workdir, scaled(predict.scene(k, seed, d0), f), f"seed{seed}_sample{k}_{'4N' if f > 1 else 'N'}")
         p = predict.porosities(out)
         n = None
         if p:
@@ -64,19 +60,17 @@ def main():
     fields = ["seed", "sample", "measured", "d0_m2_s", "size", "particles", "porosity_envelope", "porosity_mass",
               "porosity_mass_hold_end", "envelope_4N_minus_N", "binary"]
     by = {(s, k, f > 1): (p, n) for (s, _, k, f), p, n in results}
-    with open(a.csv + ".tmp", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=fields)
-        w.writeheader()
-        for (seed, d0, k, f), p, n in results:
-            row = {"seed": seed, "sample": k, "measured": predict.MEASURED[k], "d0_m2_s": "%.6g" % d0, "size": "4N" if f > 1 else "N",
-                   "particles": n, "binary": version}
-            if p:
-                row.update({c: "%.5g" % p[c] for c in ("porosity_envelope", "porosity_mass", "porosity_mass_hold_end")})
-                other = by.get((seed, k, False))[0] if f > 1 else None
-                if other:
-                    row["envelope_4N_minus_N"] = "%+.4f" % (p["porosity_envelope"] - other["porosity_envelope"])
-            w.writerow(row)
-    os.replace(a.csv + ".tmp", a.csv)
+    rows = []
+    for (seed, d0, k, f), p, n in results:
+        row = {"seed": seed, "sample": k, "measured": predict.MEASURED[k], "d0_m2_s": "%.6g" % d0, "size": "4N" if f > 1 else "N",
+               "particles": n, "binary": version}
+        if p:
+            row.update({c: "%.5g" % p[c] for c in ("porosity_envelope", "porosity_mass", "porosity_mass_hold_end")})
+            other = by.get((seed, k, False))[0] if f > 1 else None
+            if other:
+                row["envelope_4N_minus_N"] = "%+.4f" % (p["porosity_envelope"] - other["porosity_envelope"])
+        rows.append(row)
+    write_csv_atomic(a.csv, rows, fields)
     print(open(a.csv).read())
 
 

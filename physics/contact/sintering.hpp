@@ -423,9 +423,10 @@ struct Sintering {
   LinearResponse linear_response(const ContactGeometry& g, double dt, const double* st) const {
     const NormalElement e = normal_element(g, st);
     if (!e.neck) return {kernel::hertz_force(e_star_, g.r_eff, std::max(g.overlap - st[kViscous], 0.0)), 0.0, 0.0};
-    const kernel::MaxwellStep base = kernel::maxwell_step(st[kElastic], e.kn, e.line.eta, -e.line.offset, dt);
-    const kernel::MaxwellStep unit = kernel::maxwell_step(0.0, e.kn, e.line.eta, 1.0, dt);
-    return {base.force, unit.force, e.fs};
+    // maxwell_step's force, F e^-x + k dt phi (v - offset), split into its two parts.
+    const kernel::MaxwellFactors m = kernel::maxwell_factors(e.kn, e.line.eta, dt);
+    const double c = e.kn * dt * m.phi;
+    return {st[kElastic] * m.decay - c * e.line.offset, c, e.fs};
   }
 
   ContactForces operator()(const ContactGeometry& g, const RelativeMotion& m, double dt, double* st) const {
@@ -445,11 +446,10 @@ struct Sintering {
     double us = st[kViscous];
     double fs = 0.0, us_rate = 0.0;
     if (neck) {
-      const CreepLine c = e.line;
-      const kernel::MaxwellStep ms = kernel::maxwell_step(fe, kn, c.eta, v - c.offset, dt);
+      const kernel::MaxwellStep ms = kernel::maxwell_step(fe, kn, e.line.eta, v - e.line.offset, dt);
       fe = ms.force;
-      us += ms.flow + c.offset * dt;
-      us_rate = dt > 0.0 ? ms.flow / dt + c.offset : 0.0;
+      us += ms.flow + e.line.offset * dt;
+      us_rate = dt > 0.0 ? ms.flow / dt + e.line.offset : 0.0;
       fs = e.fs;
       if (!hot && cold_contact_) fe = std::max(fe, 0.0);
     } else {

@@ -33,7 +33,12 @@ Vec3 lens_centre(const Vec3& xi, double ri, const Vec3& xj, double rj) {
 
 double compact_solid_volume(const std::vector<Vec3>& positions, const std::vector<double>& radii,
                             const std::vector<std::array<Index, 2>>& pairs, const Region& region) {
-  double v = solid_volume_in_region(positions, radii, region);  // validates the region and the spheres
+  // solid_volume_in_region validates the region and the spheres.
+  return minus_lenses(solid_volume_in_region(positions, radii, region), positions, radii, pairs, region);
+}
+
+double minus_lenses(double v, const std::vector<Vec3>& positions, const std::vector<double>& radii,
+                    const std::vector<std::array<Index, 2>>& pairs, const Region& region) {
   for (const auto& [i, j] : pairs) {
     const double d = (positions[j] - positions[i]).norm();
     if (d >= radii[i] + radii[j]) continue;
@@ -144,19 +149,21 @@ std::vector<double> CompactMonitor::values(const State& s) const {
   const auto& p = s.particles;
   if (p.size() == 0) return {1.0, 1.0, 0.0, region.height, 1.0, 0.0, 1.0, region.radius, 1.0};
   const auto pairs = find_pairs(p.position, p.radius, 0.0);
-  const double porosity = 1.0 - compact_solid_volume(p.position, p.radius, pairs, region) / region_volume(region);
+  // Each region's spheres once; the lenses subtracted for `porosity`, not for the porosities by
+  // mass (in sintering DEM the overlap stands for shrinkage; the lens material sits in the neck).
+  const double spheres = solid_volume_in_region(p.position, p.radius, region);
+  const double porosity = 1.0 - minus_lenses(spheres, p.position, p.radius, pairs, region) / region_volume(region);
+  const double porosity_mass = 1.0 - spheres / region_volume(region);
   double margin = p_.interior_margin;
   if (margin == 0.0)
     for (double r : p.radius) margin = std::max(margin, 2.0 * r);
   double interior = std::nan(""), interior_mass = std::nan("");
   if (margin < region.radius && 2.0 * margin < region.height) {
     const Region inner = shrink(region, margin);
-    interior = 1.0 - compact_solid_volume(p.position, p.radius, pairs, inner) / region_volume(inner);
-    interior_mass = 1.0 - compact_solid_volume(p.position, p.radius, {}, inner) / region_volume(inner);
+    const double inner_spheres = solid_volume_in_region(p.position, p.radius, inner);
+    interior = 1.0 - minus_lenses(inner_spheres, p.position, p.radius, pairs, inner) / region_volume(inner);
+    interior_mass = 1.0 - inner_spheres / region_volume(inner);
   }
-  // Mass-conserving porosity: the spheres' volume without subtracting the lenses (in sintering
-  // DEM the overlap stands for shrinkage; the lens material sits in the neck).
-  const double porosity_mass = 1.0 - compact_solid_volume(p.position, p.radius, {}, region) / region_volume(region);
   // The sample's own envelope (a cooled sample leaves the die wall): its solid by mass (spheres
   // clipped to the punches only) in its profiled envelope volume.
   CylinderRegion all = region;

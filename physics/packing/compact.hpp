@@ -42,6 +42,11 @@ Vec3 lens_centre(const Vec3& xi, double ri, const Vec3& xj, double rj);
 /// lens centre lies in the region.
 double compact_solid_volume(const std::vector<Vec3>& positions, const std::vector<double>& radii,
                             const std::vector<std::array<Index, 2>>& pairs, const Region& region);
+/// v [m^3] minus the lenses of those pairs whose lens centre lies in the region, in pair order:
+/// compact_solid_volume = minus_lenses(solid_volume_in_region(...), ...), for a caller that also
+/// needs the spheres' volume alone (the porosity by mass).
+double minus_lenses(double v, const std::vector<Vec3>& positions, const std::vector<double>& radii,
+                    const std::vector<std::array<Index, 2>>& pairs, const Region& region);
 
 /// Stage key "compact": the die (a cylinder wall) and the two punches (plane walls normal to its
 /// axis, normals pointing into the compact).
