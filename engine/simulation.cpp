@@ -189,8 +189,10 @@ StepPlan Simulation::prepare(const StageConfig& cfg) {
     m->declare(d);
     for (const auto& f : d.particle_fields) s_.particles.fields.declare(f, s_.particles.size());
   }
+  if (cfg.quasi_static)  // the inertia-free solve's guesses (engine/simulation_quasi_static.cpp)
+    for (const auto& wall : s_.walls) s_.particles.fields.declare({quasi_static_slip_field(wall.name), 1, "N s/m", 0.0, false}, s_.particles.size());
   for (Module* m : modules_) m->bind(s_);
-  plan_ = build_step_plan(modules_, kCoreFields, bond_law_ != nullptr, cfg.mechanics);
+  plan_ = build_step_plan(modules_, kCoreFields, bond_law_ != nullptr, cfg.mechanics, cfg.quasi_static);
   // Event clocks keep their references in fields (permuted and checkpointed with the particles).
   for (const PlanItem& it : plan_.items) {
     if (it.kind != PlanItem::Kind::Module || it.clock.kind != Clock::Kind::OnEvent) continue;
@@ -220,6 +222,8 @@ std::map<std::string, double> Simulation::module_stable_dts() const {
 
 double Simulation::resolve_dt(const StageConfig& cfg) const {
   if (cfg.dt > 0.0) return cfg.dt;
+  if (cfg.quasi_static && cfg.mechanics)
+    throw SetupError("stage '" + cfg.name + "': a quasi-static stage has no stable step to take a fraction of; set dt (its substeps follow quasi_static.max_strain_increment)");
   if (!cfg.mechanics) {  // frozen: the smallest stable step of the modules, in mechanical time
     double stable = std::numeric_limits<double>::infinity();
     for (const Module* m : modules_) {
@@ -317,7 +321,7 @@ void Simulation::zero_forces() {
   }
 }
 
-void Simulation::pair_forces(double dt) { law_.pair_forces(s_.particles, s_.contacts, dt, time_scale_); }
+void Simulation::pair_forces(double dt) { law_.pair_forces(s_.particles, s_.contacts, dt, time_scale_, inertia_free_); }
 
 void Simulation::bond_forces(double dt, Step step) {
   if (!bond_law_) return;
@@ -330,7 +334,7 @@ void Simulation::bond_forces(double dt, Step step) {
 }
 
 void Simulation::wall_forces(double dt) {
-  const WallLoads loads = law_.wall_pass(s_.particles, s_.walls, s_.wall_candidates, dt, time_scale_);
+  const WallLoads loads = law_.wall_pass(s_.particles, s_.walls, s_.wall_candidates, dt, time_scale_, inertia_free_);
   for (std::size_t k = 0; k < s_.walls.size(); ++k) {
     s_.walls[k].force = loads.force[k];
     s_.walls[k].normal_force = loads.normal[k];
@@ -621,6 +625,9 @@ void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_n
       case PlanItem::Kind::IntegrateSecondHalf:
         verlet_second_half(p, dt_used);
         break;
+      case PlanItem::Kind::QuasiStatic:
+        quasi_static_step(cfg, dt_used, t_new, t_area);
+        break;
     }
     if (time_item) stats_->core_seconds[it.name] += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
@@ -649,8 +656,16 @@ void Simulation::check_module_steps(const StageConfig& cfg, double dt_used, bool
 }
 
 void Simulation::evaluate_start(double dt_used, double t_area, StageResult& res) {
-  advance_walls(0.0, dt_used, t_area);
-  compute_forces(dt_used, 0.0);
+  if (plan_.items.empty() || plan_.items.front().kind != PlanItem::Kind::QuasiStatic) {
+    advance_walls(0.0, dt_used, t_area);
+    compute_forces(dt_used, 0.0);
+  } else {
+    // The forces of the start state without advancing any history (a step of zero length); a
+    // force-controlled wall stays where it is (the solve moves it).
+    for (auto& w : s_.walls)
+      if (w.motion.kind != WallMotion::Kind::Pressure || w.halted) advance_wall(w, 0.0, dt_used, t_area, time_scale_);
+    compute_forces(0.0, 0.0);
+  }
   // Event-clock modules run once on the initial state (a stage of zero steps evaluates them).
   for (const PlanItem& it : plan_.items)
     if (it.kind == PlanItem::Kind::Module && it.clock.kind == Clock::Kind::OnEvent) {
@@ -665,6 +680,7 @@ WatchdogConfig Simulation::stage_watchdog(const StageConfig& cfg) const {
   WatchdogConfig wd = cfg.watchdog;
   if (!(wd.max_speed > 0.0)) wd.max_speed = cfg.blowup_speed;
   if (wd.check_every < 1) throw SetupError("stage '" + cfg.name + "': watchdog.check_every must be at least 1");
+  if (cfg.quasi_static) wd.energy_growth_factor = 0.0;  // no inertia: the kinetic energy is a rate, not a mode that can grow
   if (!cfg.mechanics || cfg.max_steps == 0 || !(cfg.duration > 0.0)) {
     // Its geometry is given (e.g. an overlapping packing built for a network test).
     wd.max_speed = std::numeric_limits<double>::infinity();
@@ -734,10 +750,21 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.particles = p.size();
   const std::int64_t rebuilds0 = s_.rebuilds;
   if (resume) check_resumed_clocks(cfg);
+  if (cfg.quasi_static && cfg.mechanics) {
+    check_quasi_static(cfg);
+    // Velocities are the solve's output, not state: the explicit stage before left its own.
+    if (!resume)
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        p.velocity[i].setZero();
+        p.omega[i].setZero();
+      }
+  }
+  const bool explicit_mechanics = cfg.mechanics && !cfg.quasi_static;
+  inertia_free_ = cfg.mechanics && cfg.quasi_static;
   const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
   s_.stage_dt = dt_used;
   res.dt = dt_used;
-  res.stable_dt_at_start = cfg.mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+  res.stable_dt_at_start = explicit_mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
   res.dt_fraction_used = dt_used / res.stable_dt_at_start;
   if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt)
     throw SetupError("stage '" + cfg.name + "': dt = " + fmt_g(dt_used) + " s is " + fmt_g(res.dt_fraction_used) + " of the stable step " +
@@ -813,7 +840,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     const bool checked = kk % wd.check_every == 0;
     if (checked) watchdog_check(s_, wd, wctx, true);
     if (cfg.stability_check_every > 0 && kk % cfg.stability_check_every == 0 && !cfg.allow_unstable_dt) {
-      const double st = cfg.mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+      const double st = explicit_mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
       if (dt_used > st)
         throw PhysicsError(s_.step, {}, "time step",
                            "dt = " + fmt_g(dt_used) + " s now exceeds the stable step " + fmt_g(st) +

@@ -10,6 +10,7 @@
 
 #include "engine/contact/bond_model.hpp"
 #include "engine/contact/contact_model.hpp"
+#include "engine/integrate/quasi_static.hpp"
 #include "engine/model/module.hpp"
 #include "engine/schedule/scheduler.hpp"
 #include "engine/start_checks.hpp"
@@ -95,6 +96,12 @@ struct StageConfig {
   /// the stage starts from: "allow", "refuse" or "relax" (engine/start_checks.hpp). Always reported.
   std::string initial_overlap = "allow";
   double initial_overlap_limit = 0.01;
+  /// The inertia-free path (engine/integrate/quasi_static.hpp): each step solves the contacts for
+  /// the velocities that balance every particle; dt is then given (the step of the modules and the
+  /// output; max_strain_increment splits it), masses and time are not scaled, pressure walls are
+  /// force-controlled unknowns. Needs a law with linear_contact (sintering).
+  bool quasi_static = false;
+  QuasiStaticConfig quasi;
 };
 
 /// A module's step at the stage start: its own stable step and the step it runs with (both in
@@ -176,6 +183,20 @@ struct StageResult {
   std::int64_t neighbor_rebuilds = 0;    ///< Verlet-list rebuilds in this run of the stage
   std::vector<ModuleStep> module_steps;  ///< per module at the stage start
   InitialOverlapReport initial_overlap;  ///< overlaps of the starting packing (not measured on resume)
+  /// Quasi-static stages: counts of the inertia-free solves (summary.json "quasi_static").
+  struct QuasiStaticStats {
+    Step substeps = 0;              ///< accepted substeps
+    Step rejected = 0;              ///< solves redone at a smaller substep (max_strain_increment)
+    Step max_substeps = 0;          ///< largest number of substeps in one step
+    Step rounds = 0;                ///< linear solves (nonlinear rounds included)
+    Step max_rounds = 0;            ///< largest rounds of one solve
+    Step unsettled = 0;             ///< solves whose nonlinear rounds did not settle (friction_iterations)
+    std::int64_t cg_iterations = 0; ///< summed
+    double max_strain_increment = 0.0;
+    double max_residual = 0.0;      ///< largest |net force| of a particle / mean |contact force|, after a step
+    double last_residual = 0.0;     ///< the same after the last step
+    double solve_seconds = 0.0;     ///< wall time of the rows and solves [s]
+  } quasi_static;
 };
 
 class Simulation {
@@ -207,11 +228,11 @@ class Simulation {
   /// Every wall to stage time t_stage (motions, servos), each adding its step's work (Wall::work).
   void advance_walls(double t_stage, double dt, double t_area);
   void zero_forces();
-  void pair_forces(double dt);  ///< pair pass + per-particle gather
+  void pair_forces(double dt);  ///< pair pass + per-particle gather (m* = 0 in a quasi-static stage)
   /// Bond pass + gather; bonds that break are marked at `step` (the step being computed) and
   /// hand their state to the contact table.
   void bond_forces(double dt, Step step);
-  void wall_forces(double dt);  ///< wall pass; stores the wall loads
+  void wall_forces(double dt);  ///< wall pass; stores the wall loads (m* = 0 in a quasi-static stage)
   void update_neighbors(double skin, Step sort_every);
   /// Run one plan item of kind Module at the end of mechanical step `step` (global index of the
   /// step being completed), `t_stage` = stage time at its end, on the item's clock.
@@ -239,10 +260,19 @@ class Simulation {
   StepPlan plan_;
   double skin_ = 0.0;
   double time_scale_ = 1.0;
+  bool inertia_free_ = false;  ///< the running stage is quasi-static
   std::function<bool(const double*)> alive_rule_;  ///< persistent pairs of the contact law
   std::map<std::string, PrescribedMotion> prescribed_;
   /// Turn the members of rotating prescribed sets by their step rotation (after the drift).
   void rotate_prescribed(double dt, double t_stage_new);
+  // The inertia-free path (StageConfig::quasi_static; order in engine/schedule/scheduler.hpp).
+  void check_quasi_static(const StageConfig& cfg) const;
+  void quasi_static_step(const StageConfig& cfg, double dt, double t_new, double t_area);
+  QuasiStaticProblem quasi_static_problem(double t_end, double h, double t_area) const;
+  void commit_quasi_static(const QuasiStaticSolution& sol, const QuasiStaticProblem& prob, double t_end, double t_area);
+  double force_residual() const;
+  [[noreturn]] void throw_increment_error(const QuasiStaticProblem& prob, const QuasiStaticSolution& sol, const QuasiStaticConfig& q,
+                                          double hs) const;
 };
 
 /// Built-in monitors available in every stage.

@@ -48,6 +48,18 @@ struct WallLoads {
   std::vector<double> normal;  ///< sum over contacts of the push against the inward normal [N]
 };
 
+/// One contact of the inertia-free step (engine/integrate/quasi_static.hpp): particles i and j
+/// (j < 0: the wall of index -1 - j), the unit normal n (j -> i), the lever arms of the contact
+/// point, the smaller radius (the strain-increment measure) and the law's affine forces.
+struct LinearRow {
+  Index i = 0;
+  std::int64_t j = -1;
+  Vec3 n = Vec3::UnitZ();
+  double arm_i = 0.0, arm_j = 0.0;  ///< [m]
+  double r_min = 0.0;               ///< [m]
+  LinearContact lc;
+};
+
 class ContactModel {
  public:
   virtual ~ContactModel() = default;
@@ -58,16 +70,18 @@ class ContactModel {
   virtual std::function<bool(const double*)> alive_rule() const { return {}; }
   /// Particle-particle pass: fills table.force/torque/overlap rows (does not gather).
   /// `time_scale` = physical seconds per mechanical second (used by kThermal laws only).
-  virtual void pair_pass(const ParticleStore& p, ContactTable& table, double dt, double time_scale = 1.0) const = 0;
+  /// `inertia_free` (a quasi-static stage): every geometry's m* is 0, so the laws' numerical
+  /// dashpots, which scale with sqrt(m* k), vanish as the inertia they damp does.
+  virtual void pair_pass(const ParticleStore& p, ContactTable& table, double dt, double time_scale = 1.0, bool inertia_free = false) const = 0;
   /// pair_pass followed by table.gather into p.force / p.torque. Bit-identical to them when the
   /// particles' forces and torques are zero on entry (as at the step's contact pass, after
   /// zero_forces): on one thread the rows are added as they are computed (see the definition).
-  virtual void pair_forces(ParticleStore& p, ContactTable& table, double dt, double time_scale = 1.0) const = 0;
+  virtual void pair_forces(ParticleStore& p, ContactTable& table, double dt, double time_scale = 1.0, bool inertia_free = false) const = 0;
   /// Particle-wall pass over the candidate particles of each wall (those within r + skin at the
   /// last neighbour rebuild); adds forces and torques to the particles; returns wall loads.
   /// Wall history lives in the per-particle field "wall_state/<wall name>".
   virtual WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& candidates,
-                              double dt, double time_scale = 1.0) const = 0;
+                              double dt, double time_scale = 1.0, bool inertia_free = false) const = 0;
   /// Stable step estimate from the current state [s]: min of the law's a-priori step (Rayleigh
   /// for Hertz laws) and 2/omega_max, omega_max^2 the largest eigenvalue of the mass-weighted
   /// stiffness matrix K~ = M^-1/2 K M^-1/2 of the current contacts, bounded by the tighter of two
@@ -94,6 +108,15 @@ class ContactModel {
   /// (+inf without springs). stable_dt = min(a-priori step, network_stable_dt).
   virtual double network_stable_dt(const ParticleStore& p, const ContactTable& table, const std::vector<Wall>& walls,
                                    const std::vector<double>* extra_rows = nullptr) const = 0;
+  /// True when the law has an inertia-free form (Law::linear_contact): quasi-static stages.
+  virtual bool has_linear_contacts() const { return false; }
+  /// The inertia-free rows of the live pairs of the contact table and of the walls' candidate
+  /// particles in contact, for a step of dt (state read only). Empty for a law without the form.
+  virtual std::vector<LinearRow> linear_rows(const ParticleStore& p, const ContactTable& table, const std::vector<Wall>& walls,
+                                             const std::vector<std::vector<Index>>& candidates, double dt) const {
+    (void)p, (void)table, (void)walls, (void)candidates, (void)dt;
+    return {};
+  }
   /// The run watchdog's default bound on overlap / smaller radius (pairs) and overlap / radius
   /// (walls): kDefaultOverlapRatioBound, or the law's own `overlap_ratio_bound()` when it has one
   /// (a law whose healthy runs reach larger overlaps, e.g. sintering densification).
@@ -159,6 +182,42 @@ class ContactModelT final : public ContactModel {
     else
       return kDefaultOverlapRatioBound;
   }
+  static constexpr bool kLinear = requires(const Law& l, const ContactGeometry& g, const double* st) { l.linear_contact(g, 0.0, st); };
+  bool has_linear_contacts() const override { return kLinear; }
+  std::vector<LinearRow> linear_rows(const ParticleStore& p, const ContactTable& t, const std::vector<Wall>& walls,
+                                     const std::vector<std::vector<Index>>& cand, double dt) const override {
+    std::vector<LinearRow> out;
+    if constexpr (kLinear) {
+      const PassInputs in = pass_inputs(p, t, 1.0);
+      out.reserve(t.size());
+      for (std::size_t r = 0; r < t.size(); ++r) {
+        const Index i = t.i(r), j = t.j(r);
+        const Vec3 d = p.position[i] - p.position[j];
+        const double dist = d.norm();
+        const double delta = p.radius[i] + p.radius[j] - dist;
+        const double* state = in.width > 0 ? t.state(r) : nullptr;
+        bool active = delta > 0.0;
+        if constexpr (is_persistent<Law>()) active = active || law_.alive(state);
+        if (!active || dist <= 0.0) continue;
+        const ContactGeometry g = pair_geometry(p, i, j, d / dist, delta, in);
+        out.push_back({i, j, g.n, g.arm_i, g.arm_j, std::min(g.r_i, g.r_j), law_.linear_contact(g, dt, state)});
+      }
+      for (std::size_t k = 0; k < walls.size(); ++k) {
+        const double* hist = in.width > 0 ? p.fields.data("wall_state/" + walls[k].name).data() : nullptr;
+        for (const Index i : cand[k]) {
+          Vec3 nrm;
+          double dist;
+          walls[k].distance(p.position[i], nrm, dist);
+          if (p.radius[i] - dist <= 0.0) continue;
+          const ContactGeometry g = wall_geometry(p, i, nrm, dist, in.temp, 1.0);
+          const double* st = hist ? hist + static_cast<std::size_t>(i) * in.width : nullptr;
+          out.push_back({i, -1 - static_cast<std::int64_t>(k), nrm, dist, 0.0, p.radius[i], law_.linear_contact(g, dt, st)});
+        }
+      }
+    }
+    return out;
+  }
+
   std::function<bool(const double*)> alive_rule() const override {
     if constexpr (is_persistent<Law>())
       return [this](const double* st) { return law_.alive(st); };
@@ -166,9 +225,10 @@ class ContactModelT final : public ContactModel {
       return {};
   }
 
-  void pair_pass(const ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0) const override {
+  void pair_pass(const ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0, bool inertia_free = false) const override {
     const std::int64_t rows = static_cast<std::int64_t>(t.size());
-    const PassInputs in = pass_inputs(p, t, time_scale);
+    PassInputs in = pass_inputs(p, t, time_scale);
+    in.inertia_free = inertia_free;
     auto& F = t.force();
     auto& Ti = t.torque_i();
     auto& Tj = t.torque_j();
@@ -180,10 +240,10 @@ class ContactModelT final : public ContactModel {
       }
   }
 
-  void pair_forces(ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0) const override {
+  void pair_forces(ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0, bool inertia_free = false) const override {
     const std::int64_t rows = static_cast<std::int64_t>(t.size());
     if (par::worth(rows, par::kHeavy) && par::threads() > 1) {
-      pair_pass(p, t, dt, time_scale);
+      pair_pass(p, t, dt, time_scale, inertia_free);
       t.gather(p.force, p.torque);
       return;
     }
@@ -193,7 +253,8 @@ class ContactModelT final : public ContactModel {
     // often share i: its running sums stay in registers until i changes (a row never has j == i,
     // so no other row of the run touches them). The force rows are filled as by pair_pass; the
     // torque rows are not (only the gather reads them).
-    const PassInputs in = pass_inputs(p, t, time_scale);
+    PassInputs in = pass_inputs(p, t, time_scale);
+    in.inertia_free = inertia_free;
     auto& F = t.force();
     Index cur = -1;
     Vec3 fi = Vec3::Zero(), ti = Vec3::Zero(), tri, trj;
@@ -221,7 +282,7 @@ class ContactModelT final : public ContactModel {
   }
 
   WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& cand, double dt,
-                      double time_scale = 1.0) const override {
+                      double time_scale = 1.0, bool inertia_free = false) const override {
     const double* temp = nullptr;
     if constexpr (is_thermal<Law>())
       if (p.fields.has("temperature")) temp = p.fields.data("temperature").data();
@@ -251,20 +312,8 @@ class ContactModelT final : public ContactModel {
             for (int c = 0; c < w; ++c) state[c] = 0.0;
             continue;
           }
-          ContactGeometry g;
-          g.n = nrm;
-          g.overlap = delta;
-          g.r_eff = p.radius[i];
-          g.m_eff = p.mass[i];
-          g.arm_i = dist;
-          g.arm_j = 0.0;
-          g.wall = true;
-          g.r_i = p.radius[i];
-          g.r_j = std::numeric_limits<double>::infinity();
-          if constexpr (is_thermal<Law>()) {
-            g.temperature = temp ? temp[i] : std::numeric_limits<double>::quiet_NaN();
-            g.time_scale = time_scale;
-          }
+          ContactGeometry g = wall_geometry(p, i, nrm, dist, temp, time_scale);
+          if (inertia_free) g.m_eff = 0.0;
           const Vec3 vw = wall.u_dot * nrm;
           const RelativeMotion m = relative_motion(g, p.velocity[i], vw, p.omega[i], Vec3::Zero());
           const ContactForces f = law_(g, m, dt, state);
@@ -403,6 +452,7 @@ class ContactModelT final : public ContactModel {
     std::vector<double> gbf;
     double time_scale = 1.0;
     int width = 0;
+    bool inertia_free = false;  ///< m* = 0 (ContactModel::pair_pass)
   };
   PassInputs pass_inputs(const ParticleStore& p, const ContactTable& t, double time_scale) const {
     PassInputs in;
@@ -413,6 +463,47 @@ class ContactModelT final : public ContactModel {
     if constexpr (requires(const Law& l) { l.grain_boundary_fraction_column(); })
       if (law_.grain_boundary_fraction_column() >= 0) in.gbf = grain_boundary_fractions(p, t, law_.grain_boundary_fraction_column());
     return in;
+  }
+
+  /// The geometry of the pair (i, j) with unit normal n (j -> i) and overlap delta.
+  [[gnu::always_inline]] ContactGeometry pair_geometry(const ParticleStore& p, Index i, Index j, const Vec3& n, double delta,
+                                                       const PassInputs& in) const {
+    ContactGeometry g;
+    g.n = n;
+    g.overlap = delta;
+    g.r_eff = p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]);
+    g.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
+    g.arm_i = p.radius[i] - 0.5 * delta;
+    g.arm_j = p.radius[j] - 0.5 * delta;
+    g.r_i = p.radius[i];
+    g.r_j = p.radius[j];
+    if constexpr (is_thermal<Law>()) {
+      g.temperature = in.temp ? 0.5 * (in.temp[i] + in.temp[j]) : std::numeric_limits<double>::quiet_NaN();
+      g.time_scale = in.time_scale;
+    }
+    if (!in.gbf.empty()) g.gb_fraction = std::max(in.gbf[i], in.gbf[j]);
+    if (in.inertia_free) g.m_eff = 0.0;
+    return g;
+  }
+  /// The geometry of particle i against a wall: inward normal nrm, centre-to-wall distance dist.
+  ContactGeometry wall_geometry(const ParticleStore& p, Index i, const Vec3& nrm, double dist, const double* temp, double time_scale) const {
+    ContactGeometry g;
+    g.n = nrm;
+    g.overlap = p.radius[i] - dist;
+    g.r_eff = p.radius[i];
+    g.m_eff = p.mass[i];
+    g.arm_i = dist;
+    g.arm_j = 0.0;
+    g.wall = true;
+    g.r_i = p.radius[i];
+    g.r_j = std::numeric_limits<double>::infinity();
+    if constexpr (is_thermal<Law>()) {
+      g.temperature = temp ? temp[i] : std::numeric_limits<double>::quiet_NaN();
+      g.time_scale = time_scale;
+    } else {
+      (void)temp, (void)time_scale;
+    }
+    return g;
   }
 
   /// The law on row r: writes its overlap, and, for a live pair, the force on i and the torques
@@ -433,20 +524,7 @@ class ContactModelT final : public ContactModel {
       F.setZero();  // the row forces are part of the state file and the frame output
       return false;
     }
-    ContactGeometry g;
-    g.n = d / dist;
-    g.overlap = delta;
-    g.r_eff = p.radius[i] * p.radius[j] / (p.radius[i] + p.radius[j]);
-    g.m_eff = p.mass[i] * p.mass[j] / (p.mass[i] + p.mass[j]);
-    g.arm_i = p.radius[i] - 0.5 * delta;
-    g.arm_j = p.radius[j] - 0.5 * delta;
-    g.r_i = p.radius[i];
-    g.r_j = p.radius[j];
-    if constexpr (is_thermal<Law>()) {
-      g.temperature = in.temp ? 0.5 * (in.temp[i] + in.temp[j]) : std::numeric_limits<double>::quiet_NaN();
-      g.time_scale = in.time_scale;
-    }
-    if (!in.gbf.empty()) g.gb_fraction = std::max(in.gbf[i], in.gbf[j]);
+    const ContactGeometry g = pair_geometry(p, i, j, d / dist, delta, in);
     const RelativeMotion m = relative_motion(g, p.velocity[i], p.velocity[j], p.omega[i], p.omega[j]);
     const ContactForces f = law_(g, m, dt, state);
     F = f.force;

@@ -2,6 +2,8 @@
 /// Geometry and relative motion of one contact, as seen by a contact law.
 /// Convention: n is the unit normal pointing from partner j (or the wall) towards particle i;
 /// the law returns the force on i (j receives the opposite).
+#include <limits>
+
 #include "engine/core/types.hpp"
 
 namespace sparkdem {
@@ -38,6 +40,33 @@ struct RelativeMotion {
 struct ContactForces {
   Vec3 force = Vec3::Zero();       ///< total force on i [N]
   Vec3 tangential = Vec3::Zero();  ///< tangential part (for torques) [N]
+};
+
+/// A contact's forces at the end of a step of dt as affine functions of its relative motion over
+/// the step (the inertia-free step, engine/integrate/quasi_static.hpp): the normal force on i
+/// F_n = f0 + c v (v the approach rate of the centres, -v_rel . n; known rates such as the radii's
+/// thermal growth or a prescribed wall's motion already in f0), the tangential force on i
+/// F_t = ft0 - ct v_t, capped at mu F_n when mu is finite, and, when `unilateral`, F_n >= 0.
+/// A law that provides linear_contact(g, dt, state) -> LinearContact (state read, not written)
+/// runs in quasi-static stages; the pass that follows the solve must reproduce these forces.
+struct LinearContact {
+  double f0 = 0.0;                                           ///< [N] normal force at zero approach rate (repulsive > 0)
+  double c = 0.0;                                            ///< [N s/m] dF_n / d(approach rate)
+  Vec3 ft0 = Vec3::Zero();                                   ///< [N] tangential force at zero sliding
+  double ct = 0.0;                                           ///< [N s/m] -dF_t / d v_t
+  double mu = std::numeric_limits<double>::infinity();       ///< Coulomb cap of |F_t| / F_n (inf: none)
+  bool unilateral = false;                                   ///< compression only (a wall, a contact without a neck)
+  /// [m] the viscous flow of the contact over the step (its dashpot's displacement, the part of the
+  /// approach that is not elastic), affine in the approach rate: du = flow0 + flow1 v. Zero for an
+  /// elastic contact. The step's length is set from it (max_strain_increment): an elastic
+  /// re-balancing is instantaneous whatever the step, a creep increment is not.
+  double flow0 = 0.0;
+  double flow1 = 0.0;  ///< [s]
+  /// An elastic Hertz normal force F_n = hertz max(overlap + v dt, 0)^(3/2) [N/m^1.5] (0: not one):
+  /// the solve iterates its secant over the step instead of {f0, c}, the tangent at the start
+  /// (which vanishes at zero overlap: a contact loaded from touching overshot by 0.06 of its radius).
+  double hertz = 0.0;
+  double overlap = 0.0;  ///< [m] at the step start (hertz > 0)
 };
 
 [[gnu::always_inline]] inline RelativeMotion relative_motion(const ContactGeometry& g, const Vec3& vi, const Vec3& vj, const Vec3& wi,

@@ -8,10 +8,16 @@
 
 namespace sparkdem {
 
-StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields, bool bonds, bool mechanics) {
+StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields, bool bonds, bool mechanics,
+                         bool quasi_static) {
   using K = PlanItem::Kind;
   StepPlan plan;
-  if (mechanics) {
+  quasi_static = quasi_static && mechanics;
+  if (quasi_static && bonds)
+    throw SetupError("a quasi-static stage has no bond pass: the scenario's bond law has no inertia-free form (run the stage explicit)");
+  if (quasi_static) {
+    plan.items.push_back({K::QuasiStatic, "quasi_static_step", nullptr, {}});
+  } else if (mechanics) {
     plan.items.push_back({K::IntegrateFirstHalf, "integrate_first_half", nullptr, {}});
     plan.items.push_back({K::Walls, "walls", nullptr, {}});
     plan.items.push_back({K::Neighbors, "neighbors", nullptr, {}});
@@ -40,6 +46,8 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
     for (const auto& w : d.writes) available.insert(w);
     if (m->phase() == Phase::Force && !mechanics)
       throw SetupError("module '" + m->name() + "' adds forces, but the stage's mechanics are frozen (\"mechanics\": \"frozen\")");
+    if (m->phase() == Phase::Force && quasi_static)
+      throw SetupError("module '" + m->name() + "' adds forces, which a quasi-static stage does not take (run the stage explicit)");
     if (m->phase() == Phase::Force && c.kind != Clock::Kind::EveryStep)
       throw SetupError("module '" + m->name() + "' adds forces, so it must run every mechanical step (its clock is not EveryStep)");
     if (m->phase() == Phase::Force)
@@ -61,7 +69,7 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
       throw SetupError("module '" + m->name() + "' is triggered by changes of '" + c.trigger.field +
                        "', which no active module or the core provides");
   }
-  if (mechanics) plan.items.push_back({K::IntegrateSecondHalf, "integrate_second_half", nullptr, {}});
+  if (mechanics && !quasi_static) plan.items.push_back({K::IntegrateSecondHalf, "integrate_second_half", nullptr, {}});
   // Coupling modules: topological order, writers before readers; ties keep declaration order.
   std::vector<Module*> ordered;
   std::vector<bool> placed(coupling.size(), false);

@@ -15,6 +15,20 @@
 ///   9 <coupling modules>     after the mechanics, ordered by reads/writes (writer before reader),
 ///                            each on its own clock (every N steps, k substeps per step, adaptive
 ///                            substeps from its stable step, or on an event)
+///
+/// A quasi-static stage (StageConfig::quasi_static, engine/integrate/quasi_static.hpp) replaces
+/// items 1-8 by one item, quasi_static_step, whose substeps (as many as max_strain_increment asks)
+/// each run, in this order:
+///   a neighbors             Verlet check, as item 3
+///   b solve                 the contacts' affine forces (ContactModel::linear_rows) and the
+///                           balance of every particle and force-controlled wall -> velocities,
+///                           spins, punch rates
+///   c zero_forces + contact_pairs   the law's pair pass with the solved motion (the histories
+///                           advance over the substep; the forces are those at its end)
+///   d drift                 positions and orientations by the solved motion; walls to the
+///                           substep's end (punches at their solved rate)
+///   e contact_walls         the law's wall pass at the new positions
+/// and then item 9 as above. No force modules and no bonds (a SetupError).
 #include <string>
 #include <vector>
 
@@ -23,7 +37,7 @@
 namespace sparkdem {
 
 struct PlanItem {
-  enum class Kind { IntegrateFirstHalf, Walls, Neighbors, ZeroForces, ContactPairs, Bonds, ContactWalls, Module, IntegrateSecondHalf };
+  enum class Kind { IntegrateFirstHalf, Walls, Neighbors, ZeroForces, ContactPairs, Bonds, ContactWalls, Module, IntegrateSecondHalf, QuasiStatic };
   Kind kind;
   std::string name;
   Module* module = nullptr;  ///< for Kind::Module
@@ -46,7 +60,8 @@ struct StepPlan {
 /// `mechanics` false: a frozen stage (items 1-8 left out; the particles keep their positions and
 /// the contact table of the stage start; only coupling modules run, e.g. a conduction run on a
 /// fixed packing). A force module in a frozen stage is a SetupError.
+/// `quasi_static`: items 1-8 are the one quasi_static_step item (a force module or bonds: SetupError).
 StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields, bool bonds = false,
-                         bool mechanics = true);
+                         bool mechanics = true, bool quasi_static = false);
 
 }  // namespace sparkdem

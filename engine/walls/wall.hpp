@@ -137,6 +137,14 @@ inline double interpolate(const std::vector<double>& t, const std::vector<double
   return v[k - 1] + s * (v[k] - v[k - 1]);
 }
 
+/// The load [N] a pressure-controlled wall presses with at stage time t_stage: p(s t) A, with A the
+/// motion's area or else `area_hint` (the die cross-section), s = time_scale for tables in physical time.
+inline double pressure_load(const Wall& w, double t_stage, double area_hint, double time_scale = 1.0) {
+  const WallMotion& m = w.motion;
+  const double s = m.physical_time ? time_scale : 1.0;
+  return interpolate(m.pressure_time, m.pressure_value, s * t_stage) * (m.area > 0.0 ? m.area : area_hint);
+}
+
 /// Update u and u_dot at stage time t_stage (prescribed) or by one servo step dt (pressure).
 /// `area_hint` is used when a pressure motion has area 0 (the die cross-section). `time_scale`
 /// (physical seconds per mechanical second) converts t_stage for tables in physical time:
@@ -175,8 +183,7 @@ inline double advance_wall(Wall& w, double t_stage, double dt, double area_hint,
       break;
     }
     case WallMotion::Kind::Pressure: {
-      const double area = m.area > 0.0 ? m.area : area_hint;
-      const double target = interpolate(m.pressure_time, m.pressure_value, s * t_stage) * area;
+      const double target = pressure_load(w, t_stage, area_hint, time_scale);
       double ratio = target > 0.0 ? (target - w.normal_force) / target : -1.0;
       ratio = std::clamp(ratio, -1.0, 1.0);
       w.u_dot = m.max_speed * ratio;

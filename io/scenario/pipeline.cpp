@@ -536,6 +536,20 @@ void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool 
   js["particle_steps_per_s"] = r.particle_steps_per_second;
   js["mass_scaling"] = st.cfg.mass_scaling;
   js["mass_floor_radius"] = st.cfg.mass_floor_radius;
+  if (st.cfg.quasi_static) {
+    const auto& q = r.quasi_static;
+    js["quasi_static"] = {{"substeps", q.substeps},
+                          {"rejected_substeps", q.rejected},
+                          {"max_substeps_per_step", q.max_substeps},
+                          {"linear_solves", q.rounds},
+                          {"max_rounds_per_solve", q.max_rounds},
+                          {"unsettled_solves", q.unsettled},
+                          {"cg_iterations", q.cg_iterations},
+                          {"max_strain_increment", q.max_strain_increment},
+                          {"max_force_residual", q.max_residual},
+                          {"last_force_residual", q.last_residual},
+                          {"solve_wall_time_s", q.solve_seconds}};
+  }
   if (!resuming) {
     const auto& o = r.initial_overlap;
     js["initial_overlap"] = {{"policy", o.policy},

@@ -656,6 +656,51 @@ StageFacet monitor_facet(const std::string& key, const RegistryEntry<Monitor>& e
   return {key, "object", entry.spec.doc, entry.spec, false, bind};
 }
 
+ParamSpec<QuasiStaticConfig> quasi_static_spec() {
+  using P = QuasiStaticConfig;
+  ParamSpec<P> s("quasi_static", "object",
+                 "run the stage's mechanics inertia-free (engine/integrate/quasi_static.hpp): each step solves the contacts' "
+                 "affine forces for the velocities that balance every particle, pressure walls pressing with their load as "
+                 "unknowns; no mass or time scaling (time_scale, mass_scaling, mass_floor_radius stay 1, 1, 0); dt [s] is "
+                 "required and split into substeps by max_strain_increment; the contact law needs an inertia-free form "
+                 "(sintering)");
+  s.add("max_strain_increment", &P::max_strain_increment)
+      .unit("1")
+      .positive()
+      .doc("largest viscous flow (dashpot displacement) of any contact over a substep / its smaller radius; elastic re-balancing is not limited");
+  s.add("max_approach_increment", &P::max_approach_increment)
+      .unit("1")
+      .positive()
+      .doc("largest approach (elastic and viscous) of any contact over a substep / its smaller radius: the geometric limit of one linearisation");
+  s.add("tolerance", &P::tolerance).unit("1").positive().doc("relative residual of the conjugate-gradient solve");
+  s.add("max_iterations", &P::max_iterations).min(1).doc("conjugate-gradient iterations per solve");
+  s.add("friction_iterations", &P::friction_iterations)
+      .min(1)
+      .doc("rounds of the nonlinear contacts per solve (Coulomb slip by secant viscosity, unilateral opening)");
+  s.add("friction_tolerance", &P::friction_tolerance).unit("1").positive().doc("the rounds end when the same contacts are open and the motion changed by less than this fraction of its largest component");
+  s.add("solver", &P::solver)
+      .choices({"auto", "direct", "cg"})
+      .doc("direct (sparse LDL^T), cg (conjugate gradients, incomplete-Cholesky preconditioned), auto: direct up to 60,000 unknowns");
+  s.add("max_substeps", &P::max_substeps).min(1).doc("substeps a step may be split into (then an error)");
+  return s;
+}
+/// "quasi_static": the inertia-free path and its settings.
+void bind_quasi_static(const json& value, const std::string& at, StageBuild& b) {
+  json rs;
+  auto& c = b.st.cfg;
+  c.quasi = build(quasi_static_spec(), value, at, b.errors, rs);
+  c.quasi_static = true;
+  b.resolved["quasi_static"] = rs;
+  if (!(c.dt > 0.0)) b.errors.push_back({b.path + "/dt", "a quasi-static stage needs dt [s] (its substeps follow max_strain_increment)"});
+  if (c.time_scale != 1.0)
+    b.errors.push_back({b.path + "/time_scale", "expected 1 in a quasi-static stage (no inertia to scale), found " + std::to_string(c.time_scale)});
+  if (c.mass_scaling != 1.0)
+    b.errors.push_back({b.path + "/mass_scaling", "expected 1 in a quasi-static stage (no inertia to scale), found " + std::to_string(c.mass_scaling)});
+  if (c.mass_floor_radius != 0.0)
+    b.errors.push_back({b.path + "/mass_floor_radius", "expected 0 in a quasi-static stage (no inertia to scale), found " +
+                                                           std::to_string(c.mass_floor_radius)});
+}
+
 /// "snapshots": states saved during a stepping stage.
 void bind_snapshots(const json& value, const std::string& at, StageBuild& b) {
   json rs;
@@ -700,6 +745,7 @@ std::vector<StageFacet> stage_facets(const Registry& reg) {
       {"prescribe", "object {set name: [vx, vy, vz] | prescribe}", prescribe_spec().spec().doc, prescribe_spec().spec(), false,
        bind_prescribe},
       {"until", "object {time-series column: until}", until_spec().spec().doc, until_spec().spec(), false, bind_until},
+      {"quasi_static", "object", quasi_static_spec().spec().doc, quasi_static_spec().spec(), false, bind_quasi_static},
   };
   for (const auto& [k, entry] : reg.monitors()) f.push_back(monitor_facet(k, entry));
   f.push_back({"snapshots", "object", snapshot_spec().spec().doc, snapshot_spec().spec(), false, bind_snapshots});

@@ -429,6 +429,72 @@ struct Sintering {
     return {st[kElastic] * m.decay - c * e.line.offset, c, e.fs};
   }
 
+  /// The pair's (or wall contact's) forces after a step of dt as affine functions of its motion
+  /// over the step (LinearContact; the inertia-free step of issue 36, engine/integrate/quasi_static.hpp),
+  /// exactly what operator() then computes from the solved motion, numerical damping aside:
+  ///   normal (a neck):   F_n = f0 + c v - F_s + c g,  {f0, c} of linear_response, g the radii's
+  ///                      growth rate since the last call (the law's known part of the approach);
+  ///   normal (no neck):  Hertz on the overlap, F(h) + k_H dt v to first order (unilateral);
+  ///   tangential:        the Maxwell element (k_t, eta_t) over the step, F_t = F_t e^-x - k_t dt phi(x) v_t
+  ///                      (eta_t = +inf: the elastic spring, phi = 1), Coulomb-capped without a neck;
+  ///   wall:              Hertz, iterated by the solve on the step's overlap (unilateral), and the
+  ///                      tangential -min(k_t dt, wall_friction F_n / |v_t|) v_t: the step's own slip
+  ///                      (an inertia-free pass carries no slip history; a contact without a neck likewise).
+  /// What operator() does that this leaves out, measured by the force residual of the step
+  /// (QuasiStaticStats::max_residual): a contact without a neck takes F(h) at the step start, not
+  /// F(h + v dt); a cold bonded neck clipped at zero (cold_necks: contact); the dashpots c (v - du/dt).
+  LinearContact linear_contact(const ContactGeometry& g, double dt, const double* st) const {
+    LinearContact lc;
+    if (g.wall) {
+      lc.f0 = kernel::hertz_force(e_star_, g.r_eff, g.overlap);
+      lc.c = kernel::hertz_stiffness(e_star_, g.r_eff, g.overlap) * dt;
+      const double kt = 8.0 * g_star_ * std::sqrt(g.r_eff * g.overlap);
+      lc.ft0 = -kt * in_plane(st + kTangential, g.n);
+      lc.ct = kt * dt;
+      lc.mu = p_.wall_friction;
+      lc.unilateral = true;
+      lc.hertz = 4.0 / 3.0 * e_star_ * std::sqrt(g.r_eff);
+      lc.overlap = g.overlap;
+      return lc;
+    }
+    const NormalElement e = normal_element(g, st);
+    const double radius_sum = g.r_i + g.r_j;
+    const double growth = st[kRadiusSum] > 0.0 && dt > 0.0 ? (radius_sum - st[kRadiusSum]) / dt : 0.0;
+    if (e.neck) {
+      const LinearResponse lr = linear_response(g, dt, st);
+      lc.f0 = lr.f0 - lr.fs + lr.c * growth;
+      lc.c = lr.c;
+      // maxwell_step's flow plus the line's offset, du = dt [(v - off)(1 - phi) + phi F_e / eta + off],
+      // v = approach + growth (eta = +inf: phi = 1, no flow).
+      const kernel::MaxwellFactors mf = kernel::maxwell_factors(e.kn, e.line.eta, dt);
+      const double off = e.line.offset;
+      const double creep = std::isfinite(e.line.eta) ? mf.phi * st[kElastic] / e.line.eta : 0.0;
+      lc.flow1 = dt * (1.0 - mf.phi);
+      lc.flow0 = dt * ((growth - off) * (1.0 - mf.phi) + creep + off);
+    } else {
+      const double he = std::max(g.overlap - st[kViscous], 0.0);
+      lc.f0 = kernel::hertz_force(e_star_, g.r_eff, he);
+      lc.c = kernel::hertz_stiffness(e_star_, g.r_eff, he) * dt;
+      lc.unilateral = true;
+      lc.mu = p_.friction;
+      lc.hertz = 4.0 / 3.0 * e_star_ * std::sqrt(g.r_eff);
+      lc.overlap = he;
+    }
+    const double kt = 8.0 * g_star_ * e.r_spring;
+    const kernel::MaxwellFactors mf = kernel::maxwell_factors(kt, p_.tangential_factor * e.eta_n, dt);
+    lc.ft0 = in_plane(st + kTangential, g.n) * mf.decay;
+    lc.ct = kt * dt * mf.phi;
+    return lc;
+  }
+  /// A stored tangential vector turned into the plane normal to n, its length kept (operator()).
+  static Vec3 in_plane(const double* v3, const Vec3& n) {
+    Vec3 v(v3[0], v3[1], v3[2]);
+    const double mag = v.norm();
+    v -= v.dot(n) * n;
+    const double proj = v.norm();
+    return proj > 0.0 ? Vec3(v * (mag / proj)) : v;
+  }
+
   ContactForces operator()(const ContactGeometry& g, const RelativeMotion& m, double dt, double* st) const {
     if (g.wall) return wall_contact(g, m, dt, st);
     const NormalElement e = normal_element(g, st);
@@ -462,6 +528,7 @@ struct Sintering {
     const double kt = 8.0 * g_star_ * r_spring;
     const double eta_t = p_.tangential_factor * eta_n;
     Vec3 ft(st[kTangential], st[kTangential + 1], st[kTangential + 2]);
+    if (!neck && !(g.m_eff > 0.0)) ft.setZero();  // inertia-free pass: no slip carried (linear_contact)
     const double mag = ft.norm();
     ft -= ft.dot(g.n) * g.n;
     const double proj = ft.norm();
@@ -523,7 +590,10 @@ struct Sintering {
     const double fn = kernel::hertz_force(e_star_, g.r_eff, g.overlap) - 2.0 * p_.damping_ratio * std::sqrt(g.m_eff * kn) * m.vn;
     const double kt = 8.0 * g_star_ * std::sqrt(g.r_eff * g.overlap);
     const double gt = 2.0 * p_.damping_ratio * std::sqrt(g.m_eff * kt);
-    // History column kTangential.. holds the tangential displacement for walls.
+    // History column kTangential.. holds the tangential displacement for walls. An inertia-free pass
+    // (m* = 0, a quasi-static stage) carries no slip from step to step: F_t = -min(k_t dt, mu F_n / |v_t|) v_t,
+    // the regularised Coulomb law the solve balances (linear_contact; engine/integrate/quasi_static.cpp).
+    if (!(g.m_eff > 0.0)) std::fill(st + kTangential, st + kTangential + 3, 0.0);
     ContactForces f;
     f.tangential = kernel::tangential_history(g.n, m.vt, kt, gt, p_.wall_friction, std::abs(fn), dt, st + kTangential);
     f.force = fn * g.n + f.tangential;

@@ -199,6 +199,8 @@ std::vector<Case> all_cases() {
        load_data("hot_press_small.json"), 1, 2333},
       {"hot press with mass scaling and a mass floor (per-particle factors in the checkpoint)", scaled_press, 1, 2333},
       {"hot press with the sphere-element electrical network", element_press, 1, 2333},
+      {"quasi-static hot press: inertia-free solve, pressure-controlled punch, die friction, temperature_history",
+       load_data("quasi_static_press_small.json"), 1, 137},
       {"coupled Joule press: temperature_controller, electrical_network on a voltage signal with kappa(T), implicit heat_conduction with "
        "losses and expansion",
        load_data("joule_press_small.json"), 1, 1777},
@@ -224,7 +226,7 @@ const std::vector<std::vector<std::string_view>> kGroups = {
     {"lattice", "deposit", "fill", "relax", "dynamics taking snapshots"},
     {"hot press:", "hot press with mass scaling", "hot press with the sphere-element", "coupled Joule press", "explicit heat_conduction"},
     {"cohesive-beam pin", "bonded tension", "cpc_fillers configuration", "self-heating PTC"},
-    {"cpc_fillers then Hertz settling with ptc_strain on the RKPM"},
+    {"cpc_fillers then Hertz settling with ptc_strain on the RKPM", "quasi-static hot press"},
 };
 
 bool starts_with(std::string_view s, std::string_view p) { return s.substr(0, p.size()) == p; }
@@ -265,7 +267,7 @@ TEST_CASE("generic restart: bonded torsion and tension, cpc and ptc self-heating
   run_group(2);
 }
 
-TEST_CASE("generic restart: ptc_strain on the RKPM matrix continues bit for bit from a mid-stage checkpoint",
+TEST_CASE("generic restart: ptc_strain on the RKPM matrix and the quasi-static hot press continue bit for bit from a mid-stage checkpoint",
           "[restart][contracts][scenario]") {
   run_group(3);
 }
