@@ -680,7 +680,11 @@ WatchdogConfig Simulation::stage_watchdog(const StageConfig& cfg) const {
   WatchdogConfig wd = cfg.watchdog;
   if (!(wd.max_speed > 0.0)) wd.max_speed = cfg.blowup_speed;
   if (wd.check_every < 1) throw SetupError("stage '" + cfg.name + "': watchdog.check_every must be at least 1");
-  if (cfg.quasi_static) wd.energy_growth_factor = 0.0;  // no inertia: the kinetic energy is a rate, not a mode that can grow
+  if (cfg.quasi_static) {
+    wd.energy_growth_factor = 0.0;  // no inertia: the kinetic energy is a rate, not a mode that can grow
+    // A step's motion is bounded by the substeps (max_approach_increment), not by r/dt.
+    if (!(wd.max_speed > 0.0)) wd.max_speed = std::numeric_limits<double>::infinity();
+  }
   if (!cfg.mechanics || cfg.max_steps == 0 || !(cfg.duration > 0.0)) {
     // Its geometry is given (e.g. an overlapping packing built for a network test).
     wd.max_speed = std::numeric_limits<double>::infinity();

@@ -193,6 +193,7 @@ struct StageResult {
     Step unsettled = 0;             ///< solves whose nonlinear rounds did not settle (friction_iterations)
     std::int64_t cg_iterations = 0; ///< summed
     double max_strain_increment = 0.0;
+    double max_mean_strain_increment = 0.0;  ///< largest mean flow / r_min of an accepted substep
     double max_residual = 0.0;      ///< largest |net force| of a particle / mean |contact force|, after a step
     double last_residual = 0.0;     ///< the same after the last step
     double solve_seconds = 0.0;     ///< wall time of the rows and solves [s]

@@ -35,7 +35,7 @@ void Simulation::check_quasi_static(const StageConfig& cfg) const {
   for (const auto& w : s_.walls)
     if (!s_.particles.fields.has(quasi_static_slip_field(w.name))) throw SetupError(where + "internal: the slip field of wall '" + w.name + "' is missing");
   const QuasiStaticConfig& q = cfg.quasi;
-  if (!(q.max_strain_increment > 0.0) || !(q.max_approach_increment > 0.0) || !(q.tolerance > 0.0) || q.max_iterations < 1 || q.friction_iterations < 1 || q.max_substeps < 1)
+  if (!(q.max_strain_increment > 0.0) || !(q.max_approach_increment > 0.0) || q.max_mean_strain_increment < 0.0 || !(q.tolerance > 0.0) || q.max_iterations < 1 || q.friction_iterations < 1 || q.max_substeps < 1)
     throw SetupError(where + "max_strain_increment and tolerance must be positive, the iteration and substep counts at least 1");
 }
 
@@ -148,6 +148,7 @@ void Simulation::throw_increment_error(const QuasiStaticProblem& prob, const Qua
                                      g6(q.max_strain_increment)
                                : "moves it by " + g6(sol.approach_increment) + " of its smaller radius, above max_approach_increment " +
                                      g6(q.max_approach_increment) + " (an elastic re-balancing that no shorter substep makes smaller)") +
+                         " (mean flow over the contacts " + g6(sol.mean_strain_increment) + " of their smaller radii)" +
                          "; raise quasi_static.max_substeps or lower dt");
 }
 
@@ -176,7 +177,8 @@ void Simulation::quasi_static_step(const StageConfig& cfg, double dt, double t_n
     st.cg_iterations += sol.iterations;
     st.unsettled += sol.converged ? 0 : 1;
     // The substep's largest ratio to its limits: viscous flow, and the whole approach.
-    const double over = std::max(sol.strain_increment / q.max_strain_increment, sol.approach_increment / q.max_approach_increment);
+    double over = std::max(sol.strain_increment / q.max_strain_increment, sol.approach_increment / q.max_approach_increment);
+    if (q.max_mean_strain_increment > 0.0) over = std::max(over, sol.mean_strain_increment / q.max_mean_strain_increment);
     if (over > 1.0) {
       if (hs <= h_min * (1.0 + 1e-9)) throw_increment_error(prob, sol, q, hs);
       h = std::max(h_min, hs * std::max(0.1, 0.8 / over));
@@ -185,6 +187,7 @@ void Simulation::quasi_static_step(const StageConfig& cfg, double dt, double t_n
     }
     commit_quasi_static(sol, prob, t_end, t_area);
     st.max_strain_increment = std::max(st.max_strain_increment, sol.strain_increment);
+    st.max_mean_strain_increment = std::max(st.max_mean_strain_increment, sol.mean_strain_increment);
     if (!last) h_kept = h;
     done += hs;
     ++substeps;

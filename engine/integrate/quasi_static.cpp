@@ -224,7 +224,8 @@ bool update_modes(const QuasiStaticProblem& prob, const DofMap& m, const Eigen::
                   std::vector<RowMode>& modes, QuasiStaticSolution& sol) {
   bool same = true;
   sol.sliding = sol.open = 0;
-  sol.strain_increment = sol.approach_increment = 0.0;
+  sol.strain_increment = sol.approach_increment = sol.mean_strain_increment = 0.0;
+  std::size_t counted = 0;
   for (std::size_t q = 0; q < prob.rows.size(); ++q) {
     const LinearRow& r = prob.rows[q];
     double a;
@@ -235,6 +236,10 @@ bool update_modes(const QuasiStaticProblem& prob, const DofMap& m, const Eigen::
       sol.approach_row = q;
     }
     const double flow = std::abs(r.lc.flow0 + r.lc.flow1 * a);
+    if (r.r_min > 0.0) {
+      sol.mean_strain_increment += flow / r.r_min;
+      ++counted;
+    }
     if (r.r_min > 0.0 && flow / r.r_min > sol.strain_increment) {
       sol.strain_increment = flow / r.r_min;
       sol.strain_row = q;
@@ -269,6 +274,7 @@ bool update_modes(const QuasiStaticProblem& prob, const DofMap& m, const Eigen::
     sol.sliding += next.sliding;
     modes[q] = next;
   }
+  if (counted > 0) sol.mean_strain_increment /= static_cast<double>(counted);
   return same;
 }
 

@@ -39,6 +39,7 @@ namespace sparkdem {
 struct QuasiStaticConfig {
   double max_strain_increment = 2e-3;  ///< largest viscous flow of a contact over a substep / its smaller radius
   double max_approach_increment = 0.05; ///< largest approach (elastic + viscous) of a contact over a substep / its smaller radius
+  double max_mean_strain_increment = 0.0; ///< mean over the contacts of flow / smaller radius per substep (0: no limit): the compact's densification increment
   double tolerance = 1e-10;            ///< relative residual |K u - b| / |b| of the iterative solve
   std::int64_t max_iterations = 20000;        ///< conjugate-gradient iterations
   std::int64_t friction_iterations = 30;      ///< rounds of the nonlinear contacts (slip, opening)
@@ -68,6 +69,7 @@ struct QuasiStaticSolution {
   std::vector<double> slip;        ///< [N s/m] per row: its slip viscosity in the last round (0: sticking or uncapped)
   double strain_increment = 0.0;   ///< max over contacts of |flow over the step| / r_min (LinearContact::flow0, flow1)
   std::size_t strain_row = 0;      ///< the row of that maximum
+  double mean_strain_increment = 0.0;  ///< mean over the contacts of |flow over the step| / r_min
   double approach_increment = 0.0; ///< max over contacts of |a| dt / r_min (the whole approach, elastic part included)
   std::size_t approach_row = 0;    ///< the row of that maximum
   int rounds = 0;                  ///< linear solves (nonlinear rounds)

@@ -546,6 +546,7 @@ void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool 
                           {"unsettled_solves", q.unsettled},
                           {"cg_iterations", q.cg_iterations},
                           {"max_strain_increment", q.max_strain_increment},
+                          {"max_mean_strain_increment", q.max_mean_strain_increment},
                           {"max_force_residual", q.max_residual},
                           {"last_force_residual", q.last_residual},
                           {"solve_wall_time_s", q.solve_seconds}};

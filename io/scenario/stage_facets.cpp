@@ -672,6 +672,11 @@ ParamSpec<QuasiStaticConfig> quasi_static_spec() {
       .unit("1")
       .positive()
       .doc("largest approach (elastic and viscous) of any contact over a substep / its smaller radius: the geometric limit of one linearisation");
+  s.add("max_mean_strain_increment", &P::max_mean_strain_increment)
+      .unit("1")
+      .nonnegative()
+      .doc("mean over the contacts of viscous flow / smaller radius per substep, the densification increment (0: no limit; "
+           "with it, max_strain_increment can be a looser bound on the fastest contact)");
   s.add("tolerance", &P::tolerance).unit("1").positive().doc("relative residual of the conjugate-gradient solve");
   s.add("max_iterations", &P::max_iterations).min(1).doc("conjugate-gradient iterations per solve");
   s.add("friction_iterations", &P::friction_iterations)

@@ -130,6 +130,29 @@ TEST_CASE("Quasi-static sintering cluster: every particle ends each step in bala
   CHECK(res.quasi_static.max_residual == Approx(worst).epsilon(1e-9));
 }
 
+TEST_CASE("Quasi-static substeps: the mean flow of the contacts (densification increment) is bounded when asked", "[quasi_static]") {
+  // The free pair of the first test, 30 steps of 1e-4 s: with max_mean_strain_increment the
+  // substeps keep every accepted substep's mean flow / r_min below it (one contact: mean = max),
+  // with more substeps than the per-contact limit alone asks for when that one is looser.
+  auto run = [](double max_c, double mean_c) {
+    State s;
+    const double h0 = 0.002 * kR;
+    test::add_sphere(s, Vec3(-(kR - 0.5 * h0), 0, 0), kR, kRho);
+    test::add_sphere(s, Vec3(kR - 0.5 * h0, 0, 0), kR, kRho);
+    const ContactModelT<Sintering> law(hot_params());
+    Simulation sim(s, law);
+    StageConfig cfg = qs_stage(1e-4, 30);
+    cfg.quasi.max_strain_increment = max_c;
+    cfg.quasi.max_mean_strain_increment = mean_c;
+    test::NullObserver obs;
+    return sim.run_stage(cfg, obs).quasi_static;
+  };
+  const auto loose = run(1e-2, 0.0), bounded = run(1e-2, 5e-4);
+  CHECK(bounded.max_mean_strain_increment <= 5e-4);
+  CHECK(loose.max_mean_strain_increment > 5e-4);
+  CHECK(bounded.substeps > loose.substeps);
+}
+
 TEST_CASE("Quasi-static punch: a force-controlled wall presses a column at the closed-form Hertz overlaps", "[quasi_static]") {
   // Three equal cold spheres stacked on a fixed plane under a pressure-controlled punch (load L =
   // p A): every contact carries L, so each pair overlaps by d_p = (L / (4/3 E* sqrt(r/2)))^(2/3) and
