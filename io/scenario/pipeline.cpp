@@ -697,8 +697,8 @@ json derive_stage(const Scenario& sc, StageDef& st, State& s) {
   for (auto& m : st.modules) sim.add_module(m.get());
   sim.prepare(st.cfg);
   s.contacts.rebuild(find_pairs(s.particles.position, s.particles.radius, 0.0), s.particles.id, s.particles.size());
-  // A frozen stage (mechanics off) has no mechanical step limit, as in the run.
-  const double stable = st.cfg.mechanics ? sim.mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+  // A frozen or quasi-static stage has no mechanical step limit, as in the run.
+  const double stable = st.cfg.mechanics && !st.cfg.quasi_static ? sim.mechanical_stable_dt() : std::numeric_limits<double>::infinity();
   d["particles_at_start"] = s.particles.size();
   d["mechanical_stable_dt_s"] = stable;
   try {

@@ -16,7 +16,11 @@
 #include "engine/simulation.hpp"
 #include "physics/contact/hertz_mindlin.hpp"
 #include "physics/contact/sintering.hpp"
+#include "io/scenario/pipeline.hpp"
+#include "io/scenario/scenario.hpp"
+#include "physics/register_all.hpp"
 #include "support/free_pair.hpp"
+#include "support/scratch.hpp"
 #include "support/scene.hpp"
 
 using namespace sparkdem;
@@ -215,4 +219,17 @@ TEST_CASE("Quasi-static stage: what it cannot take is refused before step 0", "[
     c.dt_fraction = 0.5;
     CHECK_THROWS_WITH(sim.run_stage(c, obs), Catch::Contains("set dt"));
   }
+}
+
+TEST_CASE("Quasi-static stage: `sparkdem check` plans it without a stable-step limit", "[quasi_static]") {
+  // The dry run prepares each stage as the run does: a quasi-static stage's dt (1 s here) is not
+  // compared with the explicit stable step, and its plan is the one quasi_static_step item.
+  Registry reg;
+  physics::register_all(reg);
+  io::Scenario sc = io::load_scenario(test::load_data("quasi_static_press_small.json"), reg,
+                                      std::filesystem::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data");
+  const nlohmann::json d = io::dry_run(sc);
+  const auto& press = d["stages"][1]["derived"];
+  CHECK_FALSE(press.contains("dt_note"));
+  CHECK(press["step_plan"] == nlohmann::json::array({"quasi_static_step", "temperature_history"}));
 }
