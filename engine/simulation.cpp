@@ -656,7 +656,7 @@ void Simulation::check_module_steps(const StageConfig& cfg, double dt_used, bool
 }
 
 void Simulation::evaluate_start(double dt_used, double t_area, StageResult& res) {
-  if (plan_.items.empty() || plan_.items.front().kind != PlanItem::Kind::QuasiStatic) {
+  if (!inertia_free_) {
     advance_walls(0.0, dt_used, t_area);
     compute_forces(dt_used, 0.0);
   } else {
@@ -723,6 +723,38 @@ void Simulation::halt_walls(std::vector<std::string>& cols, std::vector<double>&
   }
 }
 
+/// The stage's mechanics and its step [s]: the inertia-free path's checks (its velocities are the
+/// solve's output: a fresh quasi-static stage starts them at zero); the step from the checkpoint on
+/// resume, else resolve_dt, against the contact law's stable step (explicit mechanics only) and the
+/// modules' steps; into res.
+double Simulation::choose_step(const StageConfig& cfg, bool resume, StageResult& res) {
+  auto& p = s_.particles;
+  if (cfg.quasi_static && cfg.mechanics) {
+    check_quasi_static(cfg);
+    // Velocities are the solve's output, not state: the explicit stage before left its own.
+    if (!resume)
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        p.velocity[i].setZero();
+        p.omega[i].setZero();
+      }
+  }
+  const bool explicit_mechanics = cfg.mechanics && !cfg.quasi_static;
+  inertia_free_ = cfg.mechanics && cfg.quasi_static;
+  const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
+  s_.stage_dt = dt_used;
+  res.dt = dt_used;
+  res.stable_dt_at_start = explicit_mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+  res.dt_fraction_used = dt_used / res.stable_dt_at_start;
+  if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt)
+    throw SetupError("stage '" + cfg.name + "': dt = " + fmt_g(dt_used) + " s is " + fmt_g(res.dt_fraction_used) + " of the stable step " +
+                     fmt_g(res.stable_dt_at_start) + " s of the contact law; lower dt or set allow_unstable_dt");
+  // Fixed-clock modules: their step against their own stable step (in their time domain).
+  // Adaptive clocks choose their substeps from it; event clocks run quasi-static solves.
+  check_module_steps(cfg, dt_used, true);
+  res.module_steps = module_steps(dt_used);
+  return dt_used;
+}
+
 StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool resume) {
   using clock = std::chrono::steady_clock;
   const auto t_start = clock::now();
@@ -754,29 +786,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   res.particles = p.size();
   const std::int64_t rebuilds0 = s_.rebuilds;
   if (resume) check_resumed_clocks(cfg);
-  if (cfg.quasi_static && cfg.mechanics) {
-    check_quasi_static(cfg);
-    // Velocities are the solve's output, not state: the explicit stage before left its own.
-    if (!resume)
-      for (std::size_t i = 0; i < p.size(); ++i) {
-        p.velocity[i].setZero();
-        p.omega[i].setZero();
-      }
-  }
-  const bool explicit_mechanics = cfg.mechanics && !cfg.quasi_static;
-  inertia_free_ = cfg.mechanics && cfg.quasi_static;
-  const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
-  s_.stage_dt = dt_used;
-  res.dt = dt_used;
-  res.stable_dt_at_start = explicit_mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
-  res.dt_fraction_used = dt_used / res.stable_dt_at_start;
-  if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt)
-    throw SetupError("stage '" + cfg.name + "': dt = " + fmt_g(dt_used) + " s is " + fmt_g(res.dt_fraction_used) + " of the stable step " +
-                     fmt_g(res.stable_dt_at_start) + " s of the contact law; lower dt or set allow_unstable_dt");
-  // Fixed-clock modules: their step against their own stable step (in their time domain).
-  // Adaptive clocks choose their substeps from it; event clocks run quasi-static solves.
-  check_module_steps(cfg, dt_used, true);
-  res.module_steps = module_steps(dt_used);
+  const double dt_used = choose_step(cfg, resume, res);
   obs.steps_planned(dt_used, res.stable_dt_at_start, res.module_steps);
   const double t_area = die_area(s_.walls);
   if (!resume) evaluate_start(dt_used, t_area, res);
@@ -844,7 +854,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     const bool checked = kk % wd.check_every == 0;
     if (checked) watchdog_check(s_, wd, wctx, true);
     if (cfg.stability_check_every > 0 && kk % cfg.stability_check_every == 0 && !cfg.allow_unstable_dt) {
-      const double st = explicit_mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+      const double st = cfg.mechanics && !inertia_free_ ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
       if (dt_used > st)
         throw PhysicsError(s_.step, {}, "time step",
                            "dt = " + fmt_g(dt_used) + " s now exceeds the stable step " + fmt_g(st) +

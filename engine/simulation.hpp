@@ -250,6 +250,7 @@ class Simulation {
   WatchdogConfig stage_watchdog(const StageConfig& cfg) const;
   void evaluate_start(double dt_used, double t_area, StageResult& res);
   void check_module_steps(const StageConfig& cfg, double dt_used, bool at_start) const;
+  double choose_step(const StageConfig& cfg, bool resume, StageResult& res);
   void halt_walls(std::vector<std::string>& cols, std::vector<double>& vals);
   void end_stage(const std::vector<std::string>& cols, const std::vector<double>& vals, StageResult& res);
   State& s_;

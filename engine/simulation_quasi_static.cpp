@@ -12,6 +12,14 @@
 namespace sparkdem {
 
 namespace {
+/// Each wall's slip field (quasi_static_slip_field), looked up once per substep.
+template <class Fields>
+auto slip_fields(Fields& fields, const std::vector<Wall>& walls) {
+  std::vector<decltype(&fields.data(std::string()))> out;
+  for (const Wall& w : walls) out.push_back(&fields.data(quasi_static_slip_field(w.name)));
+  return out;
+}
+
 const char* const kSubstepMark = "quasi_static/substep";  ///< the last substep [s] (checkpointed with the marks)
 
 std::string g6(double x) {
@@ -32,8 +40,6 @@ void Simulation::check_quasi_static(const StageConfig& cfg) const {
   for (const auto& w : s_.walls)
     if (w.motion.kind == WallMotion::Kind::Pressure && !w.is_plane())
       throw SetupError(where + "wall '" + w.name + "': a pressure-controlled wall must be a plane");
-  for (const auto& w : s_.walls)
-    if (!s_.particles.fields.has(quasi_static_slip_field(w.name))) throw SetupError(where + "internal: the slip field of wall '" + w.name + "' is missing");
   const QuasiStaticConfig& q = cfg.quasi;
   if (!(q.max_strain_increment > 0.0) || !(q.max_approach_increment > 0.0) || q.max_mean_strain_increment < 0.0 || !(q.tolerance > 0.0) || q.max_iterations < 1 || q.friction_iterations < 1 || q.max_substeps < 1)
     throw SetupError(where + "max_strain_increment and tolerance must be positive, the iteration and substep counts at least 1");
@@ -48,9 +54,10 @@ QuasiStaticProblem Simulation::quasi_static_problem(double t_end, double h, doub
   prob.step = s_.step + 1;
   prob.rows = law_.linear_rows(s_.particles, s_.contacts, s_.walls, s_.wall_candidates, h);
   prob.slip_guess.assign(prob.rows.size(), 0.0);
+  const auto slip = slip_fields(s_.particles.fields, s_.walls);
   for (std::size_t q = 0; q < prob.rows.size(); ++q) {
     const LinearRow& r = prob.rows[q];
-    if (r.j < 0) prob.slip_guess[q] = s_.particles.fields.data(quasi_static_slip_field(s_.walls[static_cast<std::size_t>(-1 - r.j)].name))[r.i];
+    if (r.j < 0) prob.slip_guess[q] = (*slip[static_cast<std::size_t>(-1 - r.j)])[r.i];
   }
   for (const Wall& w : s_.walls) {
     if (w.motion.kind == WallMotion::Kind::Pressure && !w.halted) {
@@ -106,13 +113,11 @@ void Simulation::commit_quasi_static(const QuasiStaticSolution& sol, const Quasi
     }
   }
   wall_forces(h);
-  for (const Wall& w : s_.walls) {
-    auto& f = p.fields.data(quasi_static_slip_field(w.name));
-    std::fill(f.begin(), f.end(), 0.0);
-  }
+  const auto slip = slip_fields(p.fields, s_.walls);
+  for (auto* f : slip) std::fill(f->begin(), f->end(), 0.0);
   for (std::size_t q = 0; q < prob.rows.size(); ++q) {
     const LinearRow& r = prob.rows[q];
-    if (r.j < 0) p.fields.data(quasi_static_slip_field(s_.walls[static_cast<std::size_t>(-1 - r.j)].name))[r.i] = sol.slip[q];
+    if (r.j < 0) (*slip[static_cast<std::size_t>(-1 - r.j)])[r.i] = sol.slip[q];
   }
 }
 

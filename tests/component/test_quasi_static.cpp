@@ -47,9 +47,8 @@ namespace {
 /// of the closed form from the state at 1 ms, and the stage result.
 double free_pair_error(double max_strain_increment, StageResult& res, Vec3& mid) {
   State s;
-  const double h0 = 0.002 * kR;
-  test::add_sphere(s, Vec3(-(kR - 0.5 * h0), 0, 0), kR, kRho);
-  test::add_sphere(s, Vec3(kR - 0.5 * h0, 0, 0), kR, kRho);
+  test::free_pair::add_pair(s);
+  const double h0 = test::free_pair::kH0;
   const ContactModelT<Sintering> law(hot_params());
   Simulation sim(s, law);
   const double dt = 1e-4;
@@ -140,9 +139,7 @@ TEST_CASE("Quasi-static substeps: the mean flow of the contacts (densification i
   // with more substeps than the per-contact limit alone asks for when that one is looser.
   auto run = [](double max_c, double mean_c) {
     State s;
-    const double h0 = 0.002 * kR;
-    test::add_sphere(s, Vec3(-(kR - 0.5 * h0), 0, 0), kR, kRho);
-    test::add_sphere(s, Vec3(kR - 0.5 * h0, 0, 0), kR, kRho);
+    test::free_pair::add_pair(s);
     const ContactModelT<Sintering> law(hot_params());
     Simulation sim(s, law);
     StageConfig cfg = qs_stage(1e-4, 30);

@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "physics/contact/sintering.hpp"
+#include "support/scene.hpp"
 
 namespace sparkdem::test::free_pair {
 
@@ -13,6 +14,14 @@ using physics::Sintering;
 
 // Equal spheres, NiAl-like density, a stiff modulus so that the elastic approach is small.
 constexpr double kR = 1e-6, kRho = 5900.0, kT = 1500.0;
+
+/// The pair's initial overlap [m].
+constexpr double kH0 = 0.002 * kR;
+/// The two spheres, centred on the origin along x, overlapping by kH0.
+inline void add_pair(State& s) {
+  add_sphere(s, Vec3(-(kR - 0.5 * kH0), 0, 0), kR, kRho);
+  add_sphere(s, Vec3(kR - 0.5 * kH0, 0, 0), kR, kRho);
+}
 
 inline Sintering::Params law_params() {
   Sintering::Params p;

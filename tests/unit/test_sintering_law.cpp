@@ -71,13 +71,11 @@ struct Sample {
   double t_phys, h, a, rate;
 };
 
-// Two free spheres with initial overlap h0; returns samples of (physical time, overlap, neck,
+// Two free spheres with initial overlap kH0 (free_pair::add_pair); returns samples of (physical time, overlap, neck,
 // approach rate in physical time).
 std::vector<Sample> sinter_pair(double time_scale, double t_phys_end, double dt, int samples) {
   State s;
-  const double h0 = 0.002 * kR;
-  test::add_sphere(s, Vec3(-(kR - 0.5 * h0), 0, 0), kR, kRho);
-  test::add_sphere(s, Vec3(kR - 0.5 * h0, 0, 0), kR, kRho);
+  test::free_pair::add_pair(s);
   const ContactModelT<Sintering> law(law_params());
   Simulation sim(s, law);
   const Step steps = static_cast<Step>(std::llround(t_phys_end / time_scale / dt));
