@@ -192,6 +192,7 @@ struct StageResult {
     Step max_rounds = 0;            ///< largest rounds of one solve
     Step unsettled = 0;             ///< solves whose nonlinear rounds did not settle (friction_iterations)
     std::int64_t cg_iterations = 0; ///< summed
+    std::int64_t factorisations = 0; ///< summed (LDL^T or incomplete Cholesky)
     double max_strain_increment = 0.0;
     double max_mean_strain_increment = 0.0;  ///< largest mean flow / r_min of an accepted substep
     double max_residual = 0.0;      ///< largest |net force| of a particle / mean |contact force|, after a step

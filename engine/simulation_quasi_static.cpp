@@ -181,6 +181,7 @@ void Simulation::quasi_static_step(const StageConfig& cfg, double dt, double t_n
     st.rounds += sol.rounds;
     st.max_rounds = std::max<Step>(st.max_rounds, sol.rounds);
     st.cg_iterations += sol.iterations;
+    st.factorisations += sol.factorisations;
     st.unsettled += sol.converged ? 0 : 1;
     // The substep's largest ratio to its limits: viscous flow, and the whole approach.
     double over = std::max(sol.strain_increment / q.max_strain_increment, sol.approach_increment / q.max_approach_increment);

@@ -20,7 +20,8 @@ using Triplet = Eigen::Triplet<double>;
 struct RowMode {
   bool open = false;       ///< unilateral and pulling: no force
   bool sliding = false;    ///< Coulomb-capped and at the cap: the force cap against the slip direction
-  Vec3 dir = Vec3::Zero(); ///< slip direction of the last round (unit)
+  Vec3 dir = Vec3::Zero(); ///< slip direction of the last round (unit) if it held over two rounds, else zero (the secant form)
+  Vec3 last = Vec3::Zero(); ///< slip direction of the last round (unit)
   double cap = 0.0;        ///< mu F_n of the last round [N]
   double k = 0.0;          ///< cap / |slip| of the last round [N s/m] (the secant viscosity)
   double secant = -1.0;    ///< a Hertz row's secant stiffness over the step [N/m] (< 0: its tangent at the start)
@@ -76,14 +77,19 @@ int row_blocks(const LinearRow& r, const DofMap& m, Block (&b)[4], Eigen::Index&
 }
 
 /// The row's coefficients in this round: normal {f0 (known wall rate folded in), c}, tangential
-/// F_t = ft0 - Ct s. Sticking: {ft0, ct I}. Sliding: the secant viscosity {0, k I}, k ~ mu F_n / |s|
-/// (a Newton tangent, zero along the slip, diverged on a die wall: 130 contacts sliding at once).
+/// F_t = ft0 - Ct s. Sticking: {ft0, ct I}. Sliding in direction e with cap C = mu F_n and secant
+/// k = C / |s_last| (RowMode), linearised about the last slip with a kept fraction eps of k along it:
+///   F_t = -(1 - eps) C e - k (I - (1 - eps) e e^T) s
+/// eps = 1 is the secant (Picard) form, F_t = -k s, whose rounds contract by C / (driving force)
+/// per round (0.7 on the NiAl die); eps -> 0 is Newton's tangent (zero along the slip), which
+/// diverged on a die wall with 130 contacts sliding at once. Any eps in (0, 1] has the same fixed
+/// point F_t = -C e and keeps K definite (eigenvalues k, k, eps k).
 struct RowCoeffs {
   double f0, c;
   Vec3 ft0;
   Eigen::Matrix3d ct;
 };
-RowCoeffs coeffs(const LinearRow& r, const RowMode& mode, const QuasiStaticProblem& prob) {
+RowCoeffs coeffs(const LinearRow& r, const RowMode& mode, const QuasiStaticProblem& prob, double eps) {
   if (mode.open) return {0.0, 0.0, Vec3::Zero(), Eigen::Matrix3d::Zero()};
   double f0 = r.lc.f0;
   double c = r.lc.c;
@@ -95,22 +101,26 @@ RowCoeffs coeffs(const LinearRow& r, const RowMode& mode, const QuasiStaticProbl
     const double rate = prob.wall_rate[static_cast<std::size_t>(-1 - r.j)];
     if (!std::isnan(rate)) f0 += c * rate;
   }
-  if (mode.sliding) return {f0, c, Vec3::Zero(), mode.k * Eigen::Matrix3d::Identity()};
+  if (mode.sliding) {
+    const double keep = 1.0 - eps;  // 1 - eps (a warm-started row has no direction yet: the secant)
+    return {f0, c, -keep * mode.cap * mode.dir, mode.k * (Eigen::Matrix3d::Identity() - keep * mode.dir * mode.dir.transpose())};
+  }
   // A Coulomb-capped row carries no stored tangential force into the solve (see update_modes).
   return {f0, c, std::isfinite(r.lc.mu) ? Vec3::Zero() : r.lc.ft0, r.lc.ct * Eigen::Matrix3d::Identity()};
 }
 
-/// K (lower triangle) and b of one round.
-void assemble(const QuasiStaticProblem& prob, const DofMap& m, const std::vector<RowMode>& modes, SpMat& K, Eigen::VectorXd& b) {
-  std::vector<Triplet> trip;
-  trip.reserve(prob.rows.size() * 80);
+/// Every entry of one round's K (lower triangle, as emit(row, col, value)) and its b. The entries
+/// come in the same order every round (zeros kept), so the rounds share K's pattern.
+template <class Emit>
+void for_each_entry(const QuasiStaticProblem& prob, const DofMap& m, const std::vector<RowMode>& modes, double eps, Eigen::VectorXd& b,
+                    Emit&& emit) {
   b = Eigen::VectorXd::Zero(m.size);
   for (std::size_t k = 0; k < m.wall_dof.size(); ++k)
     if (m.wall_dof[k] >= 0) b[m.wall_dof[k]] += prob.wall_load[k];
   Block blk[4];
   for (std::size_t q = 0; q < prob.rows.size(); ++q) {
     const LinearRow& r = prob.rows[q];
-    const RowCoeffs co = coeffs(r, modes[q], prob);
+    const RowCoeffs co = coeffs(r, modes[q], prob, eps);
     Eigen::Index wd;
     const int nb = row_blocks(r, m, blk, wd);
     for (int p = 0; p < nb; ++p) {
@@ -119,28 +129,55 @@ void assemble(const QuasiStaticProblem& prob, const DofMap& m, const std::vector
         if (blk[s].dof > blk[p].dof) continue;  // lower triangle: row dof p >= column dof s
         const Eigen::Matrix3d kb = co.c * blk[p].h.transpose() * blk[s].h + blk[p].g.transpose() * co.ct * blk[s].g;
         for (int x = 0; x < 3; ++x)
-          for (int y = 0; y < 3; ++y) {
-            const Eigen::Index row = blk[p].dof + x, col = blk[s].dof + y;
-            if (row >= col) trip.emplace_back(row, col, kb(x, y));  // zeros kept: one pattern for every round
-          }
+          for (int y = 0; y < 3; ++y)
+            if (blk[p].dof + x >= blk[s].dof + y) emit(blk[p].dof + x, blk[s].dof + y, kb(x, y));
       }
       if (wd >= 0)  // the wall unknown is numbered after every particle: its row is below
-        for (int x = 0; x < 3; ++x)
-          trip.emplace_back(wd, blk[p].dof + x, co.c * blk[p].h[x]);
+        for (int x = 0; x < 3; ++x) emit(wd, blk[p].dof + x, co.c * blk[p].h[x]);
     }
     if (wd >= 0) {
-      trip.emplace_back(wd, wd, co.c);
+      emit(wd, wd, co.c);
       b[wd] += -co.f0;
     }
   }
-  for (Eigen::Index i = 0; i < m.size; ++i) trip.emplace_back(i, i, 0.0);  // every diagonal stored: regularised in place
-  K.resize(m.size, m.size);
-  K.setFromTriplets(trip.begin(), trip.end());
+  for (Eigen::Index i = 0; i < m.size; ++i) emit(i, i, 0.0);  // every diagonal stored: regularised in place
 }
 
-/// The diagonal regularisation (see the header) and the symmetric Jacobi scaling D^-1/2 K D^-1/2.
-Eigen::VectorXd regularise_and_scale(SpMat& K, Eigen::VectorXd& b, const DofMap& m, Step step) {
-  Eigen::VectorXd d = K.diagonal();
+/// K of the rounds of one solve: the first round builds the pattern and remembers where each entry
+/// lands in K's values; later rounds only refill the values.
+class Assembly {
+ public:
+  void assemble(const QuasiStaticProblem& prob, const DofMap& m, const std::vector<RowMode>& modes, double eps, Eigen::VectorXd& b) {
+    if (slot_.empty()) {
+      std::vector<Triplet> trip;
+      trip.reserve(prob.rows.size() * 80);
+      for_each_entry(prob, m, modes, eps, b, [&](Eigen::Index i, Eigen::Index j, double v) { trip.emplace_back(i, j, v); });
+      K.resize(m.size, m.size);
+      K.setFromTriplets(trip.begin(), trip.end());
+      K.makeCompressed();
+      slot_.reserve(trip.size());
+      for (const Triplet& t : trip) {
+        const int* begin = K.innerIndexPtr() + K.outerIndexPtr()[t.col()];
+        const int* end = K.innerIndexPtr() + K.outerIndexPtr()[t.col() + 1];
+        slot_.push_back(static_cast<std::size_t>(std::lower_bound(begin, end, static_cast<int>(t.row())) - K.innerIndexPtr()));
+      }
+      return;
+    }
+    std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
+    std::size_t t = 0;
+    double* values = K.valuePtr();
+    for_each_entry(prob, m, modes, eps, b, [&](Eigen::Index, Eigen::Index, double v) { values[slot_[t++]] += v; });
+  }
+  SpMat K;  ///< lower triangle, compressed
+
+ private:
+  std::vector<std::size_t> slot_;  ///< per emitted entry: its index in K's values
+};
+
+/// The diagonal regularisation (see the header) and the symmetric Jacobi scale D^-1/2 of the
+/// first round's K (kept for the later rounds, whose solves it preconditions).
+Eigen::VectorXd regularisation(const SpMat& K, const DofMap& m, Step step) {
+  const Eigen::VectorXd d = K.diagonal();
   double mean[2] = {0.0, 0.0};
   double count[2] = {0.0, 0.0};
   for (std::size_t i = 0; i < m.particles; ++i)
@@ -153,55 +190,100 @@ Eigen::VectorXd regularise_and_scale(SpMat& K, Eigen::VectorXd& b, const DofMap&
     if (m.wall_dof[k] >= 0 && !(d[m.wall_dof[k]] > 0.0))
       throw PhysicsError(step, {}, "quasi-static step",
                          "a force-controlled wall (wall index " + std::to_string(k) + ") touches no particle: nothing balances its load");
-  Eigen::VectorXd scale(m.size);
-  for (Eigen::Index i = 0; i < m.size; ++i) {
-    const double reg = i < static_cast<Eigen::Index>(6 * m.particles) ? 1e-12 * mean[(i % 6) / 3] : 0.0;
-    K.coeffRef(i, i) += reg;
-    scale[i] = 1.0 / std::sqrt(K.coeff(i, i));
-  }
-  K = scale.asDiagonal() * K * scale.asDiagonal();
-  b = scale.cwiseProduct(b);
-  return scale;
+  Eigen::VectorXd reg = Eigen::VectorXd::Zero(m.size);
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(6 * m.particles); ++i) reg[i] = 1e-12 * mean[(i % 6) / 3];
+  return reg;
 }
 
-/// The direct solver of one solve_quasi_static call: the rounds share K's pattern, so its ordering
-/// and symbolic factorisation are made once.
-struct DirectSolver {
-  Eigen::SimplicialLDLT<SpMat, Eigen::Lower> ldlt;
-  bool analysed = false;
-};
+/// K + diag(reg), scaled in place to S K S (S = diag(scale)).
+void regularise_and_scale(SpMat& K, const Eigen::VectorXd& reg, const Eigen::VectorXd& scale) {
+  for (Eigen::Index j = 0; j < K.outerSize(); ++j)
+    for (SpMat::InnerIterator it(K, j); it; ++it) {
+      if (it.row() == j) it.valueRef() += reg[j];
+      it.valueRef() *= scale[it.row()] * scale[j];
+    }
+}
 
-/// Solve the scaled system; returns the unscaled solution.
-Eigen::VectorXd linear_solve(const SpMat& K, const Eigen::VectorXd& b, const Eigen::VectorXd& scale, const QuasiStaticConfig& cfg,
-                             Step step, DirectSolver& direct_solver, QuasiStaticSolution& sol) {
-  const bool direct = cfg.solver == "direct" || (cfg.solver == "auto" && K.rows() <= 60000);
-  Eigen::VectorXd x;
-  if (direct) {
-    auto& ldlt = direct_solver.ldlt;
-    if (!direct_solver.analysed) ldlt.analyzePattern(K);
-    direct_solver.analysed = true;
-    ldlt.factorize(K);
-    if (ldlt.info() != Eigen::Success) throw PhysicsError(step, {}, "quasi-static step", "the sparse LDL^T factorisation failed");
-    x = ldlt.solve(b);
-    sol.residual = b.norm() > 0.0 ? (K.selfadjointView<Eigen::Lower>() * x - b).norm() / b.norm() : 0.0;
-  } else {
-    Eigen::ConjugateGradient<SpMat, Eigen::Lower, Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>> cg;
-    cg.setTolerance(cfg.tolerance);
-    cg.setMaxIterations(static_cast<Eigen::Index>(cfg.max_iterations));
-    cg.compute(K);
-    if (cg.info() != Eigen::Success) throw PhysicsError(step, {}, "quasi-static step", "the incomplete Cholesky preconditioner failed");
-    x = cg.solve(b);
-    sol.iterations += static_cast<int>(cg.iterations());
-    sol.residual = cg.error();
-    if (cg.info() != Eigen::Success || !(cg.error() <= cfg.tolerance))
-      throw PhysicsError(step, {}, "quasi-static step",
-                         "conjugate gradients reached a relative residual of " + std::to_string(cg.error()) + " after " +
-                             std::to_string(cg.iterations()) + " iterations (tolerance " + std::to_string(cfg.tolerance) +
+/// The linear solver of one solve_quasi_static call. The rounds change only the coefficients of
+/// the capped and unilateral rows, so the first round factorises (sparse LDL^T, or incomplete
+/// Cholesky for "cg") and the later rounds run conjugate gradients preconditioned by that factor,
+/// from the last round's solution; a direct solver refactorises only when they do not reach the
+/// tolerance within kStaleIterations (the NiAl compact: 63 % of its time was refactorising).
+class RoundSolver {
+ public:
+  RoundSolver(const QuasiStaticConfig& cfg, Step step, Eigen::Index n)
+      : cfg_(cfg), step_(step), direct_(cfg.solver == "direct" || (cfg.solver == "auto" && n <= 60000)) {}
+
+  /// x of the scaled system A x = b (A lower triangle), from x (the last round's, or empty).
+  void solve(const SpMat& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, QuasiStaticSolution& sol) {
+    if (x.size() != b.size()) x = Eigen::VectorXd::Zero(b.size());
+    if (factored_ && pcg(A, b, x, direct_ ? kStaleIterations : cfg_.max_iterations, sol)) return;
+    factor(A);
+    if (direct_) {
+      x = ldlt_.solve(b);
+      sol.residual = b.norm() > 0.0 ? (A.selfadjointView<Eigen::Lower>() * x - b).norm() / b.norm() : 0.0;
+    } else if (!pcg(A, b, x, cfg_.max_iterations, sol)) {
+      throw PhysicsError(step_, {}, "quasi-static step",
+                         "conjugate gradients reached a relative residual of " + std::to_string(sol.residual) + " after " +
+                             std::to_string(cfg_.max_iterations) + " iterations (tolerance " + std::to_string(cfg_.tolerance) +
                              "); raise quasi_static.max_iterations or use solver \"direct\"");
+    }
+    if (!x.allFinite()) throw PhysicsError(step_, {}, "quasi-static step", "the solve returned a non-finite velocity");
   }
-  if (!x.allFinite()) throw PhysicsError(step, {}, "quasi-static step", "the solve returned a non-finite velocity");
-  return scale.cwiseProduct(x);
-}
+
+ private:
+  static constexpr std::int64_t kStaleIterations = 50;
+
+  void factor(const SpMat& A) {
+    ++factorisations;
+    factored_ = true;
+    if (direct_) {
+      if (!analysed_) ldlt_.analyzePattern(A);
+      analysed_ = true;
+      ldlt_.factorize(A);
+      if (ldlt_.info() != Eigen::Success) throw PhysicsError(step_, {}, "quasi-static step", "the sparse LDL^T factorisation failed");
+    } else {
+      ic_.compute(A);
+      if (ic_.info() != Eigen::Success) throw PhysicsError(step_, {}, "quasi-static step", "the incomplete Cholesky preconditioner failed");
+    }
+  }
+  Eigen::VectorXd precondition(const Eigen::VectorXd& r) const { return direct_ ? Eigen::VectorXd(ldlt_.solve(r)) : Eigen::VectorXd(ic_.solve(r)); }
+
+  /// Preconditioned conjugate gradients to |b - A x| <= tolerance |b|; false if not within max_it.
+  bool pcg(const SpMat& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, std::int64_t max_it, QuasiStaticSolution& sol) {
+    const auto Asym = A.selfadjointView<Eigen::Lower>();
+    const double target = cfg_.tolerance * b.norm();
+    Eigen::VectorXd r = b - Asym * x;
+    sol.residual = b.norm() > 0.0 ? r.norm() / b.norm() : 0.0;
+    if (r.norm() <= target) return true;
+    Eigen::VectorXd z = precondition(r), p = z, Ap(b.size());
+    double rz = r.dot(z);
+    for (std::int64_t it = 0; it < max_it; ++it) {
+      Ap.noalias() = Asym * p;
+      const double alpha = rz / p.dot(Ap);
+      x += alpha * p;
+      r -= alpha * Ap;
+      ++sol.iterations;
+      sol.residual = b.norm() > 0.0 ? r.norm() / b.norm() : 0.0;
+      if (r.norm() <= target) return x.allFinite();
+      z = precondition(r);
+      const double rz_new = r.dot(z);
+      p = z + (rz_new / rz) * p;
+      rz = rz_new;
+    }
+    return false;
+  }
+
+  const QuasiStaticConfig& cfg_;
+  Step step_;
+  bool direct_;
+  bool factored_ = false, analysed_ = false;
+  Eigen::SimplicialLDLT<SpMat, Eigen::Lower> ldlt_;
+  Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>> ic_;
+
+ public:
+  int factorisations = 0;
+};
 
 /// The row's approach rate a and sliding velocity s at the solution u.
 void row_motion(const LinearRow& r, const DofMap& m, const QuasiStaticProblem& prob, const Eigen::VectorXd& u, double& a, Vec3& s) {
@@ -265,7 +347,12 @@ bool update_modes(const QuasiStaticProblem& prob, const DofMap& m, const Eigen::
       const double sn = s.norm();
       if (sn * r.lc.ct > next.cap) {
         next.sliding = true;
-        next.k = next.cap / sn;  // the secant viscosity (Picard)
+        next.k = next.cap / sn;  // the secant viscosity
+        // The slip's direction, once it held (within 25 deg) over two rounds: the relaxed Newton form
+        // then applies (coeffs); a row turning or starting to slide takes the secant form.
+        const Vec3 e = s / sn;
+        if (modes[q].sliding && e.dot(modes[q].dir.norm() > 0.0 ? modes[q].dir : modes[q].last) > 0.9) next.dir = e;
+        next.last = e;
       }
     }
     const RowMode& cur = modes[q];
@@ -290,16 +377,22 @@ QuasiStaticSolution solve_quasi_static(const QuasiStaticProblem& prob, const Qua
         modes[q].sliding = true;
         modes[q].k = prob.slip_guess[q];
       }
-  Eigen::VectorXd u, u_last;
-  DirectSolver direct;
+  Eigen::VectorXd u, u_last, x;
+  Assembly asm_;
+  RoundSolver solver(cfg, prob.step, m.size);
+  Eigen::VectorXd reg, scale;
   const bool warm = std::any_of(modes.begin(), modes.end(), [](const RowMode& r) { return r.sliding; });
   sol.converged = false;
   for (std::int64_t round = 0; round < std::max<std::int64_t>(1, cfg.friction_iterations); ++round) {
-    SpMat K;
     Eigen::VectorXd b;
-    assemble(prob, m, modes, K, b);
-    const Eigen::VectorXd scale = regularise_and_scale(K, b, m, prob.step);
-    u = linear_solve(K, b, scale, cfg, prob.step, direct, sol);
+    asm_.assemble(prob, m, modes, cfg.slip_relaxation, b);
+    if (round == 0) {
+      reg = regularisation(asm_.K, m, prob.step);
+      scale = (asm_.K.diagonal() + reg).cwiseSqrt().cwiseInverse();
+    }
+    regularise_and_scale(asm_.K, reg, scale);
+    solver.solve(asm_.K, scale.cwiseProduct(b), x, sol);
+    u = scale.cwiseProduct(x);
     ++sol.rounds;
     const bool same_set = update_modes(prob, m, u, modes, sol);
     // Settled: the same open contacts, and the motion moved less than friction_tolerance (of its
@@ -312,6 +405,7 @@ QuasiStaticSolution solve_quasi_static(const QuasiStaticProblem& prob, const Qua
       break;
     }
   }
+  sol.factorisations = solver.factorisations;
   sol.v.resize(prob.particles);
   sol.w.resize(prob.particles);
   for (std::size_t i = 0; i < prob.particles; ++i) {

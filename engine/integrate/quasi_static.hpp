@@ -27,6 +27,10 @@
 /// Unknowns without any contact (a rattler, a sphere's spin about its only contact normal) get a
 /// regularising drag of 1e-12 times the mean diagonal of their kind (translation or rotation), so
 /// K is definite; their right-hand side is zero, so they stay at rest.
+///
+/// The rounds share K's pattern and differ only in the coefficients of the capped and unilateral
+/// rows: the first round factorises, the later ones run conjugate gradients preconditioned by that
+/// factor (a direct solver refactorises if they do not converge within 50 iterations).
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -43,6 +47,7 @@ struct QuasiStaticConfig {
   double tolerance = 1e-10;            ///< relative residual |K u - b| / |b| of the iterative solve
   std::int64_t max_iterations = 20000;        ///< conjugate-gradient iterations
   std::int64_t friction_iterations = 30;      ///< rounds of the nonlinear contacts (slip, opening)
+  double slip_relaxation = 0.1;        ///< eps: the fraction of a sliding row's secant viscosity kept along its slip (1: secant rounds; -> 0: Newton)
   double friction_tolerance = 1e-3;    ///< change of the motion between rounds / its largest component that ends the rounds
   std::string solver = "auto";         ///< direct (sparse LDL^T), cg (IC-preconditioned), auto (direct below 60,000 unknowns)
   std::int64_t max_substeps = 1000000;           ///< substeps a step may be split into by max_strain_increment
@@ -73,7 +78,8 @@ struct QuasiStaticSolution {
   double approach_increment = 0.0; ///< max over contacts of |a| dt / r_min (the whole approach, elastic part included)
   std::size_t approach_row = 0;    ///< the row of that maximum
   int rounds = 0;                  ///< linear solves (nonlinear rounds)
-  int iterations = 0;              ///< CG iterations, summed over rounds (0: direct)
+  int iterations = 0;              ///< CG iterations, summed over rounds (rounds after the first reuse the first one's factor as CG's preconditioner)
+  int factorisations = 0;          ///< factorisations (LDL^T or incomplete Cholesky) of this solve
   double residual = 0.0;           ///< relative residual of the last linear solve
   std::size_t sliding = 0;         ///< contacts sliding in the last round
   std::size_t open = 0;            ///< unilateral contacts dropped in the last round

@@ -545,6 +545,7 @@ void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool 
                           {"max_rounds_per_solve", q.max_rounds},
                           {"unsettled_solves", q.unsettled},
                           {"cg_iterations", q.cg_iterations},
+                          {"factorisations", q.factorisations},
                           {"max_strain_increment", q.max_strain_increment},
                           {"max_mean_strain_increment", q.max_mean_strain_increment},
                           {"max_force_residual", q.max_residual},

@@ -682,6 +682,13 @@ ParamSpec<QuasiStaticConfig> quasi_static_spec() {
   s.add("friction_iterations", &P::friction_iterations)
       .min(1)
       .doc("rounds of the nonlinear contacts per solve (Coulomb slip by secant viscosity, unilateral opening)");
+  s.add("slip_relaxation", &P::slip_relaxation)
+      .unit("1")
+      .positive()
+      .max(1.0)
+      .doc("eps in (0, 1]: a sliding contact's rounds keep this fraction of its secant viscosity along the slip and "
+           "apply the rest as the constant force mu F_n (1: secant rounds, contracting by mu F_n / driving force per "
+           "round; smaller: nearer Newton, fewer rounds)");
   s.add("friction_tolerance", &P::friction_tolerance).unit("1").positive().doc("the rounds end when the same contacts are open and the motion changed by less than this fraction of its largest component");
   s.add("solver", &P::solver)
       .choices({"auto", "direct", "cg"})

@@ -5,6 +5,7 @@
 //    creep rates;
 //  - a force-controlled punch on a column of cold spheres: every contact carries the load, at
 //    the Hertz overlap of the closed form, and the punch's wall force equals p A;
+//  - Coulomb sliding against a viscous drag reaches its closed form for every slip_relaxation;
 //  - what the path cannot take is refused before step 0.
 #include <catch2/catch.hpp>
 
@@ -13,6 +14,7 @@
 #include <random>
 
 #include "engine/contact/contact_model.hpp"
+#include "engine/integrate/quasi_static.hpp"
 #include "engine/simulation.hpp"
 #include "physics/contact/hertz_mindlin.hpp"
 #include "physics/contact/sintering.hpp"
@@ -190,6 +192,61 @@ TEST_CASE("Quasi-static punch: a force-controlled wall presses a column at the c
   CHECK(kR - (x[0].z() - 1e-4 * kR) == Approx(dw).epsilon(1e-6));
   CHECK(s.walls[1].normal_force == Approx(load).epsilon(1e-6));
   CHECK(s.walls[0].normal_force == Approx(load).epsilon(1e-6));
+}
+
+namespace {
+/// One particle between a frictional floor (Coulomb cap mu N, stiff stick viscosity) and a ceiling
+/// that drags it sideways with F_t = F - c_t v_x, both pressing with N; arms zero (no spin). The
+/// particle slides at v_x = (F - mu N) / c_t when F > mu N and sticks (v_x = F / (c_t + k_stick))
+/// otherwise. Returns the solution at the given slip_relaxation.
+QuasiStaticSolution dragged_particle(double drag, double eps) {
+  QuasiStaticProblem prob;
+  prob.particles = 1;
+  prob.dt = 1.0;
+  prob.wall_rate = {0.0, 0.0};
+  prob.wall_load = {0.0, 0.0};
+  LinearRow floor, ceiling;
+  floor.j = -1;
+  floor.n = Vec3::UnitZ();
+  floor.r_min = 1.0;
+  floor.lc.f0 = 1.0;   // N [N]
+  floor.lc.c = 10.0;   // [N s/m]
+  floor.lc.mu = 0.5;
+  floor.lc.ct = 1e4;   // stick viscosity [N s/m]
+  floor.lc.unilateral = true;
+  ceiling = floor;
+  ceiling.j = -2;
+  ceiling.n = -Vec3::UnitZ();
+  ceiling.lc.mu = std::numeric_limits<double>::infinity();
+  ceiling.lc.ct = 1.0;  // c_t [N s/m]
+  ceiling.lc.ft0 = Vec3(drag, 0.0, 0.0);
+  prob.rows = {floor, ceiling};
+  QuasiStaticConfig cfg;
+  cfg.friction_iterations = 500;
+  cfg.friction_tolerance = 1e-8;
+  cfg.slip_relaxation = eps;
+  return solve_quasi_static(prob, cfg);
+}
+}  // namespace
+
+TEST_CASE("Quasi-static friction: a dragged particle slides at (F - mu N) / c_t for every slip_relaxation, sooner with a small one", "[quasi_static]") {
+  // Near sticking (mu N / F = 0.9) the secant rounds (eps = 1) contract by 0.9 per round and the
+  // relaxed Newton form (eps = 0.1) by eps mu N / (F - mu N + eps mu N) = 0.47: the same answer in
+  // fewer rounds.
+  const double drag = 0.5 / 0.9, exact = drag - 0.5;
+  const QuasiStaticSolution secant = dragged_particle(drag, 1.0), relaxed = dragged_particle(drag, 0.1);
+  INFO("v_x " << secant.v[0].x() << " (" << secant.rounds << " rounds), " << relaxed.v[0].x() << " (" << relaxed.rounds
+              << " rounds); closed form " << exact << " m/s");
+  CHECK(secant.converged);
+  CHECK(relaxed.converged);
+  CHECK(secant.v[0].x() == Approx(exact).epsilon(1e-6));
+  CHECK(relaxed.v[0].x() == Approx(exact).epsilon(1e-6));
+  CHECK(std::abs(secant.v[0].z()) < 1e-12);
+  CHECK(relaxed.rounds * 3 < secant.rounds);
+  // Below the cap it sticks: the stick viscosity alone resists.
+  const QuasiStaticSolution stuck = dragged_particle(0.4, 0.1);
+  CHECK(stuck.v[0].x() == Approx(0.4 / (1.0 + 1e4)).epsilon(1e-9));
+  CHECK(stuck.sliding == 0);
 }
 
 TEST_CASE("Quasi-static stage: what it cannot take is refused before step 0", "[quasi_static]") {
