@@ -12,7 +12,7 @@ quasi-static stage is its dt and all three of its increment limits (max_strain_i
 max_approach_increment, max_mean_strain_increment), halved together.
 
     python3 -m benchmarks.sps_nial.step_halving --sparkdem build/sparkdem --workdir DIR
-        [--config configs/sps_nial_small.json] [--hot-press FILE] [--seed 2024]
+        [--config configs/sps_nial_small.json] [--hot-press FILE] [--seed 2024] [--factors 1,0.5]
         [--csv benchmarks/sps_nial/step_halving.csv]
 """
 import argparse
@@ -65,13 +65,15 @@ def main():
     ap.add_argument("--workdir", required=True)
     ap.add_argument("--config", default="configs/sps_nial_small.json")
     ap.add_argument("--hot-press", default=None, help="a config whose hot_press stage replaces the config's")
+    ap.add_argument("--factors", default="1,0.5", help="step factors to run, the first the reference (\"1\": the gates of one run)")
     ap.add_argument("--seed", type=int, default=2024)
     ap.add_argument("--csv", default=os.path.join(REPO, "benchmarks/sps_nial/step_halving.csv"))
     a = ap.parse_args()
     os.makedirs(a.workdir, exist_ok=True)
     version = subprocess.run([a.sparkdem, "--version"], capture_output=True, text=True).stdout.strip()
     runs = {}
-    for factor in (1.0, 0.5):
+    factors = [float(x) for x in a.factors.split(",")]
+    for factor in factors:
         name = f"dt_x{factor:g}"
         path, out = os.path.join(a.workdir, name + ".json"), os.path.join(a.workdir, name + "_out")
         with open(path, "w") as f:
@@ -86,16 +88,16 @@ def main():
         for t in taken:
             k = t["index"]
             g = so.quasi_static_gates(t.get("columns", {}))
-            ref = runs[1.0]
-            row = {"dt_factor": factor, "snapshot": k, "target": t.get("target"), "porosity_taken": t["value"],
+            ref = runs[factors[0]]
+            row = {"seed": a.seed, "dt_factor": factor, "snapshot": k, "target": t.get("target"), "porosity_taken": t["value"],
                    "kappa_without_layer": nogb.get(k), "kappa_with_layer": gb.get(k), "binary": version}
-            if factor != 1.0 and nogb.get(k) and ref[1].get(k):
+            if factor != factors[0] and nogb.get(k) and ref[1].get(k):
                 row["kappa_without_layer_change"] = nogb[k] / ref[1][k] - 1.0
-            if factor != 1.0 and gb.get(k) and ref[2].get(k):
+            if factor != factors[0] and gb.get(k) and ref[2].get(k):
                 row["kappa_with_layer_change"] = gb[k] / ref[2][k] - 1.0
             row.update({f"qs_{n}": g.get(n) for n in so.QUANTITIES})
             rows.append(row)
-    fields = ["dt_factor", "snapshot", "target", "porosity_taken", "kappa_without_layer", "kappa_with_layer", "kappa_without_layer_change",
+    fields = ["seed", "dt_factor", "snapshot", "target", "porosity_taken", "kappa_without_layer", "kappa_with_layer", "kappa_without_layer_change",
               "kappa_with_layer_change"] + [f"qs_{n}" for n in so.QUANTITIES] + ["binary"]
     write_csv_atomic(a.csv, [{k: ("%.6g" % v if isinstance(v, float) else v) for k, v in r.items()} for r in rows], fields)
     print(open(a.csv).read())

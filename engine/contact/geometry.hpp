@@ -67,6 +67,12 @@ struct LinearContact {
   /// (which vanishes at zero overlap: a contact loaded from touching overshot by 0.06 of its radius).
   double hertz = 0.0;
   double overlap = 0.0;  ///< [m] at the step start (hertz > 0)
+  /// [N m s] resistance of a pair's neck to the relative rotation rate W = w_i - w_j over the step:
+  /// the moment on i is -(bend (I - n n^T) + twist n n^T) W (on j the opposite). Used by the
+  /// quasi-static solve only (the explicit path has no contact moments; its inertia bounds the modes
+  /// these remove: a particle hanging by one neck rolls about it freely).
+  double bend = 0.0;
+  double twist = 0.0;
 };
 
 [[gnu::always_inline]] inline RelativeMotion relative_motion(const ContactGeometry& g, const Vec3& vi, const Vec3& vj, const Vec3& wi,

@@ -25,6 +25,7 @@ struct RowMode {
   double cap = 0.0;        ///< mu F_n of the last round [N]
   double k = 0.0;          ///< cap / |slip| of the last round [N s/m] (the secant viscosity)
   double secant = -1.0;    ///< a Hertz row's secant stiffness over the step [N/m] (< 0: its tangent at the start)
+  bool touch = false;      ///< a Hertz row on its chord to touching, F(d0) / d0 (predicted to separate)
 };
 
 /// A Hertz row's force at overlap d [N].
@@ -109,6 +110,24 @@ RowCoeffs coeffs(const LinearRow& r, const RowMode& mode, const QuasiStaticProbl
   return {f0, c, std::isfinite(r.lc.mu) ? Vec3::Zero() : r.lc.ft0, r.lc.ct * Eigen::Matrix3d::Identity()};
 }
 
+/// A pair row's resistance to relative rotation, W = w_i - w_j: the potential W^T B W / 2 with
+/// B = bend (I - n n^T) + twist n n^T, i.e. the blocks B on (w_i, w_i) and (w_j, w_j) and -B between.
+template <class Emit>
+void emit_neck_moments(const LinearRow& r, Emit& emit) {
+  const Eigen::Matrix3d nn = r.n * r.n.transpose();
+  const Eigen::Matrix3d B = r.lc.bend * (Eigen::Matrix3d::Identity() - nn) + r.lc.twist * nn;
+  const Eigen::Index wi = 6 * static_cast<Eigen::Index>(r.i) + 3, wj = 6 * static_cast<Eigen::Index>(r.j) + 3;
+  const Eigen::Index hi = std::max(wi, wj), lo = std::min(wi, wj);
+  for (int x = 0; x < 3; ++x)
+    for (int y = 0; y < 3; ++y) {
+      if (x >= y) {
+        emit(wi + x, wi + y, B(x, y));
+        emit(wj + x, wj + y, B(x, y));
+      }
+      emit(hi + x, lo + y, -B(x, y));  // B is symmetric: the block below the diagonal
+    }
+}
+
 /// Every entry of one round's K (lower triangle, as emit(row, col, value)) and its b. The entries
 /// come in the same order every round (zeros kept), so the rounds share K's pattern.
 template <class Emit>
@@ -139,6 +158,7 @@ void for_each_entry(const QuasiStaticProblem& prob, const DofMap& m, const std::
       emit(wd, wd, co.c);
       b[wd] += -co.f0;
     }
+    if (r.j >= 0 && (r.lc.bend > 0.0 || r.lc.twist > 0.0)) emit_neck_moments(r, emit);
   }
   for (Eigen::Index i = 0; i < m.size; ++i) emit(i, i, 0.0);  // every diagonal stored: regularised in place
 }
@@ -330,12 +350,22 @@ bool update_modes(const QuasiStaticProblem& prob, const DofMap& m, const Eigen::
     RowMode next;
     double fn = r.lc.f0 + r.lc.c * a;  // (a includes a known wall rate)
     if (r.lc.hertz > 0.0) {
-      // The Hertz force at the predicted overlap and the secant over the step (Picard).
-      const double d1 = r.lc.overlap + a * prob.dt, dd = d1 - r.lc.overlap;
+      // The Hertz force at the predicted overlap and the secant over the step (Picard). A contact
+      // predicted to separate first takes the chord to touching, F = F(d0) d / d0, and opens only if
+      // that chord would pull: a particle free to roll about its one neck, pushed by a punch it
+      // barely touches, then rolls exactly off it (its rounds had alternated between a closed
+      // round, moving it at 29 m/s, and an open one, leaving it at rest).
+      const double d0 = r.lc.overlap, d1 = d0 + a * prob.dt, dd = d1 - d0;
+      const RowMode& cur = modes[q];
       fn = hertz_force(r.lc, d1);
-      next.secant = std::abs(dd) > 1e-12 * std::max(r.lc.overlap, 1e-30) ? (fn - hertz_force(r.lc, r.lc.overlap)) / dd
-                                                                          : 1.5 * r.lc.hertz * std::sqrt(std::max(r.lc.overlap, 0.0));
-      next.open = d1 <= 0.0;
+      if (d1 > 0.0) {
+        next.secant = std::abs(dd) > 1e-12 * std::max(d0, 1e-30) ? (fn - hertz_force(r.lc, d0)) / dd : 1.5 * r.lc.hertz * std::sqrt(std::max(d0, 0.0));
+      } else if (d0 > 0.0 && !cur.open && (!cur.touch || d1 > -1e-6 * d0)) {
+        next.touch = true;
+        next.secant = hertz_force(r.lc, d0) / d0;
+      } else {
+        next.open = true;
+      }
     } else {
       next.open = r.lc.unilateral && fn < 0.0;
     }

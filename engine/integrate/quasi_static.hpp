@@ -24,9 +24,14 @@
 /// mu F_n against the sliding), until the set of sliding and open contacts repeats and every secant
 /// viscosity moved less than friction_tolerance.
 ///
-/// Unknowns without any contact (a rattler, a sphere's spin about its only contact normal) get a
-/// regularising drag of 1e-12 times the mean diagonal of their kind (translation or rotation), so
-/// K is definite; their right-hand side is zero, so they stay at rest.
+/// Unknowns without any contact (a rattler) get a regularising drag of 1e-12 times the mean
+/// diagonal of their kind (translation or rotation), so K is definite; their right-hand side is
+/// zero, so they stay at rest. A neck resists the relative rotation of its particles (rolling and
+/// twisting, LinearContact::bend and twist), so a particle hanging by one neck has no free mode.
+///
+/// A Hertz row (a wall, a contact without a neck) predicted to separate first takes its chord to
+/// touching, F = F(d0) d / d0, and opens only if that chord would pull: a particle pushed along a
+/// near-free mode then moves exactly off the contact.
 ///
 /// The rounds share K's pattern and differ only in the coefficients of the capped and unilateral
 /// rows: the first round factorises, the later ones run conjugate gradients preconditioned by that

@@ -197,6 +197,24 @@ inline MaxwellStep maxwell_step(double force, double k, double eta, double v, do
   return {force * m.decay + k * v * dt * m.phi, dt * (v * (1.0 - m.phi) + m.phi * force / eta)};
 }
 
+/// A neck's resistance to the relative rotation of its particles, over a step [N m s]: the moment
+/// on i is -(bend (I - n n^T) + twist n n^T) (w_i - w_j).
+///   bend  = c a^2 / 12:  the normal line F = c v on the neck disk of radius a, with the normal
+///                        velocity linear across the disk, v(x) = theta' x, instead of uniform.
+///                        For grain-boundary diffusion (the plating flux solves a Poisson problem
+///                        on the disk, p = 0 at its edge) a uniform v gives F = -C v pi a^4 / 8 and
+///                        v = theta' x gives M = -C theta' pi a^6 / 96: M / theta' = (F / v) a^2 / 12.
+///   twist = c_t a^2 / 2: the tangential line F_t = c_t v_t with the in-plane velocity rising
+///                        linearly from the centre, v_t(r) = phi' r: M = (c_t / (pi a^2)) phi' pi a^4 / 2.
+/// Derived here under the assumptions of neck_viscosity (a flat disk neck, the Coble/Nosewicz
+/// boundary flux); used by the inertia-free step only (LinearContact::bend, twist).
+struct NeckMoments {
+  double bend, twist;
+};
+inline NeckMoments neck_rotation_resistance(double c_normal, double c_tangential, double a_m) {
+  return {c_normal * a_m * a_m / 12.0, c_tangential * a_m * a_m / 2.0};
+}
+
 }  // namespace kernel
 
 struct Sintering {
@@ -484,6 +502,11 @@ struct Sintering {
     const kernel::MaxwellFactors mf = kernel::maxwell_factors(kt, p_.tangential_factor * e.eta_n, dt);
     lc.ft0 = in_plane(st + kTangential, g.n) * mf.decay;
     lc.ct = kt * dt * mf.phi;
+    if (e.neck) {
+      const kernel::NeckMoments nm = kernel::neck_rotation_resistance(lc.c, lc.ct, e.a);
+      lc.bend = nm.bend;
+      lc.twist = nm.twist;
+    }
     return lc;
   }
   /// A stored tangential vector turned into the plane normal to n, its length kept (operator()).

@@ -5,6 +5,7 @@
 //    creep rates;
 //  - a force-controlled punch on a column of cold spheres: every contact carries the load, at
 //    the Hertz overlap of the closed form, and the punch's wall force equals p A;
+//  - a neck's rolling and twisting resistance turns two particles at torque / resistance;
 //  - Coulomb sliding against a viscous drag reaches its closed form for every slip_relaxation;
 //  - what the path cannot take is refused before step 0.
 #include <catch2/catch.hpp>
@@ -247,6 +248,52 @@ TEST_CASE("Quasi-static friction: a dragged particle slides at (F - mu N) / c_t 
   const QuasiStaticSolution stuck = dragged_particle(0.4, 0.1);
   CHECK(stuck.v[0].x() == Approx(0.4 / (1.0 + 1e4)).epsilon(1e-9));
   CHECK(stuck.sliding == 0);
+}
+
+TEST_CASE("Quasi-static neck moments: two particles twisted and bent against each other turn at torque / (twist or bend)", "[quasi_static]") {
+  // Particles 0 and 1 joined by a neck along x (LinearContact bend B, twist T; no arms, so its
+  // tangential line takes no part). Each is driven by two force-free wall rows (normals +z and -z,
+  // arm R, F_t = +-F along y and along x), whose net is a torque 2 R F x (twist) and -2 R F y (bend)
+  // on particle 0 and the opposite on 1. The relative spin W = w_0 - w_1 is then (2RF / T, -2RF / B, 0)
+  // and the common spin is zero (its right-hand side is).
+  const double R = 1e-6, F = 1e-6, B = 3e-15, T = 7e-15;
+  QuasiStaticProblem prob;
+  prob.particles = 2;
+  prob.dt = 1.0;
+  prob.wall_rate = {0.0, 0.0};
+  prob.wall_load = {0.0, 0.0};
+  LinearRow neck;
+  neck.i = 0;
+  neck.j = 1;
+  neck.n = Vec3::UnitX();
+  neck.r_min = R;
+  neck.lc.c = 1.0;
+  neck.lc.ct = 1.0;
+  neck.lc.bend = B;
+  neck.lc.twist = T;
+  prob.rows.push_back(neck);
+  for (int p = 0; p < 2; ++p)
+    for (int side = 0; side < 2; ++side) {
+      const double sgn = side == 0 ? 1.0 : -1.0, dir = p == 0 ? 1.0 : -1.0;
+      LinearRow d;
+      d.i = static_cast<Index>(p);
+      d.j = -1 - side;
+      d.n = sgn * Vec3::UnitZ();
+      d.arm_i = R;
+      d.r_min = R;
+      d.lc.ft0 = dir * sgn * F * Vec3(1.0, 1.0, 0.0);  // y: torque R F x (twist); x: torque -R F y (bend)
+      prob.rows.push_back(d);
+    }
+  QuasiStaticConfig cfg;
+  const QuasiStaticSolution sol = solve_quasi_static(prob, cfg);
+  const Vec3 W = sol.w[0] - sol.w[1], common = sol.w[0] + sol.w[1];
+  INFO("W = " << W.transpose() << " rad/s; closed form " << 2 * R * F / T << ", " << -2 * R * F / B);
+  CHECK(W.x() == Approx(2.0 * R * F / T).epsilon(1e-9));
+  CHECK(W.y() == Approx(-2.0 * R * F / B).epsilon(1e-9));
+  CHECK(std::abs(W.z()) < 1e-9 * W.norm());
+  // The common spin is a free mode held by the 1e-12 drag alone: round-off (1e-16) amplified 1e12 times.
+  CHECK(common.norm() < 1e-3 * W.norm());
+  CHECK(sol.v[0].norm() + sol.v[1].norm() < 1e-12);
 }
 
 TEST_CASE("Quasi-static stage: what it cannot take is refused before step 0", "[quasi_static]") {
