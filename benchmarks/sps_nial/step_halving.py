@@ -12,7 +12,7 @@ quasi-static stage is its dt and all three of its increment limits (max_strain_i
 max_approach_increment, max_mean_strain_increment), halved together.
 
     python3 -m benchmarks.sps_nial.step_halving --sparkdem build/sparkdem --workdir DIR
-        [--config configs/sps_nial_small.json] [--hot-press FILE] [--seed 2024] [--factors 1,0.5]
+        [--config configs/sps_nial_small.json] [--hot-press FILE] [--seed 2024] [--factors 1,0.5] [--size 1]
         [--csv benchmarks/sps_nial/step_halving.csv]
 """
 import argparse
@@ -37,9 +37,13 @@ def load(config):
     return c
 
 
-def scene(config, seed, factor, hot_press=None):
+def scene(config, seed, factor, hot_press=None, size=1.0):
     c = load(config)
     c["seed"] = seed
+    gen = c["stages"][0].get("generator", {})
+    for k in ("radius", "length"):  # size x the particles: the die and the compact scaled by size^(1/3)
+        if k in gen:
+            gen[k] *= size ** (1.0 / 3.0)
     c["stages"] = [st for st in c["stages"] if st["name"] != "cooled_conductivity"]
     if hot_press:
         hp = next(st for st in load(hot_press)["stages"] if st["name"] == "hot_press")
@@ -65,22 +69,24 @@ def main():
     ap.add_argument("--workdir", required=True)
     ap.add_argument("--config", default="configs/sps_nial_small.json")
     ap.add_argument("--hot-press", default=None, help="a config whose hot_press stage replaces the config's")
+    ap.add_argument("--size", type=float, default=1.0, help="the compact's volume (and particle count) x this")
     ap.add_argument("--factors", default="1,0.5", help="step factors to run, the first the reference (\"1\": the gates of one run)")
     ap.add_argument("--seed", type=int, default=2024)
     ap.add_argument("--csv", default=os.path.join(REPO, "benchmarks/sps_nial/step_halving.csv"))
     a = ap.parse_args()
     os.makedirs(a.workdir, exist_ok=True)
     version = subprocess.run([a.sparkdem, "--version"], capture_output=True, text=True).stdout.strip()
-    runs = {}
+    runs, particles = {}, {}
     factors = [float(x) for x in a.factors.split(",")]
     for factor in factors:
         name = f"dt_x{factor:g}"
         path, out = os.path.join(a.workdir, name + ".json"), os.path.join(a.workdir, name + "_out")
         with open(path, "w") as f:
-            json.dump(scene(a.config, a.seed, factor, a.hot_press), f, indent=1)
+            json.dump(scene(a.config, a.seed, factor, a.hot_press, a.size), f, indent=1)
         subprocess.run([a.sparkdem, "run", path, "-o", out, "--threads", "1", "--quiet"], check=False)
         with open(os.path.join(out, "summary.json")) as f:
             s = json.load(f)
+        particles[factor] = so.find_stage(s, "hot_press").get("particles")
         runs[factor] = (so.find_stage(s, "hot_press").get("snapshots", {}).get("taken", []), so.sweep_values(s, "conductivity_no_gb"),
                         so.sweep_values(s, "conductivity_gb"))
     rows = []
@@ -89,7 +95,7 @@ def main():
             k = t["index"]
             g = so.quasi_static_gates(t.get("columns", {}))
             ref = runs[factors[0]]
-            row = {"seed": a.seed, "dt_factor": factor, "snapshot": k, "target": t.get("target"), "porosity_taken": t["value"],
+            row = {"seed": a.seed, "size": a.size, "particles": particles[factor], "dt_factor": factor, "snapshot": k, "target": t.get("target"), "porosity_taken": t["value"],
                    "kappa_without_layer": nogb.get(k), "kappa_with_layer": gb.get(k), "binary": version}
             if factor != factors[0] and nogb.get(k) and ref[1].get(k):
                 row["kappa_without_layer_change"] = nogb[k] / ref[1][k] - 1.0
@@ -97,7 +103,7 @@ def main():
                 row["kappa_with_layer_change"] = gb[k] / ref[2][k] - 1.0
             row.update({f"qs_{n}": g.get(n) for n in so.QUANTITIES})
             rows.append(row)
-    fields = ["seed", "dt_factor", "snapshot", "target", "porosity_taken", "kappa_without_layer", "kappa_with_layer", "kappa_without_layer_change",
+    fields = ["seed", "size", "particles", "dt_factor", "snapshot", "target", "porosity_taken", "kappa_without_layer", "kappa_with_layer", "kappa_without_layer_change",
               "kappa_with_layer_change"] + [f"qs_{n}" for n in so.QUANTITIES] + ["binary"]
     write_csv_atomic(a.csv, [{k: ("%.6g" % v if isinstance(v, float) else v) for k, v in r.items()} for r in rows], fields)
     print(open(a.csv).read())
