@@ -14,9 +14,12 @@ and which stop holds the necks at the end (stops()): the share of particles whos
 fraction sum a^2 / (4 r^2) reached 1 (seed 000 Eq. 22-23, the law's creep_stop_gb_fraction), and
 the shares of the necks frozen by it and by the overlap limit h >= r_min (creep_overlap_limit).
 
+With --quasi-static the hot presses run on the inertia-free path (predict.to_quasi_static) and D_0
+comes from the ledger's seed000/table1_densification_quasi_static run (RUNS_QS).
+
     python3 -m benchmarks.sps_table1.creep_scan --sparkdem build/sparkdem --workdir DIR [--jobs 2]
         [--runs benchmarks/validation/runs/full/seed000_table1_densification/N300.json]
-        [--csv benchmarks/sps_table1/creep_scan.csv]
+        [--csv benchmarks/sps_table1/creep_scan.csv] [--quasi-static]
 """
 import argparse
 import json
@@ -32,6 +35,7 @@ from benchmarks.sps_table1 import predict
 RATES = (1e-2, 1.0, 1e2, 1e4)
 MEASURED = predict.MEASURED
 RUNS = os.path.join(predict.REPO, "benchmarks/validation/runs/full/seed000_table1_densification/N300.json")
+RUNS_QS = os.path.join(predict.REPO, "benchmarks/validation/runs/full/seed000_table1_densification_quasi_static/N300.json")
 
 
 def calibrated_d0(path):
@@ -69,9 +73,12 @@ def main():
     ap.add_argument("--sparkdem", required=True)
     ap.add_argument("--workdir", required=True)
     ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--runs", default=RUNS)
+    ap.add_argument("--runs", default=None, help="the ledger's run file with the calibrated D_0 (default RUNS, or RUNS_QS)")
+    ap.add_argument("--quasi-static", action="store_true")
     ap.add_argument("--csv", default=os.path.join(predict.HERE, "creep_scan.csv"))
     a = ap.parse_args()
+    a.runs = a.runs or (RUNS_QS if a.quasi_static else RUNS)
+    prepare = predict.to_quasi_static if a.quasi_static else (lambda sc: sc)
     os.makedirs(a.workdir, exist_ok=True)
     version = subprocess.run([a.sparkdem, "--version"], capture_output=True, text=True).stdout.strip()
     items = []
@@ -90,7 +97,7 @@ def main():
         out = os.path.join(a.workdir, name + "_out")
         p = predict.porosities(out) if os.path.exists(os.path.join(out, "summary.json")) else None  # a finished run is read
         if p is None:
-            out = predict.run_scene(a.sparkdem, a.workdir, predict.scene(k, seed, d0, powerlaw_creep_rate=rate, **extra), name)
+            out = predict.run_scene(a.sparkdem, a.workdir, prepare(predict.scene(k, seed, d0, powerlaw_creep_rate=rate, **extra)), name)
             p = predict.porosities(out)
         return item, dict(p, **stops(out)) if p else None
 
