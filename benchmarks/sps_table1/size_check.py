@@ -8,8 +8,11 @@ the bed length scaled by 4^(1/3) (~1200 particles, the same aspect ratio). One C
 seed, sample, scale, particles, cooled envelope porosity (the ledger's body), mass porosity in the
 die cooled and at the end of the hold; then per (seed, sample) the difference 4N - N.
 
+With --quasi-static the hot presses run on the inertia-free path (predict.to_quasi_static), D_0 from
+the ledger's seed000/table1_densification_quasi_static run.
+
     python3 -m benchmarks.sps_table1.size_check --sparkdem build/sparkdem --workdir DIR [--jobs 2]
-        [--samples 2 4] [--runs RUNFILE] [--csv benchmarks/sps_table1/size_check.csv]
+        [--samples 2 4] [--runs RUNFILE] [--csv benchmarks/sps_table1/size_check.csv] [--quasi-static]
 """
 import argparse
 import json
@@ -19,7 +22,7 @@ from concurrent import futures
 
 from benchmarks.perf.harness import write_csv_atomic
 from benchmarks.sps_table1 import predict
-from benchmarks.sps_table1.creep_scan import RUNS, calibrated_d0
+from benchmarks.sps_table1.creep_scan import RUNS, RUNS_QS, calibrated_d0
 
 SCALE = 4.0 ** (1.0 / 3.0)
 
@@ -38,16 +41,19 @@ def main():
     ap.add_argument("--workdir", required=True)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--samples", type=int, nargs="+", default=[1, 2, 3, 4])
-    ap.add_argument("--runs", default=RUNS)
+    ap.add_argument("--runs", default=None, help="the ledger's run file with the calibrated D_0 (default RUNS, or RUNS_QS)")
+    ap.add_argument("--quasi-static", action="store_true")
     ap.add_argument("--csv", default=os.path.join(predict.HERE, "size_check.csv"))
     a = ap.parse_args()
+    a.runs = a.runs or (RUNS_QS if a.quasi_static else RUNS)
+    prepare = predict.to_quasi_static if a.quasi_static else (lambda sc: sc)
     os.makedirs(a.workdir, exist_ok=True)
     version = subprocess.run([a.sparkdem, "--version"], capture_output=True, text=True).stdout.strip()
     items = [(seed, d0, k, f) for seed, d0 in sorted(calibrated_d0(a.runs).items()) for k in a.samples for f in (SCALE, 1.0)]
 
     def run(item):
         seed, d0, k, f = item
-        out = predict.run_scene(a.sparkdem, a.workdir, scaled(predict.scene(k, seed, d0), f), f"seed{seed}_sample{k}_{'4N' if f > 1 else 'N'}")
+        out = predict.run_scene(a.sparkdem, a.workdir, prepare(scaled(predict.scene(k, seed, d0), f)), f"seed{seed}_sample{k}_{'4N' if f > 1 else 'N'}")
         p = predict.porosities(out)
         n = None
         if p:
