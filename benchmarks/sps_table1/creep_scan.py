@@ -78,7 +78,7 @@ def main():
     ap.add_argument("--csv", default=os.path.join(predict.HERE, "creep_scan.csv"))
     a = ap.parse_args()
     a.runs = a.runs or (RUNS_QS if a.quasi_static else RUNS)
-    prepare = predict.to_quasi_static if a.quasi_static else (lambda sc: sc)
+    prepare = predict.preparer(a.quasi_static)
     os.makedirs(a.workdir, exist_ok=True)
     version = subprocess.run([a.sparkdem, "--version"], capture_output=True, text=True).stdout.strip()
     items = []

@@ -107,6 +107,11 @@ def to_quasi_static(sc):
     return sc
 
 
+def preparer(quasi_static):
+    """The scene transform of a path: to_quasi_static, or the scene unchanged."""
+    return to_quasi_static if quasi_static else (lambda sc: sc)
+
+
 def run_scene(sparkdem, workdir, sc, name, threads=1):
     """Writes scene `sc` to WORKDIR/NAME.json and runs it into WORKDIR/NAME_out (a failed run leaves
     its summary.json status for porosities() to read); returns the output directory."""
@@ -232,7 +237,7 @@ def main():
         ap.error("--sparkdem and --workdir are needed to run")
     os.makedirs(a.workdir, exist_ok=True)
 
-    prepare = to_quasi_static if a.quasi_static else (lambda sc: sc)
+    prepare = preparer(a.quasi_static)
     result, d0, _ = predict(lambda sc, name: run_scene(a.sparkdem, a.workdir, prepare(sc), name, a.threads), a.seed)
     path = a.csv or os.path.join(a.workdir, "prediction.csv")
     with open(path, "w", newline="") as fh:

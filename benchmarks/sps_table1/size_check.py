@@ -46,7 +46,7 @@ def main():
     ap.add_argument("--csv", default=os.path.join(predict.HERE, "size_check.csv"))
     a = ap.parse_args()
     a.runs = a.runs or (RUNS_QS if a.quasi_static else RUNS)
-    prepare = predict.to_quasi_static if a.quasi_static else (lambda sc: sc)
+    prepare = predict.preparer(a.quasi_static)
     os.makedirs(a.workdir, exist_ok=True)
     version = subprocess.run([a.sparkdem, "--version"], capture_output=True, text=True).stdout.strip()
     items = [(seed, d0, k, f) for seed, d0 in sorted(calibrated_d0(a.runs).items()) for k in a.samples for f in (SCALE, 1.0)]

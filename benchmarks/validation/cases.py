@@ -482,7 +482,7 @@ def run_table1_densification(ctx, quasi_static=False):
     """benchmarks/sps_table1/predict.py: D_0 calibrated on sample 2, samples 1, 3, 4 predicted (the hot
     press on the inertia-free path from 60 s above the sintering start when quasi_static)."""
     from benchmarks.sps_table1 import predict
-    prepare = predict.to_quasi_static if quasi_static else (lambda sc: sc)
+    prepare = predict.preparer(quasi_static)
     result, d0, history = predict.predict(lambda sc, name: ctx.sparkdem(prepare(sc), name), ctx.seed, log=lambda m: None)
     out = {}
     for k, r in result.items():

@@ -21,7 +21,7 @@ struct RowMode {
   bool open = false;       ///< unilateral and pulling: no force
   bool sliding = false;    ///< Coulomb-capped and at the cap: the force cap against the slip direction
   Vec3 dir = Vec3::Zero(); ///< slip direction of the last round (unit) if it held over two rounds, else zero (the secant form)
-  Vec3 last = Vec3::Zero(); ///< slip direction of the last round (unit)
+  Vec3 last = Vec3::Zero(); ///< slip direction of the last round (unit; equal to dir when dir is set)
   double cap = 0.0;        ///< mu F_n of the last round [N]
   double k = 0.0;          ///< cap / |slip| of the last round [N s/m] (the secant viscosity)
   double secant = -1.0;    ///< a Hertz row's secant stiffness over the step [N/m] (< 0: its tangent at the start)
@@ -267,16 +267,23 @@ class RoundSolver {
       if (ic_.info() != Eigen::Success) throw PhysicsError(step_, {}, "quasi-static step", "the incomplete Cholesky preconditioner failed");
     }
   }
-  Eigen::VectorXd precondition(const Eigen::VectorXd& r) const { return direct_ ? Eigen::VectorXd(ldlt_.solve(r)) : Eigen::VectorXd(ic_.solve(r)); }
+  /// z = M^-1 r with the factor of the first round (into z's storage).
+  void precondition(const Eigen::VectorXd& r, Eigen::VectorXd& z) const {
+    if (direct_)
+      z = ldlt_.solve(r);
+    else
+      z = ic_.solve(r);
+  }
 
   /// Preconditioned conjugate gradients to |b - A x| <= tolerance |b|; false if not within max_it.
   bool pcg(const SpMat& A, const Eigen::VectorXd& b, Eigen::VectorXd& x, std::int64_t max_it, QuasiStaticSolution& sol) {
     const auto Asym = A.selfadjointView<Eigen::Lower>();
-    const double target = cfg_.tolerance * b.norm();
-    Eigen::VectorXd r = b - Asym * x;
-    sol.residual = b.norm() > 0.0 ? r.norm() / b.norm() : 0.0;
+    const double bn = b.norm(), target = cfg_.tolerance * bn;
+    Eigen::VectorXd r = b - Asym * x, z(b.size()), Ap(b.size());
+    sol.residual = bn > 0.0 ? r.norm() / bn : 0.0;
     if (r.norm() <= target) return true;
-    Eigen::VectorXd z = precondition(r), p = z, Ap(b.size());
+    precondition(r, z);
+    Eigen::VectorXd p = z;
     double rz = r.dot(z);
     for (std::int64_t it = 0; it < max_it; ++it) {
       Ap.noalias() = Asym * p;
@@ -284,9 +291,10 @@ class RoundSolver {
       x += alpha * p;
       r -= alpha * Ap;
       ++sol.iterations;
-      sol.residual = b.norm() > 0.0 ? r.norm() / b.norm() : 0.0;
-      if (r.norm() <= target) return x.allFinite();
-      z = precondition(r);
+      const double rn = r.norm();
+      sol.residual = bn > 0.0 ? rn / bn : 0.0;
+      if (rn <= target) return x.allFinite();
+      precondition(r, z);
       const double rz_new = r.dot(z);
       p = z + (rz_new / rz) * p;
       rz = rz_new;
@@ -347,6 +355,7 @@ bool update_modes(const QuasiStaticProblem& prob, const DofMap& m, const Eigen::
       sol.strain_row = q;
     }
     if (!r.lc.unilateral && !std::isfinite(r.lc.mu)) continue;
+    const RowMode& cur = modes[q];
     RowMode next;
     double fn = r.lc.f0 + r.lc.c * a;  // (a includes a known wall rate)
     if (r.lc.hertz > 0.0) {
@@ -356,7 +365,6 @@ bool update_modes(const QuasiStaticProblem& prob, const DofMap& m, const Eigen::
       // barely touches, then rolls exactly off it (its rounds had alternated between a closed
       // round, moving it at 29 m/s, and an open one, leaving it at rest).
       const double d0 = r.lc.overlap, d1 = d0 + a * prob.dt, dd = d1 - d0;
-      const RowMode& cur = modes[q];
       fn = hertz_force(r.lc, d1);
       if (d1 > 0.0) {
         next.secant = std::abs(dd) > 1e-12 * std::max(d0, 1e-30) ? (fn - hertz_force(r.lc, d0)) / dd : 1.5 * r.lc.hertz * std::sqrt(std::max(d0, 0.0));
@@ -381,11 +389,10 @@ bool update_modes(const QuasiStaticProblem& prob, const DofMap& m, const Eigen::
         // The slip's direction, once it held (within 25 deg) over two rounds: the relaxed Newton form
         // then applies (coeffs); a row turning or starting to slide takes the secant form.
         const Vec3 e = s / sn;
-        if (modes[q].sliding && e.dot(modes[q].dir.norm() > 0.0 ? modes[q].dir : modes[q].last) > 0.9) next.dir = e;
+        if (cur.sliding && e.dot(cur.last) > 0.9) next.dir = e;
         next.last = e;
       }
     }
-    const RowMode& cur = modes[q];
     if (next.open != cur.open) same = false;
     sol.open += next.open;
     sol.sliding += next.sliding;
