@@ -15,6 +15,7 @@
 #include "physics/contact/sintering.hpp"
 #include "physics/contact/hooke.hpp"
 #include "physics/contact/lammps_granular.hpp"
+#include "physics/contact/mass_conserving_radii.hpp"
 #include "physics/electrical/contact_percolation.hpp"
 #include "physics/electrical/electrical_network.hpp"
 #include "physics/electrical/ptc_strain.hpp"
@@ -46,6 +47,7 @@ void register_all(Registry& r) {
   r.module<TensionTest>();
   r.module<ElectricalNetwork>();
   r.module<TemperatureHistory>();
+  r.module<MassConservingRadii>();
   r.module<HeatConduction>();
   r.module<TemperatureController>();
   r.module<TorsionTest>();

@@ -38,6 +38,7 @@
 #include "engine/state/contact_table.hpp"
 #include "engine/state/particle_store.hpp"
 #include "engine/walls/wall.hpp"
+#include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
 
 namespace sparkdem {
@@ -462,6 +463,13 @@ class ContactModelT final : public ContactModel {
       if (p.fields.has("temperature")) in.temp = p.fields.data("temperature").data();
     if constexpr (requires(const Law& l) { l.grain_boundary_fraction_column(); })
       if (law_.grain_boundary_fraction_column() >= 0) in.gbf = grain_boundary_fractions(p, t, law_.grain_boundary_fraction_column());
+    if constexpr (requires(const Law& l) { l.grain_boundary_fraction_field(); })
+      if (const std::string f = law_.grain_boundary_fraction_field(); !f.empty()) {
+        if (!p.fields.has(f))
+          throw SetupError("contact law " + std::string(Law::kName) + ": its creep stop reads the particle field '" + f +
+                           "', which no module of the stage writes (add the module that does)");
+        in.gbf = p.fields.data(f);
+      }
     return in;
   }
 

@@ -31,7 +31,8 @@
 /// Neck radius a (state column `neck_radius`, read by the electrical module's
 /// `"neck": "law"`): from the overlap h by `neck` (kratos: a = 1.43 sqrt(r_min^2 - x^2),
 /// x = r_min - h/2; coble: sqrt(2 r* h); cv: constant volume — the kernels shared with the
-/// electrical module), never decreasing while the pair lives, at least min_neck_fraction r_min
+/// electrical module; intersection: the circle where the spheres meet, for the grown spheres of
+/// the module mass_conserving_radii), never decreasing while the pair lives, at least min_neck_fraction r_min
 /// once sintering (eta_n > 0 at a fresh contact), at most r_min. A pair with a > 0 is
 /// persistent: it outlives zero or negative overlap (the neck holds the particles together).
 /// After a >= a_eq the driving force stops; the dashpot either stops too, freezing u_s
@@ -46,7 +47,10 @@
 /// fraction sum_k a_k^2 / (4 r^2) (seed 000 Eq. 22, from the previous step's necks) reaches
 /// f_stop: a particle whose surface is all grain boundary has no pore left to shrink into (f_stop
 /// = 1: full density by Eq. 23). Without it the interior of the NiAl compact creeps past full
-/// density (issue 21: mass porosity -0.18 to -0.24 in the core at the last snapshot).
+/// density (issue 21: mass porosity -0.18 to -0.24 in the core at the last snapshot). With
+/// `stop_flow_at_dense` (for the grown particles of the module mass_conserving_radii) a pair stops
+/// flowing altogether, driving force and dashpots, once either particle is flagged dense by that
+/// module (its necks' caps cover its surface).
 ///
 /// Power-law creep (`powerlaw_creep_rate` > 0; issue 36): dislocation creep of the necks acting in
 /// parallel with grain-boundary diffusion, so the dashpot's rates add,
@@ -88,6 +92,7 @@
 /// | friction, wall_friction      | 1       | Coulomb mu (contacts without a neck; walls)        |
 /// | min_neck_fraction            | 1       | smallest neck of a sintering pair / r_min         |
 /// | neck_strength                | Pa      | a neck breaks when the tension exceeds it x pi a^2 (0: never) |
+/// | stop_flow_at_dense           | bool    | pairs of a dense particle (mass_conserving_radii) stop flowing |
 /// | powerlaw_creep_rate          | 1/s     | eps_dot_0 at powerlaw_creep_stress and _temperature (0: off) |
 /// | powerlaw_creep_stress        | Pa      | sigma_0                                           |
 /// | powerlaw_creep_exponent      | 1       | n                                                 |
@@ -104,6 +109,7 @@
 #include <vector>
 
 #include "engine/contact/geometry.hpp"
+#include "engine/core/error.hpp"
 #include "engine/model/param_spec.hpp"
 #include "physics/contact/contact_kernels.hpp"
 #include "physics/electrical/conductance_kernels.hpp"
@@ -136,6 +142,20 @@ inline double kratos_neck_radius(double r_min_m, double h_m) {
   if (!(h_m > 0.0)) return 0.0;
   const double x = r_min_m - 0.5 * std::min(h_m, 2.0 * r_min_m);
   return 1.43 * std::sqrt(std::max(0.0, r_min_m * r_min_m - x * x));
+}
+
+/// Radius of the circle where two overlapping spheres meet [m] (0 for h <= 0): on the radical
+/// plane at x_i = (d^2 + r_i^2 - r_j^2) / (2d) from centre i, d = r_i + r_j - h,
+///   a = sqrt(r_i^2 - x_i^2),
+/// capped at the smaller radius (a small sphere whose centre passed the plane). The neck of the
+/// grown spheres of mass_conserving_radii (physics/contact/mass_conserving_radii.hpp).
+inline double intersection_neck_radius(double r_i, double r_j, double h_m) {
+  if (!(h_m > 0.0)) return 0.0;
+  const double r_min = std::min(r_i, r_j);
+  const double d = r_i + r_j - h_m;
+  if (!(d > std::abs(r_i - r_j))) return r_min;
+  const double x = (d * d + r_i * r_i - r_j * r_j) / (2.0 * d);
+  return std::min(r_min, std::sqrt(std::max(0.0, r_i * r_i - x * x)));
 }
 
 /// One step of a Maxwell element (spring k in series with dashpot eta) driven by the rate v,
@@ -245,6 +265,7 @@ struct Sintering {
     double creep_overlap_limit = 1.0;
     std::string neck_stiffness = "elastic_approach";
     double creep_stop_gb_fraction = 0.0;
+    bool stop_flow_at_dense = false;
     double powerlaw_creep_rate = 0.0;
     double powerlaw_creep_stress = 1.0e8;
     double powerlaw_creep_exponent = 5.5;
@@ -276,8 +297,10 @@ struct Sintering {
         .nonnegative()
         .doc("a neck breaks when its tension exceeds this x pi a^2 (0: never)");
     s.add("neck", &P::neck)
-        .choices({"kratos", "coble", "cv"})
-        .doc("neck radius from the overlap: Kratos 1.43 sqrt(r_min^2 - x^2), Coble, constant volume");
+        .choices({"kratos", "coble", "cv", "intersection"})
+        .doc(
+            "neck radius from the overlap: Kratos 1.43 sqrt(r_min^2 - x^2), Coble, constant volume, or the circle where the two "
+            "spheres meet, sqrt(r_i^2 - x_i^2) with x_i the radical plane's distance (with mass_conserving_radii)");
     s.add("sintering_radius", &P::sintering_radius)
         .choices({"r_min", "r_eff", "two_r_eff"})
         .doc("R of the driving force for unequal spheres");
@@ -297,6 +320,11 @@ struct Sintering {
         .doc(
             "creep: the dashpot of a pair also stops once either particle's grain-boundary fraction sum a^2 / (4 r^2) over its necks "
             "reaches this (seed 000 Eq. 22-23: 1 = the particle's surface all grain boundary, full density); 0: never");
+    s.add("stop_flow_at_dense", &P::stop_flow_at_dense)
+        .doc(
+            "a pair stops flowing (driving force and dashpots, before and after a_eq) once either particle is dense: its surface closed "
+            "by its necks (the particle flag written by the module mass_conserving_radii, which then also holds it incompressible); "
+            "the exact-geometry form of creep_stop_gb_fraction for grown particles");
     s.add("powerlaw_creep_rate", &P::powerlaw_creep_rate)
         .unit("1/s")
         .nonnegative()
@@ -329,21 +357,28 @@ struct Sintering {
         g_star_(kernel::effective_shear_modulus(p.youngs_modulus, p.poisson_ratio)),
         sin_half_(std::sin(0.5 * p.dihedral_angle)),
         cos_half_(std::cos(0.5 * p.dihedral_angle)),
-        neck_kind_(p.neck == "coble" ? NeckKind::Coble
-                   : p.neck == "cv"  ? NeckKind::ConstantVolume
-                                     : NeckKind::Kratos),
+        neck_kind_(p.neck == "coble"          ? NeckKind::Coble
+                   : p.neck == "cv"           ? NeckKind::ConstantVolume
+                   : p.neck == "intersection" ? NeckKind::Intersection
+                                              : NeckKind::Kratos),
         radius_kind_(p.sintering_radius == "r_eff"       ? RadiusKind::Reff
                      : p.sintering_radius == "two_r_eff" ? RadiusKind::TwoReff
                                                          : RadiusKind::Rmin),
         cold_contact_(p.cold_necks == "contact"),
         creep_(p.after_equilibrium == "creep"),
         neck_spring_(p.neck_stiffness == "neck_radius"),
-        power_law_(kernel::PowerLawCreep::of(p.powerlaw_creep_exponent, p.powerlaw_creep_stress)) {}
+        power_law_(kernel::PowerLawCreep::of(p.powerlaw_creep_exponent, p.powerlaw_creep_stress)) {
+    if (p.creep_stop_gb_fraction > 0.0 && p.stop_flow_at_dense)
+      throw ConfigError("/stop_flow_at_dense", "expected one creep stop, found stop_flow_at_dense true and creep_stop_gb_fraction > 0 (set it to 0)");
+  }
 
   bool alive(const double* st) const { return st[kNeck] > 0.0; }
   /// The state column of the neck radius when the law reads the particles' grain-boundary
   /// fractions (creep_stop_gb_fraction > 0), else -1 (ContactModelT then skips the sums).
   int grain_boundary_fraction_column() const { return p_.creep_stop_gb_fraction > 0.0 ? kNeck : -1; }
+  /// The particle field ContactModelT reads into ContactGeometry::gb_fraction instead of the Eq. 22
+  /// sums (stop_flow_at_dense: the dense flag of mass_conserving_radii, 1 or 0), else empty.
+  std::string grain_boundary_fraction_field() const { return p_.stop_flow_at_dense ? "mass_conserving_radii/dense" : ""; }
   /// The run watchdog's default bound on overlap / smaller radius (engine/watchdog.hpp):
   /// densification legitimately drives a pair's centres together up to creep_overlap_limit x r_min
   /// (default 1: the smaller centre on the other's surface) plus the elastic approach; 0.5 r_min
@@ -355,6 +390,7 @@ struct Sintering {
     if (!(h > 0.0)) return 0.0;
     if (neck_kind_ == NeckKind::Coble) return electrical::coble_neck_radius(r_i, r_j, h);
     if (neck_kind_ == NeckKind::ConstantVolume) return electrical::cv_neck_radius(r_i, r_j, h);
+    if (neck_kind_ == NeckKind::Intersection) return kernel::intersection_neck_radius(r_i, r_j, h);
     return kernel::kratos_neck_radius(std::min(r_i, r_j), h);
   }
   /// Normal viscosity in physical time [N s/m] at temperature T (+inf below the start).
@@ -412,8 +448,11 @@ struct Sintering {
     if (e.hot && h > 0.0) a = std::max({a, geometric_neck(g.r_i, g.r_j, h), p_.min_neck_fraction * r_min});
     e.a = std::min(a, r_min);
     e.neck = e.a > 0.0;
-    e.sintering = e.hot && e.neck && e.a < r_min * sin_half_;
-    const bool dense = p_.creep_stop_gb_fraction > 0.0 && g.gb_fraction >= p_.creep_stop_gb_fraction;
+    // A dense particle (its surface closed by its necks, stop_flow_at_dense) has neither a pore to
+    // shrink into nor a free surface to drive sintering: its pairs stop flowing altogether.
+    const bool closed = p_.stop_flow_at_dense && g.gb_fraction >= 0.5;
+    e.sintering = e.hot && e.neck && e.a < r_min * sin_half_ && !closed;
+    const bool dense = closed || (p_.creep_stop_gb_fraction > 0.0 && g.gb_fraction >= p_.creep_stop_gb_fraction);
     const bool creeping = e.hot && e.neck && h < p_.creep_overlap_limit * r_min && !dense;
     const bool flowing = e.sintering || (creep_ && creeping);
     // Mechanical-time viscosity: eta / s.
@@ -649,7 +688,7 @@ struct Sintering {
   const Params& params() const { return p_; }
 
  private:
-  enum class NeckKind { Kratos, Coble, ConstantVolume };
+  enum class NeckKind { Kratos, Coble, ConstantVolume, Intersection };
   enum class RadiusKind { Rmin, Reff, TwoReff };
   Params p_;
   double e_star_, g_star_, sin_half_, cos_half_;

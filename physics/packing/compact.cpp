@@ -1,4 +1,5 @@
 #include "physics/packing/compact.hpp"
+#include "physics/thermal/expansion.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -144,6 +145,19 @@ double envelope_volume(const std::vector<Vec3>& positions, const std::vector<dou
   return volume;
 }
 
+namespace {
+/// Each particle's radius without the mass-conserving growth (its own radius when there is none).
+std::vector<double> free_radii(const ParticleStore& p) {
+  std::vector<double> r(p.radius.begin(), p.radius.end());
+  if (p.fields.has(thermal::kRadiusFactorField)) {
+    const auto& g = p.fields.data(thermal::kRadiusFactorField);
+    for (std::size_t i = 0; i < r.size(); ++i)
+      if (g[i] > 0.0) r[i] /= g[i];
+  }
+  return r;
+}
+}  // namespace
+
 std::vector<double> CompactMonitor::values(const State& s) const {
   const CylinderRegion region = compact_region(s, p_);
   const auto& p = s.particles;
@@ -151,8 +165,12 @@ std::vector<double> CompactMonitor::values(const State& s) const {
   const auto pairs = find_pairs(p.position, p.radius, 0.0);
   // Each region's spheres once; the lenses subtracted for `porosity`, not for the porosities by
   // mass (in sintering DEM the overlap stands for shrinkage; the lens material sits in the neck).
-  const double spheres = solid_volume_in_region(p.position, p.radius, region);
-  const double porosity = 1.0 - minus_lenses(spheres, p.position, p.radius, pairs, region) / region_volume(region);
+  // The porosities by mass take each particle's free radius: its radius less the mass-conserving
+  // growth of its sintered necks (thermal::kRadiusFactorField), which holds no extra matter.
+  const std::vector<double> r_mass = free_radii(p);
+  const double spheres_grown = solid_volume_in_region(p.position, p.radius, region);
+  const double spheres = solid_volume_in_region(p.position, r_mass, region);
+  const double porosity = 1.0 - minus_lenses(spheres_grown, p.position, p.radius, pairs, region) / region_volume(region);
   const double porosity_mass = 1.0 - spheres / region_volume(region);
   double margin = p_.interior_margin;
   if (margin == 0.0)
@@ -160,9 +178,9 @@ std::vector<double> CompactMonitor::values(const State& s) const {
   double interior = std::nan(""), interior_mass = std::nan("");
   if (margin < region.radius && 2.0 * margin < region.height) {
     const Region inner = shrink(region, margin);
-    const double inner_spheres = solid_volume_in_region(p.position, p.radius, inner);
-    interior = 1.0 - minus_lenses(inner_spheres, p.position, p.radius, pairs, inner) / region_volume(inner);
-    interior_mass = 1.0 - inner_spheres / region_volume(inner);
+    const double inner_grown = solid_volume_in_region(p.position, p.radius, inner);
+    interior = 1.0 - minus_lenses(inner_grown, p.position, p.radius, pairs, inner) / region_volume(inner);
+    interior_mass = 1.0 - solid_volume_in_region(p.position, r_mass, inner) / region_volume(inner);
   }
   // The sample's own envelope (a cooled sample leaves the die wall): its solid by mass (spheres
   // clipped to the punches only) in its profiled envelope volume.
@@ -172,7 +190,7 @@ std::vector<double> CompactMonitor::values(const State& s) const {
     all.radius = std::max(all.radius, (d - d.dot(region.axis) * region.axis).norm() + p.radius[i]);
   }
   const double v_env = envelope_volume(p.position, p.radius, region, p_.envelope_cell);
-  const double porosity_envelope = 1.0 - compact_solid_volume(p.position, p.radius, {}, all) / v_env;
+  const double porosity_envelope = 1.0 - compact_solid_volume(p.position, r_mass, {}, all) / v_env;
   const double r_env = std::sqrt(v_env / (kPi * region.height));
   return {porosity, interior, 1.0 - porosity, region.height, porosity_mass, r_env, porosity_envelope, region.radius, interior_mass};
 }

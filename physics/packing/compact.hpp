@@ -83,7 +83,8 @@ double envelope_volume(const std::vector<Vec3>& positions, const std::vector<dou
 
 /// Time-series columns: porosity = 1 - V_s / (pi R^2 H); porosity_interior (the same in the
 /// region shrunk by interior_margin from every wall); relative_density = 1 - porosity;
-/// compact_height = H [m]; porosity_mass = 1 - sum_i V(sphere_i ∩ region) / (pi R^2 H), the
+/// compact_height = H [m]; porosity_mass = 1 - sum_i V(sphere_i ∩ region) / (pi R^2 H) (free radii: the
+/// mass-conserving growth of mass_conserving_radii left out, it holds no matter), the
 /// lenses NOT subtracted: in a sintering compact the overlap stands for shrinkage and the lens
 /// material sits in the neck, so this is the porosity by mass (Archimedes) — the one to compare
 /// with measured samples; `porosity` (lenses subtracted) falls behind it as necks grow;

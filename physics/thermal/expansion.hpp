@@ -18,6 +18,17 @@
 
 namespace sparkdem::physics::thermal {
 
+/// A particle field other modules may keep: a factor on the thermally expanded radius (the
+/// mass-conserving growth of sintered particles, physics/contact/mass_conserving_radii.hpp). When
+/// the field exists, apply_expansion sets r_i = r_ref,i (1 + alpha_T (T_i - T_0)) g_i.
+inline constexpr const char* kRadiusFactorField = "mass_conserving_radii/factor";
+/// The closed share of each grown particle's surface, sum_j h_j / (2 R) over the caps on its
+/// necks' radical planes (capped at 1), and whether it reached the module's dense_closed_surface
+/// (1 or 0: the particle is dense), written by the same module; the sintering law's
+/// stop_flow_at_dense reads the flag.
+inline constexpr const char* kClosedSurfaceField = "mass_conserving_radii/closed_surface";
+inline constexpr const char* kDenseField = "mass_conserving_radii/dense";
+
 /// Thermally expanded radius [m]: r = r_ref (1 + alpha (T - T0)).
 inline double expanded_radius(double r_ref, double alpha, double T, double T0) { return r_ref * (1.0 + alpha * (T - T0)); }
 

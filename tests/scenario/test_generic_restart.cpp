@@ -187,6 +187,12 @@ std::vector<Case> all_cases() {
     st["modules"]["ptc_strain"]["strain_statistics"] = true;
     st["modules"]["ptc_strain"]["strain_histogram_edges"] = json::array({-0.01, 0.0, 0.005, 0.01, 0.02});
   }
+  // The quasi-static press with Arzt's mass-conserving radii (grown radii, closed shares, dense
+  // flags and the factor in the checkpoint) and the dense stop.
+  json grown_press = load_data("quasi_static_press_small.json");
+  grown_press["stages"][1]["modules"]["mass_conserving_radii"] = json::object();
+  grown_press["stages"][1]["contact"]["params"]["neck"] = "intersection";
+  grown_press["stages"][1]["contact"]["params"]["stop_flow_at_dense"] = true;
   return {
       {"lattice + bonded pull with event, adaptive and every-N mock modules, electrical network, time scaling",
        load_data("restart_contracts.json"), 1, 180},
@@ -201,6 +207,7 @@ std::vector<Case> all_cases() {
       {"hot press with the sphere-element electrical network", element_press, 1, 2333},
       {"quasi-static hot press: inertia-free solve, pressure-controlled punch, die friction, temperature_history",
        load_data("quasi_static_press_small.json"), 1, 137},
+      {"hot press, quasi-static, with mass_conserving_radii and the dense stop", grown_press, 1, 137},
       {"coupled Joule press: temperature_controller, electrical_network on a voltage signal with kappa(T), implicit heat_conduction with "
        "losses and expansion",
        load_data("joule_press_small.json"), 1, 1777},
@@ -224,7 +231,8 @@ std::vector<Case> all_cases() {
 /// and none runs long; "generic restart: every case is in one group" keeps them complete.
 const std::vector<std::vector<std::string_view>> kGroups = {
     {"lattice", "deposit", "fill", "relax", "dynamics taking snapshots"},
-    {"hot press:", "hot press with mass scaling", "hot press with the sphere-element", "coupled Joule press", "explicit heat_conduction"},
+    {"hot press:", "hot press with mass scaling", "hot press with the sphere-element", "coupled Joule press", "explicit heat_conduction",
+     "hot press, quasi-static"},
     {"cohesive-beam pin", "bonded tension", "cpc_fillers configuration", "self-heating PTC"},
     {"cpc_fillers then Hertz settling with ptc_strain on the RKPM", "quasi-static hot press"},
 };
