@@ -4,11 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "engine/core/error.hpp"
 #include "engine/neighbor/neighbor_search.hpp"
 #include "engine/state/pair_rows.hpp"
 #include "physics/body/gravity.hpp"
+#include "physics/packing/microstructure.hpp"
 #include "engine/core/parallel.hpp"
 
 namespace sparkdem::physics {
@@ -489,6 +491,14 @@ ParamSpec<RelaxGenerator::Params> RelaxGenerator::spec() {
       .doc(
           "report seed 001's microstructure with neighbours at gaps <= this * r_mean: neighbour and eccentricity "
           "histograms (Figs. 2, 4), eccentric shares, the wall density profile (< 0: off)");
+  s.add("interior_target_density", &Params::interior_target_density)
+      .unit("1")
+      .range(0.0, 0.74)
+      .doc(
+          "solid fraction more than 4 mean diameters from every face to reach: after the relaxation the radii and masses are rescaled "
+          "by (target / interior)^(1/3) and relaxed again until within interior_tolerance (0: off); the overall fraction follows");
+  s.add("interior_tolerance", &Params::interior_tolerance).unit("1").range(1e-6, 0.05).doc("|interior fraction - target| to stop at");
+  s.add("interior_rounds", &Params::interior_rounds).min(1).doc("most rescale-and-relax rounds (not reaching the target: an error)");
   return s;
 }
 
@@ -577,10 +587,15 @@ inline RelaxTerm relax_wall(double k, const Wall& w, const Vec3& x, double r, Ve
 }  // namespace
 
 void RelaxGenerator::generate(State& s) {
+  const std::size_t first = s.particles.size();
+  place(s, radii(s));
+  relax(s, first);
+  if (p_.interior_target_density > 0.0) reach_interior_target(s, first);
+  for (auto& vel : s.particles.velocity) vel.setZero();
+}
+
+void RelaxGenerator::place(State& s, const std::vector<double>& rad) const {
   auto& p = s.particles;
-  const std::size_t first = p.size();
-  const std::vector<double> rad = radii(s);
-  const double rbar = scale_radius_;
   for (double r : rad) {
     Vec3 x;
     if (p_.shape == "cylinder") {
@@ -594,80 +609,144 @@ void RelaxGenerator::generate(State& s) {
     p.add(x, r, p_.density * 4.0 / 3.0 * kPi * r * r * r, static_cast<std::int32_t>(p_.material));
   }
   add_container_walls(s, p_.shape == "cylinder", p_.radius, p_.length, p_.lo, p_.hi);
+}
 
-  // FIRE (Bitzek et al., PRL 97, 170201, 2006) on U, unit masses, positions in metres.
-  // Parallel and deterministic: per-pair forces into an array, summed per particle through the
-  // CSR incidence in increasing pair order (the serial order: bit-identical for any thread
-  // count); the FIRE scalars P, |v|, |F| are summed serially.
-  const double k = p_.stiffness;
+void RelaxGenerator::reach_interior_target(State& s, std::size_t first) {
+  auto& p = s.particles;
+  auto interior = [&] {
+    const double d = 2.0 * p.mean_radius();
+    return wall_density_profile(p.position, p.radius, container_region(s), 0.5 * d, 4.0 * d, 4.0 * d).interior;
+  };
+  double phi = interior();
+  std::int64_t rounds = 0;
+  for (; std::abs(phi - p_.interior_target_density) > p_.interior_tolerance; ++rounds) {
+    if (!std::isfinite(phi))
+      throw SetupError("relax: interior_target_density needs a container wider than 8 mean diameters (no interior 4 mean diameters in)");
+    if (rounds == p_.interior_rounds)
+      throw SetupError("relax: the interior solid fraction is " + std::to_string(phi) + " after " + std::to_string(rounds) +
+                       " rescale-and-relax rounds, not within " + std::to_string(p_.interior_tolerance) + " of interior_target_density " +
+                       std::to_string(p_.interior_target_density) + " (raise interior_rounds)");
+    const double c = std::cbrt(p_.interior_target_density / phi);
+    for (std::size_t i = first; i < p.size(); ++i) {
+      p.radius[i] *= c;
+      p.mass[i] *= c * c * c;
+      p.inertia[i] = 0.4 * p.mass[i] * p.radius[i] * p.radius[i];
+    }
+    scale_radius_ *= c;
+    relax(s, first);
+    phi = interior();
+  }
+  result_["interior_rounds"] = static_cast<double>(rounds);
+  result_["interior_density_reached"] = phi;
+}
+
+namespace {
+/// The forces of U on every particle (pairs and walls) for FIRE, with their own Verlet list.
+/// Parallel and deterministic: per-pair forces into an array, summed per particle through the CSR
+/// incidence in increasing pair order (the serial order: bit-identical for any thread count).
+class RelaxForces {
+ public:
+  RelaxForces(State& s, std::size_t first, double k, double skin) : s_(s), first_(first), k_(k), skin_(skin) {}
+  /// F[i] for every particle; returns {max |F|, max overlap ratio}.
+  std::pair<double, double> evaluate(std::vector<Vec3>& F) {
+    auto& p = s_.particles;
+    if (tracker_.needs_rebuild(p.position, p.radius, skin_)) rebuild();
+    const std::int64_t np = static_cast<std::int64_t>(pairs_.size()), n = static_cast<std::int64_t>(p.size());
+    const std::size_t nw = s_.walls.size();
+    double om = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : om) if (par::worth(np, par::kHeavy))
+    for (std::int64_t r = 0; r < np; ++r)
+      om = std::max(om, relax_pair(k_, p.position[pairs_[r][0]], p.position[pairs_[r][1]], p.radius[pairs_[r][0]],
+                                   p.radius[pairs_[r][1]], fpair_[r])
+                            .overlap);
+    double fm = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : fm, om) if (par::worth(n, par::kHeavy))
+    for (std::int64_t i = 0; i < n; ++i) {
+      Vec3 f = Vec3::Zero();
+      for (std::int64_t c = inc_start_[i]; c < inc_start_[i + 1]; ++c) {
+        if (inc_row_[c] >= 0)
+          f += fpair_[inc_row_[c]];
+        else
+          f -= fpair_[~inc_row_[c]];
+      }
+      for (std::size_t w = 0; w < nw; ++w) {
+        if (!near_wall_[i * nw + w]) continue;
+        Vec3 fw;
+        om = std::max(om, relax_wall(k_, s_.walls[w], p.position[i], p.radius[i], fw).overlap);
+        f += fw;
+      }
+      F[i] = f;
+      fm = std::max(fm, f.norm());
+    }
+    return {fm, om};
+  }
+  /// U at the current positions, serially in the order of the pair list, then particles x walls.
+  double energy() const {
+    const auto& p = s_.particles;
+    double e = 0.0;
+    for (const auto& pr : pairs_) {
+      Vec3 f;
+      e += relax_pair(k_, p.position[pr[0]], p.position[pr[1]], p.radius[pr[0]], p.radius[pr[1]], f).w;
+    }
+    for (std::size_t i = first_; i < p.size(); ++i)
+      for (const auto& w : s_.walls) {
+        Vec3 f;
+        e += relax_wall(k_, w, p.position[i], p.radius[i], f).w;
+      }
+    return e;
+  }
+
+ private:
+  void rebuild() {
+    auto& p = s_.particles;
+    const std::size_t N = p.size(), nw = s_.walls.size();
+    pairs_ = find_pairs(p.position, p.radius, skin_);
+    tracker_.mark_built(p.position, p.radius);
+    build_incidence(
+        N, pairs_.size(), [&](std::size_t r) { return pairs_[r][0]; }, [&](std::size_t r) { return pairs_[r][1]; }, inc_start_, inc_row_);
+    fpair_.resize(pairs_.size());
+    // Wall candidates: within r + skin of the wall at the build (valid until the next rebuild, as
+    // the pairs); the others have q > 1 against that wall and feel no force from it.
+    near_wall_.assign(N * nw, 0);
+    const std::int64_t n = static_cast<std::int64_t>(N);
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
+    for (std::int64_t i = static_cast<std::int64_t>(first_); i < n; ++i)
+      for (std::size_t w = 0; w < nw; ++w) {
+        Vec3 nrm;
+        double d;
+        s_.walls[w].distance(p.position[i], nrm, d);
+        near_wall_[i * nw + w] = d < p.radius[i] + skin_;
+      }
+  }
+  State& s_;
+  std::size_t first_;
+  double k_, skin_;
+  VerletTracker tracker_;
+  std::vector<std::array<Index, 2>> pairs_;
+  std::vector<Vec3> fpair_;
+  std::vector<std::int64_t> inc_start_, inc_row_;
+  std::vector<char> near_wall_;  ///< [i * nw + w]: particle i is a candidate of wall w
+};
+}  // namespace
+
+void RelaxGenerator::relax(State& s, std::size_t first) {
+  // FIRE (Bitzek et al., PRL 97, 170201, 2006) on U, unit masses, positions in metres; the FIRE
+  // scalars P, |v|, |F| are summed serially.
+  auto& p = s.particles;
+  const double rbar = scale_radius_, k = p_.stiffness;
   const std::size_t N = p.size();
   const std::int64_t n = static_cast<std::int64_t>(N);
   std::vector<Vec3> v_(N, Vec3::Zero()), F(N);
   double dt = 0.1 * rbar, dt_max = 1.0 * rbar;  // scaled "time": displacement per unit force rbar/k
   double alpha = 0.1;
   int since_neg = 0;
-  const double skin = 0.5 * rbar;
-  VerletTracker tracker;
-  std::vector<std::array<Index, 2>> pairs;
-  std::vector<Vec3> fpair;
-  std::vector<std::int64_t> inc_start, inc_row;
-  const std::size_t nw = s.walls.size();
-  std::vector<char> near_wall;  // [i * nw + w]: particle i is a candidate of wall w
-  std::int64_t it = 0;
-  double fmax = 0.0, overlap_max = 0.0;
-  auto forces = [&]() {
-    if (tracker.needs_rebuild(p.position, p.radius, skin)) {
-      pairs = find_pairs(p.position, p.radius, skin);
-      tracker.mark_built(p.position, p.radius);
-      build_incidence(
-          N, pairs.size(), [&](std::size_t r) { return pairs[r][0]; }, [&](std::size_t r) { return pairs[r][1]; }, inc_start, inc_row);
-      fpair.resize(pairs.size());
-      // Wall candidates: within r + skin of the wall at the build (valid until the next rebuild,
-      // as the pairs); the others have q > 1 against that wall and feel no force from it.
-      near_wall.assign(N * nw, 0);
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-      for (std::int64_t i = static_cast<std::int64_t>(first); i < n; ++i)
-        for (std::size_t w = 0; w < nw; ++w) {
-          Vec3 nrm;
-          double d;
-          s.walls[w].distance(p.position[i], nrm, d);
-          near_wall[i * nw + w] = d < p.radius[i] + skin;
-        }
-    }
-    const std::int64_t np = static_cast<std::int64_t>(pairs.size());
-    double om = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : om) if (par::worth(np, par::kHeavy))
-    for (std::int64_t r = 0; r < np; ++r)
-      om = std::max(
-          om,
-          relax_pair(k, p.position[pairs[r][0]], p.position[pairs[r][1]], p.radius[pairs[r][0]], p.radius[pairs[r][1]], fpair[r]).overlap);
-    double fm = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : fm, om) if (par::worth(n, par::kHeavy))
-    for (std::int64_t i = 0; i < n; ++i) {
-      Vec3 f = Vec3::Zero();
-      for (std::int64_t c = inc_start[i]; c < inc_start[i + 1]; ++c) {
-        if (inc_row[c] >= 0)
-          f += fpair[inc_row[c]];
-        else
-          f -= fpair[~inc_row[c]];
-      }
-      for (std::size_t w = 0; w < nw; ++w) {
-        if (!near_wall[i * nw + w]) continue;
-        Vec3 fw;
-        om = std::max(om, relax_wall(k, s.walls[w], p.position[i], p.radius[i], fw).overlap);
-        f += fw;
-      }
-      F[i] = f;
-      fm = std::max(fm, f.norm());
-    }
-    fmax = fm;
-    overlap_max = om;
-  };
-  forces();
+  RelaxForces forces(s, first, k, 0.5 * rbar);
+  auto [fmax, overlap_max] = forces.evaluate(F);
   const double ftol = p_.force_tolerance * k / rbar;
   // Converged: forces below the tolerance, or (max_overlap > 0) overlaps small enough.
   auto converged = [&]() { return fmax <= ftol || (p_.max_overlap > 0.0 && overlap_max <= p_.max_overlap); };
-  for (it = 0; it < p_.max_iterations && !converged(); ++it) {
+  std::int64_t it = 0;
+  for (; it < p_.max_iterations && !converged(); ++it) {
     double P = 0.0, vn = 0.0, fn = 0.0;
     for (std::size_t i = 0; i < N; ++i) {
       P += F[i].dot(v_[i]);
@@ -701,24 +780,13 @@ void RelaxGenerator::generate(State& s) {
       if (dx.norm() > cap) dx *= cap / dx.norm();
       p.position[i] += dx;
     }
-    forces();
+    std::tie(fmax, overlap_max) = forces.evaluate(F);
   }
-  // Final energy, serially in the order of the pair list, then particles x walls.
-  double energy = 0.0;
-  for (const auto& pr : pairs) {
-    Vec3 f;
-    energy += relax_pair(k, p.position[pr[0]], p.position[pr[1]], p.radius[pr[0]], p.radius[pr[1]], f).w;
-  }
-  for (std::size_t i = first; i < N; ++i)
-    for (const auto& w : s.walls) {
-      Vec3 f;
-      energy += relax_wall(k, w, p.position[i], p.radius[i], f).w;
-    }
-  result_["fire_iterations"] = static_cast<double>(it);
+  result_["fire_iterations"] = static_cast<double>(it) + (result_.count("fire_iterations") ? result_["fire_iterations"] : 0.0);
   result_["fire_max_force_relative"] = fmax * rbar / k;
-  result_["fire_energy"] = energy;
-  for (auto& vel : p.velocity) vel.setZero();
+  result_["fire_energy"] = forces.energy();
 }
+
 std::map<std::string, double> RelaxGenerator::report(const State& s) const {
   auto r = packing_report(s, p_.neighbour_gap_relative);
   r.insert(result_.begin(), result_.end());

@@ -155,6 +155,11 @@ class RelaxGenerator final : public Generator {
     double density = 1000.0;               ///< [kg/m^3] particle density for the masses (not read from materials)
     double neighbour_gap_relative = -1.0;  ///< [1] of r_mean: report seed 001's microstructure (< 0: off)
     std::int64_t material = 0;
+    /// [1] solid fraction more than 4 mean diameters from every face to reach by rescaling the radii
+    /// (and masses) and relaxing again (0: off; target_density then only sets the first radii)
+    double interior_target_density = 0.0;
+    double interior_tolerance = 0.001;   ///< [1] |interior fraction - target| at which the rounds stop
+    std::int64_t interior_rounds = 8;    ///< most rescale-and-relax rounds (more: a set-up error)
   };
   static ParamSpec<Params> spec();
   explicit RelaxGenerator(const Params& p) : p_(p) {}
@@ -173,6 +178,13 @@ class RelaxGenerator final : public Generator {
  private:
   /// Radii: uniform spread rescaled to exactly target_density (no distribution), else drawn.
   std::vector<double> radii(State& s);
+  /// The drawn particles at random centres in the container, and its walls.
+  void place(State& s, const std::vector<double>& radii) const;
+  /// FIRE on U over the particles from index `first` (and the walls) until converged; its figures into result_.
+  void relax(State& s, std::size_t first);
+  /// Rescale-and-relax rounds until the solid fraction 4 mean diameters in from every face is
+  /// interior_target_density (interior_target_density > 0).
+  void reach_interior_target(State& s, std::size_t first);
   Params p_;
   std::map<std::string, double> result_;
   std::map<std::string, double> sampling_;

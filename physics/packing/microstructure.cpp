@@ -57,18 +57,25 @@ NeighbourStats neighbour_stats(const std::vector<Vec3>& positions, const std::ve
   const int top = *std::max_element(count.begin(), count.end());
   st.histogram.assign(static_cast<std::size_t>(top) + 1, 0.0);
   st.eccentricity_histogram.assign(15, 0.0);
-  std::size_t ecc = 0, interior = 0, ecc_interior = 0;
+  std::size_t ecc = 0, interior = 0, ecc_interior = 0, core = 0;
+  double core_sum = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     st.histogram[count[i]] += 1.0;
     st.mean += count[i];
     const bool eccentric = e[i] >= e_face - 1e-9;  // the tolerance of TransmissionSurfaceModel::platonic
     ecc += eccentric;
     st.eccentricity_histogram[std::min<std::size_t>(14, static_cast<std::size_t>(e[i] / 0.1))] += 1.0 / static_cast<double>(n);
-    if (distance_to_boundary(region, positions[i]) > radii[i] + 2.0 * r_mean) {
+    const double depth = distance_to_boundary(region, positions[i]);
+    if (depth > radii[i] + 2.0 * r_mean) {
       ++interior;
       ecc_interior += eccentric;
     }
+    if (depth > 8.0 * r_mean) {
+      ++core;
+      core_sum += count[i];
+    }
   }
+  st.mean_core = core > 0 ? core_sum / static_cast<double>(core) : std::numeric_limits<double>::quiet_NaN();
   st.mean /= static_cast<double>(n);
   st.eccentric_share = static_cast<double>(ecc) / static_cast<double>(n);
   st.interior_share = static_cast<double>(interior) / static_cast<double>(n);

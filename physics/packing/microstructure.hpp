@@ -17,6 +17,7 @@ struct NeighbourStats {
   double eccentric_share = 0.0;           ///< share of elements with e >= e_face [-]
   double eccentric_share_interior = 0.0;  ///< the same over interior elements (NaN if none)
   double interior_share = 0.0;            ///< interior elements / all [-]
+  double mean_core = 0.0;                 ///< mean neighbour count of the elements centred more than 4 mean diameters from every face (NaN if none)
   /// Shares of e in bins of 0.1 from 0 to 1.5 (the last bin also holds e >= 1.5), as Fig. 4.
   std::vector<double> eccentricity_histogram;
 };
@@ -24,7 +25,8 @@ struct NeighbourStats {
 /// Neighbours of i: every j with |x_i - x_j| - r_i - r_j <= gap_relative * r_mean (overlapping
 /// pairs included); e_i = |(1/n_i) sum_j x_j - x_i| / r_i (seed 001 Eq. 2; 0 without
 /// neighbours); eccentric: e >= e_face - 1e-9 (0.4, the face element of the cubic lattice, with f = 2
-/// of Eq. 3 from there on). Interior: the element's surface more than one mean diameter from
+/// of Eq. 3 from there on). Core (mean_core): centres more than 4 mean diameters from every face.
+/// Interior: the element's surface more than one mean diameter from
 /// every face of `region` (centre farther than r_i + 2 r_mean). Throws ConfigError on invalid
 /// arguments (mismatched sizes, gap_relative < 0, e_face <= 0).
 NeighbourStats neighbour_stats(const std::vector<Vec3>& positions, const std::vector<double>& radii, double gap_relative,

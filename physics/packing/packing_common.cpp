@@ -241,6 +241,7 @@ void add_microstructure(const State& s, double gap_relative, std::map<std::strin
   r["eccentric_share"] = n.eccentric_share;
   r["eccentric_share_interior"] = n.eccentric_share_interior;
   r["interior_share"] = n.interior_share;
+  r["neighbours_mean_core"] = n.mean_core;
   const DensityProfile p = profile(s);
   r["density_profile_bin_width"] = p.bin_width;
   r["density_profile_interior"] = p.interior;

@@ -1,0 +1,86 @@
+#!/usr/bin/python3
+"""Issue 38 item 1: does the pin's interior depend on N? Packs configs/resistance_cylinder.json's
+cylinder (r_d = 1 mm, l_d = 5 mm, radii uniform in r(1 +- 0.125)) with the relax generator at each
+N and packing seed, by one of two protocols, and writes per packing the generator's report:
+
+  overall     target_density 0.63 (the seed's "around 63 %", the ledger's protocol of issues 19/20)
+  interior    interior_target_density PHI (the solid fraction more than 4 mean diameters from every
+              face), the overall fraction following; PHI given with --interior, or (default) the
+              mean interior fraction of the `overall` protocol at N = 5000 (the seed's pin), so that
+              the seed's N keeps the seed's overall 0.63
+
+Columns: protocol, N, seed, packing_density (overall), density_profile_interior (4 mean diameters
+in from every face), neighbours_mean (gap <= 0.02 r_mean, all elements), neighbours_mean_core (the
+same, elements centred 4 mean diameters in), coordination_interior (touching), eccentric_share,
+interior_rounds, wall_time_s.
+
+    python3 -m benchmarks.resistance_cylinder.interior_packing --sparkdem BIN --workdir DIR
+        [--n 2500,5000,10000,20000,40000] [--seeds 1,2,3] [--interior PHI]
+        [--csv benchmarks/resistance_cylinder/interior_packing.csv]
+"""
+import argparse
+import json
+import os
+import statistics
+import subprocess
+
+from benchmarks.perf.harness import write_csv_atomic
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+KEYS = ("packing_density", "density_profile_interior", "neighbours_mean", "neighbours_mean_core", "coordination_interior",
+        "eccentric_share", "interior_rounds", "interior_density_reached")
+
+
+def pack(sparkdem, workdir, n, seed, interior=None):
+    with open(os.path.join(REPO, "configs/resistance_cylinder.json")) as f:
+        c = json.load(f)
+    c["seed"] = seed
+    c["stages"] = c["stages"][:1]  # the packing alone
+    gen = c["stages"][0]["generator"]
+    gen["particles"] = n
+    if interior is not None:
+        gen["interior_target_density"] = interior
+    tag = f"{'interior' if interior else 'overall'}_N{n}_s{seed}"
+    scene = os.path.join(workdir, tag + ".json")
+    with open(scene, "w") as f:
+        json.dump(c, f)
+    out = os.path.join(workdir, tag)
+    subprocess.run([sparkdem, "run", scene, "-o", out, "--threads", "2", "--quiet"], check=True)
+    with open(os.path.join(out, "summary.json")) as f:
+        st = json.load(f)["stages"][0]
+    rep = st["packing"]
+    return {"protocol": "interior" if interior else "overall", "N": n, "seed": seed, **{k: rep.get(k) for k in KEYS},
+            "wall_time_s": st["wall_time_s"]}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sparkdem", required=True)
+    ap.add_argument("--workdir", required=True)
+    ap.add_argument("--n", default="2500,5000,10000,20000,40000")
+    ap.add_argument("--seeds", default="1,2,3")
+    ap.add_argument("--interior", type=float, default=None)
+    ap.add_argument("--csv", default=os.path.join(REPO, "benchmarks/resistance_cylinder/interior_packing.csv"))
+    a = ap.parse_args()
+    os.makedirs(a.workdir, exist_ok=True)
+    sparkdem = os.path.abspath(a.sparkdem)
+    ns, seeds = [int(x) for x in a.n.split(",")], [int(x) for x in a.seeds.split(",")]
+    rows = [pack(sparkdem, a.workdir, n, s) for n in ns for s in seeds]
+    phi = a.interior
+    if phi is None:
+        phi = round(statistics.mean(r["density_profile_interior"] for r in rows if r["N"] == 5000), 4)
+    rows += [pack(sparkdem, a.workdir, n, s, phi) for n in ns for s in seeds]
+    write_csv_atomic(a.csv, rows)
+    print(f"interior target {phi}")
+    for proto in ("overall", "interior"):
+        for n in ns:
+            sel = [r for r in rows if r["protocol"] == proto and r["N"] == n]
+            line = [f"{proto:8s} N={n:6d}"]
+            for k in ("packing_density", "density_profile_interior", "neighbours_mean", "neighbours_mean_core"):
+                v = [r[k] for r in sel]
+                line.append(f"{k}={statistics.mean(v):.4f}+-{statistics.stdev(v) if len(v) > 1 else 0:.4f}")
+            print(" ".join(line))
+
+
+if __name__ == "__main__":
+    main()
