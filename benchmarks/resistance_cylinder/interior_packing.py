@@ -5,9 +5,10 @@ N and packing seed, by one of two protocols, and writes per packing the generato
 
   overall     target_density 0.63 (the seed's "around 63 %", the ledger's protocol of issues 19/20)
   interior    interior_target_density PHI (the solid fraction more than 4 mean diameters from every
-              face), the overall fraction following; PHI given with --interior, or (default) the
-              mean interior fraction of the `overall` protocol at N = 5000 (the seed's pin), so that
-              the seed's N keeps the seed's overall 0.63
+              face), the overall fraction following; PHI given with --interior, or (default) fixed
+              before any interior run from the `overall` runs alone: the middle of the window of PHI
+              whose overall fraction stays within the seed's "around 63 %" (0.62-0.64) at every N,
+              PHI - deficit(N) in [0.62, 0.64], deficit(N) = mean interior - overall at N
 
 Columns: protocol, N, seed, packing_density (overall), density_profile_interior (4 mean diameters
 in from every face), neighbours_mean (gap <= 0.02 r_mean, all elements), neighbours_mean_core (the
@@ -68,7 +69,10 @@ def main():
     rows = [pack(sparkdem, a.workdir, n, s) for n in ns for s in seeds]
     phi = a.interior
     if phi is None:
-        phi = round(statistics.mean(r["density_profile_interior"] for r in rows if r["N"] == 5000), 4)
+        deficit = [statistics.mean(r["density_profile_interior"] - r["packing_density"] for r in rows if r["N"] == n) for n in ns]
+        lo, hi = 0.62 + max(deficit), 0.64 + min(deficit)
+        phi = round(0.5 * (lo + hi), 4)
+        print(f"window of the interior target: [{lo:.4f}, {hi:.4f}]{' (empty)' if lo > hi else ''}; target {phi}")
     rows += [pack(sparkdem, a.workdir, n, s, phi) for n in ns for s in seeds]
     write_csv_atomic(a.csv, rows)
     print(f"interior target {phi}")
