@@ -25,40 +25,52 @@ RHO, RD, LD = 0.73e-6, 1e-3, 5e-3
 EDGES = [0.0, 0.5e-3, 0.7e-3, 0.85e-3, 1.2e-3]
 
 
-def analyse(run):
-    f = h5py.File(sorted(glob.glob(run + "/out/frames/*.h5"))[-1], "r")
+def ring_kappa(f, edges, length=LD, rd=RD):
+    """The effective conductivity of each ring edges[k] <= r < edges[k + 1] [S/m] of the last frame
+    `f` (an open h5py file): the axial current crossing 21 planes over the middle half of the
+    length, split by the radius of the crossing point, over (ring area x |dphi/dz|), dphi/dz fitted
+    over the same middle half. Returns (kappa per ring, |dphi/dz|)."""
     p = f["particles"]
-    x, r = p["position"][:], p["radius"][:].ravel()
+    x = p["position"][:]
     phi, ids = p["electric_potential"][:].ravel(), p["id"][:].ravel()
-    hi, lo = p["set_end_high"][:].ravel() > 0.5, p["set_end_low"][:].ravel() > 0.5
-    s = json.load(open(run + "/out/summary.json"))
-    fin = [t for t in s["stages"] if "electrical_resistance" in t.get("final", {})][-1]["final"]
-    current, resistance = fin["electrical_current"], fin["electrical_resistance"]
     z = x[:, 2]
     zc = 0.5 * (z.min() + z.max())
-    mid = (np.abs(z - zc) < 0.25 * LD) & np.isfinite(phi)
+    mid = (np.abs(z - zc) < 0.25 * length) & np.isfinite(phi)
     grad = abs(np.polyfit(z[mid], phi[mid], 1)[0])
-    r_th = RHO * (LD - 2.0 * r.mean()) / (np.pi * RD ** 2)
-    r_mid = grad * (z[hi].mean() - z[lo].mean()) / current
     index = {int(i): k for k, i in enumerate(ids)}
     pairs, branch_i = f["networks/electrical/pairs"][:], f["networks/electrical/current"][:].ravel()
     keep = (pairs[:, 0] >= 0) & (pairs[:, 1] >= 0)
     ia = np.array([index[int(a)] for a in pairs[keep, 0]])
     ib = np.array([index[int(b)] for b in pairs[keep, 1]])
     cur = np.abs(branch_i[keep])
-    ring = np.zeros(len(EDGES) - 1)
-    planes = zc + np.linspace(-0.25 * LD, 0.25 * LD, 21)
+    ring = np.zeros(len(edges) - 1)
+    planes = zc + np.linspace(-0.25 * length, 0.25 * length, 21)
     for zp in planes:
         cross = (z[ia] - zp) * (z[ib] - zp) < 0
         t = (zp - z[ia][cross]) / (z[ib][cross] - z[ia][cross])
         pt = x[ia][cross] + t[:, None] * (x[ib][cross] - x[ia][cross])
-        k = np.clip(np.searchsorted(EDGES, np.hypot(pt[:, 0], pt[:, 1])) - 1, 0, len(ring) - 1)
+        k = np.clip(np.searchsorted(edges, np.hypot(pt[:, 0], pt[:, 1])) - 1, 0, len(ring) - 1)
         np.add.at(ring, k, cur[cross] / len(planes))
+    outer = np.minimum(np.array(edges[1:]), rd)
+    areas = np.pi * (outer ** 2 - np.array(edges[:-1]) ** 2)
+    return ring / (areas * grad), grad
+
+
+def analyse(run):
+    f = h5py.File(sorted(glob.glob(run + "/out/frames/*.h5"))[-1], "r")
+    p = f["particles"]
+    x, r = p["position"][:], p["radius"][:].ravel()
+    hi, lo = p["set_end_high"][:].ravel() > 0.5, p["set_end_low"][:].ravel() > 0.5
+    s = json.load(open(run + "/out/summary.json"))
+    fin = [t for t in s["stages"] if "electrical_resistance" in t.get("final", {})][-1]["final"]
+    current, resistance = fin["electrical_current"], fin["electrical_resistance"]
+    z = x[:, 2]
+    kappa, grad = ring_kappa(f, EDGES)
+    r_th = RHO * (LD - 2.0 * r.mean()) / (np.pi * RD ** 2)
+    r_mid = grad * (z[hi].mean() - z[lo].mean()) / current
     outer = np.minimum(np.array(EDGES[1:]), RD)
-    areas = np.pi * (outer ** 2 - np.array(EDGES[:-1]) ** 2)
-    kappa = ring / (areas * grad)
     rings = ", ".join(f"r {1e3 * EDGES[i]:.2f}-{1e3 * outer[i]:.2f} mm {100 * (kappa[i] * RHO - 1):+.1f} %"
-                      for i in range(len(ring)))
+                      for i in range(len(kappa)))
     print(f"{run}: R/R_th - 1 {100 * (resistance / r_th - 1):+.2f} %, electrode share "
           f"{100 * (resistance - r_mid) / resistance:+.2f} %; kappa rho_e - 1 by ring: {rings}")
 
