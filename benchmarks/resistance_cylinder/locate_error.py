@@ -25,24 +25,15 @@ RHO, RD, LD = 0.73e-6, 1e-3, 5e-3
 EDGES = [0.0, 0.5e-3, 0.7e-3, 0.85e-3, 1.2e-3]
 
 
-def ring_kappa(f, edges, length=LD, rd=RD):
-    """The effective conductivity of each ring edges[k] <= r < edges[k + 1] [S/m] of the last frame
-    `f` (an open h5py file): the axial current crossing 21 planes over the middle half of the
-    length, split by the radius of the crossing point, over (ring area x |dphi/dz|), dphi/dz fitted
-    over the same middle half. Returns (kappa per ring, |dphi/dz|)."""
-    p = f["particles"]
-    x = p["position"][:]
-    phi, ids = p["electric_potential"][:].ravel(), p["id"][:].ravel()
+def ring_kappa_arrays(x, phi, ia, ib, cur, edges, length=LD, rd=RD):
+    """The effective conductivity of each ring edges[k] <= r < edges[k + 1] [S/m]: the axial current
+    |cur| of the branches (ia, ib) crossing 21 planes over the middle half of the length, split by
+    the radius of the crossing point, over (ring area x |dphi/dz|), dphi/dz of the node potentials
+    phi fitted over the same middle half. Returns (kappa per ring, |dphi/dz|)."""
     z = x[:, 2]
     zc = 0.5 * (z.min() + z.max())
     mid = (np.abs(z - zc) < 0.25 * length) & np.isfinite(phi)
     grad = abs(np.polyfit(z[mid], phi[mid], 1)[0])
-    index = {int(i): k for k, i in enumerate(ids)}
-    pairs, branch_i = f["networks/electrical/pairs"][:], f["networks/electrical/current"][:].ravel()
-    keep = (pairs[:, 0] >= 0) & (pairs[:, 1] >= 0)
-    ia = np.array([index[int(a)] for a in pairs[keep, 0]])
-    ib = np.array([index[int(b)] for b in pairs[keep, 1]])
-    cur = np.abs(branch_i[keep])
     ring = np.zeros(len(edges) - 1)
     planes = zc + np.linspace(-0.25 * length, 0.25 * length, 21)
     for zp in planes:
@@ -50,10 +41,24 @@ def ring_kappa(f, edges, length=LD, rd=RD):
         t = (zp - z[ia][cross]) / (z[ib][cross] - z[ia][cross])
         pt = x[ia][cross] + t[:, None] * (x[ib][cross] - x[ia][cross])
         k = np.clip(np.searchsorted(edges, np.hypot(pt[:, 0], pt[:, 1])) - 1, 0, len(ring) - 1)
-        np.add.at(ring, k, cur[cross] / len(planes))
+        np.add.at(ring, k, np.abs(cur[cross]) / len(planes))
     outer = np.minimum(np.array(edges[1:]), rd)
     areas = np.pi * (outer ** 2 - np.array(edges[:-1]) ** 2)
     return ring / (areas * grad), grad
+
+
+def ring_kappa(f, edges, length=LD, rd=RD):
+    """ring_kappa_arrays on the last frame `f` (an open h5py file): its particle potentials and the
+    branch currents of /networks/electrical."""
+    p = f["particles"]
+    x = p["position"][:]
+    phi, ids = p["electric_potential"][:].ravel(), p["id"][:].ravel()
+    index = {int(i): k for k, i in enumerate(ids)}
+    pairs, branch_i = f["networks/electrical/pairs"][:], f["networks/electrical/current"][:].ravel()
+    keep = (pairs[:, 0] >= 0) & (pairs[:, 1] >= 0)
+    ia = np.array([index[int(a)] for a in pairs[keep, 0]])
+    ib = np.array([index[int(b)] for b in pairs[keep, 1]])
+    return ring_kappa_arrays(x, phi, ia, ib, branch_i[keep], edges, length, rd)
 
 
 def analyse(run):

@@ -12,7 +12,9 @@ Rows (per run):
   e_face          eccentricity threshold of f = 2 (seed 001: 0.4)
   interior_f1     f = 1 for every element more than one mean diameter from the surface
   f1              f = 1 everywhere
-Columns: mean neighbours, eccentric share (all / interior), R/R_th - 1. R_th as the ledger:
+Columns: mean neighbours, eccentric share (all / interior), R/R_th - 1, the core's kappa rho_e
+(r < r_d - 4 r_mean, locate_error.ring_kappa_arrays; 1 = the continuum), the skin coefficient
+c = (R/R_th - 1) / (r_mean / r_d) (Table III: 0.60 +- 0.03). R_th as the ledger:
 rho (l_d - 2 r_mean) / (pi r_d^2). Geometry and rho: seed 001 (r_d = 1 mm, l_d = 5 mm, 304L).
 """
 import argparse
@@ -27,6 +29,9 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import spsolve
 from scipy.spatial import cKDTree
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from locate_error import ring_kappa_arrays  # noqa: E402  (run as a script, beside it)
 
 RHO, RD, LD = 0.73e-6, 1e-3, 5e-3
 S3, S5 = np.sqrt(3.0), np.sqrt(5.0)
@@ -43,13 +48,14 @@ def alpha(n):
 
 
 def load(run):
-    f = h5py.File(sorted(glob.glob(run + "/out/frames/*.h5"))[-1], "r")
+    run = run + "/out" if os.path.isdir(run + "/out") else run  # ledger runs keep their output in out/
+    f = h5py.File(sorted(glob.glob(run + "/frames/*.h5"))[-1], "r")
     p = f["particles"]
     out = {k: p[k][:] for k in ("position", "radius", "set_end_high", "set_end_low")}
     out["radius"] = out["radius"].ravel()
-    s = json.load(open(run + "/out/summary.json"))
+    s = json.load(open(run + "/summary.json"))
     fin = [t for t in s["stages"] if "electrical_resistance" in t.get("final", {})][-1]["final"]
-    resolved = json.load(open(run + "/out/resolved.json"))
+    resolved = json.load(open(run + "/resolved.json"))
     mods = [st["modules"]["electrical_network"] for st in resolved["stages"] if "electrical_network" in st.get("modules", {})]
     rel = mods[-1].get("touch_tolerance_relative", 0.0)
     out["R_engine"] = fin["electrical_resistance"]
@@ -92,7 +98,9 @@ def resistance(x, r, hi, lo, pairs, dist, e_face=0.4, f_mask=None):
     rhs = -K[free][:, fixed] @ u[fixed]
     u[free] = spsolve(Kff.tocsc(), rhs)
     current = (K @ u)[hi].sum()
-    return 1.0 / current, cnt.mean(), (f > 1).mean(), e
+    # The core's kappa rho_e (r < r_d - 4 r_mean; locate_error.ring_kappa_arrays) from the branch currents.
+    kappa, _ = ring_kappa_arrays(x, np.where(live, u, np.nan), a, b, g * (u[a] - u[b]), [0.0, RD - 4.0 * r.mean(), 10.0 * RD])
+    return 1.0 / current, cnt.mean(), (f > 1).mean(), e, kappa[0] * RHO
 
 
 def main():
@@ -119,13 +127,15 @@ def main():
                      ("engine tol, f1", d["tol_m"], 0.4, np.ones(len(r), bool))]
         for name, tol, ef, mask in variants:
             pr, ds = network(x, r, tol)
-            R, nmean, ecc, e = resistance(x, r, hi, lo, pr, ds, ef, mask)
+            R, nmean, ecc, e, core = resistance(x, r, hi, lo, pr, ds, ef, mask)
             row = {"run": run, "N": len(r), "variant": name, "tol_over_r_mean": tol / rm, "mean_neighbours": nmean,
                    "eccentric_share": float((e >= ef).mean()), "eccentric_share_interior": float((e[interior] >= ef).mean()),
-                   "interior_share": float(interior.mean()), "R_over_R_th_minus_1_pct": 100 * (R / r_th - 1)}
+                   "interior_share": float(interior.mean()), "R_over_R_th_minus_1_pct": 100 * (R / r_th - 1),
+                   "core_kappa_rho": core, "skin_c": (R / r_th - 1) / (rm / RD)}
             rows.append(row)
             print(f"{run.split('/')[-1]:>14} {name:>28}  n {nmean:5.2f}  ecc {100 * row['eccentric_share']:5.1f} % "
-                  f"(interior {100 * row['eccentric_share_interior']:5.1f} %)  R/R_th-1 {row['R_over_R_th_minus_1_pct']:+6.2f} %")
+                  f"(interior {100 * row['eccentric_share_interior']:5.1f} %)  R/R_th-1 {row['R_over_R_th_minus_1_pct']:+6.2f} %"
+                  f"  core kappa rho {core:.4f}  c {row['skin_c']:.2f}")
     if a.csv:
         import csv
         with open(a.csv + ".tmp", "w", newline="") as f:
