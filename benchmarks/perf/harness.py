@@ -19,11 +19,51 @@ import time
 from tools.ledger import binary_build, write_json_atomic
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-__all__ = ["REPO", "Context", "write_csv_atomic", "write_json_atomic", "stats", "interleave", "load_config",
+__all__ = ["REPO", "Context", "study_parser", "print_means", "run_study_scene", "write_csv_atomic", "write_json_atomic", "stats", "interleave", "load_config",
            "lammps_version", "git", "git_head", "git_history_unavailable"]
 
 
 # ---------------------------------------------------------------- files and numbers
+
+def study_parser(doc, n_default, csv_default, seeds_default="1,2,3"):
+    """The arguments every ensemble study over N and packing seeds takes: --sparkdem, --workdir,
+    --n (comma list), --seeds (comma list), --csv (its output, `csv_default` in the repository)."""
+    import argparse
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
+    ap.add_argument("--sparkdem", required=True)
+    ap.add_argument("--workdir", required=True)
+    ap.add_argument("--n", default=n_default)
+    ap.add_argument("--seeds", default=seeds_default)
+    ap.add_argument("--csv", default=os.path.join(REPO, csv_default))
+    return ap
+
+
+def run_study_scene(sparkdem, workdir, tag, scene, threads=1):
+    """Writes `scene` (a dict) to WORKDIR/TAG.json, runs `sparkdem run` on it into WORKDIR/TAG with
+    `threads` OpenMP threads (a failed run raises), and returns (that directory, its summary.json)."""
+    path = os.path.join(workdir, tag + ".json")
+    with open(path, "w") as f:
+        json.dump(scene, f)
+    out = os.path.join(workdir, tag)
+    subprocess.run([sparkdem, "run", path, "-o", out, "--threads", str(threads), "--quiet"], check=True,
+                   env=dict(os.environ, OMP_NUM_THREADS=str(threads)))
+    with open(os.path.join(out, "summary.json")) as f:
+        return out, json.load(f)
+
+
+def print_means(rows, by, keys):
+    """One line per distinct value of the columns `by` (in first-seen order): mean +- std over the
+    rows sharing it of each column in `keys`."""
+    groups = {}
+    for r in rows:
+        groups.setdefault(tuple(r[b] for b in by), []).append(r)
+    for g, sel in groups.items():
+        line = [" ".join(f"{b}={v}" for b, v in zip(by, g))]
+        for k in keys:
+            v = [r[k] for r in sel]
+            line.append(f"{k}={statistics.mean(v):.4f}+-{statistics.stdev(v) if len(v) > 1 else 0:.4f}")
+        print(" ".join(line))
+
 
 def write_csv_atomic(path, rows, fields=None):
     """rows (dicts) as CSV, header `fields` (default: the first row's keys), temporary name then rename."""

@@ -19,13 +19,11 @@ interior_rounds, wall_time_s.
         [--n 2500,5000,10000,20000,40000] [--seeds 1,2,3] [--interior PHI]
         [--csv benchmarks/resistance_cylinder/interior_packing.csv]
 """
-import argparse
 import json
 import os
 import statistics
-import subprocess
 
-from benchmarks.perf.harness import write_csv_atomic
+from benchmarks.perf.harness import print_means, run_study_scene, study_parser, write_csv_atomic
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 KEYS = ("packing_density", "density_profile_interior", "neighbours_mean", "neighbours_mean_core", "coordination_interior",
@@ -41,27 +39,16 @@ def pack(sparkdem, workdir, n, seed, interior=None):
     gen["particles"] = n
     if interior is not None:
         gen["interior_target_density"] = interior
-    tag = f"{'interior' if interior else 'overall'}_N{n}_s{seed}"
-    scene = os.path.join(workdir, tag + ".json")
-    with open(scene, "w") as f:
-        json.dump(c, f)
-    out = os.path.join(workdir, tag)
-    subprocess.run([sparkdem, "run", scene, "-o", out, "--threads", "2", "--quiet"], check=True)
-    with open(os.path.join(out, "summary.json")) as f:
-        st = json.load(f)["stages"][0]
+    _, s = run_study_scene(sparkdem, workdir, f"{'interior' if interior else 'overall'}_N{n}_s{seed}", c, threads=2)
+    st = s["stages"][0]
     rep = st["packing"]
     return {"protocol": "interior" if interior else "overall", "N": n, "seed": seed, **{k: rep.get(k) for k in KEYS},
             "wall_time_s": st["wall_time_s"]}
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sparkdem", required=True)
-    ap.add_argument("--workdir", required=True)
-    ap.add_argument("--n", default="2500,5000,10000,20000,40000")
-    ap.add_argument("--seeds", default="1,2,3")
+    ap = study_parser(__doc__, "2500,5000,10000,20000,40000", "benchmarks/resistance_cylinder/interior_packing.csv")
     ap.add_argument("--interior", type=float, default=None)
-    ap.add_argument("--csv", default=os.path.join(REPO, "benchmarks/resistance_cylinder/interior_packing.csv"))
     a = ap.parse_args()
     os.makedirs(a.workdir, exist_ok=True)
     sparkdem = os.path.abspath(a.sparkdem)
@@ -76,14 +63,7 @@ def main():
     rows += [pack(sparkdem, a.workdir, n, s, phi) for n in ns for s in seeds]
     write_csv_atomic(a.csv, rows)
     print(f"interior target {phi}")
-    for proto in ("overall", "interior"):
-        for n in ns:
-            sel = [r for r in rows if r["protocol"] == proto and r["N"] == n]
-            line = [f"{proto:8s} N={n:6d}"]
-            for k in ("packing_density", "density_profile_interior", "neighbours_mean", "neighbours_mean_core"):
-                v = [r[k] for r in sel]
-                line.append(f"{k}={statistics.mean(v):.4f}+-{statistics.stdev(v) if len(v) > 1 else 0:.4f}")
-            print(" ".join(line))
+    print_means(rows, ("protocol", "N"), ("packing_density", "density_profile_interior", "neighbours_mean", "neighbours_mean_core"))
 
 
 if __name__ == "__main__":

@@ -15,17 +15,14 @@ interior_packing.py from packings alone), and writes per run:
         [--n 5000,10000,20000] [--seeds 1,2,3] [--protocols overall,interior] [--interior 0.6574]
         [--csv benchmarks/resistance_cylinder/interior_resistance.csv]
 """
-import argparse
 import glob
 import json
 import math
 import os
-import statistics
-import subprocess
 
 import h5py
 
-from benchmarks.perf.harness import write_csv_atomic
+from benchmarks.perf.harness import print_means, run_study_scene, study_parser, write_csv_atomic
 from benchmarks.resistance_cylinder.locate_error import ring_kappa
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -39,13 +36,7 @@ def run(sparkdem, workdir, protocol, n, seed, interior):
     gen["particles"] = n
     if protocol == "interior":
         gen["interior_target_density"] = interior
-    tag = f"{protocol}_N{n}_s{seed}"
-    scene = os.path.join(workdir, tag + ".json")
-    with open(scene, "w") as f:
-        json.dump(c, f)
-    out = os.path.join(workdir, tag)
-    subprocess.run([sparkdem, "run", scene, "-o", out, "--threads", "2", "--quiet"], check=True)
-    s = json.load(open(os.path.join(out, "summary.json")))
+    out, s = run_study_scene(sparkdem, workdir, f"{protocol}_N{n}_s{seed}", c, threads=2)
     pk = s["stages"][0]["packing"]
     fin = [t for t in s["stages"] if "electrical_resistance" in t.get("final", {})][-1]["final"]
     m = c["stages"][1]["modules"]["electrical_network"]
@@ -63,28 +54,16 @@ def run(sparkdem, workdir, protocol, n, seed, interior):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--sparkdem", required=True)
-    ap.add_argument("--workdir", required=True)
-    ap.add_argument("--n", default="5000,10000,20000")
-    ap.add_argument("--seeds", default="1,2,3")
+    ap = study_parser(__doc__, "5000,10000,20000", "benchmarks/resistance_cylinder/interior_resistance.csv")
     ap.add_argument("--protocols", default="overall,interior")
     ap.add_argument("--interior", type=float, default=0.6574)
-    ap.add_argument("--csv", default=os.path.join(REPO, "benchmarks/resistance_cylinder/interior_resistance.csv"))
     a = ap.parse_args()
     os.makedirs(a.workdir, exist_ok=True)
     sparkdem = os.path.abspath(a.sparkdem)
     rows = [run(sparkdem, a.workdir, proto, int(n), int(s), a.interior)
             for proto in a.protocols.split(",") for n in a.n.split(",") for s in a.seeds.split(",")]
     write_csv_atomic(a.csv, rows)
-    for proto in a.protocols.split(","):
-        for n in a.n.split(","):
-            sel = [r for r in rows if r["protocol"] == proto and r["N"] == int(n)]
-            line = [f"{proto:8s} N={int(n):6d}"]
-            for k in ("R_rel_error", "core_kappa_rho", "skin_c", "packing_density"):
-                v = [r[k] for r in sel]
-                line.append(f"{k}={statistics.mean(v):.4f}+-{statistics.stdev(v) if len(v) > 1 else 0:.4f}")
-            print(" ".join(line))
+    print_means(rows, ("protocol", "N"), ("R_rel_error", "core_kappa_rho", "skin_c", "packing_density"))
 
 
 if __name__ == "__main__":

@@ -10,7 +10,6 @@
 
 #include <cmath>
 #include <numbers>
-#include <random>
 #include <vector>
 
 #include "engine/contact/contact_model.hpp"
@@ -43,13 +42,8 @@ double lens(double a, double b, double d) {
 /// axis: the 54 lattice edges overlap (d <= 1.96 um), no diagonal does (d >= 2.51 um, r_i + r_j
 /// <= 2.4 um, 4 % of growth to spare), so no three spheres share a point.
 State cluster() {
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   State s;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k)
-        test::add_sphere(s, 1.85 * kR * Vec3(i, j, k) + 0.03 * kR * Vec3(u(rng), u(rng), u(rng)), kR * (1.1 + 0.1 * u(rng)), kRho);
+  test::free_pair::add_cluster27(s, 1.85, 1.1, 0.1);
   return s;
 }
 

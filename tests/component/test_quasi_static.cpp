@@ -99,13 +99,8 @@ TEST_CASE("Quasi-static sintering cluster: every particle ends each step in bala
   // (what is left is the law's numerical dashpots on the creep rates); the forces sum to zero
   // (action = reaction) and the kinetic energy is that of the creep rates, below 1e-20 J.
   // A 3 x 3 x 3 cube of spheres of radii 1-1.3 um, 1.9 um apart, each moved by up to 0.03 um.
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   State s;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      for (int k = 0; k < 3; ++k)
-        test::add_sphere(s, 1.9 * kR * Vec3(i, j, k) + 0.03 * kR * Vec3(u(rng), u(rng), u(rng)), kR * (1.15 + 0.15 * u(rng)), kRho);
+  test::free_pair::add_cluster27(s, 1.9, 1.15, 0.15);
   const ContactModelT<Sintering> law(hot_params());
   Simulation sim(s, law);
   double worst = 0.0, ke = 0.0;

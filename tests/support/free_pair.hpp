@@ -4,6 +4,7 @@
 /// the inertia-free path).
 #include <cmath>
 #include <numbers>
+#include <random>
 
 #include "physics/contact/sintering.hpp"
 #include "support/scene.hpp"
@@ -21,6 +22,18 @@ constexpr double kH0 = 0.002 * kR;
 inline void add_pair(State& s) {
   add_sphere(s, Vec3(-(kR - 0.5 * kH0), 0, 0), kR, kRho);
   add_sphere(s, Vec3(kR - 0.5 * kH0, 0, 0), kR, kRho);
+}
+
+/// A 3 x 3 x 3 cube of spheres `spacing` x kR apart, each moved by up to 0.03 kR per axis, radii
+/// kR (r_centre +- r_half_width) (uniform; std::mt19937_64 seed 7): the sintering cluster of the
+/// inertia-free and mass-conserving tests.
+inline void add_cluster27(State& s, double spacing, double r_centre, double r_half_width) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 3; ++k)
+        add_sphere(s, spacing * kR * Vec3(i, j, k) + 0.03 * kR * Vec3(u(rng), u(rng), u(rng)), kR * (r_centre + r_half_width * u(rng)), kRho);
 }
 
 inline Sintering::Params law_params() {
