@@ -16,6 +16,7 @@ TruncatedVolume truncated_volume(double R, const CapNeighbour* nb, std::size_t n
   for (std::size_t k = 0; k < n; ++k) {
     const double h = R - radical_distance(nb[k].d, R, nb[k].r);
     if (!(h > 0.0)) continue;
+    t.closed += h / (2.0 * R);
     const double hc = std::min(h, 2.0 * R);
     t.volume -= cap_volume(R, hc);
     // d cap / dR = pi h^2 + pi h (2R - h) dh/dR, dh/dR = 1 - R/d (a whole sphere past 2R: 4 pi R^2).
@@ -100,6 +101,14 @@ struct NeckAdjacency {
 
 namespace {
 
+/// Particle i's sintered neighbours as caps: centre distance and radius R[other] (coincident
+/// centres, d = 0, left out).
+void cap_neighbours(const NeckAdjacency& a, std::size_t i, const std::vector<double>& R, std::vector<kernel::CapNeighbour>& nb) {
+  nb.clear();
+  for (std::size_t e = a.start[i]; e < a.start[i + 1]; ++e)
+    if (a.dist[e] > 0.0) nb.push_back({a.dist[e], R[a.other[e]]});
+}
+
 NeckAdjacency neck_adjacency(const ParticleStore& p, const ContactTable& t, int neck) {
   const std::size_t n = p.size();
   NeckAdjacency a;
@@ -142,9 +151,7 @@ std::vector<double> MassConservingRadii::solve_radii(const NeckAdjacency& a, con
     for (std::size_t i = 0; i < n; ++i) {
       next[i] = R[i];
       if (dense[i] > 0.5) continue;  // held: a closed particle's volume no radius sets
-      nb.clear();
-      for (std::size_t e = a.start[i]; e < a.start[i + 1]; ++e)
-        if (a.dist[e] > 0.0) nb.push_back({a.dist[e], R[a.other[e]]});
+      cap_neighbours(a, i, R, nb);
       const double v0 = 4.0 / 3.0 * kPi * r_free[i] * r_free[i] * r_free[i];
       bool at_cap = false;
       next[i] = kernel::conserving_radius(v0, R[i], r_free[i], p_.max_growth * r_free[i], nb.data(), nb.size(), p_.tolerance, at_cap);
@@ -191,19 +198,14 @@ MassConservingRadii::Growth MassConservingRadii::grow(State& s) const {
   std::vector<kernel::CapNeighbour> nb;
   double v_all = 0.0, v_missing = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
-    double c = 0.0;
-    nb.clear();
-    for (std::size_t e = adj.start[i]; e < adj.start[i + 1]; ++e)
-      if (adj.dist[e] > 0.0) {
-        c += std::max(0.0, R[i] - kernel::radical_distance(adj.dist[e], R[i], R[adj.other[e]])) / (2.0 * R[i]);
-        nb.push_back({adj.dist[e], R[adj.other[e]]});
-      }
-    closed[i] = std::min(1.0, c);
+    cap_neighbours(adj, i, R, nb);
+    const kernel::TruncatedVolume tv = kernel::truncated_volume(R[i], nb.data(), nb.size());
+    closed[i] = std::min(1.0, tv.closed);
     dense[i] = closed[i] >= p_.dense_closed_surface ? 1.0 : 0.0;
     out.dense += dense[i] > 0.5 ? 1 : 0;
     const double v0 = 4.0 / 3.0 * kPi * r_free[i] * r_free[i] * r_free[i];
     v_all += v0;
-    v_missing += std::max(0.0, v0 - kernel::truncated_volume(R[i], nb.data(), nb.size()).volume);
+    v_missing += std::max(0.0, v0 - tv.volume);
   }
   out.missing_volume = v_all > 0.0 ? v_missing / v_all : 0.0;
   return out;

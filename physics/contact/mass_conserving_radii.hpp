@@ -100,8 +100,9 @@ struct CapNeighbour {
 /// Eq. (1) of the module at radius R: the volume of the sphere less its caps on the radical planes
 /// of its neighbours, and dV/dR (the neighbours' radii held).
 struct TruncatedVolume {
-  double volume;     ///< [m^3]
-  double dvolume;    ///< dV/dR [m^2]
+  double volume;        ///< [m^3]
+  double dvolume;       ///< dV/dR [m^2]
+  double closed = 0.0;  ///< sum of h / (2R) over the caps: their curved area 2 pi R h over 4 pi R^2 [1]
 };
 TruncatedVolume truncated_volume(double R, const CapNeighbour* nb, std::size_t n);
 

@@ -146,14 +146,14 @@ double envelope_volume(const std::vector<Vec3>& positions, const std::vector<dou
 }
 
 namespace {
-/// Each particle's radius without the mass-conserving growth (its own radius when there is none).
+/// Each particle's radius without the mass-conserving growth; empty when the particles have none
+/// (their radii are their free radii).
 std::vector<double> free_radii(const ParticleStore& p) {
+  if (!p.fields.has(thermal::kRadiusFactorField)) return {};
   std::vector<double> r(p.radius.begin(), p.radius.end());
-  if (p.fields.has(thermal::kRadiusFactorField)) {
-    const auto& g = p.fields.data(thermal::kRadiusFactorField);
-    for (std::size_t i = 0; i < r.size(); ++i)
-      if (g[i] > 0.0) r[i] /= g[i];
-  }
+  const auto& g = p.fields.data(thermal::kRadiusFactorField);
+  for (std::size_t i = 0; i < r.size(); ++i)
+    if (g[i] > 0.0) r[i] /= g[i];
   return r;
 }
 }  // namespace
@@ -167,9 +167,11 @@ std::vector<double> CompactMonitor::values(const State& s) const {
   // mass (in sintering DEM the overlap stands for shrinkage; the lens material sits in the neck).
   // The porosities by mass take each particle's free radius: its radius less the mass-conserving
   // growth of its sintered necks (thermal::kRadiusFactorField), which holds no extra matter.
-  const std::vector<double> r_mass = free_radii(p);
+  const std::vector<double> grown_free = free_radii(p);
+  const std::vector<double>& r_mass = grown_free.empty() ? p.radius : grown_free;
+  const bool grown = !grown_free.empty();
   const double spheres_grown = solid_volume_in_region(p.position, p.radius, region);
-  const double spheres = solid_volume_in_region(p.position, r_mass, region);
+  const double spheres = grown ? solid_volume_in_region(p.position, r_mass, region) : spheres_grown;
   const double porosity = 1.0 - minus_lenses(spheres_grown, p.position, p.radius, pairs, region) / region_volume(region);
   const double porosity_mass = 1.0 - spheres / region_volume(region);
   double margin = p_.interior_margin;
@@ -180,7 +182,7 @@ std::vector<double> CompactMonitor::values(const State& s) const {
     const Region inner = shrink(region, margin);
     const double inner_grown = solid_volume_in_region(p.position, p.radius, inner);
     interior = 1.0 - minus_lenses(inner_grown, p.position, p.radius, pairs, inner) / region_volume(inner);
-    interior_mass = 1.0 - solid_volume_in_region(p.position, r_mass, inner) / region_volume(inner);
+    interior_mass = 1.0 - (grown ? solid_volume_in_region(p.position, r_mass, inner) : inner_grown) / region_volume(inner);
   }
   // The sample's own envelope (a cooled sample leaves the die wall): its solid by mass (spheres
   // clipped to the punches only) in its profiled envelope volume.
