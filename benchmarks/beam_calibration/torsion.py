@@ -1,0 +1,148 @@
+#!/usr/bin/python3
+"""Beam calibration in torsion on the pin, as seed 001 §4 did it (issue 38 item 3).
+
+The seed fitted its beams "in order to obtain a macroscopic behaviour consistent with the
+theoretical torsion solution" on the 5000-element pin. This script does that on calibration
+packing seeds (101, 102, 103 by default) that the ledger never uses for validation (seed001/torsion
+runs seeds 1-5):
+
+  scene      configs/torsion_crack.json at N (run_torsion.scene_for: the end sets and gap follow
+             the element size), its packing protocol included (relax to the interior solid
+             fraction, issue 38 item 1), the beams of its $include, strength 1e30 (nothing
+             breaks), no electrical network (the fit reads mechanics only), twisted to
+             `--twist` rad (default 0.03, below the predicted onset 0.0416) at the config's rate
+  k          slope(torque) / slope(G J theta / L) over the rows past a quarter of the final twist
+             (least squares through 0; the start transient excluded), mean over the seeds
+  s_crit     slope(bonds_max_failure_stress) [Pa/rad] over the same rows: the largest von Mises
+             beam stress per unit twist, mean over the seeds
+
+Model choice fixed before any torsion run: the beam radius ratio stays the tension calibration's
+(configs/materials/cast_iron_beams.calibration.json: nu_M = 0.29); one slope fixes one parameter,
+and the radius ratio sets the ratio of bending to stretching stiffness that tension measures as
+nu_M. A beam lattice is linear in E_mu before the first break, so each iteration sets
+E_mu <- E_mu / k and the criterion slope with it (s_crit / k); iterations stop when |k - 1| <
+--tolerance (default 0.002; the last iteration's k is the calibration's residual). The strength is
+the first-break twist's: the first bond breaks where the criterion reaches the strength, so
+strength = s_crit x theta_y, theta_y = tau_y L / (G r) = 0.0416 rad, from the last iteration.
+
+--write writes configs/materials/cast_iron_beams_torsion.json (the beams configs/torsion_crack.json
+includes) and configs/materials/cast_iron_beams_torsion.calibration.json (every run, the fit, the
+command).
+
+    python3 -m benchmarks.beam_calibration.torsion --sparkdem BIN --workdir DIR [--n 5000]
+        [--seeds 101,102,103] [--twist 0.03] [--reuse] [--write]
+"""
+import concurrent.futures
+import csv
+import json
+import os
+import statistics
+import sys
+
+from benchmarks.perf.harness import run_study_scene, study_parser
+from benchmarks.torsion_crack import run_torsion as rt
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+CONFIG = os.path.join(REPO, "configs", "torsion_crack.json")
+BEAMS = os.path.join(REPO, "configs", "materials", "cast_iron_beams_torsion.json")
+TENSION = os.path.join(REPO, "configs", "materials", "cast_iron_beams.json")
+THETA_Y = rt.PREDICTED_ONSET  # tau_y L / (G r) [rad]
+
+
+def slope(x, y):
+    return sum(a * b for a, b in zip(x, y)) / sum(a * a for a in x)
+
+
+def scene(n, seed, beams, twist):
+    j = rt.scene_for(CONFIG, n, seed)
+    j["bonds"]["params"] = dict(beams, strength=1e30)
+    st = j["stages"][1]
+    st["modules"].pop("electrical_network")
+    st["modules"]["torsion_test"].pop("report_twists", None)
+    st["modules"]["torsion_test"]["resistance_signal"] = ""
+    st["stop"] = {"time": twist / st["prescribe"]["twisted"]["angular_velocity"][2]}
+    st["output"] = {"timeseries_every": 50}
+    j["checks"] = []
+    return j
+
+
+def fit(out):
+    with open(os.path.join(out, "timeseries.csv"), newline="") as f:
+        rows = [r for r in csv.DictReader(f) if r["stage"] == "1"]
+    th = [float(r["torsion_twist"]) for r in rows]
+    keep = [k for k, t in enumerate(th) if t >= 0.25 * th[-1]]
+    x = [th[k] for k in keep]
+    col = lambda name: [float(rows[k][name]) for k in keep]
+    return {"rows_fitted": len(keep), "final_twist_rad": th[-1],
+            "k": slope(x, col("torsion_torque")) / slope(x, col("torsion_elastic_torque")),
+            "s_crit_Pa_per_rad": slope(x, col("bonds_max_failure_stress")),
+            "max_ke_over_elastic": max(a / b for a, b in zip(col("kinetic_energy"), col("bonds_elastic_energy"))),
+            "broken": float(rows[-1]["bonds_broken"])}
+
+
+def run_reusing(a, tag, sc):
+    """run_study_scene, or with --reuse the finished run of the same scenario already in the workdir."""
+    out, path = os.path.join(a.workdir, tag), os.path.join(a.workdir, tag + ".json")
+    if a.reuse and os.path.exists(os.path.join(out, "summary.json")) and os.path.exists(path):
+        with open(path) as f:
+            same = json.load(f) == json.loads(json.dumps(sc))
+        if same:
+            with open(os.path.join(out, "summary.json")) as f:
+                return out, json.load(f)
+    return run_study_scene(os.path.abspath(a.sparkdem), a.workdir, tag, sc)
+
+
+def run_one(a, it, beams, n, seed):
+    out, s = run_reusing(a, f"it{it}_N{n}_s{seed}", scene(n, seed, beams, a.twist))
+    pk = next(x for x in s["stages"] if x["name"] == "pack")["packing"]
+    return dict(iteration=it, N=n, seed=seed, young_modulus_Pa=beams["young_modulus"], **fit(out),
+                packing_density=pk["packing_density"], density_profile_interior=pk["density_profile_interior"],
+                wall_time_s=s["wall_time_s"])
+
+
+def main():
+    ap = study_parser(__doc__, "5000", "", seeds_default="101,102,103")
+    ap.add_argument("--twist", type=float, default=0.03)
+    ap.add_argument("--tolerance", type=float, default=0.002)
+    ap.add_argument("--max-iterations", type=int, default=3)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--write", action="store_true")
+    ap.add_argument("--reuse", action="store_true", help="keep finished runs of an identical scenario")
+    a = ap.parse_args()
+    os.makedirs(a.workdir, exist_ok=True)
+    with open(TENSION) as f:
+        beams = {k: v for k, v in json.load(f).items() if k != "strength"}
+    jobs = [(int(n), int(s)) for n in a.n.split(",") for s in a.seeds.split(",")]
+    runs = []
+    for it in range(a.max_iterations):
+        with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:
+            rows = list(ex.map(lambda j: run_one(a, it, beams, *j), jobs))
+        runs += rows
+        k = statistics.mean(r["k"] for r in rows)
+        s_crit = statistics.mean(r["s_crit_Pa_per_rad"] for r in rows)
+        print(f"iteration {it}: E_mu {beams['young_modulus']:.6g} Pa, k {k:.5f} +- {statistics.stdev(r['k'] for r in rows):.5f}, "
+              f"criterion slope {s_crit:.6g} Pa/rad", flush=True)
+        if abs(k - 1.0) < a.tolerance:
+            break
+        beams["young_modulus"] /= k
+    beams["strength"] = s_crit * THETA_Y
+    print(f"E_mu {beams['young_modulus']:.6g} Pa, radius_ratio {beams['radius_ratio']:.6g}, strength {beams['strength']:.6g} Pa "
+          f"(residual k - 1 = {k - 1.0:+.5f})")
+    if a.write:
+        with open(BEAMS + ".tmp", "w") as f:
+            json.dump(beams, f, indent=2)
+            f.write("\n")
+        os.replace(BEAMS + ".tmp", BEAMS)
+        record = {"command": "python3 -m benchmarks.beam_calibration.torsion " + " ".join(sys.argv[1:]),
+                  "scene": "configs/torsion_crack.json (strength 1e30, no electrical network, twist "
+                           f"{a.twist} rad)", "theta_y_rad": THETA_Y, "residual_k_minus_1": k - 1.0,
+                  "criterion_slope_Pa_per_rad": s_crit, "params": beams, "runs": runs}
+        path = BEAMS.replace(".json", ".calibration.json")
+        with open(path + ".tmp", "w") as f:
+            json.dump(record, f, indent=1)
+            f.write("\n")
+        os.replace(path + ".tmp", path)
+
+
+if __name__ == "__main__":
+    main()
