@@ -59,6 +59,8 @@ PtcStrain::PtcStrain(const Params& p) : p_(p) {
   if (p_.strain_statistics && p_.matrix_model != "rkpm")
     errors.push_back({"/strain_statistics", "needs matrix_model \"rkpm\" (the bonded network has no strain field)"});
   check_edges(p_.strain_histogram_edges, "/strain_histogram_edges", errors);
+  if (p_.strain_points != "matrix" && !p_.strain_statistics)
+    errors.push_back({"/strain_points", "\"" + p_.strain_points + "\" needs strain_statistics true"});
   if (!p_.strain_histogram_edges.empty() && !(p_.opening_strain > 0.0))
     errors.push_back({"/opening_strain", "strain_histogram_edges need opening_strain > 0, found " + std::to_string(p_.opening_strain)});
   try {
@@ -173,6 +175,12 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
       .doc(
           "bin edges [1] of the max principal strain at eps0 = opening_strain (columns strain_total_hist_<k>, "
           "strain_mech_hist_<k>, _below, _above; needs strain_statistics)");
+  s.add("strain_points", &P::strain_points)
+      .choices({"matrix", "box", "nodes"})
+      .doc(
+          "rkpm: where strain_statistics sample (seed 002 does not say what its Fig. 4 histograms): the matrix volume "
+          "quadrature (matrix, weighted), a lattice over the whole box at spacing h / cell_subdivision, filler "
+          "interiors included (box, equal weights), or the RKPM nodes (nodes, unweighted)");
   s.add("linear_solver", &P::linear_solver)
       .choices({"cg_ic", "cg", "ldlt", "auto"})
       .doc("rkpm: CG with incomplete Cholesky (cg_ic), Jacobi CG (cg), sparse LDLT (ldlt), auto (LDLT when small)");
@@ -230,6 +238,7 @@ PtcStrain::UnitResult PtcStrain::unit_contacts(const State& s) const {
   rp.cg_max_iterations = static_cast<int>(p_.cg_max_iterations);
   rp.solver = p_.linear_solver;
   rp.strain_statistics = p_.strain_statistics;
+  rp.strain_points = p_.strain_points;
   for (double e : p_.strain_histogram_edges) rp.strain_edges.push_back(e / p_.opening_strain);
   // The polymer box: the smallest cube holding [0, L]^3 and every filler (the contact algorithm
   // has no walls, so a filler may end partly or wholly outside [0, L]^3; it stays embedded).

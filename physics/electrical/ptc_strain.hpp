@@ -40,7 +40,8 @@
 ///                                 principal total strain sym(grad u) and mechanical strain
 ///                                 sym(grad u) - eps0 I at eps0 = opening_strain [1]; then, with
 ///                                 m + 1 >= 2 strain_histogram_edges, strain_{total,mech}_hist_<k>,
-///                                 _below, _above: volume fractions per bin (the paper's Fig. 4)
+///                                 _below, _above: volume fractions per bin (the paper's Fig. 4),
+///                                 over the points strain_points names (matrix, box, nodes)
 ///   opening_hist_<k>              (only if opening_histogram_edges has m + 1 >= 2 edges) the
 ///                                 fraction of contacts whose relative opening (as opening_mean)
 ///                                 lies in [edge_k, edge_k+1), k = 0..m-1, then
@@ -122,6 +123,7 @@ class PtcStrain final : public Module {
     std::string boundary_faces = "all";          ///< rkpm: Gamma_u, "all" or comma-separated x_lo, ..., z_hi
     bool strain_statistics = false;              ///< rkpm: max principal strain of the matrix field (Fig. 4)
     std::vector<double> strain_histogram_edges;  ///< [1] bin edges of that strain at eps0 = opening_strain
+    std::string strain_points = "matrix";        ///< rkpm: "matrix" | "box" | "nodes" (rkpm_matrix.hpp)
   };
   static ParamSpec<Params> spec();
   explicit PtcStrain(const Params& p);

@@ -415,6 +415,8 @@ void check_params(const std::vector<Vec3>& centre, const std::vector<double>& ra
     throw SetupError("rkpm_matrix: boundary \"" + p.boundary + "\" needs boundary_faces");
   for (std::size_t k = 1; k < p.strain_edges.size(); ++k)
     if (!(p.strain_edges[k] > p.strain_edges[k - 1])) throw SetupError("rkpm_matrix: strain_edges must increase strictly");
+  if (p.strain_points != "matrix" && p.strain_points != "box" && p.strain_points != "nodes")
+    throw SetupError("rkpm_matrix: strain_points must be \"matrix\", \"box\" or \"nodes\", found \"" + p.strain_points + "\"");
   for (double r : radius)
     if (!(r > 0.0)) throw SetupError("rkpm_matrix: sphere radii must be > 0");
 }
@@ -782,10 +784,35 @@ Eigen::VectorXd solve_system(const Eigen::SparseMatrix<double, Eigen::RowMajor, 
   return x;
 }
 
-/// Max principal strain of the solved field at every volume point (per unit eps0): total
-/// eps = sym(grad u) and mechanical eps - I; volume-weighted histograms over strain_edges
-/// (m + 1 edges -> m bins, then below / above), means and the negative fractions.
-void strain_statistics(Result& res, const VolumeQuadrature& vq, const Params& p) {
+/// The points the strain statistics sample (Params::strain_points): the matrix volume quadrature
+/// ("matrix"), the cell centres of a lattice at spacing h / cell_subdivision over the whole domain
+/// with equal weights ("box": filler interiors included), or the kept nodes with weight 1 ("nodes").
+std::vector<QPoint> strain_sample_points(const Result& res, const VolumeQuadrature& vq, const Domain& domain, const Params& p) {
+  if (p.strain_points == "matrix") return vq.points;
+  std::vector<QPoint> out;
+  if (p.strain_points == "nodes") {
+    for (const Vec3& x : res.approximation.positions()) out.push_back({x, 1.0});
+    return out;
+  }
+  const double step = res.approximation.spacing() / p.cell_subdivision;
+  const Vec3 size = domain.hi - domain.lo, mid = 0.5 * (domain.lo + domain.hi);
+  std::array<int, 3> n{};
+  for (int d = 0; d < 3; ++d) n[d] = std::max(1, static_cast<int>(std::ceil(size[d] / step)));
+  for (int k = 0; k < n[2]; ++k)
+    for (int j = 0; j < n[1]; ++j)
+      for (int i = 0; i < n[0]; ++i) {
+        const Vec3 x = domain.lo + Vec3((i + 0.5) * size[0] / n[0], (j + 0.5) * size[1] / n[1], (k + 0.5) * size[2] / n[2]);
+        if (domain.ball_radius > 0.0 && (x - mid).norm() > domain.ball_radius) continue;
+        out.push_back({x, 1.0});
+      }
+  return out;
+}
+
+/// Max principal strain of the solved field at the sample points (per unit eps0): total
+/// eps = sym(grad u) and mechanical eps - I; weighted histograms over strain_edges
+/// (m + 1 edges -> m bins, then below / above), means and the negative fractions. A "box" point
+/// outside the node cover is counted in `uncovered` and left out.
+void strain_statistics(Result& res, const VolumeQuadrature& vq, const Domain& domain, const Params& p) {
   const std::vector<double>& e = p.strain_edges;
   const std::size_t m = e.size() >= 2 ? e.size() - 1 : 0;
   StrainStatistics& st = res.strain;
@@ -796,13 +823,24 @@ void strain_statistics(Result& res, const VolumeQuadrature& vq, const Params& p)
     if (v >= e.back()) return m + 1;
     return static_cast<std::size_t>(std::upper_bound(e.begin(), e.end(), v) - e.begin()) - 1;
   };
+  const std::vector<QPoint> points = strain_sample_points(res, vq, domain, p);
+  std::vector<std::int64_t> ids;
+  std::vector<double> phi;
+  std::vector<Vec3> g;
   double vol = 0.0, mt = 0.0, mm = 0.0, nt = 0.0, nm = 0.0;
-  for (const QPoint& q : vq.points) {
-    const Eigen::Matrix3d G = res.displacement_gradient(q.x);
+  for (const QPoint& q : points) {
+    if (!res.approximation.shape(q.x, ids, phi, &g)) {
+      if (p.strain_points != "box") throw SetupError("rkpm_matrix: strain sample point outside the node cover");
+      ++st.uncovered;
+      continue;
+    }
+    Eigen::Matrix3d G = Eigen::Matrix3d::Zero();
+    for (std::size_t a = 0; a < ids.size(); ++a) G += res.node_coefficient[ids[a]] * g[a].transpose();
     const Eigen::Matrix3d eps = 0.5 * (G + G.transpose());
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
     es.computeDirect(eps, Eigen::EigenvaluesOnly);
     const double total = es.eigenvalues().maxCoeff(), mech = total - 1.0;
+    ++st.points;
     vol += q.w;
     mt += q.w * total;
     mm += q.w * mech;
@@ -858,7 +896,7 @@ Result solve_unit(const std::vector<Vec3>& centre, const std::vector<double>& ra
   for (std::size_t I = 0; I < ns; ++I) res.sphere_displacement[I] = x.segment<3>(3 * (nn + I));
   if (p.strain_statistics) {
     const auto t2 = clock::now();
-    strain_statistics(res, vq, p);
+    strain_statistics(res, vq, domain, p);
     res.strain.seconds = std::chrono::duration<double>(clock::now() - t2).count();
   }
   return res;

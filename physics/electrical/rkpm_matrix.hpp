@@ -88,7 +88,12 @@
 /// STRAIN FIELD (Fig. 4 of the paper, "distribution of the maximum principal strain"): with
 /// strain_statistics on, the max principal value of the total strain sym(grad u) and of the
 /// mechanical strain sym(grad u) - eps0 I at every volume quadrature point, as volume-weighted
-/// histograms over strain_edges (per unit eps0), with means and negative fractions.
+/// histograms over strain_edges (per unit eps0), with means and negative fractions. Which points
+/// (`strain_points`, issue 39 item 1: the paper does not say what its Fig. 4 histograms): "matrix"
+/// (the matrix volume quadrature, weighted: the polymer only), "box" (a regular lattice of cell
+/// centres at spacing h / cell_subdivision over the whole domain, filler interiors included, where
+/// the RKPM field extends through the rigid spheres; equal weights), or "nodes" (the kept RKPM
+/// nodes, unweighted).
 ///
 /// E and alpha: the displacements depend on alpha / E (and nu), not on E alone.
 #include <array>
@@ -125,6 +130,7 @@ struct Params {
   std::vector<std::string> boundary_faces{kBoxFaces.begin(), kBoxFaces.end()};  ///< faces of clamped / rollers
   bool strain_statistics = false;                                               ///< evaluate the max principal strain at every volume point
   std::vector<double> strain_edges;  ///< histogram bin edges, per unit eps0 [1] (empty: means only)
+  std::string strain_points = "matrix";  ///< "matrix" | "box" | "nodes": where the strain statistics sample
 };
 
 /// Max principal strain over the matrix volume (per unit eps0; volume-weighted).
@@ -134,6 +140,8 @@ struct StrainStatistics {
   std::vector<double> mechanical_histogram;  ///< the same for sym(grad u) - I
   double total_mean = 0.0, mechanical_mean = 0.0;
   double total_negative_fraction = 0.0, mechanical_negative_fraction = 0.0;
+  std::size_t points = 0;     ///< sample points evaluated
+  std::size_t uncovered = 0;  ///< sample points with no node cover (skipped; "box" only)
   double seconds = 0.0;
 };
 
