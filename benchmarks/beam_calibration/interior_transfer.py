@@ -12,7 +12,12 @@ overall and interior (4 mean diameters in) solid fractions, interior rounds, wal
 
     python3 -m benchmarks.beam_calibration.interior_transfer --sparkdem BIN --workdir DIR
         [--n 2500,4000,5000,10000] [--seeds 1,2,3] [--interior 0.6574]
+        [--beams configs/materials/cast_iron_beams.json]
         [--csv benchmarks/beam_calibration/interior_transfer.csv]
+
+With --beams configs/materials/cast_iron_beams_torsion.json (the beams calibrated in torsion on the
+pin, issue 38 item 3) it is that calibration's transfer test to another stress state:
+interior_transfer_torsion_beams.csv.
 """
 import concurrent.futures
 import json
@@ -24,12 +29,12 @@ from tools import sps_outputs as so
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
-def run(sparkdem, workdir, n, seed, interior):
+def run(sparkdem, workdir, n, seed, interior, beams_file):
     path = os.path.join(REPO, "configs/calibration/cast_iron_tension.json")
     with open(path) as f:
         c = json.load(f)
     so.absolute_includes(c, os.path.dirname(path))
-    with open(os.path.join(REPO, "configs/materials/cast_iron_beams.json")) as f:
+    with open(os.path.join(REPO, beams_file)) as f:
         beams = json.load(f)
     c["seed"] = seed
     c["bonds"]["params"] = dict(beams, strength=1e30)
@@ -50,11 +55,14 @@ def main():
     ap = study_parser(__doc__, "2500,4000,5000,10000", "benchmarks/beam_calibration/interior_transfer.csv")
     ap.add_argument("--interior", type=float, default=0.6574)
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--beams", default="configs/materials/cast_iron_beams.json",
+                    help="the beams (relative to the repository): the tension calibration's, or "
+                         "configs/materials/cast_iron_beams_torsion.json (issue 38 item 3's transfer test)")
     a = ap.parse_args()
     os.makedirs(a.workdir, exist_ok=True)
     jobs = [(int(n), int(s)) for n in a.n.split(",") for s in a.seeds.split(",")]
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as ex:
-        rows = list(ex.map(lambda j: run(os.path.abspath(a.sparkdem), a.workdir, j[0], j[1], a.interior), jobs))
+        rows = list(ex.map(lambda j: run(os.path.abspath(a.sparkdem), a.workdir, j[0], j[1], a.interior, a.beams), jobs))
     write_csv_atomic(a.csv, rows)
     print_means(rows, ("N",), ("E_err", "nu_err", "bonds_per_element", "packing_density", "density_profile_interior"))
 
