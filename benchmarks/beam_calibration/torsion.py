@@ -80,20 +80,9 @@ def fit(out):
             "broken": float(rows[-1]["bonds_broken"])}
 
 
-def run_reusing(a, tag, sc):
-    """run_study_scene, or with --reuse the finished run of the same scenario already in the workdir."""
-    out, path = os.path.join(a.workdir, tag), os.path.join(a.workdir, tag + ".json")
-    if a.reuse and os.path.exists(os.path.join(out, "summary.json")) and os.path.exists(path):
-        with open(path) as f:
-            same = json.load(f) == json.loads(json.dumps(sc))
-        if same:
-            with open(os.path.join(out, "summary.json")) as f:
-                return out, json.load(f)
-    return run_study_scene(os.path.abspath(a.sparkdem), a.workdir, tag, sc)
-
-
 def run_one(a, it, beams, n, seed):
-    out, s = run_reusing(a, f"it{it}_N{n}_s{seed}", scene(n, seed, beams, a.twist))
+    out, s = run_study_scene(os.path.abspath(a.sparkdem), a.workdir, f"it{it}_N{n}_s{seed}", scene(n, seed, beams, a.twist),
+                             reuse=a.reuse)
     pk = next(x for x in s["stages"] if x["name"] == "pack")["packing"]
     return dict(iteration=it, N=n, seed=seed, young_modulus_Pa=beams["young_modulus"], **fit(out),
                 packing_density=pk["packing_density"], density_profile_interior=pk["density_profile_interior"],

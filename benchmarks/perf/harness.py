@@ -38,13 +38,19 @@ def study_parser(doc, n_default, csv_default, seeds_default="1,2,3"):
     return ap
 
 
-def run_study_scene(sparkdem, workdir, tag, scene, threads=1):
+def run_study_scene(sparkdem, workdir, tag, scene, threads=1, reuse=False):
     """Writes `scene` (a dict) to WORKDIR/TAG.json, runs `sparkdem run` on it into WORKDIR/TAG with
-    `threads` OpenMP threads (a failed run raises), and returns (that directory, its summary.json)."""
+    `threads` OpenMP threads (a failed run raises), and returns (that directory, its summary.json).
+    With reuse, a finished run of the same scene already in WORKDIR/TAG is returned instead."""
     path = os.path.join(workdir, tag + ".json")
+    out = os.path.join(workdir, tag)
+    if reuse and os.path.exists(os.path.join(out, "summary.json")) and os.path.exists(path):
+        with open(path) as f:
+            if json.load(f) == json.loads(json.dumps(scene)):
+                with open(os.path.join(out, "summary.json")) as g:
+                    return out, json.load(g)
     with open(path, "w") as f:
         json.dump(scene, f)
-    out = os.path.join(workdir, tag)
     subprocess.run([sparkdem, "run", path, "-o", out, "--threads", str(threads), "--quiet"], check=True,
                    env=dict(os.environ, OMP_NUM_THREADS=str(threads)))
     with open(os.path.join(out, "summary.json")) as f:
