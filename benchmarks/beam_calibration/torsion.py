@@ -39,7 +39,8 @@ import os
 import statistics
 import sys
 
-from benchmarks.perf.harness import run_study_scene, study_parser
+from benchmarks.beam_calibration.bending import slope
+from benchmarks.perf.harness import run_study_scene, study_parser, write_json_atomic
 from benchmarks.torsion_crack import run_torsion as rt
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -47,10 +48,6 @@ CONFIG = os.path.join(REPO, "configs", "torsion_crack.json")
 BEAMS = os.path.join(REPO, "configs", "materials", "cast_iron_beams_torsion.json")
 TENSION = os.path.join(REPO, "configs", "materials", "cast_iron_beams.json")
 THETA_Y = rt.PREDICTED_ONSET  # tau_y L / (G r) [rad]
-
-
-def slope(x, y):
-    return sum(a * b for a, b in zip(x, y)) / sum(a * a for a in x)
 
 
 def scene(n, seed, beams, twist):
@@ -118,20 +115,12 @@ def main():
     print(f"E_mu {beams['young_modulus']:.6g} Pa, radius_ratio {beams['radius_ratio']:.6g}, strength {beams['strength']:.6g} Pa "
           f"(residual k - 1 = {k - 1.0:+.5f})")
     if a.write:
-        with open(BEAMS + ".tmp", "w") as f:
-            json.dump(beams, f, indent=2)
-            f.write("\n")
-        os.replace(BEAMS + ".tmp", BEAMS)
-        record = {"command": "python3 -m benchmarks.beam_calibration.torsion " + " ".join(sys.argv[1:]),
-                  "scene": "configs/torsion_crack.json (strength 1e30, no electrical network, twist "
-                           f"{a.twist} rad)", "theta_y_rad": THETA_Y, "residual_k_minus_1": k - 1.0,
-                  "criterion_slope_Pa_per_rad": s_crit, "params": beams, "runs": runs}
-        path = BEAMS.replace(".json", ".calibration.json")
-        with open(path + ".tmp", "w") as f:
-            json.dump(record, f, indent=1)
-            f.write("\n")
-        os.replace(path + ".tmp", path)
-
+        write_json_atomic(BEAMS, beams)
+        write_json_atomic(BEAMS.replace(".json", ".calibration.json"), {
+            "command": "python3 -m benchmarks.beam_calibration.torsion " + " ".join(sys.argv[1:]),
+            "scene": f"configs/torsion_crack.json (strength 1e30, no electrical network, twist {a.twist} rad)",
+            "theta_y_rad": THETA_Y, "residual_k_minus_1": k - 1.0, "criterion_slope_Pa_per_rad": s_crit,
+            "params": beams, "runs": runs})
 
 if __name__ == "__main__":
     main()

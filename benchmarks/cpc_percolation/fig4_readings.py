@@ -49,7 +49,8 @@ def features(row, rigid_share=0.0):
     """The shape features of one configuration's total-strain histogram (0.01 % bins). With
     rigid_share > 0 (the derived reading "box_rigid"): the matrix histogram weighted by
     1 - rigid_share plus rigid_share at exactly zero strain, the fillers' own (rigid) strain."""
-    w = [(1.0 - rigid_share) * float(row[f"ptc_strain_strain_total_hist_{k:02d}"]) for k in range(len(STRAIN_EDGES) - 1)]
+    keep = 1.0 - rigid_share
+    w = [keep * float(row[f"ptc_strain_strain_total_hist_{k:02d}"]) for k in range(len(STRAIN_EDGES) - 1)]
     mid = [0.5 * (a + b) for a, b in zip(STRAIN_EDGES[:-1], STRAIN_EDGES[1:])]
     w[STRAIN_EDGES.index(0.0)] += rigid_share
     mid[STRAIN_EDGES.index(0.0)] = 0.0
@@ -58,7 +59,6 @@ def features(row, rigid_share=0.0):
     var = sum((x - mean) ** 2 * v for x, v in zip(mid, w)) / inside
     skew = sum((x - mean) ** 3 * v for x, v in zip(mid, w)) / inside / var ** 1.5 if var > 0 else math.nan
     k = max(range(len(w)), key=lambda i: w[i])
-    keep = 1.0 - rigid_share
     return {"peak_pct": 100 * mid[k], "negative_weight": keep * float(row["ptc_strain_strain_total_negative_fraction"]),
             "mean_pct": 100 * keep * float(row["ptc_strain_strain_total_mean"]), "skewness": skew,
             "plateau_weight": sum(v for x, v in zip(mid, w) if PLATEAU[0] <= x < PLATEAU[1]),

@@ -301,13 +301,17 @@ Vec3 Result::displacement(const Vec3& x) const {
   return u;
 }
 
+bool Result::displacement_gradient(const Vec3& x, Eigen::Matrix3d& G, GradientScratch& w) const {
+  if (!approximation.shape(x, w.ids, w.phi, &w.grad)) return false;
+  G.setZero();
+  for (std::size_t a = 0; a < w.ids.size(); ++a) G += node_coefficient[w.ids[a]] * w.grad[a].transpose();
+  return true;
+}
+
 Eigen::Matrix3d Result::displacement_gradient(const Vec3& x) const {
-  std::vector<std::int64_t> ids;
-  std::vector<double> phi;
-  std::vector<Vec3> g;
-  if (!approximation.shape(x, ids, phi, &g)) throw SetupError("rkpm_matrix: point outside the node cover");
-  Eigen::Matrix3d G = Eigen::Matrix3d::Zero();
-  for (std::size_t a = 0; a < ids.size(); ++a) G += node_coefficient[ids[a]] * g[a].transpose();
+  GradientScratch w;
+  Eigen::Matrix3d G;
+  if (!displacement_gradient(x, G, w)) throw SetupError("rkpm_matrix: point outside the node cover");
   return G;
 }
 
@@ -824,18 +828,15 @@ void strain_statistics(Result& res, const VolumeQuadrature& vq, const Domain& do
     return static_cast<std::size_t>(std::upper_bound(e.begin(), e.end(), v) - e.begin()) - 1;
   };
   const std::vector<QPoint> points = strain_sample_points(res, vq, domain, p);
-  std::vector<std::int64_t> ids;
-  std::vector<double> phi;
-  std::vector<Vec3> g;
+  Result::GradientScratch scratch;
+  Eigen::Matrix3d G;
   double vol = 0.0, mt = 0.0, mm = 0.0, nt = 0.0, nm = 0.0;
   for (const QPoint& q : points) {
-    if (!res.approximation.shape(q.x, ids, phi, &g)) {
+    if (!res.displacement_gradient(q.x, G, scratch)) {
       if (p.strain_points != "box") throw SetupError("rkpm_matrix: strain sample point outside the node cover");
       ++st.uncovered;
       continue;
     }
-    Eigen::Matrix3d G = Eigen::Matrix3d::Zero();
-    for (std::size_t a = 0; a < ids.size(); ++a) G += res.node_coefficient[ids[a]] * g[a].transpose();
     const Eigen::Matrix3d eps = 0.5 * (G + G.transpose());
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
     es.computeDirect(eps, Eigen::EigenvaluesOnly);

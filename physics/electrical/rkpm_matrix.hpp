@@ -198,8 +198,16 @@ struct Result {
   StrainStatistics strain;  ///< filled if Params::strain_statistics
   /// u(x) per unit eps0 [m] (the RKPM field; inside spheres it is the extension of the field)
   Vec3 displacement(const Vec3& x) const;
-  /// grad u (row = component, column = derivative) per unit eps0 [1]
+  /// grad u (row = component, column = derivative) per unit eps0 [1]; throws outside the node cover
   Eigen::Matrix3d displacement_gradient(const Vec3& x) const;
+  /// Buffers of the shape functions, kept by a caller that evaluates many points.
+  struct GradientScratch {
+    std::vector<std::int64_t> ids;
+    std::vector<double> phi;
+    std::vector<Vec3> grad;
+  };
+  /// grad u at x into G; false (G untouched) where x has no node cover.
+  bool displacement_gradient(const Vec3& x, Eigen::Matrix3d& G, GradientScratch& w) const;
 };
 
 /// One solve for eps0 = 1. Throws SetupError on bad parameters, a singular moment matrix, or a
