@@ -144,6 +144,7 @@ void box(double L, double h, double support, int order, int sub, double nu, doub
   p.poisson_ratio = nu;
   p.cut_cell_depth = static_cast<int>(env_or("RKPM_DEPTH", 2));
   if (const char* sv = std::getenv("RKPM_SOLVER")) p.solver = sv;
+  p.amg_strong_threshold = env_or("RKPM_AMG_THETA", 0.5);
   rkpm::Domain d;  // the smallest cube holding [0, L]^3 and every filler (as ptc_strain)
   Vec3 lo = Vec3::Zero(), hi = Vec3::Constant(L);
   for (std::size_t i = 0; i < n; ++i) {

@@ -213,6 +213,7 @@ struct HypreAmgPcg::Impl {
     HYPRE_BoomerAMGSetCycleRelaxType(amg, 14, 2);
     HYPRE_BoomerAMGSetCycleRelaxType(amg, 9, 3);
     if (settings.aggressive_levels > 0) HYPRE_BoomerAMGSetAggNumLevels(amg, settings.aggressive_levels);
+    if (settings.num_functions > 1) HYPRE_BoomerAMGSetNumFunctions(amg, settings.num_functions);
     HYPRE_BoomerAMGSetKeepTranspose(amg, 1);  // store P^T: faster restriction, more memory
 
     check(HYPRE_ParCSRPCGCreate(comm, &pcg), "ParCSRPCGCreate");
@@ -339,8 +340,9 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
   }
   if (!M.isCompressed()) throw SetupError("HypreAmgPcg::setup: the matrix must be compressed");
   ensure_mpi();
-  const int p = amg_spread_ranks() > 1 && M.rows() >= settings_.spread_min_rows ? amg_spread_ranks() : 1;
-  if (p == 1 && !settings_.breadth_first) {
+  const bool system = settings_.num_functions > 1;
+  const int p = !system && amg_spread_ranks() > 1 && M.rows() >= settings_.spread_min_rows ? amg_spread_ranks() : 1;
+  if (p == 1 && (system || !settings_.breadth_first)) {
     // One process, rows as numbered: the matrix is symmetric, so its compressed columns are its rows (CSR).
     std::vector<HYPRE_Int> ncols(static_cast<std::size_t>(im.n));
     for (HYPRE_BigInt r = 0; r < im.n; ++r) ncols[r] = static_cast<HYPRE_Int>(M.outerIndexPtr()[r + 1] - M.outerIndexPtr()[r]);

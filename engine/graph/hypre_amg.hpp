@@ -52,6 +52,11 @@ class HypreAmgPcg {
     /// blocks of a spread solve share thin interfaces. Measured on one process (1e6 nodes, to
     /// 1e-8): a random packing network 4.85 -> 3.54 s, a lattice numbered by layers 2.01 -> 1.85 s.
     bool breadth_first = true;
+    /// Unknowns per node of a system (BoomerAMG's "unknown" approach: row r belongs to function
+    /// r mod num_functions, and only couplings between equal functions make strength), e.g. 3
+    /// for the displacement components of an elasticity matrix numbered node by node. Above 1
+    /// the rows keep their numbering (no breadth-first order) and the solve stays on this process.
+    int num_functions = 1;
   };
   struct Outcome {
     int iterations = 0;

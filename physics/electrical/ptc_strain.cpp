@@ -182,8 +182,10 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
           "quadrature (matrix, weighted), a lattice over the whole box at spacing h / cell_subdivision, filler "
           "interiors included (box, equal weights), or the RKPM nodes (nodes, unweighted)");
   s.add("linear_solver", &P::linear_solver)
-      .choices({"cg_ic", "cg", "ldlt", "auto"})
-      .doc("rkpm: CG with incomplete Cholesky (cg_ic), Jacobi CG (cg), sparse LDLT (ldlt), auto (LDLT when small)");
+      .choices({"cg_ic", "cg", "ldlt", "auto", "amg"})
+      .doc("rkpm: CG with incomplete Cholesky (cg_ic), Jacobi CG (cg), sparse LDLT (ldlt), auto (LDLT when small), hypre "
+           "BoomerAMG-PCG on the 3-component system (amg; needs the MPI build; several times slower than cg_ic on the "
+           "penalty-bonded fillers, see rkpm_matrix.hpp)");
   return s;
 }
 

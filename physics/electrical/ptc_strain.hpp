@@ -115,7 +115,7 @@ class PtcStrain final : public Module {
     double pin_penalty = 1.0;                     ///< [1] beta / (E h)
     double cg_tolerance = 1e-10;                  ///< [1]
     std::int64_t cg_max_iterations = 20000;
-    std::string linear_solver = "cg_ic";         ///< rkpm: "cg_ic" | "cg" | "ldlt" | "auto"
+    std::string linear_solver = "cg_ic";         ///< rkpm: "cg_ic" | "cg" | "ldlt" | "auto" | "amg"
     std::int64_t cut_cell_depth = 2;             ///< rkpm: octree levels in cut quadrature cells
     double surface_spacing = 0.5;                ///< rkpm: surface point spacing / h
     std::string boundary = "free";               ///< rkpm: "free" | "clamped" | "rollers"

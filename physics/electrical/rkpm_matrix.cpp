@@ -13,6 +13,8 @@
 #include <Eigen/SparseCore>
 
 #include "engine/core/error.hpp"
+#include "engine/core/parallel.hpp"
+#include "engine/graph/hypre_amg.hpp"
 
 namespace sparkdem::physics::rkpm {
 
@@ -237,32 +239,54 @@ void Approximation::grid_nodes_near(const Vec3& x, double radius, std::vector<st
       }
 }
 
-bool Approximation::shape(const Vec3& x, std::vector<std::int64_t>& ids, std::vector<double>& phi, std::vector<Vec3>* grad) const {
+void Approximation::kept_nodes_near(const Vec3& x, double radius, std::vector<std::int64_t>& out) const {
   thread_local std::vector<std::int64_t> near;
+  grid_nodes_near(x, radius, near);
+  out.clear();
+  for (std::int64_t g : near)
+    if (id_[g] >= 0) out.push_back(id_[g]);
+}
+
+bool Approximation::shape(const Vec3& x, std::vector<std::int64_t>& ids, std::vector<double>& phi, std::vector<Vec3>* grad) const {
+  thread_local std::vector<std::int64_t> candidates;
+  kept_nodes_near(x, rho_, candidates);
+  return shape_among(x, candidates, ids, phi, grad);
+}
+
+/// The moment derivatives use dp_i/dx_k = e_(k+1) / rho:
+///     dM/dx_k = sum_i [w_i (e p_i^T + p_i e^T) / rho + dw_i/dx_k p_i p_i^T]
+///             = e s^T + s e^T + sum_i dw_i/dx_k p_i p_i^T,   s = M e_0 / rho (p_i,0 = 1).
+bool Approximation::shape_among(const Vec3& x, const std::vector<std::int64_t>& candidates, std::vector<std::int64_t>& ids,
+                                std::vector<double>& phi, std::vector<Vec3>* grad) const {
   thread_local std::vector<Vec4> pz;
   thread_local std::vector<double> wv;
   thread_local std::vector<Vec3> dw;
-  grid_nodes_near(x, rho_, near);
   ids.clear();
   phi.clear();
   pz.clear();
   wv.clear();
   dw.clear();
   Mat4 M = Mat4::Zero();
-  for (std::int64_t g : near) {
-    const std::int64_t id = id_[g];
-    if (id < 0) continue;
-    const Vec3 z = (x - position_[id]) / rho_;
+  Mat4 dM[3] = {Mat4::Zero(), Mat4::Zero(), Mat4::Zero()};
+  const double r2 = rho_ * rho_;
+  for (std::int64_t id : candidates) {
+    const Vec3 d = x - position_[id];
+    if (!(d.squaredNorm() < r2)) continue;
+    const Vec3 z = d / rho_;
     const double xi = z.norm();
-    if (xi >= 1.0) continue;
     const double w = quartic(xi);
     if (!(w > 0.0)) continue;
     const Vec4 p(1.0, z.x(), z.y(), z.z());
+    const Mat4 ppt = p * p.transpose();
     ids.push_back(id);
     pz.push_back(p);
     wv.push_back(w);
-    dw.push_back((-12.0 + 24.0 * xi - 12.0 * xi * xi) / rho_ * z);
-    M.noalias() += w * p * p.transpose();
+    M.noalias() += w * ppt;
+    if (grad) {
+      const Vec3 dwi = (-12.0 + 24.0 * xi - 12.0 * xi * xi) / rho_ * z;
+      dw.push_back(dwi);
+      for (int k = 0; k < 3; ++k) dM[k].noalias() += dwi[k] * ppt;
+    }
   }
   if (ids.size() < 4) return false;
   const Eigen::LDLT<Mat4> ldlt(M);
@@ -272,15 +296,13 @@ bool Approximation::shape(const Vec3& x, std::vector<std::int64_t>& ids, std::ve
   phi.resize(ids.size());
   for (std::size_t a = 0; a < ids.size(); ++a) phi[a] = b.dot(pz[a]) * wv[a];
   if (grad) {
-    Mat4 dM[3] = {Mat4::Zero(), Mat4::Zero(), Mat4::Zero()};
-    for (std::size_t a = 0; a < ids.size(); ++a)
-      for (int k = 0; k < 3; ++k) {
-        Vec4 dp = Vec4::Zero();
-        dp[k + 1] = 1.0 / rho_;
-        dM[k].noalias() += wv[a] * (dp * pz[a].transpose() + pz[a] * dp.transpose()) + dw[a][k] * pz[a] * pz[a].transpose();
-      }
+    const Vec4 s = M.col(0) / rho_;
     Vec4 db[3];
-    for (int k = 0; k < 3; ++k) db[k] = -ldlt.solve(dM[k] * b);
+    for (int k = 0; k < 3; ++k) {
+      dM[k].row(k + 1) += s.transpose();
+      dM[k].col(k + 1) += s;
+      db[k] = -ldlt.solve(dM[k] * b);
+    }
     grad->resize(ids.size());
     for (std::size_t a = 0; a < ids.size(); ++a) {
       const double bp = b.dot(pz[a]);
@@ -405,8 +427,8 @@ void check_params(const std::vector<Vec3>& centre, const std::vector<double>& ra
   if (p.cut_cell_depth < 0 || p.cut_cell_depth > 8) throw SetupError("rkpm_matrix: cut_cell_depth must be in 0..8");
   if (!(p.surface_spacing > 0.0)) throw SetupError("rkpm_matrix: surface_spacing must be > 0");
   if (!(p.bond_penalty >= 0.0) || !(p.pin_penalty > 0.0)) throw SetupError("rkpm_matrix: bond_penalty >= 0 and pin_penalty > 0 expected");
-  if (p.solver != "cg" && p.solver != "cg_ic" && p.solver != "ldlt" && p.solver != "auto")
-    throw SetupError("rkpm_matrix: solver must be \"cg\", \"cg_ic\", \"ldlt\" or \"auto\", found \"" + p.solver + "\"");
+  if (p.solver != "cg" && p.solver != "cg_ic" && p.solver != "ldlt" && p.solver != "auto" && p.solver != "amg")
+    throw SetupError("rkpm_matrix: solver must be \"cg\", \"cg_ic\", \"ldlt\", \"amg\" or \"auto\", found \"" + p.solver + "\"");
   if (p.boundary != "free" && p.boundary != "clamped" && p.boundary != "rollers")
     throw SetupError("rkpm_matrix: boundary must be \"free\", \"clamped\" or \"rollers\", found \"" + p.boundary + "\"");
   if (p.boundary != "free" && domain.ball_radius > 0.0)
@@ -513,12 +535,27 @@ VolumeQuadrature volume_quadrature(const Frame& f, const SphereGrid& sg, const P
 }
 
 /// Keep the nodes whose support holds a volume point (a node deep in a sphere has an empty row).
+/// Cell by cell: the grid nodes near the cell's bounding box are looked up once, then each point
+/// flags those within rho (the same test as grid_nodes_near).
 void keep_supported_nodes(Approximation& ap, const VolumeQuadrature& vq) {
   std::vector<char> flag(ap.grid_nodes(), 0);
   std::vector<std::int64_t> near;
-  for (const QPoint& q : vq.points) {
-    ap.grid_nodes_near(q.x, ap.support(), near);
-    for (std::int64_t g : near) flag[g] = 1;
+  std::vector<Vec3> xg;
+  const double r2 = ap.support() * ap.support();
+  for (std::size_t cell = 0; cell + 1 < vq.cell_start.size(); ++cell) {
+    const std::size_t q0 = vq.cell_start[cell], q1 = vq.cell_start[cell + 1];
+    if (q0 == q1) continue;
+    Vec3 lo = vq.points[q0].x, hi = lo;
+    for (std::size_t q = q0; q < q1; ++q) {
+      lo = lo.cwiseMin(vq.points[q].x);
+      hi = hi.cwiseMax(vq.points[q].x);
+    }
+    ap.grid_nodes_near(0.5 * (lo + hi), ap.support() + 0.5 * (hi - lo).norm() + 1e-12 * ap.spacing(), near);
+    xg.clear();
+    for (std::int64_t g : near) xg.push_back(ap.grid_position(g));
+    for (std::size_t q = q0; q < q1; ++q)
+      for (std::size_t k = 0; k < near.size(); ++k)
+        if (!flag[near[k]] && (vq.points[q].x - xg[k]).squaredNorm() < r2) flag[near[k]] = 1;
   }
   ap.keep(flag);
 }
@@ -555,63 +592,130 @@ int local_index(std::vector<int>& local, std::vector<std::int64_t>& lnodes, std:
   return local[id];
 }
 
-/// K += int_Omega B^T C B dV and F += int_Omega 3K grad(phi) dV, background cell by cell (dense
-/// local blocks, then one scatter per cell). Returns the integrated matrix volume.
-double assemble_volume(BlockMatrix& K, Eigen::VectorXd& F, const Approximation& ap, const VolumeQuadrature& vq, const Material& m) {
-  double volume = 0.0;
-  std::vector<std::int64_t> ids;
-  std::vector<double> phi;
-  std::vector<Vec3> grad;
-  std::vector<int> local(ap.nodes(), -1);
-  std::vector<std::int64_t> lnodes;
-  std::vector<Eigen::Matrix3d> lk;
+/// One background cell's share of the volume integrals: its points' weights, local node indices
+/// and gradients (for the load), and the dense local stiffness blocks (a <= b) over its nodes.
+struct CellBlocks {
+  std::vector<std::int64_t> lnodes;   ///< local index -> kept node id
+  std::vector<std::size_t> start{0};  ///< point k's entries: [start[k], start[k+1])
+  std::vector<double> w;              ///< point weights
+  std::vector<int> l;                 ///< local node of each entry
+  std::vector<Vec3> g;                ///< grad phi of each entry
+  std::vector<Eigen::Matrix3d> lk;    ///< nl x nl blocks, (a, b) with a <= b
   std::vector<char> touched;
-  struct PointData {
-    std::vector<int> l;
-    std::vector<Vec3> g;
-    double w;
-  };
-  std::vector<PointData> pts;
-  for (std::size_t cell = 0; cell + 1 < vq.cell_start.size(); ++cell) {
-    if (vq.cell_start[cell] == vq.cell_start[cell + 1]) continue;
-    lnodes.clear();
-    pts.clear();
-    for (std::size_t q = vq.cell_start[cell]; q < vq.cell_start[cell + 1]; ++q) {
-      const QPoint& qp = vq.points[q];
-      if (!ap.shape(qp.x, ids, phi, &grad))
-        throw SetupError("rkpm_matrix: singular moment matrix at a volume point (raise support_factor)");
-      PointData pd;
-      pd.w = qp.w;
-      for (std::size_t a = 0; a < ids.size(); ++a) {
-        pd.l.push_back(local_index(local, lnodes, ids[a]));
-        pd.g.push_back(grad[a]);
-        F.segment<3>(3 * ids[a]) += qp.w * m.threeK * grad[a];
-      }
-      volume += qp.w;
-      pts.push_back(std::move(pd));
+  bool singular = false;  ///< a point had a singular moment matrix
+};
+
+/// Fills `out` for background cell `cell`. With G_ab = sum_points w g_a g_b^T over the cell's
+/// points (one outer product per node pair and point), the stiffness block K_ij,cd above is
+///     K_ab = lambda G_ab + mu G_ab^T + mu tr(G_ab) I
+/// (g_b g_a^T = (g_a g_b^T)^T, g_a . g_b = tr(g_a g_b^T)), formed once per pair at the end.
+/// Each point's entries are sorted by local index so that only pairs a <= b are visited.
+/// `local` (size = kept nodes, all -1) maps node ids to local indices and is left all -1.
+void cell_blocks(const Approximation& ap, const VolumeQuadrature& vq, std::size_t cell, const Material& m, std::vector<int>& local,
+                 CellBlocks& out) {
+  thread_local std::vector<std::int64_t> ids;
+  thread_local std::vector<double> phi;
+  thread_local std::vector<Vec3> grad;
+  thread_local std::vector<std::pair<int, Vec3>> entry;
+  out.lnodes.clear();
+  out.start.assign(1, 0);
+  out.w.clear();
+  out.l.clear();
+  out.g.clear();
+  out.singular = false;
+  // Candidate nodes once per cell: within rho of some point of the cell's bounding box.
+  thread_local std::vector<std::int64_t> candidates;
+  Vec3 lo = vq.points[vq.cell_start[cell]].x, hi = lo;
+  for (std::size_t q = vq.cell_start[cell]; q < vq.cell_start[cell + 1]; ++q) {
+    lo = lo.cwiseMin(vq.points[q].x);
+    hi = hi.cwiseMax(vq.points[q].x);
+  }
+  ap.kept_nodes_near(0.5 * (lo + hi), ap.support() + 0.5 * (hi - lo).norm() + 1e-12 * ap.spacing(), candidates);
+  for (std::size_t q = vq.cell_start[cell]; q < vq.cell_start[cell + 1]; ++q) {
+    const QPoint& qp = vq.points[q];
+    if (!ap.shape_among(qp.x, candidates, ids, phi, &grad)) {
+      out.singular = true;
+      break;
     }
-    const std::size_t nl = lnodes.size();
-    lk.assign(nl * nl, Eigen::Matrix3d::Zero());
-    touched.assign(nl * nl, 0);
-    for (const PointData& pd : pts)  // block (a, b) for local a <= b only; K_ba = K_ab^T
-      for (std::size_t a = 0; a < pd.l.size(); ++a)
-        for (std::size_t b = 0; b < pd.l.size(); ++b) {
-          if (pd.l[a] > pd.l[b]) continue;
-          const Vec3 ga = pd.w * pd.g[a];
-          const Vec3& gb = pd.g[b];
-          const std::size_t key = static_cast<std::size_t>(pd.l[a]) * nl + pd.l[b];
-          Eigen::Matrix3d& blk = lk[key];
-          blk.noalias() += m.lambda * ga * gb.transpose() + m.mu * gb * ga.transpose();
-          blk.diagonal().array() += m.mu * ga.dot(gb);
-          touched[key] = 1;
-        }
-    for (std::size_t a = 0; a < nl; ++a)
-      for (std::size_t b = a; b < nl; ++b)
-        if (touched[a * nl + b]) {
-          K.add(lnodes[a], lnodes[b], lk[a * nl + b]);
-          if (b != a) K.add(lnodes[b], lnodes[a], lk[a * nl + b].transpose());
-        }
-    for (std::int64_t id : lnodes) local[id] = -1;
+    entry.clear();
+    for (std::size_t a = 0; a < ids.size(); ++a) entry.emplace_back(local_index(local, out.lnodes, ids[a]), grad[a]);
+    std::sort(entry.begin(), entry.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (const auto& [l, g] : entry) {
+      out.l.push_back(l);
+      out.g.push_back(g);
+    }
+    out.w.push_back(qp.w);
+    out.start.push_back(out.l.size());
+  }
+  for (std::int64_t id : out.lnodes) local[id] = -1;
+  const std::size_t nl = out.lnodes.size();
+  out.lk.assign(nl * nl, Eigen::Matrix3d::Zero());
+  out.touched.assign(nl * nl, 0);
+  if (out.singular) return;
+  for (std::size_t k = 0; k + 1 < out.start.size(); ++k)
+    for (std::size_t a = out.start[k]; a < out.start[k + 1]; ++a) {
+      const Vec3 ga = out.w[k] * out.g[a];
+      const std::size_t row = static_cast<std::size_t>(out.l[a]) * nl;
+      for (std::size_t b = a; b < out.start[k + 1]; ++b) {
+        const std::size_t key = row + static_cast<std::size_t>(out.l[b]);
+        out.lk[key].noalias() += ga * out.g[b].transpose();
+        out.touched[key] = 1;
+      }
+    }
+  for (std::size_t key = 0; key < nl * nl; ++key)
+    if (out.touched[key]) {
+      const Eigen::Matrix3d G = out.lk[key];
+      out.lk[key] = m.lambda * G + m.mu * G.transpose();
+      out.lk[key].diagonal().array() += m.mu * G.trace();
+    }
+}
+
+/// Adds one cell's blocks to K and its load 3K w grad(phi) to F, point by point in the order of
+/// the quadrature; adds the point weights to `volume` in the same order.
+void scatter_cell(const CellBlocks& c, const Material& m, BlockMatrix& K, Eigen::VectorXd& F, double& volume) {
+  for (std::size_t k = 0; k + 1 < c.start.size(); ++k) {
+    for (std::size_t a = c.start[k]; a < c.start[k + 1]; ++a) F.segment<3>(3 * c.lnodes[c.l[a]]) += c.w[k] * m.threeK * c.g[a];
+    volume += c.w[k];
+  }
+  const std::size_t nl = c.lnodes.size();
+  for (std::size_t a = 0; a < nl; ++a)
+    for (std::size_t b = a; b < nl; ++b)
+      if (c.touched[a * nl + b]) {
+        K.add(c.lnodes[a], c.lnodes[b], c.lk[a * nl + b]);
+        if (b != a) K.add(c.lnodes[b], c.lnodes[a], c.lk[a * nl + b].transpose());
+      }
+}
+
+/// K += int_Omega B^T C B dV and F += int_Omega 3K grad(phi) dV, background cell by cell. The
+/// cells' dense local blocks are computed in batches on the OpenMP threads (the shape functions
+/// and the block products: nearly all the work) and added to K and F on the calling thread in
+/// cell order, so K, F and everything after are bit for bit the same on any number of threads.
+/// Returns the integrated matrix volume.
+double assemble_volume(BlockMatrix& K, Eigen::VectorXd& F, const Approximation& ap, const VolumeQuadrature& vq, const Material& m) {
+  std::vector<std::size_t> cells;  // the background cells holding matrix points
+  for (std::size_t cell = 0; cell + 1 < vq.cell_start.size(); ++cell)
+    if (vq.cell_start[cell] != vq.cell_start[cell + 1]) cells.push_back(cell);
+  const int threads = par::threads();
+  const std::size_t batch = 16 * static_cast<std::size_t>(threads);
+  std::vector<CellBlocks> blocks(std::min(batch, cells.size()));
+  std::vector<std::vector<int>> local(static_cast<std::size_t>(threads), std::vector<int>(ap.nodes(), -1));
+  double volume = 0.0;
+  for (std::size_t first = 0; first < cells.size(); first += batch) {
+    const auto n = static_cast<std::int64_t>(std::min(batch, cells.size() - first));
+#pragma omp parallel for schedule(dynamic, 1) if (threads > 1 && n > 1)
+    for (std::int64_t k = 0; k < n; ++k) {
+#ifdef _OPENMP
+      const auto t = static_cast<std::size_t>(omp_get_thread_num());
+#else
+      const std::size_t t = 0;
+#endif
+      cell_blocks(ap, vq, cells[first + static_cast<std::size_t>(k)], m, local[t], blocks[static_cast<std::size_t>(k)]);
+    }
+    for (std::int64_t k = 0; k < n; ++k) {
+      const CellBlocks& c = blocks[static_cast<std::size_t>(k)];
+      if (c.singular) throw SetupError("rkpm_matrix: singular moment matrix at a volume point (raise support_factor)");
+      scatter_cell(c, m, K, F, volume);
+    }
   }
   return volume;
 }
@@ -760,6 +864,17 @@ Eigen::VectorXd solve_system(const Eigen::SparseMatrix<double, Eigen::RowMajor, 
     ok = ldlt.info() == Eigen::Success;
     if (ok) x = ldlt.solve(F);
     res.iterations = 0;
+  } else if (p.solver == "amg") {
+    HypreAmgPcg::Settings s;
+    s.num_functions = 3;
+    s.strong_threshold = p.amg_strong_threshold;
+    s.aggressive_levels = 0;
+    HypreAmgPcg amg(s);
+    amg.setup(Eigen::SparseMatrix<double>(A));
+    x = Eigen::VectorXd::Zero(F.size());
+    const HypreAmgPcg::Outcome o = amg.solve(F, x, p.cg_tolerance, p.cg_max_iterations);
+    res.iterations = o.iterations;
+    ok = o.converged;
   } else if (p.solver == "cg_ic" || p.solver == "auto") {
     const Eigen::SparseMatrix<double> Ac = A;
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::IncompleteCholesky<double>> cg;

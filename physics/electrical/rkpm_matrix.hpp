@@ -42,8 +42,19 @@
 /// poorly conditioned (a 20 R box at phi = 25 %, h = 3 R, 2967 unknowns: 3902 Jacobi-CG
 /// iterations, 15 s, against 97 IC-CG iterations, 2.9 s; a 35 R box, 14268 unknowns: 217 IC-CG
 /// iterations) and has ~350-500 non-zeros per row, so LDLT fills in badly (5500 unknowns: LDLT
-/// 2.6x slower than Jacobi CG). The relative residual |K x - F| / |F| is reported.
+/// 2.6x slower than Jacobi CG). `solver` amg: hypre's BoomerAMG-PCG with the three displacement
+/// components as separate functions (the "unknown" approach; Settings::num_functions = 3). Measured
+/// (issue 39 item 3; 20 R box, phi = 25 %, h = 3 R, 3618 unknowns, to 1e-10): 713-794 PCG iterations
+/// at strength thresholds 0.25-0.9 against 137 IC-CG iterations, 6x the IC-CG time. The alpha = 100 E
+/// penalty couples each sphere's three unknowns to every node near its surface, far from the
+/// M-matrix AMG's interpolation assumes; kept as an option, never a default. The relative residual
+/// |K x - F| / |F| is reported.
 ///
+/// ASSEMBLY (issue 39 item 3). The volume integrals are formed background cell by background
+/// cell; the cells' dense local blocks (the shape functions and the block products: nearly all of
+/// the assembly) are computed in batches on the OpenMP threads and added to the global matrix on
+/// the calling thread in cell order, so the system and its solution are bit for bit the same on
+/// any number of threads. Per cell the nodes near its bounding box are looked up once.
 /// QUADRATURE (volume). Background cells of edge h / cell_subdivision tile the node grid;
 /// quadrature_order^3 Gauss-Legendre points per cell. A cell wholly in the matrix keeps all its
 /// points; a cell wholly inside a sphere or outside the domain none; a CUT cell (its circumscribed
@@ -123,8 +134,9 @@ struct Params {
   double pin_penalty = 1.0;      ///< beta / (E h) [1]
   double cg_tolerance = 1e-10;   ///< relative residual |K d - F| / |F| (CG stop; checked for LDLT too)
   int cg_max_iterations = 20000;
-  std::string solver = "cg_ic";  ///< "cg_ic" (incomplete Cholesky) | "cg" (Jacobi) | "ldlt" | "auto" (LDLT up to direct_limit unknowns, else cg_ic)
+  std::string solver = "cg_ic";  ///< "cg_ic" (incomplete Cholesky) | "cg" (Jacobi) | "ldlt" | "amg" | "auto" (LDLT up to direct_limit unknowns, else cg_ic)
   std::size_t direct_limit = 3000;
+  double amg_strong_threshold = 0.5;  ///< "amg": BoomerAMG strength threshold [1]
   std::string boundary = "free";    ///< "free" (pinned translation) | "clamped" | "rollers" (box faces)
   double boundary_penalty = 100.0;  ///< beta / (E / h) [1] for clamped / rollers
   std::vector<std::string> boundary_faces{kBoxFaces.begin(), kBoxFaces.end()};  ///< faces of clamped / rollers
@@ -174,6 +186,12 @@ class Approximation {
   /// Kept nodes within rho of x with phi (and gradients if grad != nullptr). Returns false if
   /// the moment matrix is singular (fewer than 4 non-coplanar nodes in reach).
   bool shape(const Vec3& x, std::vector<std::int64_t>& ids, std::vector<double>& phi, std::vector<Vec3>* grad) const;
+  /// As shape, over `candidates` only (kept node ids in grid order, a superset of the nodes within
+  /// rho of x): a caller evaluating many points of one region looks the nodes up once.
+  bool shape_among(const Vec3& x, const std::vector<std::int64_t>& candidates, std::vector<std::int64_t>& ids, std::vector<double>& phi,
+                   std::vector<Vec3>* grad) const;
+  /// Kept node ids within `radius` of x, in grid order.
+  void kept_nodes_near(const Vec3& x, double radius, std::vector<std::int64_t>& out) const;
 
  private:
   Vec3 lo_ = Vec3::Zero();

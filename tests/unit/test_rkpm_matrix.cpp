@@ -12,8 +12,9 @@
 //      symmetry of nodes, cells and the antipodal surface points: to solver tolerance); the
 //      field is compared on rays at r = 1.25a .. b with the tolerance fixed from the measured
 //      convergence (table in the test case);
-//  (d) two touching spheres: deterministic (bit-identical on a second solve), symmetric
-//      (U_2 = -U_1 about the box centre, to solver tolerance).
+//  (d) two touching spheres: deterministic (bit-identical on a second solve and on 1 and 2
+//      threads: the volume blocks are computed on the threads and added in cell order),
+//      symmetric (U_2 = -U_1 about the box centre, to solver tolerance).
 #include <numbers>
 #include <catch2/catch.hpp>
 
@@ -22,6 +23,10 @@
 #include <cstdio>
 #include <limits>
 #include <vector>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "physics/electrical/rkpm_matrix.hpp"
 
@@ -174,10 +179,23 @@ TEST_CASE("rkpm_matrix: two touching spheres, deterministic and inversion-symmet
   d.hi = Vec3(1, 1, 1);
   const std::vector<Vec3> c = {Vec3(0.4, 0.5, 0.5), Vec3(0.6, 0.5, 0.5)};
   const std::vector<double> r = {0.1, 0.1};
+#ifdef _OPENMP
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(1);
+#endif
   const rkpm::Result s1 = rkpm::solve_unit(c, r, d, p);
+#ifdef _OPENMP
+  omp_set_num_threads(2);
+#endif
   const rkpm::Result s2 = rkpm::solve_unit(c, r, d, p);
+#ifdef _OPENMP
+  omp_set_num_threads(before);
+#endif
   REQUIRE(s1.sphere_displacement.size() == 2);
   for (int I = 0; I < 2; ++I) CHECK(s1.sphere_displacement[I] == s2.sphere_displacement[I]);
+  REQUIRE(s1.node_coefficient.size() == s2.node_coefficient.size());
+  for (std::size_t i = 0; i < s1.node_coefficient.size(); ++i) CHECK(s1.node_coefficient[i] == s2.node_coefficient[i]);
+  CHECK(s1.quadrature_volume == s2.quadrature_volume);
   // Inversion about the box centre swaps the spheres: U_2 = -U_1.
   const double scale = s1.sphere_displacement[0].norm();
   CHECK(scale > 0.0);
@@ -187,6 +205,28 @@ TEST_CASE("rkpm_matrix: two touching spheres, deterministic and inversion-symmet
   CHECK(s1.sphere_displacement[1].x() - s1.sphere_displacement[0].x() > 0.0);  // the expanding matrix pulls them apart
   std::printf("rkpm two spheres: unit opening %.5f (affine 0.2), nodes %zu, CG %d iterations\n",
               s1.sphere_displacement[1].x() - s1.sphere_displacement[0].x(), s1.approximation.nodes(), s1.iterations);
+}
+
+TEST_CASE("rkpm_matrix: the AMG solve (3-component BoomerAMG-PCG) reaches the IC-CG solution", "[ptc][rkpm][amg]") {
+  // Same system, two solvers to a relative residual of 1e-12: the sphere displacements agree to
+  // 1e-6 of |U| (the residual bound times a condition estimate of ~1e5 for this penalty system).
+  rkpm::Params p;
+  p.node_spacing = 0.125;
+  p.cg_tolerance = 1e-12;
+  rkpm::Domain d;
+  d.lo = Vec3(0, 0, 0);
+  d.hi = Vec3(1, 1, 1);
+  const std::vector<Vec3> c = {Vec3(0.4, 0.52, 0.5), Vec3(0.6, 0.5, 0.47)};
+  const std::vector<double> r = {0.1, 0.1};
+  const rkpm::Result ic = rkpm::solve_unit(c, r, d, p);
+  p.solver = "amg";
+  const rkpm::Result amg = rkpm::solve_unit(c, r, d, p);
+  const double scale = ic.sphere_displacement[0].norm();
+  REQUIRE(scale > 0.0);
+  for (int I = 0; I < 2; ++I) CHECK((amg.sphere_displacement[I] - ic.sphere_displacement[I]).norm() < 1e-6 * scale);
+  CHECK(amg.residual <= 1e-11);
+  std::printf("rkpm amg: %d PCG iterations (IC-CG %d), |dU| / |U| = %.2e\n", amg.iterations, ic.iterations,
+              (amg.sphere_displacement[0] - ic.sphere_displacement[0]).norm() / scale);
 }
 
 TEST_CASE("rkpm_matrix: cut-cell quadrature converges to the matrix volume; surface points follow h", "[ptc][rkpm]") {
