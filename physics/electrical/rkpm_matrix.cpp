@@ -876,11 +876,13 @@ Eigen::VectorXd solve_system(const Eigen::SparseMatrix<double, Eigen::RowMajor, 
     res.iterations = o.iterations;
     ok = o.converged;
   } else if (p.solver == "cg_ic" || p.solver == "auto") {
-    const Eigen::SparseMatrix<double> Ac = A;
-    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::IncompleteCholesky<double>> cg;
+    // Both triangles, row-major: the operator product runs row by row on the OpenMP threads (each
+    // row summed in one order on any thread count); the factor is the lower triangle's.
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double, Eigen::RowMajor, int>, Eigen::Lower | Eigen::Upper, Eigen::IncompleteCholesky<double>>
+        cg;
     cg.setTolerance(p.cg_tolerance);
     cg.setMaxIterations(p.cg_max_iterations);
-    cg.compute(Ac);
+    cg.compute(A);
     x = cg.solve(F);
     res.iterations = static_cast<int>(cg.iterations());
     ok = cg.info() == Eigen::Success;
