@@ -170,15 +170,27 @@ TEST_CASE("rkpm_matrix: single rigid sphere in an expanding matrix ball against 
   CHECK(e100 < 0.2);
 }
 
-TEST_CASE("rkpm_matrix: two touching spheres, deterministic and inversion-symmetric", "[ptc][rkpm]") {
+namespace {
+/// Two spheres of radius 0.1 in the unit box at h = 0.125, CG to 1e-12.
+struct TwoSpheres {
   rkpm::Params p;
-  p.node_spacing = 0.125;
-  p.cg_tolerance = 1e-12;
   rkpm::Domain d;
-  d.lo = Vec3(0, 0, 0);
-  d.hi = Vec3(1, 1, 1);
+  std::vector<double> r = {0.1, 0.1};
+  TwoSpheres() {
+    p.node_spacing = 0.125;
+    p.cg_tolerance = 1e-12;
+    d.lo = Vec3(0, 0, 0);
+    d.hi = Vec3(1, 1, 1);
+  }
+};
+}  // namespace
+
+TEST_CASE("rkpm_matrix: two touching spheres, deterministic and inversion-symmetric", "[ptc][rkpm]") {
+  TwoSpheres t;
+  const rkpm::Params& p = t.p;
+  const rkpm::Domain& d = t.d;
+  const std::vector<double>& r = t.r;
   const std::vector<Vec3> c = {Vec3(0.4, 0.5, 0.5), Vec3(0.6, 0.5, 0.5)};
-  const std::vector<double> r = {0.1, 0.1};
 #ifdef _OPENMP
   const int before = omp_get_max_threads();
   omp_set_num_threads(1);
@@ -210,17 +222,11 @@ TEST_CASE("rkpm_matrix: two touching spheres, deterministic and inversion-symmet
 TEST_CASE("rkpm_matrix: the AMG solve (3-component BoomerAMG-PCG) reaches the IC-CG solution", "[ptc][rkpm][amg]") {
   // Same system, two solvers to a relative residual of 1e-12: the sphere displacements agree to
   // 1e-6 of |U| (the residual bound times a condition estimate of ~1e5 for this penalty system).
-  rkpm::Params p;
-  p.node_spacing = 0.125;
-  p.cg_tolerance = 1e-12;
-  rkpm::Domain d;
-  d.lo = Vec3(0, 0, 0);
-  d.hi = Vec3(1, 1, 1);
+  TwoSpheres t;
   const std::vector<Vec3> c = {Vec3(0.4, 0.52, 0.5), Vec3(0.6, 0.5, 0.47)};
-  const std::vector<double> r = {0.1, 0.1};
-  const rkpm::Result ic = rkpm::solve_unit(c, r, d, p);
-  p.solver = "amg";
-  const rkpm::Result amg = rkpm::solve_unit(c, r, d, p);
+  const rkpm::Result ic = rkpm::solve_unit(c, t.r, t.d, t.p);
+  t.p.solver = "amg";
+  const rkpm::Result amg = rkpm::solve_unit(c, t.r, t.d, t.p);
   const double scale = ic.sphere_displacement[0].norm();
   REQUIRE(scale > 0.0);
   for (int I = 0; I < 2; ++I) CHECK((amg.sphere_displacement[I] - ic.sphere_displacement[I]).norm() < 1e-6 * scale);
