@@ -250,7 +250,7 @@ TORSION_TUNED = [{"parameter": "configs/materials/cast_iron_beams.json#/strength
                          "2026-11-25 23:13; marked by issue 34)"}]
 TORSION = Case(
     "seed001/torsion", ["configs/torsion_crack.json", "configs/materials/cast_iron_beams_torsion.json"],
-    {"fast": {"sizes": [1000], "seeds": [1]}, "full": {"sizes": [2500, 5000, 10000], "seeds": [1, 2, 3, 4, 5]}},
+    {"fast": {"sizes": [1000], "seeds": [1]}, "full": {"sizes": [2500, 5000, 10000, 20000], "seeds": [1, 2, 3, 4, 5]}},
     run_torsion,
     [Figure("seed001/torsion_stiffness", "stiffness", TORSION_SRC,
             "torque / (G J theta / L) = 1 before the first break (closed form)", 0.03, calibrated_on=TORSION_CAL),
@@ -664,7 +664,7 @@ def run_rkpm_two_sphere(ctx):
 TWO_SRC = "seed 002 SM S4 (Fig. S6): two touching rigid spheres in an expanding matrix ball, RKPM matrix"
 RKPM_TWO_SPHERE = Case(
     "seed002/rkpm_two_sphere", ["benchmarks/cpc_percolation/two_sphere.json"],
-    {"fast": {"sizes": [15], "seeds": [1]}, "full": {"sizes": [26, 29], "seeds": [1]}},
+    {"fast": {"sizes": [15], "seeds": [1]}, "full": {"sizes": [26, 29, 33, 37], "seeds": [1]}},
     run_rkpm_two_sphere,
     [Figure("seed002/rkpm_two_sphere_alpha10", "alpha10", TWO_SRC + ", alpha R / E = 10 (the SI test's unit)",
             "tools/two_sphere_reference.py (axisymmetric body-fitted Q9 finite elements, level 5 (fast: 4), the same "
