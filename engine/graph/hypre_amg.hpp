@@ -1,7 +1,8 @@
 #pragma once
 /// hypre's BoomerAMG as the preconditioner of hypre's conjugate gradients, on one process or
 /// spread over the ranks of an MPI run (see set_amg_spread_ranks).
-/// Internal to LaplacianSolver (LaplacianMethod::Amg): no hypre or MPI header leaks from here.
+/// Used by LaplacianSolver (LaplacianMethod::Amg) and by the RKPM matrix solve (rkpm_matrix, solver
+/// "amg", num_functions 3): no hypre or MPI header leaks from here.
 ///
 /// MPI. hypre needs MPI even on one process. ensure_mpi() initialises it the first time it is
 /// needed, unless someone (a launcher-started program, a later distributed driver) already did;
