@@ -670,33 +670,35 @@ void cell_blocks(const Approximation& ap, const VolumeQuadrature& vq, std::size_
     }
 }
 
-/// Adds one cell's blocks to K and its load 3K w grad(phi) to F, point by point in the order of
-/// the quadrature; adds the point weights to `volume` in the same order.
-void scatter_cell(const CellBlocks& c, const Material& m, BlockMatrix& K, Eigen::VectorXd& F, double& volume) {
-  for (std::size_t k = 0; k + 1 < c.start.size(); ++k) {
-    for (std::size_t a = c.start[k]; a < c.start[k + 1]; ++a) F.segment<3>(3 * c.lnodes[c.l[a]]) += c.w[k] * m.threeK * c.g[a];
-    volume += c.w[k];
-  }
+/// Adds one cell's blocks to K and its load 3K w grad(phi) to F, for the nodes (rows) in
+/// [row_lo, row_hi) only, point by point in the order of the quadrature: each row receives its
+/// contributions in the same order whatever the row range.
+void scatter_cell(const CellBlocks& c, const Material& m, std::int64_t row_lo, std::int64_t row_hi, BlockMatrix& K, Eigen::VectorXd& F) {
+  const auto mine = [&](std::int64_t id) { return id >= row_lo && id < row_hi; };
+  for (std::size_t k = 0; k + 1 < c.start.size(); ++k)
+    for (std::size_t a = c.start[k]; a < c.start[k + 1]; ++a)
+      if (mine(c.lnodes[c.l[a]])) F.segment<3>(3 * c.lnodes[c.l[a]]) += c.w[k] * m.threeK * c.g[a];
   const std::size_t nl = c.lnodes.size();
   for (std::size_t a = 0; a < nl; ++a)
     for (std::size_t b = a; b < nl; ++b)
       if (c.touched[a * nl + b]) {
-        K.add(c.lnodes[a], c.lnodes[b], c.lk[a * nl + b]);
-        if (b != a) K.add(c.lnodes[b], c.lnodes[a], c.lk[a * nl + b].transpose());
+        if (mine(c.lnodes[a])) K.add(c.lnodes[a], c.lnodes[b], c.lk[a * nl + b]);
+        if (b != a && mine(c.lnodes[b])) K.add(c.lnodes[b], c.lnodes[a], c.lk[a * nl + b].transpose());
       }
 }
 
 /// K += int_Omega B^T C B dV and F += int_Omega 3K grad(phi) dV, background cell by cell. The
 /// cells' dense local blocks are computed in batches on the OpenMP threads (the shape functions
-/// and the block products: nearly all the work) and added to K and F on the calling thread in
-/// cell order, so K, F and everything after are bit for bit the same on any number of threads.
+/// and the block products), then added to K and F in cell order with each thread owning a range
+/// of rows, so every entry sums its contributions in one order: K, F and everything after are
+/// bit for bit the same on any number of threads.
 /// Returns the integrated matrix volume.
 double assemble_volume(BlockMatrix& K, Eigen::VectorXd& F, const Approximation& ap, const VolumeQuadrature& vq, const Material& m) {
   std::vector<std::size_t> cells;  // the background cells holding matrix points
   for (std::size_t cell = 0; cell + 1 < vq.cell_start.size(); ++cell)
     if (vq.cell_start[cell] != vq.cell_start[cell + 1]) cells.push_back(cell);
   const int threads = par::threads();
-  const std::size_t batch = 16 * static_cast<std::size_t>(threads);
+  const std::size_t batch = 64 * static_cast<std::size_t>(threads);  // ~60 MB of blocks at h = 3 R
   std::vector<CellBlocks> blocks(std::min(batch, cells.size()));
   std::vector<std::vector<int>> local(static_cast<std::size_t>(threads), std::vector<int>(ap.nodes(), -1));
   double volume = 0.0;
@@ -714,7 +716,18 @@ double assemble_volume(BlockMatrix& K, Eigen::VectorXd& F, const Approximation& 
     for (std::int64_t k = 0; k < n; ++k) {
       const CellBlocks& c = blocks[static_cast<std::size_t>(k)];
       if (c.singular) throw SetupError("rkpm_matrix: singular moment matrix at a volume point (raise support_factor)");
-      scatter_cell(c, m, K, F, volume);
+      for (double w : c.w) volume += w;
+    }
+    const auto rows = static_cast<std::int64_t>(ap.nodes());
+#pragma omp parallel if (threads > 1)
+    {
+#ifdef _OPENMP
+      const std::int64_t t = omp_get_thread_num(), nt = omp_get_num_threads();
+#else
+      const std::int64_t t = 0, nt = 1;
+#endif
+      for (std::int64_t k = 0; k < n; ++k)
+        scatter_cell(blocks[static_cast<std::size_t>(k)], m, rows * t / nt, rows * (t + 1) / nt, K, F);
     }
   }
   return volume;
