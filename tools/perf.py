@@ -24,7 +24,12 @@ one without (written by the scripts the harness replaced) records of origin "imp
 commit the file names or the last commit that changed it. Timings depend on the machine's load:
 record on an idle machine and read the load column.
 
-Exit codes: 0 done; 1 a case failed; 2 bad arguments or set-up errors.
+`run` also compares each figure with the case's committed record of the same id (times and memory:
+lower is better) and prints SLOWER for one more than 10 % worse (issue 40 item 6; the load column
+says whether the machine or the code changed).
+
+Exit codes: 0 done; 1 a case failed; 2 bad arguments or set-up errors; 3 done, but a figure is more
+than 10 % worse than its last record.
 """
 import argparse
 import fnmatch
@@ -86,6 +91,30 @@ def records_of(case, path):
     return recs
 
 
+# Units of record values where lower is better (times, memory): the ones the guard compares.
+LOWER_IS_BETTER = {"s", "s/step", "B/particle"}
+SLOWDOWN_LIMIT = 0.10  # issue 40 item 6: flag a figure more than 10 % worse than its last record
+
+
+def slowdowns(new, old, limit=SLOWDOWN_LIMIT):
+    """Records of `new` more than `limit` worse than the record of the same id in `old` (the last
+    committed ones): a list of (id, old value, new value, relative change, old commit). Only values
+    in LOWER_IS_BETTER units with a positive old value are compared."""
+    last = {r["id"]: r for r in old}
+    out = []
+    for r in new:
+        o = last.get(r["id"])
+        if o is None or r.get("unit") not in LOWER_IS_BETTER or o.get("unit") != r.get("unit"):
+            continue
+        v0, v1 = o.get("value"), r.get("value")
+        if not isinstance(v0, (int, float)) or not isinstance(v1, (int, float)) or not v0 > 0:
+            continue
+        change = v1 / v0 - 1.0
+        if change > limit:
+            out.append((r["id"], v0, v1, change, o.get("commit", "")))
+    return out
+
+
 def run_case(case, a):
     workdir = os.path.join(os.path.abspath(a.workdir), case.id)
     ctx = harness.Context(case, workdir, a.sparkdem, os.path.abspath(a.build), a.repeats, a.threads, a.quick)
@@ -109,6 +138,12 @@ def run_case(case, a):
     if meta["load_max"] > (os.cpu_count() or 1):
         print(f"{case.id}: warning: the load average exceeded the core count: these timings are contaminated",
               file=sys.stderr)
+    committed = os.path.join(REPO, case.result)
+    slower = slowdowns(recs, records_of(case, committed)) if os.path.exists(committed) else []
+    for rid, v0, v1, change, commit in slower:
+        print(f"  SLOWER {rid}: {rules.fmt_number(v1)} against {rules.fmt_number(v0)} recorded at {commit} "
+              f"({100 * change:+.1f} %, limit {100 * SLOWDOWN_LIMIT:.0f} %)", file=sys.stderr)
+    a.slower = getattr(a, "slower", 0) + len(slower)
     return ctx.result
 
 
@@ -131,7 +166,9 @@ def cmd_run(a):
             print(f"{case.id}: recorded {case.result}")
     if a.record and len(failed) < len(selected(a.case)):
         cmd_report(argparse.Namespace(ledger=a.ledger, files=[]))
-    return 1 if failed else 0
+    if failed:
+        return 1
+    return 3 if getattr(a, "slower", 0) else 0
 
 
 def committed_records():
