@@ -534,6 +534,18 @@ VolumeQuadrature volume_quadrature(const Frame& f, const SphereGrid& sg, const P
   return vq;
 }
 
+/// A ball holding every node within rho of some point of background cell `cell` (non-empty): about
+/// the centre of the points' bounding box, radius rho + its half diagonal. Returns the radius.
+double cell_reach(const Approximation& ap, const VolumeQuadrature& vq, std::size_t cell, Vec3& centre) {
+  Vec3 lo = vq.points[vq.cell_start[cell]].x, hi = lo;
+  for (std::size_t q = vq.cell_start[cell]; q < vq.cell_start[cell + 1]; ++q) {
+    lo = lo.cwiseMin(vq.points[q].x);
+    hi = hi.cwiseMax(vq.points[q].x);
+  }
+  centre = 0.5 * (lo + hi);
+  return ap.support() + 0.5 * (hi - lo).norm() + 1e-12 * ap.spacing();
+}
+
 /// Keep the nodes whose support holds a volume point (a node deep in a sphere has an empty row).
 /// Cell by cell: the grid nodes near the cell's bounding box are looked up once, then each point
 /// flags those within rho (the same test as grid_nodes_near).
@@ -545,12 +557,9 @@ void keep_supported_nodes(Approximation& ap, const VolumeQuadrature& vq) {
   for (std::size_t cell = 0; cell + 1 < vq.cell_start.size(); ++cell) {
     const std::size_t q0 = vq.cell_start[cell], q1 = vq.cell_start[cell + 1];
     if (q0 == q1) continue;
-    Vec3 lo = vq.points[q0].x, hi = lo;
-    for (std::size_t q = q0; q < q1; ++q) {
-      lo = lo.cwiseMin(vq.points[q].x);
-      hi = hi.cwiseMax(vq.points[q].x);
-    }
-    ap.grid_nodes_near(0.5 * (lo + hi), ap.support() + 0.5 * (hi - lo).norm() + 1e-12 * ap.spacing(), near);
+    Vec3 centre;
+    const double reach = cell_reach(ap, vq, cell, centre);
+    ap.grid_nodes_near(centre, reach, near);
     xg.clear();
     for (std::int64_t g : near) xg.push_back(ap.grid_position(g));
     for (std::size_t q = q0; q < q1; ++q)
@@ -625,12 +634,9 @@ void cell_blocks(const Approximation& ap, const VolumeQuadrature& vq, std::size_
   out.singular = false;
   // Candidate nodes once per cell: within rho of some point of the cell's bounding box.
   thread_local std::vector<std::int64_t> candidates;
-  Vec3 lo = vq.points[vq.cell_start[cell]].x, hi = lo;
-  for (std::size_t q = vq.cell_start[cell]; q < vq.cell_start[cell + 1]; ++q) {
-    lo = lo.cwiseMin(vq.points[q].x);
-    hi = hi.cwiseMax(vq.points[q].x);
-  }
-  ap.kept_nodes_near(0.5 * (lo + hi), ap.support() + 0.5 * (hi - lo).norm() + 1e-12 * ap.spacing(), candidates);
+  Vec3 centre;
+  const double reach = cell_reach(ap, vq, cell, centre);
+  ap.kept_nodes_near(centre, reach, candidates);
   for (std::size_t q = vq.cell_start[cell]; q < vq.cell_start[cell + 1]; ++q) {
     const QPoint& qp = vq.points[q];
     if (!ap.shape_among(qp.x, candidates, ids, phi, &grad)) {
@@ -701,6 +707,7 @@ double assemble_volume(BlockMatrix& K, Eigen::VectorXd& F, const Approximation& 
   const std::size_t batch = 64 * static_cast<std::size_t>(threads);  // ~60 MB of blocks at h = 3 R
   std::vector<CellBlocks> blocks(std::min(batch, cells.size()));
   std::vector<std::vector<int>> local(static_cast<std::size_t>(threads), std::vector<int>(ap.nodes(), -1));
+  const auto rows = static_cast<std::int64_t>(ap.nodes());
   double volume = 0.0;
   for (std::size_t first = 0; first < cells.size(); first += batch) {
     const auto n = static_cast<std::int64_t>(std::min(batch, cells.size() - first));
@@ -718,7 +725,6 @@ double assemble_volume(BlockMatrix& K, Eigen::VectorXd& F, const Approximation& 
       if (c.singular) throw SetupError("rkpm_matrix: singular moment matrix at a volume point (raise support_factor)");
       for (double w : c.w) volume += w;
     }
-    const auto rows = static_cast<std::int64_t>(ap.nodes());
 #pragma omp parallel if (threads > 1)
     {
 #ifdef _OPENMP

@@ -47,14 +47,15 @@
 /// (issue 39 item 3; 20 R box, phi = 25 %, h = 3 R, 3618 unknowns, to 1e-10): 713-794 PCG iterations
 /// at strength thresholds 0.25-0.9 against 137 IC-CG iterations, 6x the IC-CG time. The alpha = 100 E
 /// penalty couples each sphere's three unknowns to every node near its surface, far from the
-/// M-matrix AMG's interpolation assumes; kept as an option, never a default. The relative residual
+/// M-matrix structure AMG's interpolation assumes; kept as an option, never a default. The relative residual
 /// |K x - F| / |F| is reported.
 ///
 /// ASSEMBLY (issue 39 item 3). The volume integrals are formed background cell by background
 /// cell; the cells' dense local blocks (the shape functions and the block products: nearly all of
-/// the assembly) are computed in batches on the OpenMP threads and added to the global matrix on
-/// the calling thread in cell order, so the system and its solution are bit for bit the same on
-/// any number of threads. Per cell the nodes near its bounding box are looked up once.
+/// the assembly) are computed in batches on the OpenMP threads, then added to the global matrix in
+/// cell order with each thread owning a range of rows, so every entry sums its contributions in one
+/// order: the system and its solution are bit for bit the same on any number of threads. Per cell
+/// the nodes near its bounding box are looked up once.
 /// QUADRATURE (volume). Background cells of edge h / cell_subdivision tile the node grid;
 /// quadrature_order^3 Gauss-Legendre points per cell. A cell wholly in the matrix keeps all its
 /// points; a cell wholly inside a sphere or outside the domain none; a CUT cell (its circumscribed
