@@ -6,6 +6,7 @@
 #include <numeric>
 #include <string>
 
+#include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
@@ -120,6 +121,29 @@ Contacts touching_contacts(const SpringNetwork& net, const UnitSolution& sol, do
       c.opening.push_back(sol.opening[e]);
     }
   return c;
+}
+
+double affine_volumetric_strain(const std::vector<Vec3>& x, const std::vector<Vec3>& u) {
+  const std::size_t n = x.size();
+  if (n < 4 || u.size() != n) throw SetupError("affine_volumetric_strain: needs >= 4 positions with one displacement each");
+  Vec3 xm = Vec3::Zero(), um = Vec3::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    xm += x[i];
+    um += u[i];
+  }
+  xm /= static_cast<double>(n);
+  um /= static_cast<double>(n);
+  Eigen::Matrix3d cux = Eigen::Matrix3d::Zero(), cxx = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 dx = x[i] - xm;
+    cux += (u[i] - um) * dx.transpose();
+    cxx += dx * dx.transpose();
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> f(cxx);
+  if (f.info() != Eigen::Success || !(f.vectorD().minCoeff() > 1e-12 * f.vectorD().maxCoeff()))
+    throw SetupError("affine_volumetric_strain: the positions lie on a plane or a line");
+  // A = C_ux C_xx^-1, so A^T = C_xx^-1 C_ux^T (C_xx symmetric).
+  return f.solve(cux.transpose()).trace();
 }
 
 std::vector<double> break_strains(const Contacts& c, double break_gap) {

@@ -113,6 +113,14 @@ struct Contacts {
 /// Springs of net with gap <= touch_tolerance, with the openings of sol.
 Contacts touching_contacts(const SpringNetwork& net, const UnitSolution& sol, double touch_tolerance);
 
+/// The composite's volumetric strain read from the fillers: tr A of the least-squares affine fit
+/// u_i ~ A x_i + b over every filler (A = C_ux C_xx^-1 with the centred covariances
+/// C_ux = sum (u_i - u_mean)(x_i - x_mean)^T, C_xx = sum (x_i - x_mean)(x_i - x_mean)^T).
+/// Per unit eps0 when u is a unit solution. Seed 002's Fig. 7 inset reads the effective volume
+/// fraction phi_eff = phi / (1 + eps0 tr A) off it (the fillers' number density). Needs >= 4
+/// fillers not on one plane (else SetupError).
+double affine_volumetric_strain(const std::vector<Vec3>& x, const std::vector<Vec3>& u);
+
 /// Break strain of every contact (header rule): eps_b [1], +inf if it never opens.
 std::vector<double> break_strains(const Contacts& c, double break_gap);
 

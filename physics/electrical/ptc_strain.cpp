@@ -267,7 +267,8 @@ PtcStrain::UnitResult PtcStrain::unit_contacts(const State& s) const {
   if (p_.strain_statistics) {  // per unit eps0 -> at opening_strain
     const rkpm::StrainStatistics& st = r.strain;
     const double e0 = p_.opening_strain;
-    u.strain = {e0 * st.total_mean, e0 * st.mechanical_mean, st.total_negative_fraction, st.mechanical_negative_fraction};
+    u.strain = {e0 * st.total_mean, e0 * st.mechanical_mean, st.total_negative_fraction, st.mechanical_negative_fraction,
+                e0 * ptc::affine_volumetric_strain(s.particles.position, r.sphere_displacement)};
     if (p_.strain_histogram_edges.size() >= 2) {
       u.strain.insert(u.strain.end(), st.total_histogram.begin(), st.total_histogram.end());
       u.strain.insert(u.strain.end(), st.mechanical_histogram.begin(), st.mechanical_histogram.end());
@@ -375,7 +376,8 @@ std::vector<std::string> PtcStrain::columns() const {
     c.emplace_back("ptc_strain_opening_hist_above");
   }
   if (p_.strain_statistics) {
-    for (const char* q : {"strain_total_mean", "strain_mech_mean", "strain_total_negative_fraction", "strain_mech_negative_fraction"})
+    for (const char* q : {"strain_total_mean", "strain_mech_mean", "strain_total_negative_fraction", "strain_mech_negative_fraction",
+                          "composite_volumetric_strain"})
       c.push_back(std::string("ptc_strain_") + q);
     const std::size_t ms = p_.strain_histogram_edges.size();
     if (ms >= 2)

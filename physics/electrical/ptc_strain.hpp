@@ -42,6 +42,10 @@
 ///                                 m + 1 >= 2 strain_histogram_edges, strain_{total,mech}_hist_<k>,
 ///                                 _below, _above: volume fractions per bin (the paper's Fig. 4),
 ///                                 over the points strain_points names (matrix, box, nodes)
+///   composite_volumetric_strain   (rkpm with strain_statistics) eps0 tr A at eps0 = opening_strain
+///                                 [1]: A the least-squares affine fit of the fillers'
+///                                 displacements (ptc::affine_volumetric_strain); the effective
+///                                 volume fraction of seed 002's Fig. 7 inset is phi / (1 + this)
 ///   opening_hist_<k>              (only if opening_histogram_edges has m + 1 >= 2 edges) the
 ///                                 fraction of contacts whose relative opening (as opening_mean)
 ///                                 lies in [edge_k, edge_k+1), k = 0..m-1, then
@@ -155,7 +159,7 @@ class PtcStrain final : public Module {
   std::size_t histogram_columns() const { return p_.opening_histogram_edges.size() >= 2 ? p_.opening_histogram_edges.size() + 1 : 0; }
   std::size_t strain_columns() const {
     if (!p_.strain_statistics) return 0;
-    return 4 + (p_.strain_histogram_edges.size() >= 2 ? 2 * (p_.strain_histogram_edges.size() + 1) : 0);
+    return 5 + (p_.strain_histogram_edges.size() >= 2 ? 2 * (p_.strain_histogram_edges.size() + 1) : 0);
   }
   /// One unit solve of the chosen matrix model: the touching contacts with their unit openings;
   /// matrix size (springs or RKPM nodes), residual and the strain columns into the arguments.

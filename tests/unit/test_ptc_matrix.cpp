@@ -25,6 +25,7 @@
 #include <limits>
 #include <vector>
 
+#include "engine/core/error.hpp"
 #include "engine/graph/laplacian.hpp"
 #include "physics/electrical/ptc_matrix.hpp"
 #include "tests/support/tolerance.hpp"
@@ -98,6 +99,8 @@ TEST_CASE("ptc_matrix: uniform lattice expands affinely, every opening equals th
   INFO("largest relative opening error " << worst << ", displacement-gradient error " << worst_grad);
   CHECK(worst < 1e-6);
   CHECK(worst_grad < 1e-6);
+  // The fillers' affine fit reads the composite's expansion: tr (h / a) I per unit eps0.
+  CHECK(test::relative_error(ptc::affine_volumetric_strain(x, s.displacement), 3.0 * h / a) < 1e-6);
   // No touching pairs in the lattice: empty contact set.
   CHECK(ptc::touching_contacts(net, s, p.touch_tolerance).size() == 0);
 }
@@ -159,4 +162,25 @@ TEST_CASE("ptc_matrix: Z, R_eq and the switching strain as contacts open one by 
   CHECK(ptc::break_strains(g, 2e-3)[0] == Approx(0.01).epsilon(1e-12));
   // Without a spanning network at eps0 = 0 the switching strain is 0.
   CHECK(ptc::switching_strain(n, c, eb, std::vector<Index>{0}, std::vector<Index>{6}) == 0.0);
+}
+
+TEST_CASE("ptc_matrix: affine_volumetric_strain is tr A of an affine field, blind to rotation and translation", "[ptc][cpc]") {
+  std::vector<Vec3> x;
+  for (int i = 0; i < 30; ++i) x.emplace_back(std::sin(1.3 * i) * 5.0, std::cos(0.7 * i) * 3.0 + i * 0.1, std::sin(0.37 * i * i));
+  Eigen::Matrix3d A;
+  A << 0.011, 0.004, -0.002, 0.001, -0.003, 0.007, 0.005, 0.002, 0.02;
+  const Vec3 b(0.3, -1.0, 2.0);
+  Eigen::Matrix3d W;  // a small rotation (skew): no volume change
+  W << 0.0, -0.01, 0.02, 0.01, 0.0, -0.03, -0.02, 0.03, 0.0;
+  std::vector<Vec3> u, w;
+  for (const Vec3& p : x) {
+    u.push_back(A * p + b);
+    w.push_back(W * p + b);
+  }
+  CHECK(std::abs(ptc::affine_volumetric_strain(x, u) - A.trace()) < 1e-13);
+  CHECK(std::abs(ptc::affine_volumetric_strain(x, w)) < 1e-13);
+  // Fillers on one plane cannot give a volume change: typed error.
+  std::vector<Vec3> flat = x;
+  for (Vec3& p : flat) p.z() = 1.0;
+  CHECK_THROWS_AS(ptc::affine_volumetric_strain(flat, u), sparkdem::SetupError);
 }
