@@ -38,6 +38,7 @@ is a tuned reading (its switching strain can never count as a pass).
         [--variants a100_free,a1.4_b4.3,...] [--seeds 1] [--phis 0.25] [--lambdas 0,35]
         [--box 70] [--jobs 2] [--reuse] [--csv benchmarks/cpc_percolation/numerics_scan.csv]
         [--sealed benchmarks/cpc_percolation/numerics_scan_switching.csv]
+    python3 -m benchmarks.cpc_percolation.numerics_scan --score A.csv[,B.csv]  # the rule, best first
 """
 import concurrent.futures
 import csv
@@ -94,6 +95,43 @@ def run(sparkdem, workdir, tag, phi, lam, seeds, box, reuse):
     return shown, sealed
 
 
+def _mean(rows, key):
+    return sum(float(r[key]) for r in rows) / len(rows)
+
+
+def score(rows):
+    """The selection rule of the docstring applied to scan rows (mean over configurations per
+    variant, phi and lambda): per variant the items met, the sum of relative misses and the
+    per-item table, best first. Items of phi = 8.5 % count only where those rows exist."""
+    groups = {}
+    for r in rows:
+        groups.setdefault(r["variant"], {}).setdefault((round(float(r["phi"]), 4), float(r["lambda_R"])), []).append(r)
+    out = []
+    for v, g in groups.items():
+        items, miss = {}, 0.0
+        for lam, target in ((0.0, 0.44), (35.0, 0.60)):
+            d = "u" if lam == 0.0 else "s"
+            rs = g.get((0.25, lam))
+            if rs:
+                peak, neg, ratio = _mean(rs, "peak_pct"), _mean(rs, "negative_weight"), _mean(rs, "mean_ratio")
+                drop, z0, z2, z3 = _mean(rs, "phi_eff_drop_pts"), _mean(rs, "Z_0p00"), _mean(rs, "Z_2p00"), _mean(rs, "Z_3p00")
+                items[f"1{d} peak"] = 0.02 <= peak <= 0.06
+                items[f"2{d} negative"] = neg >= 0.05
+                items[f"3{d} mean"] = abs(ratio - target) <= 0.1
+                items[f"4{d} phi_eff"] = 1.0 <= drop <= 2.2
+                items[f"5{d} Z"] = z3 <= 0.1 * z0 and z2 >= 0.1 * z0
+                miss += (abs(peak - 0.04) / 0.04 + abs(neg - 0.13) / 0.13 + abs(ratio - target) / target + abs(drop - 1.6) / 1.6
+                         + z3 / z0 + max(0.0, 0.1 - z2 / z0) / 0.1)
+            rs = g.get((0.085, lam))
+            if rs:
+                sk = _mean(rs, "skewness")
+                items[f"6{d} skew"] = sk > 0
+                miss += max(0.0, -sk)
+        out.append({"variant": v, "met": sum(items.values()), "items": len(items), "miss": miss,
+                    "passed": " ".join(k for k, ok in sorted(items.items()) if ok)})
+    return sorted(out, key=lambda x: (-x["met"], x["miss"]))
+
+
 def main():
     ap = study_parser(__doc__, "", "benchmarks/cpc_percolation/numerics_scan.csv", seeds_default="1")
     ap.add_argument("--variants", default=",".join(all_variants()))
@@ -103,7 +141,16 @@ def main():
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--reuse", action="store_true", help="keep finished runs of an identical scene")
     ap.add_argument("--sealed", default="benchmarks/cpc_percolation/numerics_scan_switching.csv")
+    ap.add_argument("--score", help="comma list of scan CSVs: apply the selection rule to them (no run)")
     a = ap.parse_args()
+    if a.score:
+        rows = []
+        for path in a.score.split(","):
+            with open(path, newline="") as f:
+                rows += list(csv.DictReader(f))
+        for x in score(rows):
+            print(f"{x['variant']:16s} met {x['met']:2d} / {x['items']:2d}  miss {x['miss']:8.2f}  {x['passed']}")
+        return
     os.makedirs(a.workdir, exist_ok=True)
     seeds = [int(s) for s in a.seeds.split(",")]
     jobs = [(v, float(p), float(l)) for v in a.variants.split(",") for p in a.phis.split(",") for l in a.lambdas.split(",")]

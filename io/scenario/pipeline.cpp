@@ -758,7 +758,7 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   s.materials = sc.materials;
   s.walls = sc.walls;
   s.rng.seed(sc.seed);
-  if (opt.start) s = *opt.start;
+  if (opt.start) s = std::move(*opt.start);  // the item's own start state: no second copy
   RunRecord record;  // snapshots taken and sweep progress (see sweep.hpp)
   RestartPoint rp = read_restart(sc, opt, s, record, log);
 

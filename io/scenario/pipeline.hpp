@@ -53,7 +53,7 @@ struct RunOptions {
   bool quiet = false;
   int threads = 0;  ///< 0 = OpenMP default
   // Set by sweeps for the nested run of one item (see sweep.hpp); the command line leaves them.
-  const State* start = nullptr;           ///< start from this state instead of an empty one
+  State* start = nullptr;                 ///< start from this state (moved from: no copy) instead of an empty one
   std::int64_t stage_offset = 0;          ///< index of the first stage in the enclosing run
   std::filesystem::path checkpoint_file;  ///< where checkpoints go; empty: outdir/checkpoint.h5
   std::function<json()> record;           ///< pipeline record stored in checkpoints; empty: the run's own

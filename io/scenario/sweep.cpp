@@ -575,9 +575,10 @@ namespace {
 
 using namespace sweep_detail;
 
-/// The sweep's context: the input state (the state before the stage, kept in a file for a
-/// restart; on a restart read back from it), its items, and the rows a restart carries over.
-SweepContext sweep_context(Scenario& sc, std::size_t k, const State& s, const RunRecord& record, bool resuming, const RunOptions& opt) {
+/// The sweep's context: the input state (the state before the stage, moved out of the main state
+/// s for the sweep and given back by run_sweep; kept in a file for a restart; on a restart read
+/// back from it), its items, and the rows a restart carries over.
+SweepContext sweep_context(Scenario& sc, std::size_t k, State& s, const RunRecord& record, bool resuming, const RunOptions& opt) {
   SweepContext ctx;
   const StageDef& st = sc.stages[k];
   ctx.stage = k;
@@ -609,8 +610,13 @@ SweepContext sweep_context(Scenario& sc, std::size_t k, const State& s, const Ru
     read_checkpoint(ctx.input_file, ctx.input);
     ctx.input.materials = sc.materials;
   } else {
-    ctx.input = s;
-    write_state(ctx.input_file, ctx.input);
+    ctx.input = std::move(s);  // a branch: the main state waits in ctx.input (run_sweep gives it back)
+    try {
+      write_state(ctx.input_file, ctx.input);
+    } catch (...) {
+      s = std::move(ctx.input);
+      throw;
+    }
   }
   const SweepDef& sw = *ctx.sw;
   if (sw.kind == SweepDef::Kind::Parameter) ctx.n = sw.values.size();
@@ -719,7 +725,13 @@ json sweep_entry(const SweepContext& ctx, const StageDef& st, const json& rows) 
 SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record, bool resuming, const RunOptions& opt) {
   const auto t0 = std::chrono::steady_clock::now();
   SweepContext ctx = sweep_context(sc, k, s, record, resuming, opt);
-  const auto ran = ranks::size() > 1 ? run_items_spread(sc, ctx, record) : run_items_in_order(sc, ctx, record, opt);
+  std::map<std::size_t, ItemResult> ran;
+  try {
+    ran = ranks::size() > 1 ? run_items_spread(sc, ctx, record) : run_items_in_order(sc, ctx, record, opt);
+  } catch (...) {
+    s = std::move(ctx.input);  // the run's summary reports the state before the sweep
+    throw;
+  }
   record.sweep = nullptr;
   std::map<std::size_t, json> rows = ctx.done;
   SweepOutcome out;
