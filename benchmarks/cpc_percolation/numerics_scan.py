@@ -11,6 +11,7 @@ variant:
   boundary      free expansion, or every face clamped by the penalty beta = b E / h with
                 b = 1, 4.3 (the unit-box reading of beta = 100 E), 10, 100 (the stiff clamp)
   rho / h       2 (the configs'), 2.5, 3 (4 would need ~8x the 3 GB of non-zeros of rho / h = 2)
+  h / R         3 (the configs'); finer spacings in a smaller box (--box) for the resolution of tr A
 
 and reports, per configuration, only what Figs. 4 and 7 and the text show (no switching strain):
 
@@ -55,15 +56,15 @@ Z_AT = ("0p00", "1p00", "2p00", "2p50", "3p00")
 
 
 def variant(tag):
-    """'a<alpha R/E>_<free | b<beta h/E>>[_r<rho/h>]' -> the ptc_strain overrides."""
+    """'a<alpha R/E>_<free | b<beta h/E>>[_r<rho/h>][_h<h/R>]' -> the ptc_strain overrides."""
     parts = tag.split("_")
     rk = {"bond_penalty": float(parts[0][1:])}
     if parts[1] == "free":
         rk["boundary"] = "free"
     else:
         rk.update(boundary="clamped", boundary_penalty=float(parts[1][1:]))
-    if len(parts) > 2:
-        rk["support_factor"] = float(parts[2][1:])
+    for p in parts[2:]:
+        rk[{"r": "support_factor", "h": "node_spacing"}[p[0]]] = float(p[1:])
     return rk
 
 
