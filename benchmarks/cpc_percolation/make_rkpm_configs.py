@@ -118,7 +118,21 @@ def main():
     # and the mean local strain (rkpm_results.md section 8), chosen before its switching strain was
     # looked at; a tuned reading, never a pass.
     tuned = [stage(f"L70_lambda{lam:g}_rkpm_tuned", lam, seeds, **TUNED) for lam in (0.0, 35.0)]
+    # Issue 39 item 3: the converged free-expansion continuum at the SI test's unit (alpha R / E = 10,
+    # where the two-sphere test passes at 29 nodes per edge): 24 R box, segregated (it spans the box),
+    # 4 configurations, node spacing 3, 2, 1.5 R; the fillers' affine expansion against the
+    # rigid-inclusion closed form.
+    converged = []
+    for h in (3.0, 2.0, 1.5):
+        st = stage(f"L24_lambda35_rkpm_alpha10_h{h:g}", 35.0, seeds, box=24.0, node_spacing=h, bond_penalty=10.0)
+        st["sweep"]["collect"].append("ptc_strain_composite_volumetric_strain")
+        converged.append(st)
     out = {
+        "cpc_ptc_rkpm_converged.json": scenario(
+            "cpc_ptc_rkpm_converged", COMMON + " Issue 39 item 3: free expansion at alpha R / E = 10 (the SI test's unit, "
+            "where the two-sphere test passes), segregated (lambda = 35 R), 24 R box, node spacing 3, 2 and 1.5 R on the "
+            "same 4 configurations: the switching strain's resolution study and the fillers' affine expansion "
+            "(composite_volumetric_strain) against the rigid-inclusion Hashin-Shtrikman estimate.", converged),
         "cpc_ptc_rkpm_tuned.json": scenario(
             "cpc_ptc_rkpm_tuned", COMMON + " Issue 39 item 2: the paper's unstated numerics (alpha's unit, the boundary "
             "penalty beta on every face, the support rho / h) set to the one variant that the selection rule of "
