@@ -143,17 +143,17 @@ def run_case(case, a):
     for rid, v0, v1, change, commit in slower:
         print(f"  SLOWER {rid}: {rules.fmt_number(v1)} against {rules.fmt_number(v0)} recorded at {commit} "
               f"({100 * change:+.1f} %, limit {100 * SLOWDOWN_LIMIT:.0f} %)", file=sys.stderr)
-    a.slower = getattr(a, "slower", 0) + len(slower)
-    return ctx.result
+    return ctx.result, len(slower)
 
 
 def cmd_run(a):
     if a.record and a.quick:
         raise ValueError("--quick results are smoke tests: they are never recorded")
-    failed = []
+    failed, slower = [], 0
     for case in selected(a.case):
         try:
-            result = run_case(case, a)
+            result, n_slower = run_case(case, a)
+            slower += n_slower
         except (RuntimeError, OSError, KeyError, ValueError) as e:
             print(f"{case.id}: FAILED: {e}", file=sys.stderr)
             failed.append(case.id)
@@ -168,7 +168,7 @@ def cmd_run(a):
         cmd_report(argparse.Namespace(ledger=a.ledger, files=[]))
     if failed:
         return 1
-    return 3 if getattr(a, "slower", 0) else 0
+    return 3 if slower else 0
 
 
 def committed_records():

@@ -82,13 +82,14 @@ def run(sparkdem, workdir, tag, phi, lam, seeds, box, reuse):
     out, _ = run_study_scene(sparkdem, workdir, name, sc, reuse=reuse)
     with open(os.path.join(out, f"sweep_{name}.csv"), newline="") as f:
         rows = list(csv.DictReader(f))
+    e0 = st["modules"]["ptc_strain"]["opening_strain"]  # the strain columns are at eps0 = opening_strain
     shown, sealed = [], []
     for i, r in enumerate(rows):
         key = dict(variant=tag, phi=phi, lambda_R=lam, config=seeds[i])
         f = features(r)
-        trA = float(r["ptc_strain_composite_volumetric_strain"]) / 0.01  # the column is at eps0 = 1 %
-        phi_c = float(r["packing.volume_fraction"])
-        f.update(mean_ratio=f["mean_pct"] / 1.0, tr_A=trA, phi_eff_drop_pts=100 * phi_c * (1 - 1 / (1 + 0.03 * trA)),
+        trA = float(r["ptc_strain_composite_volumetric_strain"]) / e0
+        packed = float(r["packing.volume_fraction"])
+        f.update(mean_ratio=f["mean_pct"] / (100 * e0), tr_A=trA, phi_eff_drop_pts=100 * packed * (1 - 1 / (1 + 0.03 * trA)),
                  closing=float(r["ptc_strain_opening_negative_fraction"]))
         f.update({f"Z_{z}": float(r[f"ptc_strain_coordination_{z}pct"]) for z in Z_AT})
         shown.append({**key, **f})

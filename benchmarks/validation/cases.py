@@ -810,13 +810,14 @@ def run_switch_rkpm_converged(ctx):
                for r in rows]
         phi = sum(float(r["packing.volume_fraction"]) for r in rows) / len(rows)
         per_h[h] = (mean_std(eps), mean_std(tra), phi, st["modules"]["ptc_strain"]["poisson_ratio"])
-    hs = sorted(per_h)  # finest first
-    (m, sd), (ta, tsd), phi, nu = per_h[hs[0]]
-    coarser = per_h[hs[1]][0][0]
-    seq = {f"h{h:g}R": per_h[h][0][0] for h in sorted(per_h, reverse=True)}
-    return {"switch": fig(m, SWITCH[False], std=sd, configurations=4, last_refinement_change=m / coarser - 1.0, **seq),
-            "expansion": fig(ta, hs_rigid_volumetric(phi, nu), std=tsd, configurations=4, phi=phi,
-                             **{f"trA_h{h:g}R": per_h[h][1][0] for h in sorted(per_h, reverse=True)})}
+    coarse_first = sorted(per_h, reverse=True)
+    (m, sd), (ta, tsd), phi, nu = per_h[coarse_first[-1]]  # the finest spacing carries the figures
+    coarser = per_h[coarse_first[-2]][0][0]
+    n = len(rows)
+    return {"switch": fig(m, SWITCH[False], std=sd, configurations=n, last_refinement_change=m / coarser - 1.0,
+                          **{f"h{h:g}R": per_h[h][0][0] for h in coarse_first}),
+            "expansion": fig(ta, hs_rigid_volumetric(phi, nu), std=tsd, configurations=n, phi=phi,
+                             **{f"trA_h{h:g}R": per_h[h][1][0] for h in coarse_first})}
 
 
 CONVERGED_SRC = ("seed 002, free expansion at alpha R / E = 10 (the SI test's unit; two-sphere test within 0.05 %), "
