@@ -98,7 +98,7 @@ void Simulation::commit_quasi_static(const QuasiStaticSolution& sol, const Quasi
   for (std::int64_t i = 0; i < n; ++i) {
     p.position[i] += h * p.velocity[i];
     const double w2 = p.omega[i].squaredNorm();
-    if (w2 > 0.0) p.orientation[i] = renormalised(rotation_quaternion(p.omega[i], std::sqrt(w2), h) * p.orientation[i]);
+    if (w2 > 0.0) p.orientation[i] = renormalised(rotation_quaternion(p.omega[i], w2, h) * p.orientation[i]);
   }
   for (std::size_t k = 0; k < s_.walls.size(); ++k) {
     Wall& w = s_.walls[k];

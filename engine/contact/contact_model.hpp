@@ -244,8 +244,7 @@ class ContactModelT final : public ContactModel {
   void pair_forces(ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0, bool inertia_free = false) const override {
     const std::int64_t rows = static_cast<std::int64_t>(t.size());
     if (par::worth(rows, par::kHeavy) && par::threads() > 1) {
-      pair_pass(p, t, dt, time_scale, inertia_free);
-      t.gather(p.force, p.torque);
+      pair_forces_split(p, t, dt, time_scale, inertia_free);
       return;
     }
     // One thread: each live row is added to its two particles as it is computed, in row order.
@@ -280,6 +279,50 @@ class ContactModelT final : public ContactModel {
       p.force[cur] = fi;
       p.torque[cur] = ti;
     }
+  }
+
+  /// pair_forces on a team of threads: each range of PairRows::row_split is walked in row order
+  /// by one thread, which adds each live row straight into the particles its range owns (as the
+  /// one-thread loop does) and stores the row's torques only for the boundary particles, gathered
+  /// after the team joins. Every particle's sum takes its rows in row order from the zeroed force:
+  /// bit-identical to the one-thread loop, with neither the torque rows of the whole table nor a
+  /// second pass over it (the gather of every particle) in between.
+  void pair_forces_split(ParticleStore& p, ContactTable& t, double dt, double time_scale, bool inertia_free) const {
+    const std::int64_t rows = static_cast<std::int64_t>(t.size());
+    const int ranges = par::threads();
+    const auto& split = t.row_split(ranges);
+    PassInputs in = pass_inputs(p, t, time_scale);
+    in.inertia_free = inertia_free;
+    auto& F = t.force();
+    auto& Ti = t.torque_i();
+    auto& Tj = t.torque_j();
+    const std::int32_t* owner = split.owner.data();
+#pragma omp parallel
+    for (int range = par::thread_num(); range < ranges; range += par::team_size()) {
+      const std::int64_t lo = rows * range / ranges, hi = rows * (range + 1) / ranges;
+      Vec3 tri, trj;
+      for (std::int64_t r = lo; r < hi; ++r) {
+        if (!row_forces(p, t, r, dt, in, F[r], tri, trj)) {
+          Ti[r].setZero();
+          Tj[r].setZero();
+          continue;
+        }
+        const Index i = t.i(r), j = t.j(r);
+        if (owner[i] == range) {
+          p.force[i] += F[r];
+          p.torque[i] += tri;
+        } else {
+          Ti[r] = tri;
+        }
+        if (owner[j] == range) {
+          p.force[j] -= F[r];
+          p.torque[j] += trj;
+        } else {
+          Tj[r] = trj;
+        }
+      }
+    }
+    t.gather_particles(split.boundary, p.force, p.torque);
   }
 
   WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& cand, double dt,

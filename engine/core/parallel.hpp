@@ -63,6 +63,22 @@ inline int threads() {
 #endif
 }
 
+/// This thread's number in its team, and the team's size (0 and 1 without OpenMP).
+inline int thread_num() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+inline int team_size() {
+#ifdef _OPENMP
+  return omp_get_num_threads();
+#else
+  return 1;
+#endif
+}
+
 /// True when a loop of n items of that kind is worth a parallel region.
 inline bool worth(std::int64_t n, Kind kind) { return n >= min_items(kind); }
 

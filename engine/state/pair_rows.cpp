@@ -30,6 +30,7 @@ void PairRows::remap_after_permutation(const std::vector<Id>& ids) {
 }
 
 void PairRows::keep_rows(const std::vector<char>& keep) {
+  split_.threads = 0;
   const std::size_t w = state_names_.size(), n = size();
   const bool results = force_.size() == n && torque_i_.size() == n && torque_j_.size() == n;
   std::size_t q = 0;
@@ -78,28 +79,68 @@ void PairRows::reset_results(std::size_t n_particles) {
 }
 
 void PairRows::build_incidence(std::size_t n) {
+  split_.threads = 0;
   sparkdem::build_incidence(
       n, size(), [&](std::size_t r) { return i_[r]; }, [&](std::size_t r) { return j_[r]; }, inc_start_, inc_row_);
 }
 
+namespace {
+/// The incidence sum of particle p (in increasing row order) added to force[p], torque[p].
+inline void gather_one(std::int64_t p, const std::vector<std::int64_t>& start, const std::vector<std::int64_t>& row,
+                       const std::vector<Vec3>& f_row, const std::vector<Vec3>& ti_row, const std::vector<Vec3>& tj_row,
+                       std::vector<Vec3>& force, std::vector<Vec3>& torque) {
+  Vec3 f = Vec3::Zero(), t = Vec3::Zero();
+  for (std::int64_t k = start[p]; k < start[p + 1]; ++k) {
+    const std::int64_t code = row[k];
+    if (code >= 0) {
+      f += f_row[code];
+      t += ti_row[code];
+    } else {
+      f -= f_row[~code];
+      t += tj_row[~code];
+    }
+  }
+  force[p] += f;
+  torque[p] += t;
+}
+}  // namespace
+
 void PairRows::gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
   const std::int64_t n = static_cast<std::int64_t>(force.size());
 #pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
+  for (std::int64_t p = 0; p < n; ++p) gather_one(p, inc_start_, inc_row_, force_, torque_i_, torque_j_, force, torque);
+}
+
+void PairRows::gather_particles(const std::vector<Index>& which, std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
+  const std::int64_t n = static_cast<std::int64_t>(which.size());
+#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
+  for (std::int64_t k = 0; k < n; ++k) gather_one(which[k], inc_start_, inc_row_, force_, torque_i_, torque_j_, force, torque);
+}
+
+const PairRows::RowSplit& PairRows::row_split(int threads) const {
+  if (split_.threads == threads) return split_;
+  const std::int64_t rows = static_cast<std::int64_t>(size()), n = static_cast<std::int64_t>(inc_start_.size()) - 1;
+  const auto range_of = [&](std::int64_t code) {
+    const std::int64_t r = code >= 0 ? code : ~code;
+    // the t with rows t / T <= r < rows (t + 1) / T
+    std::int64_t t = r * threads / std::max<std::int64_t>(rows, 1);
+    while (t > 0 && r < rows * t / threads) --t;
+    while (t + 1 < threads && r >= rows * (t + 1) / threads) ++t;
+    return static_cast<std::int32_t>(t);
+  };
+  split_.owner.assign(std::max<std::int64_t>(n, 0), -1);
+  split_.boundary.clear();
   for (std::int64_t p = 0; p < n; ++p) {
-    Vec3 f = Vec3::Zero(), t = Vec3::Zero();
-    for (std::int64_t k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
-      const std::int64_t code = inc_row_[k];
-      if (code >= 0) {
-        f += force_[code];
-        t += torque_i_[code];
-      } else {
-        f -= force_[~code];
-        t += torque_j_[~code];
-      }
-    }
-    force[p] += f;
-    torque[p] += t;
+    if (inc_start_[p] == inc_start_[p + 1]) continue;
+    // the incidence lists rows in increasing order: the first and last give the ranges touched
+    const std::int32_t a = range_of(inc_row_[inc_start_[p]]), b = range_of(inc_row_[inc_start_[p + 1] - 1]);
+    if (a == b)
+      split_.owner[p] = a;
+    else
+      split_.boundary.push_back(static_cast<Index>(p));
   }
+  split_.threads = threads;
+  return split_;
 }
 
 void PairRows::visit_rows(Archive& ar, const std::string& prefix, const std::string& what) {

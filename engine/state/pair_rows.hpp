@@ -84,6 +84,21 @@ class PairRows {
   /// Sum per-row forces/torques into particle arrays (adds to force/torque).
   void gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
 
+  /// The rows dealt to `threads` contiguous ranges, range t = [rows t / T, rows (t + 1) / T), and
+  /// per particle the range holding every row that touches it (`owner`, -1 when rows of two ranges
+  /// touch it or none does); `boundary`: the particles touched by rows of two ranges. A thread that
+  /// walks its range in row order may add its rows straight into the particles it owns: each sum
+  /// takes the same operands in the same order as the gather, whatever the thread count.
+  struct RowSplit {
+    int threads = 0;
+    std::vector<std::int32_t> owner;
+    std::vector<Index> boundary;
+  };
+  /// The split for `threads` ranges (computed from the incidence, kept until it changes).
+  const RowSplit& row_split(int threads) const;
+  /// gather for the listed particles only.
+  void gather_particles(const std::vector<Index>& which, std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
+
   /// Rows r with keep[r] == 0 removed (order of the others preserved): ids, cached local indices,
   /// state and per-row results. The local indices are stale until remap_after_permutation.
   void keep_rows(const std::vector<char>& keep);
@@ -103,6 +118,7 @@ class PairRows {
   std::vector<double> state_;
   std::vector<Vec3> force_, torque_i_, torque_j_;
   std::vector<std::int64_t> inc_start_, inc_row_;
+  mutable RowSplit split_;  ///< cache of row_split (threads = 0: stale)
 };
 
 /// Named per-row values handed from one table to another (contact -> bond on bonding,

@@ -346,7 +346,9 @@ void delete_stage_sets(State& s, const std::vector<std::pair<std::string, SetSel
         remove[i] = true;
         ++n;
       }
-    s.marks[std::string(kDeletedMark) + "set/" + name] = static_cast<double>(n);
+    std::string mark(kDeletedMark);  // appended in place: GCC 12's -Warray-bounds misreads string + "..." + name here
+    mark.append("set/").append(name);
+    s.marks[mark] = static_cast<double>(n);
   }
   const DeletionCounts c = delete_particles(s, remove);
   s.marks[std::string(kDeletedMark) + "total"] = static_cast<double>(c.particles);

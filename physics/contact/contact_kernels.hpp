@@ -108,19 +108,28 @@ inline double linear_damping_for_restitution(double e, double m_eff, double k) {
 /// linear_history). The stored displacement xi is first rotated into the current tangent plane
 /// (keeping its length), then xi += v_t dt, F_t = -k_t xi - gamma_t v_t; if |F_t| > mu |F_n|
 /// the force is scaled to the cone and xi reset to -(F_t + gamma_t v_t)/k_t.
+/// `frame_epsilon` > 0 is LAMMPS's frame-update rule (pair_granular.cpp, EPSILON = 1e-10): the
+/// rotation is skipped when the normal component of xi would contribute less than that fraction
+/// of the friction limit, |xi . n| k_t <= frame_epsilon mu |F_n| (two square roots and a division
+/// saved on most rows of a bed at rest); 0 rotates on every call.
 /// @param[in,out] xi tangential displacement history [m] (3 values)
 /// @return tangential force on i [N]
-inline Vec3 tangential_history(const Vec3& n, const Vec3& vt, double k_t, double gamma_t, double mu, double fn_abs, double dt, double* xi) {
+inline Vec3 tangential_history(const Vec3& n, const Vec3& vt, double k_t, double gamma_t, double mu, double fn_abs, double dt, double* xi,
+                               double frame_epsilon = 0.0) {
   Vec3 s(xi[0], xi[1], xi[2]);
-  const double mag = s.norm();
-  s -= s.dot(n) * n;
-  const double proj = s.norm();
-  if (proj > 0.0) s *= mag / proj;
+  const double fcrit = mu * fn_abs;
+  const double rsht = s.dot(n);
+  if (frame_epsilon > 0.0 ? std::abs(rsht) * k_t > frame_epsilon * fcrit : true) {
+    const double mag = s.norm();
+    s -= rsht * n;
+    const double proj = s.norm();
+    if (proj > 0.0) s *= mag / proj;
+  }
   s += vt * dt;
   Vec3 ft = -k_t * s - gamma_t * vt;
-  const double fcrit = mu * fn_abs;
-  const double fmag = ft.norm();
-  if (fmag > fcrit) {
+  // |F_t| > mu |F_n| compared squared: the square root only for a sliding row.
+  if (ft.squaredNorm() > fcrit * fcrit) {
+    const double fmag = ft.norm();
     if (k_t > 0.0 && fmag > 0.0) {
       ft *= fcrit / fmag;
       s = -(ft + gamma_t * vt) / k_t;

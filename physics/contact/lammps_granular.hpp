@@ -23,6 +23,9 @@
 namespace sparkdem::physics {
 
 struct LammpsHertzTsuji {
+  /// LAMMPS pair_granular.cpp's EPSILON: the history is rotated into the tangent plane only when
+  /// its normal component matters to that fraction of the friction limit (kernel::tangential_history).
+  static constexpr double kLammpsFrameEpsilon = 1e-10;
   static constexpr std::string_view kName = "lammps_hertz_tsuji";
   struct Params {
     double youngs_modulus = 1e7;
@@ -57,7 +60,8 @@ struct LammpsHertzTsuji {
     const double damp = alpha_ * std::sqrt(g.m_eff * knfac);
     const double fn = knfac * g.overlap - damp * m.vn;
     ContactForces f;
-    f.tangential = kernel::tangential_history(g.n, m.vt, p_.tangential_stiffness, p_.x_gammat * damp, p_.friction, std::abs(fn), dt, xi);
+    f.tangential = kernel::tangential_history(g.n, m.vt, p_.tangential_stiffness, p_.x_gammat * damp, p_.friction, std::abs(fn), dt, xi,
+                                                kLammpsFrameEpsilon);
     f.force = fn * g.n + f.tangential;
     return f;
   }
