@@ -7,6 +7,7 @@
 //   build/benchmarks/stream_scaling [particles ...]    (default 2,000 24,000 200,000 2,000,000)
 #include <omp.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>

@@ -288,7 +288,6 @@ class ContactModelT final : public ContactModel {
   /// bit-identical to the one-thread loop, with neither the torque rows of the whole table nor a
   /// second pass over it (the gather of every particle) in between.
   void pair_forces_split(ParticleStore& p, ContactTable& t, double dt, double time_scale, bool inertia_free) const {
-    const std::int64_t rows = static_cast<std::int64_t>(t.size());
     const int ranges = par::threads();
     const auto& split = t.row_split(ranges);
     PassInputs in = pass_inputs(p, t, time_scale);
@@ -299,7 +298,7 @@ class ContactModelT final : public ContactModel {
     const std::int32_t* owner = split.owner.data();
 #pragma omp parallel
     for (int range = par::thread_num(); range < ranges; range += par::team_size()) {
-      const std::int64_t lo = rows * range / ranges, hi = rows * (range + 1) / ranges;
+      const std::int64_t lo = split.row_begin[range], hi = split.row_begin[range + 1];
       Vec3 tri, trj;
       for (std::int64_t r = lo; r < hi; ++r) {
         if (!row_forces(p, t, r, dt, in, F[r], tri, trj)) {

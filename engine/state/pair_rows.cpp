@@ -84,48 +84,43 @@ void PairRows::build_incidence(std::size_t n) {
       n, size(), [&](std::size_t r) { return i_[r]; }, [&](std::size_t r) { return j_[r]; }, inc_start_, inc_row_);
 }
 
-namespace {
-/// The incidence sum of particle p (in increasing row order) added to force[p], torque[p].
-inline void gather_one(std::int64_t p, const std::vector<std::int64_t>& start, const std::vector<std::int64_t>& row,
-                       const std::vector<Vec3>& f_row, const std::vector<Vec3>& ti_row, const std::vector<Vec3>& tj_row,
-                       std::vector<Vec3>& force, std::vector<Vec3>& torque) {
+void PairRows::gather_one(std::int64_t p, std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
   Vec3 f = Vec3::Zero(), t = Vec3::Zero();
-  for (std::int64_t k = start[p]; k < start[p + 1]; ++k) {
-    const std::int64_t code = row[k];
+  for (std::int64_t k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
+    const std::int64_t code = inc_row_[k];
     if (code >= 0) {
-      f += f_row[code];
-      t += ti_row[code];
+      f += force_[code];
+      t += torque_i_[code];
     } else {
-      f -= f_row[~code];
-      t += tj_row[~code];
+      f -= force_[~code];
+      t += torque_j_[~code];
     }
   }
   force[p] += f;
   torque[p] += t;
 }
-}  // namespace
 
 void PairRows::gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
   const std::int64_t n = static_cast<std::int64_t>(force.size());
 #pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-  for (std::int64_t p = 0; p < n; ++p) gather_one(p, inc_start_, inc_row_, force_, torque_i_, torque_j_, force, torque);
+  for (std::int64_t p = 0; p < n; ++p) gather_one(p, force, torque);
 }
 
 void PairRows::gather_particles(const std::vector<Index>& which, std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
   const std::int64_t n = static_cast<std::int64_t>(which.size());
 #pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-  for (std::int64_t k = 0; k < n; ++k) gather_one(which[k], inc_start_, inc_row_, force_, torque_i_, torque_j_, force, torque);
+  for (std::int64_t k = 0; k < n; ++k) gather_one(which[k], force, torque);
 }
 
 const PairRows::RowSplit& PairRows::row_split(int threads) const {
   if (split_.threads == threads) return split_;
   const std::int64_t rows = static_cast<std::int64_t>(size()), n = static_cast<std::int64_t>(inc_start_.size()) - 1;
+  split_.row_begin.resize(threads + 1);
+  for (int t = 0; t <= threads; ++t) split_.row_begin[t] = rows * t / threads;
   const auto range_of = [&](std::int64_t code) {
     const std::int64_t r = code >= 0 ? code : ~code;
-    // the t with rows t / T <= r < rows (t + 1) / T
-    std::int64_t t = r * threads / std::max<std::int64_t>(rows, 1);
-    while (t > 0 && r < rows * t / threads) --t;
-    while (t + 1 < threads && r >= rows * (t + 1) / threads) ++t;
+    int t = 0;
+    while (r >= split_.row_begin[t + 1]) ++t;
     return static_cast<std::int32_t>(t);
   };
   split_.owner.assign(std::max<std::int64_t>(n, 0), -1);

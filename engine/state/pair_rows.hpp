@@ -84,13 +84,15 @@ class PairRows {
   /// Sum per-row forces/torques into particle arrays (adds to force/torque).
   void gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
 
-  /// The rows dealt to `threads` contiguous ranges, range t = [rows t / T, rows (t + 1) / T), and
+  /// The rows dealt to `threads` contiguous ranges, range t = [row_begin[t], row_begin[t + 1]) with
+  /// row_begin[t] = rows t / T, and
   /// per particle the range holding every row that touches it (`owner`, -1 when rows of two ranges
   /// touch it or none does); `boundary`: the particles touched by rows of two ranges. A thread that
   /// walks its range in row order may add its rows straight into the particles it owns: each sum
   /// takes the same operands in the same order as the gather, whatever the thread count.
   struct RowSplit {
     int threads = 0;
+    std::vector<std::int64_t> row_begin;
     std::vector<std::int32_t> owner;
     std::vector<Index> boundary;
   };
@@ -109,6 +111,8 @@ class PairRows {
   /// Resize the per-row result arrays to the row count (zeroed) and rebuild the incidence.
   void reset_results(std::size_t n_particles);
   void build_incidence(std::size_t n_particles);
+  /// The incidence sum of particle p, in increasing row order, added to force[p] and torque[p].
+  void gather_one(std::int64_t p, std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
   /// Rows (ids, local indices) and state with their column names.
   void visit_rows(Archive& ar, const std::string& prefix, const std::string& what);
 

@@ -119,7 +119,7 @@ inline Vec3 tangential_history(const Vec3& n, const Vec3& vt, double k_t, double
   Vec3 s(xi[0], xi[1], xi[2]);
   const double fcrit = mu * fn_abs;
   const double rsht = s.dot(n);
-  if (frame_epsilon > 0.0 ? std::abs(rsht) * k_t > frame_epsilon * fcrit : true) {
+  if (frame_epsilon <= 0.0 || std::abs(rsht) * k_t > frame_epsilon * fcrit) {
     const double mag = s.norm();
     s -= rsht * n;
     const double proj = s.norm();
