@@ -27,6 +27,8 @@
 #include "tests/support/scene.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_cohesive_beam {
+
 using namespace sparkdem;
 using physics::CohesiveBeam;
 
@@ -427,3 +429,5 @@ TEST_CASE("bond_virial_failure, von Mises: the virial tensor of a stretched cubi
   for (std::size_t r = 0; r < s.bonds.size(); ++r)
     if (s.bonds.broken(r)) CHECK(s.bonds.break_record(r).mode == kBreakModeVirialVonMises);
 }
+
+}  // namespace test_cohesive_beam

@@ -23,6 +23,8 @@
 #include "tests/support/scene.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_contact_percolation {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -199,3 +201,5 @@ TEST_CASE("contact_percolation: pure metrics on an explicit graph", "[cpc]") {
   CHECK(m.coordination == Approx(6.0 / 7.0).epsilon(1e-15));
   CHECK(m.largest_cluster_fraction == Approx(3.0 / 7.0).epsilon(1e-15));
 }
+
+}  // namespace test_contact_percolation

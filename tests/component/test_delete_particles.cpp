@@ -10,6 +10,8 @@
 #include "engine/state/particle_set.hpp"
 #include "support/scene.hpp"
 
+namespace test_delete_particles {
+
 using namespace sparkdem;
 
 namespace {
@@ -111,3 +113,5 @@ TEST_CASE("deleting particles keeps the particle, contact and bond tables consis
   CHECK(p.size() == 100);
   CHECK_THROWS_AS(delete_particles(s, std::vector<bool>(3, true)), SetupError);
 }
+
+}  // namespace test_delete_particles

@@ -19,6 +19,8 @@
 #include "tests/support/scene.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_electrical_network {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -380,3 +382,5 @@ TEST_CASE("electrical_network: the sphere-element topology stays below the Hashi
     previous = se.conductivity_eff;
   }
 }
+
+}  // namespace test_electrical_network

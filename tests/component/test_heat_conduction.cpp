@@ -25,6 +25,8 @@
 #include "tests/support/scene.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_heat_conduction {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -330,3 +332,5 @@ TEST_CASE("heat_conduction: report_sets gives the capacity-weighted mean tempera
   hp.report_sets = "lower,lower";
   CHECK_THROWS_WITH(HeatConduction(hp), Catch::Contains("listed twice"));
 }
+
+}  // namespace test_heat_conduction

@@ -22,6 +22,8 @@
 #include "tests/support/thermal_network.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_heat_stiff {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 using test::StiffScene;
@@ -247,3 +249,5 @@ TEST_CASE("heat_conduction: first-order convergence of both schemes on the stiff
     CHECK(ea / eb <= 2.02);
   }
 }
+
+}  // namespace test_heat_stiff

@@ -14,6 +14,8 @@
 #include "physics/contact/hertz_mindlin.hpp"
 #include "tests/support/scene.hpp"
 
+namespace test_history {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -247,3 +249,5 @@ TEST_CASE("Tangential history survives rebuilds and spatial sorts (end to end)",
     }
   CHECK(wall_hist > 1e-10);
 }
+
+}  // namespace test_history

@@ -24,6 +24,8 @@
 #include "tests/support/scene.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_interaction_graph {
+
 using namespace sparkdem;
 using test::relative_error;
 
@@ -351,3 +353,5 @@ TEST_CASE("Graph + Laplacian: lattice of spheres between two walls against the c
   CHECK(mass[g.wall_node(0)] == 0.0);
   CHECK_THROWS_AS(node_field(s, g, "temperature"), SetupError);
 }
+
+}  // namespace test_interaction_graph

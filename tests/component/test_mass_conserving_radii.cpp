@@ -21,6 +21,8 @@
 #include "support/free_pair.hpp"
 #include "support/scene.hpp"
 
+namespace test_mass_conserving_radii {
+
 using namespace sparkdem;
 using physics::MassConservingRadii;
 using physics::Sintering;
@@ -212,3 +214,5 @@ TEST_CASE("Mass-conserving radii: dense particles stop their pairs' flow (stop_f
   both.creep_stop_gb_fraction = 0.9;
   CHECK_THROWS_WITH(Sintering(both), Catch::Contains("/stop_flow_at_dense"));
 }
+
+}  // namespace test_mass_conserving_radii

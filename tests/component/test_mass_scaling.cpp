@@ -12,6 +12,8 @@
 #include "physics/contact/hooke.hpp"
 #include "support/scene.hpp"
 
+namespace test_mass_scaling {
+
 using namespace sparkdem;
 
 TEST_CASE("mass_scaling and mass_floor_radius scale the fines during the stage and are undone after it", "[mass_scaling]") {
@@ -63,3 +65,5 @@ TEST_CASE("mass_scaling and mass_floor_radius scale the fines during the stage a
   sim.run_stage(plain, check);
   CHECK_FALSE(p.fields.has("mass_factor"));
 }
+
+}  // namespace test_mass_scaling

@@ -13,6 +13,8 @@
 #include "engine/neighbor/neighbor_search.hpp"
 #include "tests/support/scene.hpp"
 
+namespace test_neighbor {
+
 using namespace sparkdem;
 
 namespace {
@@ -116,3 +118,5 @@ TEST_CASE("Verlet criterion: moves below skin/2 keep every contact in the old li
   r2[3] = r[3] + 0.49 * skin;
   CHECK_FALSE(vt.needs_rebuild(x, r2, skin));
 }
+
+}  // namespace test_neighbor

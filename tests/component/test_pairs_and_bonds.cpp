@@ -24,6 +24,8 @@
 #include "tests/support/scene.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_pairs_and_bonds {
+
 using namespace sparkdem;
 
 namespace {
@@ -290,3 +292,5 @@ TEST_CASE("an event clock fires when a bond breaks", "[bonds][scheduler][contrac
   CHECK(s.bonds.broken_step(0) == 8);
   CHECK(w.steps == std::vector<Step>{0, 8});
 }
+
+}  // namespace test_pairs_and_bonds

@@ -6,6 +6,8 @@
 #include "physics/contact/hertz_mindlin.hpp"
 #include "support/scene.hpp"
 
+namespace test_particle_sets {
+
 using namespace sparkdem;
 
 namespace {
@@ -108,3 +110,5 @@ TEST_CASE("cylinder set: centre-inside and overlap criteria, any axis", "[sets]"
   sel.radius = 0.0;
   CHECK_THROWS_AS(select_particles(s, sel), SetupError);
 }
+
+}  // namespace test_particle_sets

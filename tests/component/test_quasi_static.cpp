@@ -26,6 +26,8 @@
 #include "support/scratch.hpp"
 #include "support/scene.hpp"
 
+namespace test_quasi_static {
+
 using namespace sparkdem;
 using physics::Sintering;
 
@@ -329,3 +331,5 @@ TEST_CASE("Quasi-static stage: `sparkdem check` plans it without a stable-step l
   CHECK_FALSE(press.contains("dt_note"));
   CHECK(press["step_plan"] == nlohmann::json::array({"quasi_static_step", "temperature_history"}));
 }
+
+}  // namespace test_quasi_static

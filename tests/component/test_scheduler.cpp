@@ -13,6 +13,8 @@
 #include "physics/contact/hertz_mindlin.hpp"
 #include "tests/support/scene.hpp"
 
+namespace test_scheduler {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -307,3 +309,5 @@ TEST_CASE("time scaling: physical-time modules see time_scale x dt and the physi
   CHECK(r.physical_time == Approx(10 * dt * scale).epsilon(1e-12));
   CHECK(b.s.physical_time == Approx(10 * dt * scale).epsilon(1e-12));
 }
+
+}  // namespace test_scheduler

@@ -12,6 +12,8 @@
 #include "support/scene.hpp"
 #include "support/tolerance.hpp"
 
+namespace test_temperature_history {
+
 using namespace sparkdem;
 using physics::TemperatureHistory;
 
@@ -233,3 +235,5 @@ TEST_CASE("temperature_history start_from_current cools a state from the tempera
   test::NullObserver none;
   CHECK_THROWS_WITH(sim2.run_stage(cfg, none), Catch::Contains("start_from_current needs the particles' temperature"));
 }
+
+}  // namespace test_temperature_history

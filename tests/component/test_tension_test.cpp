@@ -12,6 +12,8 @@
 #include "physics/mechanics/tension_test.hpp"
 #include "support/scene.hpp"
 
+namespace test_tension_test {
+
 using namespace sparkdem;
 
 namespace {
@@ -168,3 +170,5 @@ TEST_CASE("local_damping leaves prescribed particles alone: their force is the r
   CHECK(s.particles.force[0].x() == 0.3);           // v_x = 0: no damping
   CHECK(s.particles.force[1] == f);
 }
+
+}  // namespace test_tension_test

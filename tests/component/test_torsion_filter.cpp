@@ -16,6 +16,8 @@
 #include "physics/mechanics/torsion_test.hpp"
 #include "tests/support/scene.hpp"
 
+namespace test_torsion_filter {
+
 using namespace sparkdem;
 
 namespace {
@@ -82,3 +84,5 @@ TEST_CASE("torsion_test resistance onsets: unfiltered first crossing; a persiste
   CHECK(f.rejected_rises == 1.0);
   CHECK(f.rejected_jumps == 1.0);
 }
+
+}  // namespace test_torsion_filter

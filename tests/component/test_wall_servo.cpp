@@ -9,6 +9,8 @@
 #include "physics/contact/hertz_mindlin.hpp"
 #include "support/scene.hpp"
 
+namespace test_wall_servo {
+
 using namespace sparkdem;
 
 namespace {
@@ -173,3 +175,5 @@ TEST_CASE("wall work: a punch squeezing a frozen sphere does the Hertz energy it
   CHECK(punch.work == Approx(energy).epsilon(3e-3));
   CHECK(s.find_wall("floor")->work == 0.0);
 }
+
+}  // namespace test_wall_servo

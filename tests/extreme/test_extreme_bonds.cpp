@@ -20,6 +20,8 @@
 #include "tests/extreme/extreme_figures.hpp"
 #include "tests/support/scene.hpp"
 
+namespace test_extreme_bonds {
+
 using namespace sparkdem;
 using physics::CohesiveBeam;
 
@@ -104,3 +106,5 @@ TEST_CASE("extreme B1: a cohesive-beam block loaded until every bond breaks", "[
   EXTREME_FIGURE("B1 every bond breaks", "worst break time offset from n_f dt", worst_dt, "steps");
   EXTREME_FIGURE("B1 every bond breaks", "kinetic energy change while coasting", std::abs(ke() - k0) / k0, "");
 }
+
+}  // namespace test_extreme_bonds

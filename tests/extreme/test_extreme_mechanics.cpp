@@ -38,6 +38,8 @@
 #include "tests/support/scratch.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_extreme_mechanics {
+
 using namespace sparkdem;
 using physics::HertzMindlin;
 namespace fs = std::filesystem;
@@ -692,3 +694,5 @@ TEST_CASE("extreme M5: overlapping initial particles are reported, and refused, 
                    rel["stages"][1]["initial_overlap"]["relax_sweeps"].get<double>(), "");
   }
 }
+
+}  // namespace test_extreme_mechanics

@@ -31,6 +31,8 @@
 #include "tests/support/scene.hpp"
 #include "tests/support/thermal_network.hpp"
 
+namespace test_extreme_networks {
+
 using namespace sparkdem;
 
 namespace {
@@ -519,3 +521,5 @@ TEST_CASE("extreme T2: implicit heat at 1e3 x the explicit stable step on a clus
   EXTREME_FIGURE("T2 implicit heat at 1e3 x", "stiffness lambda_max / lambda_min(>0)",
                  modal.rates().maxCoeff() / modal.rates().tail(modal.rates().size() - 1).minCoeff(), "");
 }
+
+}  // namespace test_extreme_networks

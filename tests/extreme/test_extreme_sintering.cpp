@@ -26,6 +26,8 @@
 #include "tests/extreme/extreme_figures.hpp"
 #include "tests/support/scene.hpp"
 
+namespace test_extreme_sintering {
+
 using namespace sparkdem;
 using physics::Sintering;
 namespace kernel = physics::kernel;
@@ -263,3 +265,5 @@ TEST_CASE(
   EXTREME_FIGURE("S3 0.99 T_m sintering", "final neck / a_eq", a_end / a_eq, "");
   EXTREME_FIGURE("S3 0.99 T_m sintering", "wall time", res.wall_seconds, "s");
 }
+
+}  // namespace test_extreme_sintering

@@ -30,6 +30,8 @@
 #include "tests/extreme/extreme_figures.hpp"
 #include "tests/support/scene.hpp"
 
+namespace test_stable_step {
+
 using namespace sparkdem;
 
 namespace {
@@ -271,3 +273,5 @@ TEST_CASE("stable step S4: cohesive-beam block - estimate below the bisected lim
   const Estimate e = estimate_of(sc);
   report("S4 cohesive-beam block", e, bisected_limit(sc, e.full));
 }
+
+}  // namespace test_stable_step

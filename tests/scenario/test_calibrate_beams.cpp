@@ -15,6 +15,8 @@
 #include "io/scenario/scenario.hpp"
 #include "support/scratch.hpp"
 
+namespace test_calibrate_beams {
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace sparkdem;
@@ -146,3 +148,5 @@ TEST_CASE("calibrate: a bad calibration file is rejected with every problem at o
     }
   }
 }
+
+}  // namespace test_calibrate_beams

@@ -19,6 +19,8 @@
 #include "io/scenario/scenario.hpp"
 #include "support/scratch.hpp"
 
+namespace test_check_exit {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -179,3 +181,5 @@ TEST_CASE("sparkdem run --help documents --report-only and exit code 5", "[check
   CHECK(contains(r.out, "--report-only"));
   CHECK(contains(r.out, "5 the run completed"));
 }
+
+}  // namespace test_check_exit

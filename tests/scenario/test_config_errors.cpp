@@ -23,6 +23,8 @@
 #include "io/scenario/scenario.hpp"
 #include "physics/register_all.hpp"
 
+namespace test_config_errors {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -334,3 +336,5 @@ TEST_CASE("$include merges a JSON file into an object, keys beside it override, 
   const fs::path file = sparkdem::test::write_scene(dir.path, "scene.json", scene);
   expect_cli_rejects(file, {{"/contact/params/$include", "cannot read"}, {"/stages/0/$include", "JSON object"}}, dir.path);
 }
+
+}  // namespace test_config_errors

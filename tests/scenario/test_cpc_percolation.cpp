@@ -31,6 +31,8 @@
 #include "physics/register_all.hpp"
 #include "support/scratch.hpp"
 
+namespace test_cpc_percolation {
+
 using namespace sparkdem;
 using nlohmann::json;
 namespace fs = std::filesystem;
@@ -176,3 +178,5 @@ TEST_CASE("cpc_fillers: a seeds sweep gives the spanning fraction", "[cpc][scena
   const double mean = stats["mean"].get<double>();
   CHECK((mean == 0.0 || mean == 0.25 || mean == 0.5 || mean == 0.75 || mean == 1.0));
 }
+
+}  // namespace test_cpc_percolation

@@ -34,6 +34,8 @@
 #include "support/crash_harness.hpp"
 #include "support/scratch.hpp"
 
+namespace test_crash_safety {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -266,3 +268,5 @@ TEST_CASE("a damaged checkpoint given to --restart or from_snapshot exits with c
     }
   }
 }
+
+}  // namespace test_crash_safety

@@ -10,6 +10,8 @@
 
 #include "support/scratch.hpp"
 
+namespace test_create_bonds {
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace sparkdem;
@@ -43,3 +45,5 @@ TEST_CASE("create_bonds gap_tolerance_relative bonds the pairs of the absolute g
   CHECK(abs["bonds_created"] == rel["bonds_created"]);
   CHECK(rel["bonds_created"].get<int>() > cook["bonds_created"].get<int>());
 }
+
+}  // namespace test_create_bonds

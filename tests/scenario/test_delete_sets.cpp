@@ -13,6 +13,8 @@
 #include "support/h5compare.hpp"
 #include "support/scratch.hpp"
 
+namespace test_delete_sets {
+
 namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -151,3 +153,5 @@ TEST_CASE("delete_sets: an unknown set is a configuration error at its path", "[
     CHECK(e.diagnostics()[0].path == "/stages/1/delete_sets");
   }
 }
+
+}  // namespace test_delete_sets

@@ -13,6 +13,8 @@
 #include "io/scenario/scenario.hpp"
 #include "support/scratch.hpp"
 
+namespace test_electrical_output {
+
 namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -57,3 +59,5 @@ TEST_CASE("electrical_network writes branch currents, conductances and powers to
   }
   CHECK(std::abs(P - 0.5 * I) <= 1e-12 * P);  // sum I^2 R = V I
 }
+
+}  // namespace test_electrical_output

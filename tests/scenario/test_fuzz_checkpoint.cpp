@@ -21,6 +21,8 @@
 #include "support/mock_modules.hpp"
 #include "support/scratch.hpp"
 
+namespace test_fuzz_checkpoint {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -157,3 +159,5 @@ TEST_CASE("restart reader: the mutated checkpoints that crashed, hung or threw u
     }
   }
 }
+
+}  // namespace test_fuzz_checkpoint

@@ -30,6 +30,8 @@
 #include "io/scenario/scenario.hpp"
 #include "physics/register_all.hpp"
 
+namespace test_fuzz_loader {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -191,3 +193,5 @@ TEST_CASE("the scenario loader refuses special files and huge stage lists quickl
     CHECK(r.seconds < 5.0);
   }
 }
+
+}  // namespace test_fuzz_loader

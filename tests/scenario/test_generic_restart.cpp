@@ -38,6 +38,8 @@ Registry registry_with_mocks() {
 }
 }  // namespace sparkdem::test
 
+namespace test_generic_restart {
+
 namespace {
 using sparkdem::test::load_data;
 using sparkdem::test::write_scene;
@@ -279,3 +281,5 @@ TEST_CASE("generic restart: ptc_strain on the RKPM matrix and the quasi-static h
           "[restart][contracts][scenario]") {
   run_group(3);
 }
+
+}  // namespace test_generic_restart

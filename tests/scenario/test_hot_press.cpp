@@ -16,6 +16,8 @@
 #include "io/scenario/scenario.hpp"
 #include "support/scratch.hpp"
 
+namespace test_hot_press {
+
 namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -131,3 +133,5 @@ TEST_CASE("sparkdem schema lists temperature_history and the compact stage key",
     if (p["name"] == "expansion_coefficient") unit_ok = p["unit"] == "1/K";
   CHECK(unit_ok);
 }
+
+}  // namespace test_hot_press

@@ -25,6 +25,8 @@
 #include "io/scenario/scenario.hpp"
 #include "support/scratch.hpp"
 
+namespace test_joule_validation {
+
 namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -104,3 +106,5 @@ TEST_CASE("notched bar, N = 620: energy balance closed, network connected", "[jo
   CHECK(f["heat_balance_error"].get<double>() <= 1e-12);
   CHECK(f["electrical_floating_nodes"].get<double>() <= 0.02 * static_cast<double>(st.particles.size()));
 }
+
+}  // namespace test_joule_validation

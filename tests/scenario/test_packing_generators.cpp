@@ -12,6 +12,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+namespace test_packing_generators {
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -150,3 +152,5 @@ TEST_CASE("shipped fill and relax configs reach their targets", "[generators][sl
     check_packing(s, generator_params(scene), fill, fill);
   }
 }
+
+}  // namespace test_packing_generators

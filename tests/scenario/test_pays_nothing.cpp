@@ -27,6 +27,8 @@
 #include "io/scenario/scenario.hpp"
 #include "physics/register_all.hpp"
 
+namespace test_pays_nothing {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -191,3 +193,5 @@ TEST_CASE("a short CLI pour stores and writes no optional field beyond the wall 
           std::set<std::string>{"force", "id", "material", "omega", "position", "radius", "velocity"});
   }
 }
+
+}  // namespace test_pays_nothing

@@ -20,6 +20,8 @@
 #include "support/plate_probe.hpp"
 #include "support/scratch.hpp"
 
+namespace test_plate_source {
+
 namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -104,3 +106,5 @@ TEST_CASE("plate with a central source (N = 2000): discrete maximum principle, F
   CHECK(phi.at("P1") < phi.at("P1c"));
   CHECK(phi.at("P1c") < phi.at("P2"));
 }
+
+}  // namespace test_plate_source

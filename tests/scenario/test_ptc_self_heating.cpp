@@ -33,6 +33,8 @@
 #include "physics/register_all.hpp"
 #include "support/scratch.hpp"
 
+namespace test_ptc_self_heating {
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace sparkdem;
@@ -137,3 +139,5 @@ TEST_CASE("ptc self-heating element: energy balance, cold conduction below the t
   CHECK(mean < I0_hi / 10.0);
   CHECK(std::abs(Tbar - T_sw) < 0.1 * (T_sw - T_amb));
 }
+
+}  // namespace test_ptc_self_heating

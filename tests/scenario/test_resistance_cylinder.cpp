@@ -17,6 +17,8 @@
 #include <string>
 #include <unistd.h>
 
+namespace test_resistance_cylinder {
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -58,3 +60,5 @@ TEST_CASE("seed 001 cylinder at N = 5000: the packing reaches its target, Kirchh
   // The figure against the continuum (R_th) is the validation ledger's, not this test's:
   // tools/validate.py case seed001/cylinder (full tier N = 20,000, three packings; fast tier in CI).
 }
+
+}  // namespace test_resistance_cylinder

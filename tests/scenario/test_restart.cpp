@@ -30,6 +30,8 @@
 
 #include "io/hdf5/h5file.hpp"
 
+namespace test_restart {
+
 namespace {
 using sparkdem::test::load_data;
 using sparkdem::test::write_scene;
@@ -212,3 +214,5 @@ TEST_CASE("restart from a checkpoint at a stage's last step writes the uninterru
   CHECK(a.read_int64s("/frames/000001/contacts/pairs") == c.read_int64s("/frames/000000/contacts/pairs"));
   sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
 }
+
+}  // namespace test_restart

@@ -32,6 +32,8 @@
 #include "io/scenario/scenario.hpp"
 #include "support/scratch.hpp"
 
+namespace test_sps_coupled {
+
 using nlohmann::json;
 using namespace sparkdem;
 
@@ -107,3 +109,5 @@ TEST_CASE("SPS coupled (reduced): Joule heating under PI control follows the hea
   CHECK(worst_radius <= 1e-12);
   CHECK(summary["stages"][1]["module_wall_time_s"].contains("heat_conduction"));
 }
+
+}  // namespace test_sps_coupled

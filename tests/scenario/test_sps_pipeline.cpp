@@ -24,6 +24,8 @@
 #include "io/scenario/scenario.hpp"
 #include "support/scratch.hpp"
 
+namespace test_sps_pipeline {
+
 using nlohmann::json;
 using namespace sparkdem;
 
@@ -103,3 +105,5 @@ TEST_CASE("SPS pipeline (reduced): packing, hot press, porosity snapshots, calib
   // other tests; the fast variant above checks the same on the first three.
   check_pipeline(small_pipeline());
 }
+
+}  // namespace test_sps_pipeline

@@ -38,6 +38,8 @@
 #include "io/scenario/pipeline.hpp"
 #include "io/scenario/scenario.hpp"
 
+namespace test_sweeps {
+
 namespace {
 using sparkdem::test::load_data;
 using sparkdem::test::write_scene;
@@ -606,3 +608,5 @@ TEST_CASE("a module's own consistency errors carry their paths, all at once, wit
     }
   }
 }
+
+}  // namespace test_sweeps

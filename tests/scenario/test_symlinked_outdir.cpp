@@ -31,6 +31,8 @@
 
 #include "support/scratch.hpp"
 
+namespace test_symlinked_outdir {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -274,3 +276,5 @@ TEST_CASE("a run failing after a completed stage says how to continue, and that 
     CHECK(continue_command(r.err).empty());
   }
 }
+
+}  // namespace test_symlinked_outdir

@@ -15,6 +15,8 @@
 #include "io/scenario/scenario.hpp"
 #include "support/scratch.hpp"
 
+namespace test_thermal_stiff {
+
 namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -61,3 +63,5 @@ TEST_CASE("configs/thermal_stiff.json: implicit at 1000 x the explicit step with
     CHECK_THROWS_AS(run(e, "refused"), SetupError);
   }
 }
+
+}  // namespace test_thermal_stiff

@@ -23,6 +23,8 @@
 #include "physics/register_all.hpp"
 #include "support/scratch.hpp"
 
+namespace test_torsion_crack {
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace sparkdem;
@@ -227,3 +229,5 @@ TEST_CASE("pin torsion (configs/torsion_crack.json at N = 1000): elastic torque,
   CHECK((r07.is_null() || r07.get<double>() > 1.5));  // null: +inf, separated
   check_intact(intact_rows(out / "timeseries.csv"));
 }
+
+}  // namespace test_torsion_crack

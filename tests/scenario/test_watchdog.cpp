@@ -39,6 +39,8 @@
 #include "physics/register_all.hpp"
 #include "support/scratch.hpp"
 
+namespace test_watchdog {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -401,3 +403,5 @@ TEST_CASE("watchdog negative: the frictional pour runs to its end with the defau
   CHECK(ov < 0.1 * kDefaultOverlapRatioBound);
   CHECK(v * 2e-5 / 1e-3 < 0.1);  // dt = 2e-5 s, r = 1 mm: far below one radius per step
 }
+
+}  // namespace test_watchdog

@@ -26,6 +26,8 @@
 #include "io/scenario/scenario.hpp"
 #include "support/scratch.hpp"
 
+namespace test_xdmf_frames {
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -190,3 +192,5 @@ TEST_CASE("results.xdmf of a multi-stage run: one grid per time, strictly increa
   CHECK(on_disk == referenced);
   CHECK(io::H5File::open_read(out / "results.h5").children("/frames").size() == grids.size());
 }
+
+}  // namespace test_xdmf_frames

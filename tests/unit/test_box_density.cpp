@@ -13,6 +13,8 @@
 #include "physics/packing/box_density.hpp"
 #include "support/scratch.hpp"
 
+namespace test_box_density {
+
 using namespace sparkdem;
 using nlohmann::json;
 
@@ -78,3 +80,5 @@ TEST_CASE("box_density: a stage key with JSON-pointer errors, did-you-mean and k
     CHECK(fin["box_solid_fraction"].get<double>() == Approx(n * 4.0 / 3.0 * std::numbers::pi * rr * rr * rr / 8.0).epsilon(1e-12));
   }
 }
+
+}  // namespace test_box_density

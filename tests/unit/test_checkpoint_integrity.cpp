@@ -20,6 +20,8 @@
 #include "io/restart/hdf5_archive.hpp"
 #include "support/scratch.hpp"
 
+namespace test_checkpoint_integrity {
+
 namespace fs = std::filesystem;
 using sparkdem::SetupError;
 using sparkdem::io::H5File;
@@ -261,3 +263,5 @@ TEST_CASE("a correctly sealed file whose data is not HDF5 fails cleanly in HDF5"
   } catch (const SetupError& e) { CHECK_THAT(e.what(), Catch::Contains("HDF5 file '" + path.string() + "': cannot open the file image")); }
   CHECK(H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL) == 0);
 }
+
+}  // namespace test_checkpoint_integrity

@@ -13,6 +13,8 @@
 #include "support/scene.hpp"
 #include "support/tolerance.hpp"
 
+namespace test_compact {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -204,3 +206,5 @@ TEST_CASE("sample envelope: caliper profile of rings, a barrel and an outlier", 
   // sectors each reach the outer ring, rho = 8 mm + r.
   CHECK(envelope_volume(xb, rb, tall, 3.0) == Approx(kPi * 9e-3 * 9e-3 * 4e-3).epsilon(1e-12));
 }
+
+}  // namespace test_compact

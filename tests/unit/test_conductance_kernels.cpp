@@ -17,6 +17,8 @@
 #include "physics/electrical/conductance_kernels.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_conductance_kernels {
+
 using namespace sparkdem;
 using namespace sparkdem::physics::electrical;
 using sparkdem::test::relative_error;
@@ -546,3 +548,5 @@ TEST_CASE("Bulk conductivity kappa(T): linear resistivity and tabulated", "[elec
   CHECK_THROWS_AS(ConductivityTable({300.0, kInf}, {1.0, 2.0}), ConfigError);
   CHECK_THROWS_AS(conductivity(law, std::nan("")), ConfigError);
 }
+
+}  // namespace test_conductance_kernels

@@ -17,6 +17,8 @@
 #include "tests/support/scene.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_contact_laws {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 using sparkdem::test::relative_error;
@@ -358,3 +360,5 @@ TEST_CASE("Sphere-wall bounce: restitution and duration with R* = r, m* = m", "[
                                               << relative_error(im.duration, tc));
   }
 }
+
+}  // namespace test_contact_laws

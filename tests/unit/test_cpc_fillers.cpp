@@ -22,6 +22,8 @@
 #include "physics/packing/cpc_fillers.hpp"
 #include "physics/packing/size_distribution.hpp"
 
+namespace test_cpc_fillers {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -143,3 +145,5 @@ TEST_CASE("cpc_fillers: aggregation", "[cpc]") {
     CHECK(largest_cluster(x, r, 1e-3) > seed_size);
   }
 }
+
+}  // namespace test_cpc_fillers

@@ -13,6 +13,8 @@
 #include "tests/support/scene.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_energy {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -142,3 +144,5 @@ TEST_CASE("Elastic frictionless gas in a box conserves energy (1e6 steps)", "[en
   // Same bound over ten times as many steps (~600 collisions per particle).
   CHECK(energy_drift(1000000) < 1e-4);
 }
+
+}  // namespace test_energy

@@ -7,6 +7,8 @@
 
 #include "support/fd_laplace2d.hpp"
 
+namespace test_fd_laplace2d {
+
 using namespace sparkdem;
 
 namespace {
@@ -102,3 +104,5 @@ TEST_CASE("fd Laplace: Richardson extrapolation of a second-order sequence", "[f
   CHECK(r.band == Approx((f(0.05) - f(0.025)) / 3.0).epsilon(1e-9));
   CHECK_THROWS_AS(fd::solve(fd::plate_problem(0.03, 0.0149), 60), std::invalid_argument);  // disc touches the edges
 }
+
+}  // namespace test_fd_laplace2d

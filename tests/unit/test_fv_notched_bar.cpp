@@ -7,6 +7,8 @@
 
 #include "support/fv_notched_bar.hpp"
 
+namespace test_fv_notched_bar {
+
 using namespace sparkdem;
 
 namespace {
@@ -139,3 +141,5 @@ TEST_CASE("fv notched bar: a grid that does not resolve the slots is rejected", 
   bad.z_hi = bad.z_lo;
   CHECK_THROWS_AS(fv::solve(g, fv::Material{}, bad, grid(25e-6, 10)), std::invalid_argument);
 }
+
+}  // namespace test_fv_notched_bar

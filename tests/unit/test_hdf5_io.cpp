@@ -20,6 +20,8 @@
 #include "io/hdf5/results_writer.hpp"
 #include "io/restart/hdf5_archive.hpp"
 
+namespace test_hdf5_io {
+
 namespace fs = std::filesystem;
 using sparkdem::Quat;
 using sparkdem::SetupError;
@@ -656,3 +658,5 @@ TEST_CASE("results.xdmf times: strictly increasing, at least 1e-15 s apart, true
   for (std::size_t k = 1; k < listed.size(); ++k) CHECK(listed[k] - listed[k - 1] >= gap - 1e-18);
   CHECK(ResultsWriter::listed_times({}).empty());
 }
+
+}  // namespace test_hdf5_io

@@ -22,6 +22,8 @@
 #include "tests/support/scratch.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_laplacian {
+
 using namespace sparkdem;
 using test::relative_error;
 
@@ -519,3 +521,5 @@ TEST_CASE("Laplacian: the CG warm start goes through a checkpoint bit for bit", 
   P.permute_warm_start(perm, net.nodes);
   for (std::size_t i = 0; i < net.nodes; ++i) CHECK(P.warm_start()[i] == before[perm[i]]);
 }
+
+}  // namespace test_laplacian

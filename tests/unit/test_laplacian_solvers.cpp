@@ -24,6 +24,8 @@
 #include "engine/graph/laplacian.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_laplacian_solvers {
+
 using namespace sparkdem;
 using test::relative_error;
 
@@ -574,3 +576,5 @@ TEST_CASE("Laplacian solvers: pseudo-transient and its limit are bit-identical f
   CHECK(r1.pseudo.change_indicator == r2.pseudo.change_indicator);
   CHECK(r1.value == r2.value);
 }
+
+}  // namespace test_laplacian_solvers

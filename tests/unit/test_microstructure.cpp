@@ -8,6 +8,8 @@
 
 #include "physics/packing/microstructure.hpp"
 
+namespace test_microstructure {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -109,3 +111,5 @@ TEST_CASE("wall_density_profile: cylinder annuli conserve the solid volume", "[p
   sum += solid_volume_in_region(x, r, core);
   CHECK(sum == Approx(solid_volume_in_region(x, r, body)).epsilon(1e-10));
 }
+
+}  // namespace test_microstructure

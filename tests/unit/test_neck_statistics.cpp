@@ -10,6 +10,8 @@
 #include "physics/packing/neck_statistics.hpp"
 #include "support/scene.hpp"
 
+namespace test_neck_statistics {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -57,3 +59,5 @@ TEST_CASE("necks monitor: reads the law's neck_radius column, r_min of each pair
   CHECK(v[2] == 100.0);
   CHECK(v[3] == 0.0);
 }
+
+}  // namespace test_neck_statistics

@@ -8,6 +8,8 @@
 
 #include "physics/packing/packing_metrics.hpp"
 
+namespace test_packing_metrics {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -287,3 +289,5 @@ TEST_CASE("invalid packing-metric arguments throw ConfigError", "[packing_metric
   CHECK_THROWS_AS(packing_density(x, r, BoxRegion{Vec3(0, 0, 0), Vec3(1, 0, 1)}), ConfigError);
   CHECK_THROWS_AS(shrink(box, -0.1), ConfigError);
 }
+
+}  // namespace test_packing_metrics

@@ -30,6 +30,8 @@
 #include "physics/electrical/ptc_matrix.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_ptc_matrix {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -184,3 +186,5 @@ TEST_CASE("ptc_matrix: affine_volumetric_strain is tr A of an affine field, blin
   for (Vec3& p : flat) p.z() = 1.0;
   CHECK_THROWS_AS(ptc::affine_volumetric_strain(flat, u), sparkdem::SetupError);
 }
+
+}  // namespace test_ptc_matrix

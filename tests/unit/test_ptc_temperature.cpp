@@ -23,6 +23,8 @@
 #include "physics/electrical/ptc_temperature.hpp"
 #include "tests/support/tolerance.hpp"
 
+namespace test_ptc_temperature {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -187,3 +189,5 @@ TEST_CASE("ptc_local_strain: per-spring eigenstrains with one factorisation", "[
     CHECK(test::relative_error(open[2], 0.03 * h3) < 1e-8);
   }
 }
+
+}  // namespace test_ptc_temperature

@@ -30,6 +30,8 @@
 
 #include "physics/electrical/rkpm_matrix.hpp"
 
+namespace test_rkpm_matrix {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -365,3 +367,5 @@ TEST_CASE("rkpm strain statistics over the matrix, the whole box and the nodes (
   }
   CHECK(below[0] < 0.02);
 }
+
+}  // namespace test_rkpm_matrix

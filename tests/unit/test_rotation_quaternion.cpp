@@ -8,6 +8,8 @@
 
 #include "engine/integrate/velocity_verlet.hpp"
 
+namespace test_rotation_quaternion {
+
 using namespace sparkdem;
 
 namespace {
@@ -39,3 +41,5 @@ TEST_CASE("renormalised keeps a spinning orientation at unit length over 1e6 ste
   const Quat ref = closed_form(w, 1e6 * dt);
   CHECK(std::abs(std::abs(q.dot(ref)) - 1.0) <= 1e-10);
 }
+
+}  // namespace test_rotation_quaternion

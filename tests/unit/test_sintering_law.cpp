@@ -16,6 +16,8 @@
 #include "support/free_pair.hpp"
 #include "support/scene.hpp"
 
+namespace test_sintering_law {
+
 using namespace sparkdem;
 using physics::Sintering;
 namespace kernel = physics::kernel;
@@ -592,3 +594,5 @@ TEST_CASE("Inertia-free sintering pair: neck growth follows the closed form at 4
   CHECK(e1 < 0.005);
   CHECK(e2 < 0.005);
 }
+
+}  // namespace test_sintering_law

@@ -14,6 +14,8 @@
 
 #include "physics/packing/size_distribution.hpp"
 
+namespace test_size_distribution {
+
 using namespace sparkdem;
 using namespace sparkdem::physics;
 
@@ -332,3 +334,5 @@ TEST_CASE("sampling is deterministic for a given engine state", "[size_distribut
     CHECK(r1() == r2());
   }
 }
+
+}  // namespace test_size_distribution

@@ -17,6 +17,8 @@
 #include "engine/core/error.hpp"
 #include "physics/electrical/sphere_element.hpp"
 
+namespace test_sphere_element {
+
 using namespace sparkdem;
 using namespace sparkdem::physics::electrical;
 
@@ -124,3 +126,5 @@ TEST_CASE("sphere element: invalid input is a ConfigError", "[electrical][sphere
   CHECK(cap_half_angle(kR, kR, CapRule::Rim) == Approx(kPiT / 2));
   CHECK(cap_half_angle(kR, kR, CapRule::EqualArea) == Approx(kPiT / 3));  // 2 pi R^2 (1 - cos) = pi R^2
 }
+
+}  // namespace test_sphere_element
