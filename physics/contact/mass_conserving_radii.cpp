@@ -5,6 +5,7 @@
 
 #include "engine/core/error.hpp"
 #include "physics/thermal/expansion.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
 
@@ -76,7 +77,6 @@ void MassConservingRadii::declare(Declarations& d) const {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 /// The contact-law columns the growth touches (SetupError when the law has none).
 struct SinteringColumns {

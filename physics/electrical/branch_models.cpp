@@ -4,14 +4,13 @@
 #include <limits>
 
 #include "physics/electrical/conductance_kernels.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
 
 namespace el = electrical;
 
 namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 el::HemisphereLaw hemisphere_law(const std::string& name) {
   if (name == "reading_b") return el::HemisphereLaw::reading_b();

@@ -5,17 +5,12 @@
 #include <sstream>
 #include <string>
 #include <utility>
+#include "engine/core/format.hpp"
 
 namespace sparkdem::physics::electrical {
 
 namespace {
 
-std::string fmt(double x) {
-  std::ostringstream s;
-  s.precision(12);
-  s << x;
-  return s.str();
-}
 
 /// Linear interpolation in sorted x (size >= 2); beyond the ends: the end value (clamp) or the
 /// end segment extended (extrapolate).
@@ -60,7 +55,7 @@ void check_necks(std::span<const Index> edge_a, std::span<const double> neck_rad
 
 namespace detail {
 void invalid(const char* what, const char* expected, double value) {
-  throw ConfigError("", std::string(what) + " must be " + expected + ", found " + fmt(value));
+  throw ConfigError("", std::string(what) + " must be " + expected + ", found " + format_number(value, 12));
 }
 }  // namespace detail
 
@@ -215,11 +210,11 @@ PiecewiseLinear::PiecewiseLinear(std::vector<double> x, std::vector<double> y, c
     throw ConfigError("", n + ": " + std::to_string(x_.size()) + " abscissae but " + std::to_string(y_.size()) + " values");
   if (x_.size() < 2) throw ConfigError("", n + ": needs at least 2 points, found " + std::to_string(x_.size()));
   for (std::size_t k = 0; k < x_.size(); ++k) {
-    if (!std::isfinite(x_[k])) throw ConfigError("", n + ": abscissa " + std::to_string(k) + " is " + fmt(x_[k]));
-    if (!std::isfinite(y_[k])) throw ConfigError("", n + ": value " + std::to_string(k) + " is " + fmt(y_[k]));
+    if (!std::isfinite(x_[k])) throw ConfigError("", n + ": abscissa " + std::to_string(k) + " is " + format_number(x_[k], 12));
+    if (!std::isfinite(y_[k])) throw ConfigError("", n + ": value " + std::to_string(k) + " is " + format_number(y_[k], 12));
     if (k > 0 && !(x_[k] > x_[k - 1]))
       throw ConfigError(
-          "", n + ": abscissae must increase strictly, found " + fmt(x_[k - 1]) + " then " + fmt(x_[k]) + " at point " + std::to_string(k));
+          "", n + ": abscissae must increase strictly, found " + format_number(x_[k - 1], 12) + " then " + format_number(x_[k], 12) + " at point " + std::to_string(k));
   }
 }
 
@@ -241,7 +236,7 @@ TransmissionSurfaceModel::TransmissionSurfaceModel(PiecewiseLinear alpha, Piecew
       e_tol_(e_tolerance),
       factor_(eccentric_factor) {
   if (!std::isfinite(n_min_) || !std::isfinite(n_max_) || !(n_min_ <= n_max_))
-    throw ConfigError("", "transmission surface: need finite n_min <= n_max, found " + fmt(n_min_) + ", " + fmt(n_max_));
+    throw ConfigError("", "transmission surface: need finite n_min <= n_max, found " + format_number(n_min_, 12) + ", " + format_number(n_max_, 12));
   if (!(e_face_ > 0.0) || std::isinf(e_face_)) detail::invalid("face eccentricity threshold [-]", "> 0", e_face_);
   detail::require_nonnegative("eccentricity tolerance [-]", e_tol_);
   if (!(factor_ >= 1.0) || std::isinf(factor_)) detail::invalid("eccentricity factor [-]", ">= 1 and finite", factor_);
@@ -253,7 +248,7 @@ TransmissionSurfaceModel::TransmissionSurfaceModel(PiecewiseLinear alpha, Piecew
     for (const double x : at)
       if (!(t.extrapolated(x) > 0.0))
         throw ConfigError("", std::string("transmission surface: ") + what + " must be > 0 on [n_min, n_max], found " +
-                                  fmt(t.extrapolated(x)) + " at n = " + fmt(x));
+                                  format_number(t.extrapolated(x), 12) + " at n = " + format_number(x, 12));
   };
   check(alpha_, "alpha(n)");
   check(fv_, "f_v(n)");
@@ -351,8 +346,8 @@ double conductivity(const ConductivityLaw& law, double t_K) {
     if (!std::isfinite(lin->beta_per_K)) detail::invalid("resistivity coefficient beta [1/K]", "finite", lin->beta_per_K);
     const double denom = 1.0 + lin->beta_per_K * (t_K - lin->t_ref_K);
     if (!(denom > 0.0))
-      throw ConfigError("", "linear resistivity law: 1 + beta (T - T_ref) = " + fmt(denom) + " <= 0 at T = " + fmt(t_K) + " K (beta = " +
-                                fmt(lin->beta_per_K) + " 1/K, T_ref = " + fmt(lin->t_ref_K) + " K): outside the law's range");
+      throw ConfigError("", "linear resistivity law: 1 + beta (T - T_ref) = " + format_number(denom, 12) + " <= 0 at T = " + format_number(t_K, 12) + " K (beta = " +
+                                format_number(lin->beta_per_K, 12) + " 1/K, T_ref = " + format_number(lin->t_ref_K, 12) + " K): outside the law's range");
     return lin->kappa_ref_S_per_m / denom;
   }
   return std::get<ConductivityTable>(law)(t_K);

@@ -10,14 +10,9 @@
 #include "engine/graph/interaction_graph.hpp"
 #include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
-
-namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-}  // namespace
 
 namespace percolation {
 

@@ -10,6 +10,7 @@
 #include "physics/electrical/branch_models.hpp"
 #include "physics/electrical/conductance_kernels.hpp"
 #include "physics/electrical/sphere_element.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
 
@@ -17,8 +18,6 @@ namespace el = electrical;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 bool is_wall_electrode(const std::string& e) { return e.rfind("wall:", 0) == 0; }
 

@@ -13,11 +13,11 @@
 #include "engine/core/error.hpp"
 #include "engine/neighbor/neighbor_search.hpp"
 #include "physics/electrical/contact_percolation.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics::ptc {
 
 namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
 }
 
 SpringNetwork build_network(const std::vector<Vec3>& x, const std::vector<double>& r, const MatrixParams& p) {

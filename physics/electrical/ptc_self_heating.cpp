@@ -7,12 +7,9 @@
 #include "engine/core/error.hpp"
 #include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
-
-namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-}  // namespace
 
 ParamSpec<PtcSelfHeating::Params> PtcSelfHeating::spec() {
   using P = Params;

@@ -12,12 +12,11 @@
 #include "engine/state/state.hpp"
 #include "physics/electrical/ptc_matrix.hpp"
 #include "physics/electrical/rkpm_matrix.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
 
 namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t kFixed = 8;  // columns before the per-eps0 block
 
 }  // namespace

@@ -15,12 +15,12 @@
 #include "engine/core/error.hpp"
 #include "engine/core/parallel.hpp"
 #include "engine/graph/hypre_amg.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics::rkpm {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 using Vec4 = Eigen::Vector4d;
 using Mat4 = Eigen::Matrix4d;
 

@@ -6,12 +6,11 @@
 #include "engine/core/error.hpp"
 #include "engine/core/format.hpp"
 #include "engine/state/state.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const std::string kKey = "torsion/";
 
 const std::vector<double>& set_field(const State& s, const std::string& name) {

@@ -7,11 +7,11 @@
 
 #include "engine/core/error.hpp"
 #include "engine/neighbor/neighbor_search.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
 
 namespace {
-constexpr double kPi = std::numbers::pi;
 }
 
 double lens_volume(double ri, double rj, double d) {

@@ -9,11 +9,11 @@
 #include "engine/graph/laplacian.hpp"
 #include "engine/neighbor/neighbor_search.hpp"
 #include "physics/packing/size_distribution.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 double max_radius(const std::vector<double>& r) {
   double m = 0.0;
   for (double x : r) m = std::max(m, x);

@@ -12,11 +12,11 @@
 #include "physics/body/gravity.hpp"
 #include "physics/packing/microstructure.hpp"
 #include "engine/core/parallel.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 
 Wall plane(const std::string& name, const Vec3& point, const Vec3& normal) {
   Wall w;

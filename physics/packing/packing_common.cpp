@@ -12,11 +12,11 @@
 #include "engine/core/error.hpp"
 #include "engine/neighbor/neighbor_search.hpp"
 #include "physics/packing/microstructure.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 }
 
 ParamSpec<SizeDistributionParams> size_distribution_spec(bool optional) {

@@ -5,18 +5,13 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include "engine/core/numbers.hpp"
+#include "engine/core/format.hpp"
 
 namespace sparkdem::physics {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
-std::string fmt(double x) {
-  std::ostringstream s;
-  s.precision(12);
-  s << x;
-  return s.str();
-}
 
 // ---------------------------------------------------------------- argument checks
 
@@ -26,7 +21,7 @@ void check_particles(const std::vector<Vec3>& positions, const std::vector<doubl
         "", "positions (" + std::to_string(positions.size()) + ") and radii (" + std::to_string(radii.size()) + ") differ in length");
   for (std::size_t i = 0; i < radii.size(); ++i) {
     if (!std::isfinite(radii[i]) || radii[i] <= 0.0)
-      throw ConfigError("", "radius of particle " + std::to_string(i) + " must be positive and finite [m], found " + fmt(radii[i]));
+      throw ConfigError("", "radius of particle " + std::to_string(i) + " must be positive and finite [m], found " + format_number(radii[i], 12));
     if (!positions[i].allFinite()) throw ConfigError("", "position of particle " + std::to_string(i) + " is not finite");
   }
 }
@@ -249,7 +244,7 @@ bool contains_unchecked(const Region& region, const Vec3& p) {
 /// Shared coordination counter; `counted[i]` selects the particles entering the statistics.
 CoordinationStats coordination_impl(const std::vector<Vec3>& positions, const std::vector<double>& radii,
                                     const std::vector<std::array<Index, 2>>& pairs, double tol, const std::vector<bool>& counted) {
-  if (!std::isfinite(tol) || tol < 0.0) throw ConfigError("", "relative gap tolerance must be >= 0 and finite, found " + fmt(tol));
+  if (!std::isfinite(tol) || tol < 0.0) throw ConfigError("", "relative gap tolerance must be >= 0 and finite, found " + format_number(tol, 12));
   const std::size_t n = positions.size();
   std::vector<int> z(n, 0);
   for (std::size_t k = 0; k < pairs.size(); ++k) {
@@ -288,11 +283,11 @@ void validate(const Region& region) {
   std::vector<Diagnostic> out;
   if (!c.base.allFinite()) out.push_back({"/base", "cylinder base must be finite"});
   if (!c.axis.allFinite() || std::abs(c.axis.norm() - 1.0) > 1e-6)
-    out.push_back({"/axis", "cylinder axis must be a unit vector, |axis| = " + fmt(c.axis.norm())});
+    out.push_back({"/axis", "cylinder axis must be a unit vector, |axis| = " + format_number(c.axis.norm(), 12)});
   if (!std::isfinite(c.radius) || c.radius <= 0.0)
-    out.push_back({"/radius", "cylinder radius must be positive and finite [m], found " + fmt(c.radius)});
+    out.push_back({"/radius", "cylinder radius must be positive and finite [m], found " + format_number(c.radius, 12)});
   if (!std::isfinite(c.height) || c.height <= 0.0)
-    out.push_back({"/height", "cylinder height must be positive and finite [m], found " + fmt(c.height)});
+    out.push_back({"/height", "cylinder height must be positive and finite [m], found " + format_number(c.height, 12)});
   if (!out.empty()) throw ConfigError(std::move(out));
 }
 
@@ -305,7 +300,7 @@ double region_volume(const Region& region) {
 
 Region shrink(const Region& region, double margin) {
   validate(region);
-  if (!std::isfinite(margin) || margin < 0.0) throw ConfigError("", "shrink margin must be >= 0 and finite [m], found " + fmt(margin));
+  if (!std::isfinite(margin) || margin < 0.0) throw ConfigError("", "shrink margin must be >= 0 and finite [m], found " + format_number(margin, 12));
   Region out;
   if (const auto* b = std::get_if<BoxRegion>(&region)) {
     out = BoxRegion{(b->lo.array() + margin).matrix(), (b->hi.array() - margin).matrix()};
@@ -315,7 +310,7 @@ Region shrink(const Region& region, double margin) {
   }
   try {
     validate(out);
-  } catch (const ConfigError&) { throw ConfigError("", "shrink margin " + fmt(margin) + " m leaves an empty region"); }
+  } catch (const ConfigError&) { throw ConfigError("", "shrink margin " + format_number(margin, 12) + " m leaves an empty region"); }
   return out;
 }
 
@@ -327,7 +322,7 @@ bool contains(const Region& region, const Vec3& point) {
 double sphere_volume_in_region(const Vec3& centre, double radius, const Region& region) {
   validate(region);
   if (!centre.allFinite() || !std::isfinite(radius) || radius <= 0.0)
-    throw ConfigError("", "sphere needs a finite centre and a positive finite radius, found r = " + fmt(radius));
+    throw ConfigError("", "sphere needs a finite centre and a positive finite radius, found r = " + format_number(radius, 12));
   return sphere_in_region_unchecked(centre, radius, region);
 }
 

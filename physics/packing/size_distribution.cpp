@@ -5,19 +5,14 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include "engine/core/numbers.hpp"
+#include "engine/core/format.hpp"
 
 namespace sparkdem::physics {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kFractionTolerance = 1e-6;  ///< allowed |F_last - 1| and overshoot of F_k above 1
 
-std::string fmt(double x) {
-  std::ostringstream s;
-  s.precision(12);
-  s << x;
-  return s.str();
-}
 
 /// Standard normal CDF Phi(z) = erfc(-z / sqrt 2) / 2 (accurate in the lower tail).
 double phi_cdf(double z) { return 0.5 * std::erfc(-z / std::numbers::sqrt2); }
@@ -225,33 +220,33 @@ void validate_table(const SizeDistribution& s, std::vector<Diagnostic>& out) {
   for (std::size_t k = 0; k < d.size(); ++k) {
     const std::string path = "/diameters/" + std::to_string(k);
     if (!std::isfinite(d[k]) || d[k] <= 0.0)
-      out.push_back({path, "diameter must be positive and finite [m], found " + fmt(d[k])});
+      out.push_back({path, "diameter must be positive and finite [m], found " + format_number(d[k], 12)});
     else if (k > 0 && std::isfinite(d[k - 1]) && d[k] <= d[k - 1])
-      out.push_back({path, "diameters must be strictly increasing, found " + fmt(d[k]) + " after " + fmt(d[k - 1])});
+      out.push_back({path, "diameters must be strictly increasing, found " + format_number(d[k], 12) + " after " + format_number(d[k - 1], 12)});
   }
   for (std::size_t k = 0; k < f.size(); ++k) {
     const std::string path = "/cumulative_fraction/" + std::to_string(k);
     if (!std::isfinite(f[k]) || f[k] < 0.0 || f[k] > 1.0 + kFractionTolerance)
-      out.push_back({path, "cumulative fraction must be in [0, 1], found " + fmt(f[k])});
+      out.push_back({path, "cumulative fraction must be in [0, 1], found " + format_number(f[k], 12)});
     else if (k > 0 && std::isfinite(f[k - 1]) && f[k] < f[k - 1])
-      out.push_back({path, "cumulative fractions must be non-decreasing, found " + fmt(f[k]) + " after " + fmt(f[k - 1])});
+      out.push_back({path, "cumulative fractions must be non-decreasing, found " + format_number(f[k], 12) + " after " + format_number(f[k - 1], 12)});
   }
   if (!f.empty() && !(std::abs(f.back() - 1.0) <= kFractionTolerance))
-    out.push_back({"/cumulative_fraction", "fractions must add up to 1: last cumulative fraction is " + fmt(f.back()) + " (tolerance 1e-6)"});
+    out.push_back({"/cumulative_fraction", "fractions must add up to 1: last cumulative fraction is " + format_number(f.back(), 12) + " (tolerance 1e-6)"});
 }
 
 void validate_lognormal(const SizeDistribution& s, std::vector<Diagnostic>& out) {
   const std::size_t before = out.size();
   if (!std::isfinite(s.d50) || s.d50 <= 0.0)
-    out.push_back({"/d50", "median diameter must be positive and finite [m], found " + fmt(s.d50)});
+    out.push_back({"/d50", "median diameter must be positive and finite [m], found " + format_number(s.d50, 12)});
   if (!std::isfinite(s.sigma) || s.sigma <= 0.0)
-    out.push_back({"/sigma", "sigma of ln d must be positive and finite, found " + fmt(s.sigma)});
+    out.push_back({"/sigma", "sigma of ln d must be positive and finite, found " + format_number(s.sigma, 12)});
   if (!std::isfinite(s.d_min) || s.d_min < 0.0)
-    out.push_back({"/d_min", "lower truncation must be >= 0 and finite [m] (0 = none), found " + fmt(s.d_min)});
+    out.push_back({"/d_min", "lower truncation must be >= 0 and finite [m] (0 = none), found " + format_number(s.d_min, 12)});
   if (std::isnan(s.d_max) || s.d_max <= 0.0)
-    out.push_back({"/d_max", "upper truncation must be positive [m] (infinite = none), found " + fmt(s.d_max)});
+    out.push_back({"/d_max", "upper truncation must be positive [m] (infinite = none), found " + format_number(s.d_max, 12)});
   else if (std::isfinite(s.d_min) && s.d_min >= s.d_max)
-    out.push_back({"/d_max", "d_min (" + fmt(s.d_min) + ") must be smaller than d_max (" + fmt(s.d_max) + ")"});
+    out.push_back({"/d_max", "d_min (" + format_number(s.d_min, 12) + ") must be smaller than d_max (" + format_number(s.d_max, 12) + ")"});
   if (out.size() != before) return;
   // the truncation interval must hold a representable probability
   const double mu = std::log(s.d50);
@@ -259,17 +254,17 @@ void validate_lognormal(const SizeDistribution& s, std::vector<Diagnostic>& out)
   const double z_hi = std::isfinite(s.d_max) ? (std::log(s.d_max) - mu) / s.sigma : kInf;
   const double mass = z_lo > 0.0 ? phi_sf(z_lo) - phi_sf(z_hi) : phi_cdf(z_hi) - phi_cdf(z_lo);
   if (!(mass > 0.0))
-    out.push_back({"/d_min", "truncation interval [" + fmt(s.d_min) + ", " + fmt(s.d_max) +
-                                 "] holds no probability for d50 = " + fmt(s.d50) + ", sigma = " + fmt(s.sigma)});
+    out.push_back({"/d_min", "truncation interval [" + format_number(s.d_min, 12) + ", " + format_number(s.d_max, 12) +
+                                 "] holds no probability for d50 = " + format_number(s.d50, 12) + ", sigma = " + format_number(s.sigma, 12)});
 }
 
 void validate_uniform(const SizeDistribution& s, std::vector<Diagnostic>& out) {
   const bool lo_ok = std::isfinite(s.d_min) && s.d_min > 0.0;
   const bool hi_ok = std::isfinite(s.d_max) && s.d_max > 0.0;
-  if (!lo_ok) out.push_back({"/d_min", "diameter must be positive and finite [m], found " + fmt(s.d_min)});
-  if (!hi_ok) out.push_back({"/d_max", "diameter must be positive and finite [m], found " + fmt(s.d_max)});
+  if (!lo_ok) out.push_back({"/d_min", "diameter must be positive and finite [m], found " + format_number(s.d_min, 12)});
+  if (!hi_ok) out.push_back({"/d_max", "diameter must be positive and finite [m], found " + format_number(s.d_max, 12)});
   if (lo_ok && hi_ok && s.d_min > s.d_max)
-    out.push_back({"/d_max", "d_min (" + fmt(s.d_min) + ") must not exceed d_max (" + fmt(s.d_max) + ")"});
+    out.push_back({"/d_max", "d_min (" + format_number(s.d_min, 12) + ") must not exceed d_max (" + format_number(s.d_max, 12) + ")"});
 }
 
 }  // namespace
@@ -307,9 +302,9 @@ SizeDistribution make_uniform(double d_min, double d_max) {
 SizeDistribution uniform_about_mean(double r_mean, double spread) {
   std::vector<Diagnostic> out;
   if (!std::isfinite(r_mean) || r_mean <= 0.0)
-    out.push_back({"/r_mean", "mean radius must be positive and finite [m], found " + fmt(r_mean)});
+    out.push_back({"/r_mean", "mean radius must be positive and finite [m], found " + format_number(r_mean, 12)});
   if (!std::isfinite(spread) || spread < 0.0 || spread >= 1.0)
-    out.push_back({"/spread", "relative spread must be in [0, 1), found " + fmt(spread)});
+    out.push_back({"/spread", "relative spread must be in [0, 1), found " + format_number(spread, 12)});
   if (!out.empty()) throw ConfigError(std::move(out));
   return make_uniform(2.0 * r_mean * (1.0 - spread), 2.0 * r_mean * (1.0 + spread));
 }
@@ -336,7 +331,7 @@ void validate(const SizeDistribution& dist) {
 double cdf_number(const SizeDistribution& dist, double d) { return cdf(prepare(dist), d, false); }
 
 double quantile_number(const SizeDistribution& dist, double p) {
-  if (!(p >= 0.0 && p <= 1.0)) throw ConfigError("", "quantile probability must be in [0, 1], found " + fmt(p));
+  if (!(p >= 0.0 && p <= 1.0)) throw ConfigError("", "quantile probability must be in [0, 1], found " + format_number(p, 12));
   return quantile(prepare(dist), p);
 }
 
@@ -351,7 +346,7 @@ double sample_diameter(const SizeDistribution& dist, std::mt19937_64& rng) { ret
 
 std::vector<double> sample_until_volume(const SizeDistribution& dist, double solid_volume_m3, std::mt19937_64& rng, std::size_t max_count) {
   if (!std::isfinite(solid_volume_m3) || solid_volume_m3 < 0.0)
-    throw ConfigError("", "solid volume must be >= 0 and finite [m^3], found " + fmt(solid_volume_m3));
+    throw ConfigError("", "solid volume must be >= 0 and finite [m^3], found " + format_number(solid_volume_m3, 12));
   const Prepared p = prepare(dist);
   std::vector<double> out;
   double total = 0.0;
@@ -365,7 +360,7 @@ std::vector<double> sample_until_volume(const SizeDistribution& dist, double sol
     }
     if (out.size() >= max_count)
       throw SetupError("size distribution needs more than " + std::to_string(max_count) + " particles to reach a solid volume of " +
-                       fmt(solid_volume_m3) + " m^3");
+                       format_number(solid_volume_m3, 12) + " m^3");
     out.push_back(d);
     total += v;
   }
@@ -377,7 +372,7 @@ DistributionReport compare(const SizeDistribution& dist, const std::vector<doubl
   if (sampled_diameters.empty()) throw ConfigError("", "no sampled diameters to compare");
   for (std::size_t i = 0; i < sampled_diameters.size(); ++i)
     if (!std::isfinite(sampled_diameters[i]) || sampled_diameters[i] <= 0.0)
-      throw ConfigError("/" + std::to_string(i), "sampled diameter must be positive and finite [m], found " + fmt(sampled_diameters[i]));
+      throw ConfigError("/" + std::to_string(i), "sampled diameter must be positive and finite [m], found " + format_number(sampled_diameters[i], 12));
   std::vector<double> x = sampled_diameters;
   std::sort(x.begin(), x.end());
   const std::size_t n = x.size();

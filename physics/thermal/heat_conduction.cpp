@@ -13,12 +13,11 @@
 #include "physics/electrical/conductance_kernels.hpp"
 #include "physics/thermal/expansion.hpp"
 #include "physics/thermal/thermal_kernels.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
 
 namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 std::vector<std::string> split_names(const std::string& s) {
   std::vector<std::string> out;
@@ -31,7 +30,6 @@ std::vector<std::string> split_names(const std::string& s) {
   return out;
 }
 
-std::string num(double x) { return format_number(x); }
 }  // namespace
 
 ParamSpec<HeatConduction::Params> HeatConduction::spec() {
@@ -120,7 +118,7 @@ HeatConduction::HeatConduction(const Params& p) : p_(p) {
                                               "), found " + std::to_string(p.conductivity_factors.size())});
   for (std::size_t k = 0; k < p.conductivity_factors.size(); ++k)
     if (!(p.conductivity_factors[k] > 0.0) || !std::isfinite(p.conductivity_factors[k]))
-      d.push_back({"/conductivity_factors/" + std::to_string(k), "expected a finite factor > 0, found " + num(p.conductivity_factors[k])});
+      d.push_back({"/conductivity_factors/" + std::to_string(k), "expected a finite factor > 0, found " + format_number(p.conductivity_factors[k])});
   report_names_ = split_names(p.report_sets);
   for (std::size_t k = 0; k < report_names_.size(); ++k)
     for (std::size_t j = 0; j < k; ++j)
@@ -130,12 +128,12 @@ HeatConduction::HeatConduction(const Params& p) : p_(p) {
                                             std::to_string(p.fixed_temperatures.size())});
   for (std::size_t k = 0; k < p.fixed_temperatures.size(); ++k)
     if (!(p.fixed_temperatures[k] > 0.0) || !std::isfinite(p.fixed_temperatures[k]))
-      d.push_back({"/fixed_temperatures/" + std::to_string(k), "expected a finite temperature > 0 K, found " + num(p.fixed_temperatures[k])});
+      d.push_back({"/fixed_temperatures/" + std::to_string(k), "expected a finite temperature > 0 K, found " + format_number(p.fixed_temperatures[k])});
   if (flux_names_.size() != p.flux_powers.size())
     d.push_back({"/flux_powers", "expected one power per flux set (" + std::to_string(flux_names_.size()) + "), found " +
                                      std::to_string(p.flux_powers.size())});
   if (p.capacity == "domain" && !(p.domain_volume > 0.0))
-    d.push_back({"/domain_volume", "capacity \"domain\" needs the domain volume > 0 m^3, found " + num(p.domain_volume)});
+    d.push_back({"/domain_volume", "capacity \"domain\" needs the domain volume > 0 m^3, found " + format_number(p.domain_volume)});
   if (!p.loss_set.empty() && p.convection_coefficient == 0.0 && p.emissivity == 0.0)
     d.push_back({"/loss_set", "a loss set needs convection_coefficient > 0 or emissivity > 0, found both 0"});
   if (!d.empty()) throw ConfigError(d);
@@ -251,7 +249,7 @@ void HeatConduction::bind(State& s) {
   if (p_.initial_temperature > 0.0) std::fill(T.begin(), T.end(), p_.initial_temperature);
   for (std::size_t i = 0; i < p.size(); ++i)
     if (!(T[i] > 0.0))
-      throw SetupError("heat_conduction: particle id " + std::to_string(p.id[i]) + " has temperature " + num(T[i]) +
+      throw SetupError("heat_conduction: particle id " + std::to_string(p.id[i]) + " has temperature " + format_number(T[i]) +
                        " K; give initial_temperature or run after a stage that set the temperature");
   for (std::size_t k = 0; k < fixed_names_.size(); ++k) {
     const auto& f = set_field(s, fixed_names_[k], "heat_conduction");
@@ -441,11 +439,11 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
     std::string limit = "unconditionally stable";
     if (p_.scheme == "explicit") {
       const double sdt = stable_dt(s);  // sets limiting_id_ (evaluated before it is printed)
-      limit = "stable step " + num(sdt) + " s, set by particle id " + std::to_string(limiting_id_);
+      limit = "stable step " + format_number(sdt) + " s, set by particle id " + std::to_string(limiting_id_);
     }
     throw PhysicsError(info.step, first, "temperature",
                        "heat_conduction: " + std::to_string(bad.size()) + " particle temperature(s) not finite or <= 0 K after the " +
-                           p_.scheme + " step of " + num(dt) + " s (" + limit + ")");
+                           p_.scheme + " step of " + format_number(dt) + " s (" + limit + ")");
   }
   if (p_.expansion_coefficient != 0.0) {
     thermal::apply_expansion(s, p_.expansion_coefficient, p_.reference_temperature, T);

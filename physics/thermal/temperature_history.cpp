@@ -20,10 +20,6 @@ double table_temperature(const std::vector<double>& t, const std::vector<double>
 }
 }  // namespace thermal
 
-namespace {
-std::string num(double x) { return format_number(x); }
-}  // namespace
-
 ParamSpec<TemperatureHistory::Params> TemperatureHistory::spec() {
   ParamSpec<Params> s("temperature_history", "module",
                       "prescribed uniform temperature T(t) (piecewise linear in physical time from the stage start, held "
@@ -55,14 +51,14 @@ TemperatureHistory::TemperatureHistory(const Params& p) : p_(p) {
   for (std::size_t k = 1; k < p.time.size(); ++k)
     if (!(p.time[k] > p.time[k - 1]))
       d.push_back({"/time/" + std::to_string(k),
-                   "expected times increasing strictly, found " + num(p.time[k]) + " s after " + num(p.time[k - 1]) + " s"});
+                   "expected times increasing strictly, found " + format_number(p.time[k]) + " s after " + format_number(p.time[k - 1]) + " s"});
   for (std::size_t k = 0; k < p.temperature.size(); ++k) {
     if (!(p.temperature[k] > 0.0) || !std::isfinite(p.temperature[k]))
-      d.push_back({"/temperature/" + std::to_string(k), "expected a finite temperature > 0 K, found " + num(p.temperature[k])});
+      d.push_back({"/temperature/" + std::to_string(k), "expected a finite temperature > 0 K, found " + format_number(p.temperature[k])});
     else if (!(thermal::expanded_radius(1.0, p.expansion_coefficient, p.temperature[k], p.reference_temperature) > 0.0))
       d.push_back({"/expansion_coefficient", "expected 1 + alpha_T (T - T_0) > 0 for every tabulated T, found " +
-                                                 num(1.0 + p.expansion_coefficient * (p.temperature[k] - p.reference_temperature)) +
-                                                 " at T = " + num(p.temperature[k]) + " K"});
+                                                 format_number(1.0 + p.expansion_coefficient * (p.temperature[k] - p.reference_temperature)) +
+                                                 " at T = " + format_number(p.temperature[k]) + " K"});
   }
   if (!d.empty()) throw ConfigError(d);
   current_ = p_.temperature.front();
