@@ -58,7 +58,6 @@ int run_cli(const std::string& args, int threads, const fs::path& dir, const std
   return code;
 }
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
 /// Largest |shear displacement| in the contact history: proves the friction history is exercised.
 double max_shear(const fs::path& file) {
@@ -91,14 +90,14 @@ TEST_CASE("restart from a mid-stage checkpoint reproduces the frictional pour bi
   const fs::path ckpt = write_scene(tmp.path, "ckpt.json", scene);
   const fs::path A = tmp.path / "A", B = tmp.path / "B", C = tmp.path / "C";
 
-  REQUIRE(run_cli("run " + q(plain) + " -o " + q(A) + " --quiet", 1, tmp.path) == 0);
-  REQUIRE(run_cli("run " + q(ckpt) + " -o " + q(B) + " --quiet", 1, tmp.path) == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(plain) + " -o " + sparkdem::test::shell_quoted(A) + " --quiet", 1, tmp.path) == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(ckpt) + " -o " + sparkdem::test::shell_quoted(B) + " --quiet", 1, tmp.path) == 0);
   REQUIRE(fs::exists(B / "checkpoint.h5"));
   // The checkpoint lies inside the pour stage (stage 1), at global step 1700 of 3000.
   CHECK(stored_int(B / "checkpoint.h5", "/state/step") == 1700);
   CHECK(stored_int(B / "checkpoint.h5", "/state/stage_index") == 1);
   CHECK(stored_int(B / "checkpoint.h5", "/pipeline/in_stage") == 1);
-  REQUIRE(run_cli("run " + q(ckpt) + " --restart " + q(B / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(ckpt) + " --restart " + sparkdem::test::shell_quoted(B / "checkpoint.h5") + " -o " + sparkdem::test::shell_quoted(C) + " --quiet", 1, tmp.path) == 0);
 
   CHECK(summary_of(A)["steps"] == 3000);
   CHECK(summary_of(C)["stages"].back()["steps"] == 3000);  // stage steps counted from the stage start
@@ -115,8 +114,8 @@ TEST_CASE("one and two threads give bit-identical frictional pours", "[restart][
   ScratchDir tmp;
   const fs::path scene = fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data/restart_pour.json";
   const fs::path A = tmp.path / "one", B = tmp.path / "two";
-  REQUIRE(run_cli("run " + q(scene) + " -o " + q(A) + " --quiet --threads 1", 1, tmp.path) == 0);
-  REQUIRE(run_cli("run " + q(scene) + " -o " + q(B) + " --quiet --threads 2", 2, tmp.path, "SPARKDEM_PARALLEL_MIN_ITEMS=1 ") == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(scene) + " -o " + sparkdem::test::shell_quoted(A) + " --quiet --threads 1", 1, tmp.path) == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(scene) + " -o " + sparkdem::test::shell_quoted(B) + " --quiet --threads 2", 2, tmp.path, "SPARKDEM_PARALLEL_MIN_ITEMS=1 ") == 0);
   CHECK(summary_of(A)["threads"] == 1);
   CHECK(summary_of(B)["threads"] == 2);
   CHECK(max_shear(A / "final_state.h5") > 1e-9);
@@ -131,7 +130,7 @@ TEST_CASE("multi-stage restart: checkpoints in the first and in the second dynam
   const json base = load_data("restart_two_stage.json");
   const fs::path plain = write_scene(tmp.path, "plain.json", base);
   const fs::path A = tmp.path / "A";
-  REQUIRE(run_cli("run " + q(plain) + " -o " + q(A) + " --quiet", 1, tmp.path) == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(plain) + " -o " + sparkdem::test::shell_quoted(A) + " --quiet", 1, tmp.path) == 0);
   CHECK(summary_of(A)["steps"] == 3300);
   CHECK(max_shear(A / "final_state.h5") > 1e-9);
 
@@ -146,11 +145,11 @@ TEST_CASE("multi-stage restart: checkpoints in the first and in the second dynam
       scene["stages"][c.stage]["output"]["checkpoint_every"] = c.every;
       const fs::path f = write_scene(tmp.path, "ckpt" + std::to_string(c.stage) + ".json", scene);
       const fs::path B = tmp.path / ("B" + std::to_string(c.stage)), C = tmp.path / ("C" + std::to_string(c.stage));
-      REQUIRE(run_cli("run " + q(f) + " -o " + q(B) + " --quiet", 1, tmp.path) == 0);
+      REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(f) + " -o " + sparkdem::test::shell_quoted(B) + " --quiet", 1, tmp.path) == 0);
       CHECK(stored_int(B / "checkpoint.h5", "/state/step") == c.every);
       CHECK(stored_int(B / "checkpoint.h5", "/state/stage_index") == c.stage);
       CHECK(stored_int(B / "checkpoint.h5", "/state/stage_step0") == c.stage_step0);
-      REQUIRE(run_cli("run " + q(f) + " --restart " + q(B / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
+      REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(f) + " --restart " + sparkdem::test::shell_quoted(B / "checkpoint.h5") + " -o " + sparkdem::test::shell_quoted(C) + " --quiet", 1, tmp.path) == 0);
       sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
     }
   }
@@ -163,7 +162,7 @@ TEST_CASE("restart inside a fill stage: radius growth, wall history and until co
   // conditions (growth complete, settled, small overlaps), checked every 50 steps.
   const json base = load_data("restart_fill.json");
   const fs::path A = tmp.path / "A", B = tmp.path / "B", C = tmp.path / "C";
-  REQUIRE(run_cli("run " + q(write_scene(tmp.path, "plain.json", base)) + " -o " + q(A) + " --quiet", 1, tmp.path) == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(write_scene(tmp.path, "plain.json", base)) + " -o " + sparkdem::test::shell_quoted(A) + " --quiet", 1, tmp.path) == 0);
   const json cook = summary_of(A)["stages"][0];
   CHECK(cook["until_reached"] == true);  // the stop conditions, not the step budget, end the stage
   const std::int64_t n = cook["steps"].get<std::int64_t>();
@@ -173,10 +172,10 @@ TEST_CASE("restart inside a fill stage: radius growth, wall history and until co
   json scene = base;
   scene["stages"][0]["output"]["checkpoint_every"] = every;
   const fs::path f = write_scene(tmp.path, "ckpt.json", scene);
-  REQUIRE(run_cli("run " + q(f) + " -o " + q(B) + " --quiet", 1, tmp.path) == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(f) + " -o " + sparkdem::test::shell_quoted(B) + " --quiet", 1, tmp.path) == 0);
   CHECK(stored_int(B / "checkpoint.h5", "/state/step") == every);
   CHECK(stored_int(B / "checkpoint.h5", "/state/stage_index") == 0);
-  REQUIRE(run_cli("run " + q(f) + " --restart " + q(B / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(f) + " --restart " + sparkdem::test::shell_quoted(B / "checkpoint.h5") + " -o " + sparkdem::test::shell_quoted(C) + " --quiet", 1, tmp.path) == 0);
   CHECK(summary_of(C)["stages"][0]["steps"] == n);
   sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
 }
@@ -191,9 +190,9 @@ TEST_CASE("restart from a checkpoint at a stage's last step writes the uninterru
   scene["stages"][1]["output"] = {{"frame_every", 0}, {"timeseries_every", 100}, {"checkpoint_every", 2000}};
   const fs::path f = write_scene(tmp.path, "scene.json", scene);
   const fs::path A = tmp.path / "A", C = tmp.path / "C";
-  REQUIRE(run_cli("run " + q(f) + " -o " + q(A) + " --quiet", 1, tmp.path) == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(f) + " -o " + sparkdem::test::shell_quoted(A) + " --quiet", 1, tmp.path) == 0);
   CHECK(stored_int(A / "checkpoint.h5", "/state/step") == 2000);
-  REQUIRE(run_cli("run " + q(f) + " --restart " + q(A / "checkpoint.h5") + " -o " + q(C) + " --quiet", 1, tmp.path) == 0);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(f) + " --restart " + sparkdem::test::shell_quoted(A / "checkpoint.h5") + " -o " + sparkdem::test::shell_quoted(C) + " --quiet", 1, tmp.path) == 0);
   // A: the lattice frame and the pour's closing frame; C: only the closing frame.
   const auto a = sparkdem::io::H5File::open_read(A / "results.h5");
   const auto c = sparkdem::io::H5File::open_read(C / "results.h5");

@@ -52,7 +52,6 @@ struct ScratchDir : sparkdem::test::ScratchDir {
   ScratchDir() : sparkdem::test::ScratchDir("sparkdem_sweeps") {}
 };
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
 struct Cli {
   int code = -1;
@@ -74,7 +73,7 @@ Cli cli(const std::string& args, const fs::path& dir) {
 
 /// Runs `scene` into `out`; REQUIREs success.
 void run(const fs::path& scene, const fs::path& out, const fs::path& dir, const std::string& extra = "") {
-  const Cli r = cli("run " + q(scene) + " -o " + q(out) + " --quiet " + extra, dir);
+  const Cli r = cli("run " + sparkdem::test::shell_quoted(scene) + " -o " + sparkdem::test::shell_quoted(out) + " --quiet " + extra, dir);
   INFO("sparkdem run " << scene << " " << extra << " -> " << r.code << "; stderr:\n" << r.err);
   REQUIRE(r.code == 0);
 }
@@ -280,7 +279,7 @@ TEST_CASE("a restart neither retakes nor loses snapshots and resumes a sweep ins
     const json rec = json::parse(pipeline_record(B / "checkpoint.h5"));
     CHECK(rec["snapshots"].size() == 2);
     CHECK(rec["sweep"].is_null());
-    run(f, C, tmp.path, "--restart " + q(B / "checkpoint.h5"));
+    run(f, C, tmp.path, "--restart " + sparkdem::test::shell_quoted(B / "checkpoint.h5"));
     const json c = read_json(C / "summary.json");
     const json& taken = c["stages"][0]["snapshots"]["taken"];
     REQUIRE(taken.size() == 3);
@@ -313,7 +312,7 @@ TEST_CASE("a restart neither retakes nor loses snapshots and resumes a sweep ins
     CHECK(rec["sweep"]["item"] == 1);
     REQUIRE(rec["sweep"]["rows"].size() == 1);
     CHECK(rec["sweep"]["rows"][0]["values"] == a_rows[0]["values"]);
-    run(f, E, tmp.path, "--restart " + q(D / "checkpoint.h5"));
+    run(f, E, tmp.path, "--restart " + sparkdem::test::shell_quoted(D / "checkpoint.h5"));
     const json e = read_json(E / "summary.json");
     const json& rows = e["stages"][0]["sweep"]["rows"];
     REQUIRE(rows.size() == 3);
@@ -524,7 +523,7 @@ TEST_CASE("sweep and snapshot configuration errors are all reported at once with
   const fs::path f = write_scene(tmp.path, "bad.json", scene);
   for (const std::string sub : {"check", "run"}) {
     const fs::path out = tmp.path / ("out_" + sub);
-    const Cli r = cli(sub + " " + q(f) + (sub == "run" ? " --quiet -o " + q(out) : ""), tmp.path);
+    const Cli r = cli(sub + " " + sparkdem::test::shell_quoted(f) + (sub == "run" ? " --quiet -o " + sparkdem::test::shell_quoted(out) : ""), tmp.path);
     INFO("sparkdem " << sub << " stderr:\n" << r.err);
     CHECK(r.code == 2);
     for (const auto& [path, fragment] : expected) CHECK(r.err.find(path + ": ") != std::string::npos);
@@ -570,7 +569,7 @@ TEST_CASE("a calibrating sweep over snapshots: scan, search to the closed form, 
 
   // A target outside the scan's range is refused with both ends of the scan named.
   scene["stages"][2]["sweep"]["calibrate"]["target"] = 1e-15;
-  const Cli r = cli("run " + q(write_scene(tmp.path, "cal_out.json", scene)) + " -o " + q(tmp.path / "B") + " --quiet", tmp.path);
+  const Cli r = cli("run " + sparkdem::test::shell_quoted(write_scene(tmp.path, "cal_out.json", scene)) + " -o " + sparkdem::test::shell_quoted(tmp.path / "B") + " --quiet", tmp.path);
   CHECK(r.code != 0);
   CHECK(r.err.find("is not bracketed by the scan") != std::string::npos);
   CHECK(read_csv(tmp.path / "B" / "sweep_fit.csv").size() == 5);  // header + the four scan rows

@@ -40,7 +40,6 @@ using nlohmann::json;
 using sparkdem::test::load_data;
 using sparkdem::test::write_scene;
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
 
 std::string read_text(const fs::path& f) {
   std::ifstream in(f, std::ios::binary);
@@ -58,7 +57,7 @@ struct Cli {
 /// `command` (a shell command line) on one thread; stdout discarded, stderr kept.
 Cli shell(const std::string& command, const fs::path& dir) {
   const fs::path err = dir / "stderr.txt";
-  const std::string cmd = "OMP_WAIT_POLICY=PASSIVE OMP_NUM_THREADS=1 " + command + " > /dev/null 2> " + q(err);
+  const std::string cmd = "OMP_WAIT_POLICY=PASSIVE OMP_NUM_THREADS=1 " + command + " > /dev/null 2> " + sparkdem::test::shell_quoted(err);
   const int rc = std::system(cmd.c_str());
   Cli r;
   if (rc != -1 && WIFEXITED(rc)) r.code = WEXITSTATUS(rc);
@@ -67,7 +66,7 @@ Cli shell(const std::string& command, const fs::path& dir) {
 }
 
 Cli sparkdem_run(const fs::path& scene, const std::string& out, const fs::path& dir, const std::string& extra = "") {
-  return shell(q(SPARKDEM_BINARY) + " run " + q(scene) + " -o " + q(out) + " --quiet " + extra, dir);
+  return shell(sparkdem::test::shell_quoted(SPARKDEM_BINARY) + " run " + sparkdem::test::shell_quoted(scene) + " -o " + sparkdem::test::shell_quoted(out) + " --quiet " + extra, dir);
 }
 
 /// Rows of a CSV file (no quoted cells).
@@ -182,7 +181,7 @@ TEST_CASE("an output directory LINK/../out is written at its physical path", "[s
     INFO("first run, stderr:\n" << a.err);
     REQUIRE(a.code == 0);
     REQUIRE(fs::exists(t.physical("ck") / "checkpoint.h5"));
-    const Cli b = sparkdem_run(f, t.through_link("ck2"), t.path, "--restart " + q(t.through_link("ck") + "/checkpoint.h5"));
+    const Cli b = sparkdem_run(f, t.through_link("ck2"), t.path, "--restart " + sparkdem::test::shell_quoted(t.through_link("ck") + "/checkpoint.h5"));
     INFO("restart, stderr:\n" << b.err);
     REQUIRE(b.code == 0);
     CHECK_FALSE(fs::exists(t.path / "ck2"));

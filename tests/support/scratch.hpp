@@ -34,6 +34,16 @@ struct ScratchDir {
   ScratchDir& operator=(const ScratchDir&) = delete;
 };
 
+/// A path in single quotes for a shell command line (the scratch paths hold no quote). Built by
+/// appending: `"'" + p.string()` trips GCC 12's -Wstringop-overflow false positive once inlined
+/// into a unity batch.
+inline std::string shell_quoted(const std::filesystem::path& p) {
+  std::string s = "'";
+  s += p.string();
+  s += "'";
+  return s;
+}
+
 /// Every law, module and generator, registered once.
 inline const Registry& registry() {
   static const Registry reg = [] {
