@@ -47,7 +47,7 @@ const std::vector<std::string> kCoreFields = {"position", "velocity", "orientati
 /// cylinder wall (the die), or 0.
 double die_area(const std::vector<Wall>& walls) {
   for (const auto& w : walls)
-    if (!w.is_plane()) return detail::kPi * w.cylinder_radius() * w.cylinder_radius();
+    if (!w.is_plane()) return kPi * w.cylinder_radius() * w.cylinder_radius();
   return 0.0;
 }
 

@@ -39,6 +39,7 @@
 #include "engine/state/particle_store.hpp"
 #include "engine/walls/wall.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/numbers.hpp"
 #include "engine/core/parallel.hpp"
 
 namespace sparkdem {
@@ -149,7 +150,6 @@ constexpr bool is_persistent() {
 }
 
 namespace detail {
-inline constexpr double kPi = 3.14159265358979323846;
 constexpr std::size_t kBlock = 1024;  // fixed reduction blocks: results independent of thread count
 }  // namespace detail
 
@@ -378,7 +378,7 @@ class ContactModelT final : public ContactModel {
                    const std::vector<double>* extra_rows = nullptr) const override {
     double dt = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < p.size(); ++i) {
-      const double vol = 4.0 / 3.0 * detail::kPi * p.radius[i] * p.radius[i] * p.radius[i];
+      const double vol = 4.0 / 3.0 * kPi * p.radius[i] * p.radius[i] * p.radius[i];
       dt = std::min(dt, law_.rayleigh_dt(p.radius[i], p.mass[i] / vol));
     }
     return std::min(dt, network_stable_dt(p, t, walls, extra_rows));

@@ -12,6 +12,7 @@
 #include <numeric>
 
 #include "engine/core/error.hpp"
+#include "engine/core/numbers.hpp"
 #include "engine/graph/hypre_amg.hpp"
 #include "engine/graph/interaction_graph.hpp"
 #include "engine/core/parallel.hpp"
@@ -19,8 +20,6 @@
 namespace sparkdem {
 
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 void check_endpoints(std::size_t nodes, std::span<const Index> a, std::span<const Index> b) {
   if (a.size() != b.size())

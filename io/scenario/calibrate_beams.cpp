@@ -9,6 +9,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/format.hpp"
+#include "engine/core/numbers.hpp"
 #include "io/scenario/json_binder.hpp"
 #include "io/scenario/pipeline.hpp"
 #include "io/scenario/scenario.hpp"
@@ -70,7 +71,6 @@ struct Reader {
   }
 };
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kUnbreakable = 1e30;  ///< [Pa] strength of the measuring runs (criterion stress measured, no break)
 
 double final_value(const json& stage, const std::string& column) {

@@ -54,6 +54,7 @@
 #include <vector>
 
 #include "engine/contact/bond_model.hpp"
+#include "engine/core/numbers.hpp"
 #include "engine/model/param_spec.hpp"
 
 namespace sparkdem::physics {
@@ -73,8 +74,6 @@ struct BeamKinematics {
 };
 
 namespace beam {
-
-inline constexpr double kPi = 3.14159265358979323846;
 
 /// Rotation vector taking unit vector a onto unit vector b (angle atan2(|a x b|, a.b)).
 inline Vec3 rotation_between(const Vec3& a, const Vec3& b) {

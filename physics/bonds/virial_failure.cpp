@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/core/numbers.hpp"
 #include "engine/state/pair_transfer.hpp"
 #include "engine/state/state.hpp"
 
 namespace sparkdem::physics {
 
 std::vector<double> bond_hydrostatic_stress(const ParticleStore& p, const BondTable& b, double packing_fraction) {
-  constexpr double kPi = 3.14159265358979323846;
   std::vector<double> trace(p.size(), 0.0);
   const auto& F = b.force();
   for (std::size_t r = 0; r < b.size() && r < F.size(); ++r) {
@@ -27,7 +27,6 @@ std::vector<double> bond_hydrostatic_stress(const ParticleStore& p, const BondTa
 }
 
 std::vector<Eigen::Matrix3d> bond_virial_stress(const ParticleStore& p, const BondTable& b, double packing_fraction) {
-  constexpr double kPi = 3.14159265358979323846;
   std::vector<Eigen::Matrix3d> sigma(p.size(), Eigen::Matrix3d::Zero());
   const auto& F = b.force();
   for (std::size_t r = 0; r < b.size() && r < F.size(); ++r) {

@@ -6,10 +6,9 @@
 #include <mutex>
 
 #include "engine/contact/geometry.hpp"
+#include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics::kernel {
-
-inline constexpr double kPi = 3.14159265358979323846;
 
 /// Effective Young's modulus of two identical elastic bodies [Pa]:
 ///   1/E* = (1 - nu^2)/E + (1 - nu^2)/E   (Johnson, Contact Mechanics, eq. 4.22)

@@ -61,7 +61,7 @@ struct LinearSpringDashpot {
   /// True at mu = 0: the Coulomb cap then zeroes the whole tangential force (stable step).
   bool tangential_free() const { return p_.friction == 0.0; }
   double rayleigh_dt(double radius, double density) const {
-    const double m = density * 4.0 / 3.0 * kernel::kPi * radius * radius * radius;
+    const double m = density * 4.0 / 3.0 * kPi * radius * radius * radius;
     return 2.0 * std::sqrt(m / (2.0 * p_.normal_stiffness));
   }
 

@@ -612,7 +612,7 @@ struct Sintering {
       }
     }
     // A neck that breaks in tension stops carrying load at the next step.
-    if (neck && p_.neck_strength > 0.0 && -fn > p_.neck_strength * kernel::kPi * a * a) {
+    if (neck && p_.neck_strength > 0.0 && -fn > p_.neck_strength * kPi * a * a) {
       a = 0.0;
       fe = 0.0;
       us = 0.0;

@@ -53,12 +53,10 @@
 #include <vector>
 
 #include "engine/core/error.hpp"
+#include "engine/core/numbers.hpp"
 #include "engine/core/types.hpp"
 
 namespace sparkdem::physics::electrical {
-
-inline constexpr double kPi = 3.14159265358979323846;
-inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
 namespace detail {
 /// Throws ConfigError("", "<what> must be <expected>, found <value>").

@@ -762,7 +762,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   if (!(A > 0.0))
     for (const auto& w : s.walls)
       if (!w.is_plane()) {
-        A = el::kPi * w.cylinder_radius() * w.cylinder_radius();
+        A = kPi * w.cylinder_radius() * w.cylinder_radius();
         break;
       }
   r_.length = L > 0.0 ? L : kNaN;

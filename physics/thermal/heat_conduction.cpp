@@ -272,7 +272,7 @@ void HeatConduction::bind(State& s) {
   }
   for (std::size_t i = 0; i < p.size(); ++i) {
     const double r = expands ? p.fields.data("radius_ref")[i] : p.radius[i];
-    const double v = 4.0 / 3.0 * thermal::kPi * r * r * r;
+    const double v = 4.0 / 3.0 * kPi * r * r * r;
     vsum += v;
     vfsum += v / fv[i];
     C[i] = thermal::sphere_heat_capacity(p_.density, p_.specific_heat, r);
@@ -310,7 +310,7 @@ double HeatConduction::stable_dt(const State& s) const {
     if (fixed[i]) continue;
     double rate = n.degree[i];
     if (all_lose || (lose && (*lose)[i] > 0.5)) {
-      const double A = p_.loss_area_fraction * 4.0 * thermal::kPi * p.radius[i] * p.radius[i];
+      const double A = p_.loss_area_fraction * 4.0 * kPi * p.radius[i] * p.radius[i];
       rate += thermal::ambient_loss_slope(p_.convection_coefficient, p_.emissivity, A, T[i]);
     }
     if (rate > 0.0 && C[i] / rate < dt) {
@@ -358,7 +358,7 @@ void HeatConduction::advance(State& s, const StepInfo& info) {
     const std::vector<double>* lose = p_.loss_set == "all" ? nullptr : &set_field(s, p_.loss_set, "heat_conduction");
     for (std::size_t i = 0; i < np; ++i)
       if ((!lose || (*lose)[i] > 0.5) && std::isnan(fixed_value[i]))
-        area[i] = p_.loss_area_fraction * 4.0 * thermal::kPi * p.radius[i] * p.radius[i];
+        area[i] = p_.loss_area_fraction * 4.0 * kPi * p.radius[i] * p.radius[i];
   }
   const double h = p_.convection_coefficient, em = p_.emissivity, Ta = p_.ambient_temperature;
   scratch_.assign(np, 0.0);

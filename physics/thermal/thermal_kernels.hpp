@@ -31,9 +31,10 @@
 ///   a_i = -h A_i T_a + eps sigma A_i ((T_i^n)^4 - T_a^4) - 4 eps sigma A_i (T_i^n)^4.
 #include <cmath>
 
+#include "engine/core/numbers.hpp"
+
 namespace sparkdem::physics::thermal {
 
-inline constexpr double kPi = 3.14159265358979323846;
 inline constexpr double kStefanBoltzmann = 5.670374419e-8;  ///< [W/(m^2 K^4)] (CODATA 2018, exact)
 
 /// Heat capacity of a sphere of radius r [m]: rho [kg/m^3] c [J/(kg K)] (4/3) pi r^3 [J/K].
