@@ -591,7 +591,7 @@ std::vector<ModuleStep> Simulation::module_steps(double dt_used) const {
 /// One mechanical step: the plan's items in order; t_new = stage time at the end of the step.
 void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_new, double t_area) {
   auto& p = s_.particles;
-  const bool timed = stats_ && s_.step % kSplitEvery == 0;
+  const bool timed = stats_ && split_timed(s_.step);
   if (timed) ++stats_->core_sampled_steps;
   for (const PlanItem& it : plan_.items) {
     const bool time_item = timed && it.kind != PlanItem::Kind::Module;  // modules time themselves (run_module)
@@ -758,6 +758,7 @@ double Simulation::choose_step(const StageConfig& cfg, bool resume, StageResult&
 StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool resume) {
   using clock = std::chrono::steady_clock;
   const auto t_start = clock::now();
+  const Step step_begin = s_.step;  // a resumed stage's rate counts the steps this run made
   auto& p = s_.particles;
   prepare(cfg);
 
@@ -828,13 +829,16 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     throw PhysicsError(e.step(), e.ids(), e.quantity(),
                        "stage '" + cfg.name + "' refused before its first step: its initial state fails the " + e.reason(), e.detail());
   }
-  if (wd.snapshot_every_checks > 0) obs.healthy(s_);
+  const auto stage_done = [&](Step k) { return k >= cfg.max_steps || static_cast<double>(k) * dt_used >= cfg.duration * (1.0 - 1e-12); };
+  // A stage with no step ahead (e.g. a sweep item's measurement, stop.steps = 0) keeps no copy:
+  // it would hold the state the stage fails in, which restarting from would only redo the stage.
+  if (wd.snapshot_every_checks > 0 && !stage_done(s_.step - s_.stage_step0)) obs.healthy(s_);
 
   bool reached = false;
   const Step log_every = cfg.log_every > 0 ? cfg.log_every : 100;
   for (;;) {
     const Step k = s_.step - s_.stage_step0;  // steps done in this stage
-    if (k >= cfg.max_steps || static_cast<double>(k) * dt_used >= cfg.duration * (1.0 - 1e-12)) break;
+    if (stage_done(k)) break;
     if (k > 0 && k % cfg.check_every == 0) {
       halt_walls(cols, vals);
       if (until_holds()) {
@@ -887,8 +891,9 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   end_stage(cols, vals, res);
   res.neighbor_rebuilds = s_.rebuilds - rebuilds0;
   res.wall_seconds = std::chrono::duration<double>(clock::now() - t_start).count();
-  res.particle_steps_per_second = res.wall_seconds > 0 ? static_cast<double>(res.steps) * static_cast<double>(p.size()) / res.wall_seconds
-                                                       : 0.0;
+  res.steps_run = s_.step - step_begin;
+  res.particle_steps_per_second =
+      res.wall_seconds > 0 ? static_cast<double>(res.steps_run) * static_cast<double>(p.size()) / res.wall_seconds : 0.0;
   stats_ = nullptr;
   return res;
 }

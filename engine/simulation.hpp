@@ -154,12 +154,24 @@ class Observer {
   }
 };
 
-/// Every kSplitEvery-th step has its core plan items timed (StageResult::core_seconds).
+/// One step in kSplitEvery has its core plan items timed (StageResult::core_seconds): the steps
+/// whose mixed step number (split_timed) is 0 modulo kSplitEvery. Not every kSplitEvery-th step:
+/// a Verlet list rebuilt every 32 steps would then fall on half the timed steps and the
+/// neighbour item's share come out about 16 times too large.
 inline constexpr Step kSplitEvery = 16;
+/// Whether step k is one of the timed steps (a fixed hash of k: the same steps on a restart).
+inline bool split_timed(Step k) {
+  auto x = static_cast<std::uint64_t>(k) + 0x9e3779b97f4a7c15ULL;  // splitmix64's finaliser
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  x ^= x >> 31;
+  return x % static_cast<std::uint64_t>(kSplitEvery) == 0;
+}
 
 struct StageResult {
   std::string name;
-  Step steps = 0;
+  Step steps = 0;      ///< the stage's steps (on resume: those before the checkpoint included)
+  Step steps_run = 0;  ///< steps this call made (the rates count these)
   double simulated_time = 0.0;
   double wall_seconds = 0.0;
   double dt = 0.0;
@@ -175,8 +187,8 @@ struct StageResult {
   std::map<std::string, Step> max_substeps;      ///< largest per-step substep count (adaptive clocks)
   std::map<std::string, double> module_seconds;  ///< wall time inside each module's calls [s] (the rest is mechanics and I/O)
   /// Wall time of each core item of the step plan [s] (integration halves, walls, neighbours,
-  /// zeroing, contact pairs, bonds, wall contacts), estimated from every kSplitEvery-th step
-  /// (timed) scaled by the steps taken: two clock reads per item on every step would cost a
+  /// zeroing, contact pairs, bonds, wall contacts), estimated from one step in kSplitEvery
+  /// (split_timed) scaled by the steps taken: two clock reads per item on every step would cost a
   /// few-particle scene several per cent. Modules are in module_seconds (every call timed).
   std::map<std::string, double> core_seconds;
   Step core_sampled_steps = 0;           ///< steps whose core items were timed

@@ -54,7 +54,8 @@ struct WatchdogConfig {
   double energy_growth_factor = 1e4;    ///< [1] 0 = no energy check
   Step energy_window = 5;               ///< checks over which the growth is measured (>= 1)
   double energy_floor_fraction = 0.01;  ///< [1] rms-speed floor as a fraction of the blow-up speed
-  /// Checks between in-memory copies of the last healthy state (also taken at the stage start);
+  /// Checks between in-memory copies of the last healthy state (also taken at the start of a stage
+  /// with steps to run);
   /// 0 = no copies (a failure then leaves no checkpoint_before_failure.h5).
   Step snapshot_every_checks = 10;
 };

@@ -7,14 +7,61 @@
 
 namespace sparkdem {
 
+namespace {
+
+/// The rows of a table by pair key, for the rebuild's look-ups: open addressing with linear
+/// probing over a power-of-two array of at least twice the rows (16 bytes a slot, one allocation)
+/// in place of a node-based map (one allocation a row, about 60 bytes a row).
+class RowsByKey {
+ public:
+  explicit RowsByKey(std::size_t rows) {
+    std::size_t cap = 16;
+    while (cap < 2 * rows) cap *= 2;
+    mask_ = cap - 1;
+    slots_.assign(cap, {0, kNone});
+  }
+  /// Adds a row (a key already present keeps its first row).
+  void insert(std::uint64_t key, std::size_t row) {
+    std::size_t s = home(key);
+    while (slots_[s].row != kNone && slots_[s].key != key) s = (s + 1) & mask_;
+    if (slots_[s].row == kNone) slots_[s] = {key, row};
+  }
+  /// The row of `key`, or -1.
+  std::int64_t find(std::uint64_t key) const {
+    for (std::size_t s = home(key);; s = (s + 1) & mask_) {
+      if (slots_[s].row == kNone) return -1;
+      if (slots_[s].key == key) return static_cast<std::int64_t>(slots_[s].row);
+    }
+  }
+
+ private:
+  static constexpr std::uint64_t kNone = ~std::uint64_t{0};  ///< row of an empty slot
+  struct Slot {
+    std::uint64_t key;
+    std::uint64_t row;
+  };
+  /// The slot a key starts its probe at: the key's bits mixed (the high word, the smaller id,
+  /// repeats across a particle's rows) by the 64-bit finaliser of MurmurHash3.
+  std::size_t home(std::uint64_t k) const {
+    k ^= k >> 33;
+    k *= 0xff51afd7ed558ccdULL;
+    k ^= k >> 33;
+    k *= 0xc4ceb9fe1a85ec53ULL;
+    k ^= k >> 33;
+    return static_cast<std::size_t>(k) & mask_;
+  }
+  std::vector<Slot> slots_;
+  std::size_t mask_ = 0;
+};
+
+}  // namespace
+
 void ContactTable::rebuild(const std::vector<std::array<Index, 2>>& pairs, const std::vector<Id>& ids, std::size_t n_particles,
                            const ContactRebuildRules& rules) {
   const std::size_t w = state_names_.size();
-  std::unordered_map<std::uint64_t, std::size_t> old;
-  if (w > 0) {
-    old.reserve(size() * 2);
-    for (std::size_t r = 0; r < size(); ++r) old.emplace(key(r), r);
-  }
+  RowsByKey old(w > 0 ? size() : 0);
+  if (w > 0)
+    for (std::size_t r = 0; r < size(); ++r) old.insert(key(r), r);
   std::vector<char> carried(size(), 0);
   std::vector<Index> ni, nj;
   std::vector<Id> nidi, nidj;
@@ -35,10 +82,10 @@ void ContactTable::rebuild(const std::vector<std::array<Index, 2>>& pairs, const
     nidj.push_back(ids[b]);
     nstate.resize(nstate.size() + w, 0.0);
     if (w > 0) {
-      auto it = old.find(k);
-      if (it != old.end()) {
-        std::copy_n(state_.begin() + it->second * w, w, nstate.end() - w);
-        carried[it->second] = 1;
+      const std::int64_t r = old.find(k);
+      if (r >= 0) {
+        std::copy_n(state_.begin() + r * w, w, nstate.end() - w);
+        carried[r] = 1;
       }
     }
   }

@@ -12,6 +12,7 @@
 #include <map>
 
 #include "engine/core/error.hpp"
+#include "engine/core/memory.hpp"
 #include "engine/core/memory_archive.hpp"
 #include "engine/state/delete_particles.hpp"
 #include "engine/state/pair_transfer.hpp"
@@ -92,6 +93,10 @@ class OutputObserver final : public Observer {
     ContactFrame c;
     const auto& t = s.contacts;
     FrameField ov{"overlap", 1, {}, "m"}, fn{"force", 3, {}, "N"};
+    const auto touching = static_cast<std::size_t>(std::count_if(t.overlap().begin(), t.overlap().end(), [](double h) { return h > 0.0; }));
+    c.pairs.reserve(2 * touching);
+    ov.data.reserve(touching);
+    fn.data.reserve(3 * touching);
     for (std::size_t r = 0; r < t.size(); ++r) {
       if (t.overlap()[r] <= 0.0) continue;
       c.pairs.push_back(t.id_i()[r]);
@@ -99,14 +104,15 @@ class OutputObserver final : public Observer {
       ov.data.push_back(t.overlap()[r]);
       for (int d = 0; d < 3; ++d) fn.data.push_back(t.force()[r][d]);
     }
-    c.fields = {ov, fn};
+    c.fields.push_back(std::move(ov));
+    c.fields.push_back(std::move(fn));
     const int index = writer_.frames();
     std::vector<std::pair<std::string, ContactFrame>> networks;
     for (const Module* m : modules_)
-      for (const EdgeOutput& eo : m->edge_outputs()) {
+      for (EdgeOutput& eo : m->edge_outputs()) {  // a copy of the module's: moved, not copied again
         ContactFrame n;
-        n.pairs = eo.pairs;
-        for (const EdgeField& ef : eo.fields) n.fields.push_back({ef.name, 1, ef.values, ef.unit});
+        n.pairs = std::move(eo.pairs);
+        for (EdgeField& ef : eo.fields) n.fields.push_back({ef.name, 1, std::move(ef.values), ef.unit});
         networks.emplace_back(eo.name, std::move(n));
       }
     const std::string file = writer_.write_frame(s.step, s.time, stage_, f, c, networks);
@@ -521,8 +527,8 @@ void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool 
   for (const auto& [m, n] : r.module_calls) js["module_calls"][m] = n;
   for (const auto& [m, t] : r.module_seconds) js["module_wall_time_s"][m] = t;
   if (r.core_sampled_steps > 0) {
-    // Estimated from the timed steps (one in kSplitEvery), scaled by the steps taken.
-    const double scale = static_cast<double>(r.steps) / static_cast<double>(r.core_sampled_steps);
+    // Estimated from the timed steps (one in kSplitEvery), scaled by the steps this run took.
+    const double scale = static_cast<double>(r.steps_run) / static_cast<double>(r.core_sampled_steps);
     for (const auto& [item, t] : r.core_seconds) js["core_wall_time_s"][item] = t * scale;
     js["core_wall_time_sampled_steps"] = r.core_sampled_steps;
   }
@@ -667,7 +673,7 @@ void run_plain_stage(Scenario& sc, std::size_t k, State& s, OutputObserver& obs,
     }
     if (st.snapshots) js["snapshots"] = snapshots_summary(record, stage_index, *st.snapshots, opt.outdir);
     totals.steps += r.steps;
-    totals.particle_steps += static_cast<double>(r.steps) * static_cast<double>(r.particles);
+    totals.particle_steps += static_cast<double>(r.steps_run) * static_cast<double>(r.particles);
   } else {
     sim.prepare(st.cfg);
     s.stage_step0 = s.step;
@@ -799,9 +805,11 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
         totals.steps += r.steps;
         totals.particle_steps += r.particle_steps;
         obs.final_state(s, completed(k, false));
+        release_free_memory();
         continue;
       }
       run_plain_stage(sc, k, s, obs, record, rp, opt, log, summary, totals, completed(k, false), completed(k, true));
+      release_free_memory();  // what the stage freed is not held while the next one runs
     }
   } catch (const Interrupted& e) {
     status = "interrupted";

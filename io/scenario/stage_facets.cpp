@@ -87,7 +87,7 @@ ParamSpec<StageParams::Watchdog> watchdog_spec() {
   s.add("snapshot_every_checks", &P::snapshot_every_checks)
       .min(0)
       .doc(
-          "checks between in-memory copies of the last healthy state (one more at the stage start; memory: about one "
+          "checks between in-memory copies of the last healthy state (one more at the start of a stage with steps to run; memory: about one "
           "checkpoint; 0: none, and no checkpoint_before_failure.h5)");
   return s;
 }

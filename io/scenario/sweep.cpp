@@ -725,13 +725,32 @@ json sweep_entry(const SweepContext& ctx, const StageDef& st, const json& rows) 
 SweepOutcome run_sweep(Scenario& sc, std::size_t k, State& s, RunRecord& record, bool resuming, const RunOptions& opt) {
   const auto t0 = std::chrono::steady_clock::now();
   SweepContext ctx = sweep_context(sc, k, s, record, resuming, opt);
+  // The items of a snapshot sweep start from their snapshots and take only the input's random
+  // generator: on one rank the input state waits in its file (written by sweep_context) while
+  // they run, not in memory beside theirs, and is read back after them as a restart reads it.
+  const bool parked = ranks::size() == 1 && ctx.sw->kind == SweepDef::Kind::Snapshots;
+  if (parked) {
+    State rng_only;
+    rng_only.rng = ctx.input.rng;
+    ctx.input = std::move(rng_only);
+  }
+  const auto unpark = [&] {
+    if (!parked) return;
+    read_checkpoint(ctx.input_file, ctx.input);
+    ctx.input.materials = sc.materials;
+  };
   std::map<std::size_t, ItemResult> ran;
   try {
     ran = ranks::size() > 1 ? run_items_spread(sc, ctx, record) : run_items_in_order(sc, ctx, record, opt);
   } catch (...) {
+    try {
+      unpark();
+    } catch (...) {  // the item's failure is the one to report
+    }
     s = std::move(ctx.input);  // the run's summary reports the state before the sweep
     throw;
   }
+  unpark();
   record.sweep = nullptr;
   std::map<std::size_t, json> rows = ctx.done;
   SweepOutcome out;

@@ -645,6 +645,9 @@ std::size_t particle_potentials(const BuiltNet& b, bool particle_centred, const 
 EdgeOutput branch_output(const State& s, const InteractionGraph& g, const NetSolution& sol, bool spans, bool particle_centred) {
   EdgeOutput out{"electrical", {}, {{"current", "A", {}}, {"conductance", "S", {}}, {"power", "W", {}}}};
   if (!particle_centred) return out;
+  const auto conducting = static_cast<std::size_t>(std::count_if(sol.edge_g.begin(), sol.edge_g.end(), [](double g) { return g > 0.0; }));
+  out.pairs.reserve(2 * conducting);
+  for (auto& f : out.fields) f.values.reserve(conducting);
   auto id_of = [&](Index v) {
     return g.is_wall_node(v) ? -1 - static_cast<std::int64_t>(static_cast<std::size_t>(v) - g.particle_nodes)
                              : static_cast<std::int64_t>(s.particles.id[v]);

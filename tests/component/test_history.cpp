@@ -64,6 +64,46 @@ TEST_CASE("ContactTable::rebuild carries state by global id", "[history]") {
   CHECK(t.state(0)[1] == 0.0);
 }
 
+TEST_CASE("ContactTable::rebuild carries every row of a large table, whatever the ids", "[history]") {
+  // 3000 particles with ids spread up to 2^32 (pair keys are unique below it), all multiples of
+  // 4096 (keys alike in their low bits), 12,000 pairs: the rebuild's look-up table probes past
+  // collisions and wraps around.
+  const std::size_t n = 3000;
+  std::vector<Id> ids(n);
+  for (std::size_t k = 0; k < n; ++k) ids[k] = static_cast<Id>(k) * 4096 * 349;
+  std::vector<std::array<Index, 2>> pairs;
+  for (std::size_t k = 0; k < 12000; ++k)
+    pairs.push_back({static_cast<Index>((7 * k) % n), static_cast<Index>((7 * k + 1 + k % 17) % n)});
+  ContactTable t;
+  t.set_state_columns({"a", "b"});
+  t.rebuild(pairs, ids, n);
+  REQUIRE(t.size() == pairs.size());
+  const auto mark = [](Id a, Id b) { return std::array<double, 2>{static_cast<double>(a % 100003) + 1.0, static_cast<double>(b % 65521) + 1.0}; };
+  for (std::size_t r = 0; r < t.size(); ++r) {
+    const auto v = mark(t.id_i()[r], t.id_j()[r]);
+    std::copy(v.begin(), v.end(), t.state(r));
+  }
+  // The next pair set: every other old pair, reversed and in reverse order, plus 2000 new ones.
+  std::vector<std::array<Index, 2>> next;
+  for (std::size_t k = pairs.size(); k-- > 0;)
+    if (k % 2 == 0) next.push_back({pairs[k][1], pairs[k][0]});
+  const std::size_t carried = next.size();
+  for (std::size_t k = 0; k < 2000; ++k) next.push_back({static_cast<Index>(k), static_cast<Index>(k + 2500 <= n - 1 ? k + 2500 : k + 1)});
+  std::map<std::uint64_t, std::size_t> old_rows;
+  for (std::size_t k = 0; k < pairs.size(); ++k) old_rows.emplace(pair_key(ids[pairs[k][0]], ids[pairs[k][1]]), k);
+  t.rebuild(next, ids, n);
+  REQUIRE(t.size() == next.size());
+  std::size_t kept = 0;
+  for (std::size_t r = 0; r < t.size(); ++r) {
+    const bool was = old_rows.count(t.key(r)) != 0;
+    const auto want = was ? mark(t.id_i()[r], t.id_j()[r]) : std::array<double, 2>{0.0, 0.0};
+    CHECK(t.state(r)[0] == want[0]);
+    CHECK(t.state(r)[1] == want[1]);
+    kept += was;
+  }
+  CHECK(kept >= carried);
+}
+
 TEST_CASE("Contact state and particle fields follow a permutation", "[history]") {
   ParticleStore p;
   for (int k = 0; k < 6; ++k) p.add(Vec3(k, 0.1 * k, 0), 0.6, 1.0 + k);

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <string>
 #include <vector>
@@ -73,6 +74,21 @@ std::ptrdiff_t position_of(const StepPlan& plan, const std::string& name) {
 }
 
 }  // namespace
+
+TEST_CASE("The timed steps of the stage split are one in kSplitEvery on every step period", "[scheduler]") {
+  // An item that costs on every P-th step only (a Verlet rebuild) is sampled in proportion: on
+  // the steps that are multiples of P the timed share must be 1 / kSplitEvery too, for periods that
+  // are powers of two (which a stride would alias with) and others. 64 Ki steps per period, so the
+  // binomial spread of the share is below 5 % of it (3 sigma).
+  for (const Step period : {1, 2, 7, 16, 32, 33, 64, 100, 128}) {
+    const Step n = 65536;
+    Step timed = 0;
+    for (Step k = 0; k < n; ++k) timed += split_timed(k * period) ? 1 : 0;
+    const double share = static_cast<double>(timed) / static_cast<double>(n);
+    INFO("period " << period << ": share " << share);
+    CHECK(std::abs(share * kSplitEvery - 1.0) < 0.05);
+  }
+}
 
 TEST_CASE("EveryNSteps(N) runs at global steps N, 2N, ... with dt = N dt", "[scheduler]") {
   Bench b;
