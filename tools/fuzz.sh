@@ -22,6 +22,8 @@ scratch="${FUZZ_SCRATCH:-$( [ -d /dev/shm ] && echo /dev/shm || echo "${TMPDIR:-
 trap 'rm -rf "$scratch"' EXIT
 mkdir -p "$scratch"
 bin="${FUZZ_BIN:-$build/tests/sparkdem_fuzz}"
+# The driver is not in the default build target (tests/CMakeLists.txt).
+[ -n "${FUZZ_BIN:-}" ] || cmake --build "$build" --target sparkdem_fuzz
 campaigns="${FUZZ_CAMPAIGNS:-checkpoint loader}"
 status=0
 if [[ " $campaigns " == *" checkpoint "* ]]; then
