@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "engine/contact/bond_model.hpp"
+#include "engine/core/hash.hpp"
 #include "engine/contact/contact_model.hpp"
 #include "engine/integrate/quasi_static.hpp"
 #include "engine/model/module.hpp"
@@ -160,13 +161,7 @@ class Observer {
 /// neighbour item's share come out about 16 times too large.
 inline constexpr Step kSplitEvery = 16;
 /// Whether step k is one of the timed steps (a fixed hash of k: the same steps on a restart).
-inline bool split_timed(Step k) {
-  auto x = static_cast<std::uint64_t>(k) + 0x9e3779b97f4a7c15ULL;  // splitmix64's finaliser
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  x ^= x >> 31;
-  return x % static_cast<std::uint64_t>(kSplitEvery) == 0;
-}
+inline bool split_timed(Step k) { return mix64(static_cast<std::uint64_t>(k)) % static_cast<std::uint64_t>(kSplitEvery) == 0; }
 
 struct StageResult {
   std::string name;

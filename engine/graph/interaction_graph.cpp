@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "engine/core/error.hpp"
+#include "engine/core/hash.hpp"
 #include "engine/neighbor/neighbor_search.hpp"
 
 namespace sparkdem {
@@ -29,14 +30,6 @@ const char* edge_kind_name(EdgeKind k) {
 std::size_t InteractionGraph::count(EdgeKind k) const { return static_cast<std::size_t>(std::count(kind.begin(), kind.end(), k)); }
 
 namespace {
-
-/// splitmix64 finaliser: a bijective 64-bit mix.
-std::uint64_t mix64(std::uint64_t z) {
-  z += 0x9E3779B97F4A7C15ULL;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31);
-}
 
 void check_options(const GraphOptions& o) {
   if (!(o.near_gap >= 0.0) || !std::isfinite(o.near_gap))

@@ -4,6 +4,7 @@
 #include <map>
 
 #include "engine/core/error.hpp"
+#include "engine/core/hash.hpp"
 
 namespace sparkdem {
 
@@ -40,16 +41,9 @@ class RowsByKey {
     std::uint64_t key;
     std::uint64_t row;
   };
-  /// The slot a key starts its probe at: the key's bits mixed (the high word, the smaller id,
-  /// repeats across a particle's rows) by the 64-bit finaliser of MurmurHash3.
-  std::size_t home(std::uint64_t k) const {
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdULL;
-    k ^= k >> 33;
-    k *= 0xc4ceb9fe1a85ec53ULL;
-    k ^= k >> 33;
-    return static_cast<std::size_t>(k) & mask_;
-  }
+  /// The slot a key starts its probe at: the key's bits mixed (its high word, the smaller id,
+  /// repeats across a particle's rows).
+  std::size_t home(std::uint64_t k) const { return static_cast<std::size_t>(mix64(k)) & mask_; }
   std::vector<Slot> slots_;
   std::size_t mask_ = 0;
 };
