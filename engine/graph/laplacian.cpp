@@ -37,15 +37,6 @@ void check_edges(std::size_t nodes, std::span<const Index> a, std::span<const In
     throw SetupError("Laplacian: " + std::to_string(g.size()) + " conductances for " + std::to_string(a.size()) + " edges");
 }
 
-/// Index of entry (row, col) in a compressed column-major matrix (must exist).
-std::int64_t slot_of(const Eigen::SparseMatrix<double>& A, int row, int col) {
-  const int* inner = A.innerIndexPtr();
-  const int* lo = inner + A.outerIndexPtr()[col];
-  const int* hi = inner + A.outerIndexPtr()[col + 1];
-  const int* it = std::lower_bound(lo, hi, row);
-  return static_cast<std::int64_t>(it - inner);
-}
-
 /// Throw a PhysicsError (out of line: keeps the message formatting out of solve()).
 [[noreturn, gnu::noinline]] void physics_fail(Step step, const char* quantity, const std::string& what) {
   throw PhysicsError(step, {}, quantity, what);
@@ -518,6 +509,78 @@ DirichletNodes dirichlet_nodes(const LaplacianProblem& p) {
   return d;
 }
 
+/// The pattern of the reduced matrix (free unknowns only, both triangles, compressed column-major,
+/// rows sorted in each column) and the value slot each free node's diagonal and each edge between
+/// two free nodes adds into (slot_ab: row a, column b; slot_ba: row b, column a; -1 otherwise).
+/// Edges joining the same two nodes share their slots. Built by counting, without triplets or
+/// searches: O(entries x log(entries per column)).
+struct ReducedPattern {
+  SpMat A;
+  std::vector<std::int64_t> slot_diag, slot_ab, slot_ba;
+};
+ReducedPattern reduced_pattern(std::size_t m, std::span<const Index> a, std::span<const Index> b, const std::vector<char>& active,
+                               const std::vector<std::int32_t>& role) {
+  const std::size_t ne = a.size();
+  if (ne >= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
+    throw SetupError("Laplacian: " + std::to_string(ne) + " edges; at most 2^31 - 2 are supported");
+  // Column f lists the diagonal and one entry per edge to another free node: (row, edge), the
+  // diagonal with edge -1; an edge's two entries are told apart by which column they sit in.
+  struct Entry {
+    std::int32_t row, edge;
+    bool operator<(const Entry& o) const { return row < o.row || (row == o.row && edge < o.edge); }
+  };
+  std::vector<std::int64_t> start(m + 1, 1);
+  start[0] = 0;
+  for (std::size_t e = 0; e < ne; ++e)
+    if (active[e] && role[a[e]] >= 0 && role[b[e]] >= 0) {
+      ++start[role[a[e]] + 1];
+      ++start[role[b[e]] + 1];
+    }
+  for (std::size_t f = 0; f < m; ++f) start[f + 1] += start[f];
+  std::vector<Entry> entry(static_cast<std::size_t>(start[m]));
+  std::vector<std::int64_t> fill(start.begin(), start.end() - 1);
+  for (std::size_t f = 0; f < m; ++f) entry[fill[f]++] = {static_cast<std::int32_t>(f), -1};
+  for (std::size_t e = 0; e < ne; ++e) {
+    if (!active[e]) continue;
+    const std::int32_t fa = role[a[e]], fb = role[b[e]];
+    if (fa < 0 || fb < 0) continue;
+    entry[fill[fb]++] = {fa, static_cast<std::int32_t>(e)};  // row a, column b
+    entry[fill[fa]++] = {fb, static_cast<std::int32_t>(e)};  // row b, column a
+  }
+  ReducedPattern out;
+  out.slot_diag.assign(m, -1);
+  out.slot_ab.assign(ne, -1);
+  out.slot_ba.assign(ne, -1);
+  const auto mm = static_cast<Eigen::Index>(m);
+  SpMat& A = out.A;
+  A.resize(mm, mm);
+  A.resizeNonZeros(static_cast<Eigen::Index>(entry.size()));  // an upper bound: edges joining the same nodes share a slot
+  int* outer = A.outerIndexPtr();
+  int* inner = A.innerIndexPtr();
+  int nnz = 0;
+  outer[0] = 0;
+  for (std::size_t f = 0; f < m; ++f) {
+    Entry* lo = entry.data() + start[f];
+    Entry* hi = entry.data() + start[f + 1];
+    for (Entry* it = lo + 1; it < hi; ++it)  // insertion sort: a column holds a node's few neighbours
+      for (Entry* j = it; j > lo && *j < *(j - 1); --j) std::swap(*j, *(j - 1));
+    for (Entry* it = lo; it != hi; ++it) {
+      if (it == lo || it->row != (it - 1)->row) inner[nnz++] = it->row;
+      const std::int64_t slot = nnz - 1;
+      if (it->edge < 0)
+        out.slot_diag[f] = slot;
+      else if (role[a[it->edge]] == it->row)
+        out.slot_ab[it->edge] = slot;
+      else
+        out.slot_ba[it->edge] = slot;
+    }
+    outer[f + 1] = nnz;
+  }
+  A.resizeNonZeros(nnz);
+  std::fill(A.valuePtr(), A.valuePtr() + nnz, 0.0);
+  return out;
+}
+
 /// Node values (Dirichlet values, solved values, NaN on floating nodes), branch fluxes and
 /// Dirichlet-group fluxes of a solved reduced system x.
 void write_results(const LaplacianProblem& p, const std::vector<std::int32_t>& role, const std::vector<std::int32_t>& group_of,
@@ -715,32 +778,11 @@ LaplacianResult LaplacianSolver::solve(const LaplacianProblem& p) {
   if (!same_structure) {
     im.structure_valid = false;
     im.factor_valid = false;
-    std::vector<Eigen::Triplet<double>> t;
-    t.reserve(m + 2 * ne);
-    for (std::size_t f = 0; f < m; ++f) t.emplace_back(static_cast<int>(f), static_cast<int>(f), 1.0);
-    for (std::size_t e = 0; e < ne; ++e) {
-      if (!active[e]) continue;
-      const std::int32_t fa = role[p.a[e]], fb = role[p.b[e]];
-      if (fa >= 0 && fb >= 0) {
-        t.emplace_back(fa, fb, 1.0);
-        t.emplace_back(fb, fa, 1.0);
-      }
-    }
-    im.A.resize(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
-    im.A.setFromTriplets(t.begin(), t.end());
-    im.A.makeCompressed();
-    im.slot_diag.resize(m);
-    for (std::size_t f = 0; f < m; ++f) im.slot_diag[f] = slot_of(im.A, static_cast<int>(f), static_cast<int>(f));
-    im.slot_ab.assign(ne, -1);
-    im.slot_ba.assign(ne, -1);
-    for (std::size_t e = 0; e < ne; ++e) {
-      if (!active[e]) continue;
-      const std::int32_t fa = role[p.a[e]], fb = role[p.b[e]];
-      if (fa >= 0 && fb >= 0) {
-        im.slot_ab[e] = slot_of(im.A, fa, fb);
-        im.slot_ba[e] = slot_of(im.A, fb, fa);
-      }
-    }
+    ReducedPattern pat = reduced_pattern(m, p.a, p.b, active, role);
+    im.A = std::move(pat.A);
+    im.slot_diag = std::move(pat.slot_diag);
+    im.slot_ab = std::move(pat.slot_ab);
+    im.slot_ba = std::move(pat.slot_ba);
     if (m > 0) {
       switch (opt_.method) {
         case LaplacianMethod::Direct:
