@@ -354,14 +354,20 @@ def records_networks(path):
 
 
 def run_networks_ranks(ctx):
-    """BoomerAMG-PCG to 1e-8 on 1 rank and spread over 2 (`mpirun -np 2 bench_electric --spread`),
-    1e6 and 4e6 nodes (quick: 3e5), bonded and packing, one thread per rank."""
+    """BoomerAMG-PCG on 1 rank and spread over 2 (`mpirun -np 2 bench_electric --spread`), 1e6 and
+    4e6 nodes (quick: 3e5), bonded and packing, one thread per rank, to the relative residuals 1e-8
+    (the figure recorded since issue 24) and 1e-9, 1e-10, 5e-11 (the true-error goal of issue 40 item
+    4: a potential error <= 1e-8 needs a residual near 1e-10 on the packing network). The references
+    (CG-Jacobi to 1e-13 above 2e5 nodes) are solved once and shared through a cache in the workdir."""
     mpirun, exe, rows, v = ctx.need("mpirun", "openmpi-bin"), ctx.tool(ELECTRIC), [], ctx.versions()
-    for n in (["300000"] if ctx.quick else ["1000000", "4000000"]):  # above 2e5 nodes the reference is AMG, not LDLT
+    cache = ctx.path("references")
+    os.makedirs(cache, exist_ok=True)
+    for n in (["300000"] if ctx.quick else ["1000000", "4000000"]):
         for fam in ("bonded", "packing"):
             for ranks in (1, 2):
                 csv_path = ctx.path(f"{fam}_{n}_{ranks}.csv")
-                cmd = [exe, "--sizes", n, "--families", fam, "--solvers", "amg", "--tolerances", "1e-8", "--csv", csv_path]
+                cmd = [exe, "--sizes", n, "--families", fam, "--solvers", "amg", "--tolerances", "1e-8,1e-9,1e-10,5e-11",
+                       "--reference-cache", cache, "--csv", csv_path]
                 if ranks > 1:
                     cmd = [mpirun, "--allow-run-as-root", "--oversubscribe", "-np", str(ranks), exe, "--spread"] + cmd[1:]
                 meta = ctx.launch(cmd, f"{fam}_{n}_{ranks}", 1, "passive")
@@ -372,18 +378,40 @@ def run_networks_ranks(ctx):
 
 
 def records_networks_ranks(path):
+    """Per family, size and rank count: the solve to the relative residual 1e-8 (id .../<ranks>, as
+    recorded since issue 24) and the fastest solve whose potentials are within 1e-8 of the
+    reference (id .../<ranks>/err1e-08, ratio to the 2 s goal of issue 40 item 4), when the rows
+    reach it."""
     recs = []
     rows = [r for r in rows_of(path) if r["method"] == "amg" or r["method"].startswith("amg_spread")]
-    one = {(r["family"], r["nodes"]): num(r["wall_s"]) for r in rows if r["method"] == "amg"}
+
+    def ranks_of(r):
+        return 1 if r["method"] == "amg" else int(r["method"].replace("amg_spread", ""))
+
+    one = {(r["family"], r["nodes"]): num(r["wall_s"]) for r in rows if r["method"] == "amg" and num(r["tolerance_or_beta"]) == 1e-8}
     for r in rows:
-        ranks = 1 if r["method"] == "amg" else int(r["method"].replace("amg_spread", ""))
-        base = one.get((r["family"], r["nodes"]))
+        if num(r["tolerance_or_beta"]) != 1e-8:
+            continue
+        ranks, base = ranks_of(r), one.get((r["family"], r["nodes"]))
         recs.append({"id": f"perf/networks_ranks/{r['family']}/{r['nodes']}/{ranks}", "scene": f"{r['family']} network",
                      "variant": f"amg ({r['tolerance_or_beta']}) on {ranks} MPI rank(s)", "threads": 1, "ranks": ranks,
                      "particles": int(r["nodes"]), "figure": "solve wall time (set-up included)",
                      "value": num(r["wall_s"]), "unit": "s", "ratio": base / num(r["wall_s"]) if base else None,
                      "ratio_of": "1-rank time / this time", "G_rel_err": num(r["G_rel_err"]),
                      "V_max_err": num(r["V_max_err"]), "reference": r["reference"], "commit": r["commit"]})
+    for key in sorted({(r["family"], r["nodes"], ranks_of(r)) for r in rows}):
+        ok = [r for r in rows if (r["family"], r["nodes"], ranks_of(r)) == key and num(r["V_max_err"]) is not None
+              and num(r["V_max_err"]) <= 1e-8]
+        if not ok:
+            continue
+        best = min(ok, key=lambda r: num(r["wall_s"]))
+        fam, nodes, ranks = key
+        recs.append({"id": f"perf/networks_ranks/{fam}/{nodes}/{ranks}/err1e-08", "scene": f"{fam} network",
+                     "variant": f"amg ({best['tolerance_or_beta']}) on {ranks} MPI rank(s)", "threads": 1, "ranks": ranks,
+                     "particles": int(nodes), "figure": "fastest solve with true error <= 1e-08 (set-up included)",
+                     "value": num(best["wall_s"]), "unit": "s", "ratio": num(best["wall_s"]) / 2.0,
+                     "ratio_of": "time / 2 s goal", "G_rel_err": num(best["G_rel_err"]),
+                     "V_max_err": num(best["V_max_err"]), "reference": best["reference"], "commit": best["commit"]})
     return recs
 
 
@@ -513,7 +541,9 @@ CASES = [
          "benchmarks/electric_solvers/results.csv", run_networks, records_networks, needs=["bench_electric_exe"]),
     Case("networks_ranks", "bonded and packing networks, 1e6 and 4e6 nodes", [], [1], [1, 2], 1,
          {"perf/networks_ranks/<family>/<nodes>/<ranks>": "AMG solve to 1e-8, set-up included; ratio 1-rank time / "
-          "this time"},
+          "this time",
+          "perf/networks_ranks/<family>/<nodes>/<ranks>/err1e-08": "fastest AMG solve with true error <= 1e-8; ratio "
+          "to the 2 s goal"},
          "benchmarks/electric_solvers/spread.csv", run_networks_ranks, records_networks_ranks,
          needs=["bench_electric_exe", "mpirun (openmpi-bin)"]),
     Case("ranks", "configs/cpc_percolation.json and configs/sps_nial_small.json (sweep stages)", [], [1], [1, 2], 1,

@@ -260,70 +260,70 @@ int HypreAmgPcg::ranks() const { return impl_->ranks; }
 
 namespace {
 
-/// Rows in breadth-first order, each connected component from a pseudo-peripheral row (the last
-/// row reached by a first search from its lowest row): contiguous blocks of this order are thick
-/// layers of the graph, so a block's rows have few neighbours in other blocks whatever the
-/// original numbering. Returns new -> old.
-std::vector<HYPRE_BigInt> breadth_first_order(const Eigen::SparseMatrix<double>& M) {
-  const auto n = static_cast<std::size_t>(M.rows());
-  const int* start = M.outerIndexPtr();
-  const int* idx = M.innerIndexPtr();
-  std::vector<HYPRE_BigInt> order;
-  order.reserve(n);
-  std::vector<char> seen(n, 0), probe(n, 0);
-  std::vector<std::size_t> queue;
-  auto search = [&](std::size_t root, std::vector<char>& mark, bool keep) {
-    queue.assign(1, root);
-    mark[root] = 1;
-    for (std::size_t q = 0; q < queue.size(); ++q) {
-      const std::size_t r = queue[q];
-      if (keep) order.push_back(static_cast<HYPRE_BigInt>(r));
-      for (int k = start[r]; k < start[r + 1]; ++k) {
-        const auto c = static_cast<std::size_t>(idx[k]);
-        if (!mark[c]) {
-          mark[c] = 1;
-          queue.push_back(c);
-        }
-      }
-    }
-    return queue.back();
-  };
-  for (std::size_t r = 0; r < n; ++r) {
-    if (seen[r]) continue;
-    const std::size_t far = search(r, probe, false);
-    search(far, seen, true);
-  }
-  return order;
-}
-
-/// The rows of `M` in the order `perm` (new -> old; empty: as they are), columns renumbered:
-/// CSR as hypre's IJ interface takes it (entries per row, global columns, values), with the
-/// offset of each row's first entry.
+/// A matrix's rows as hypre's IJ interface takes them (entries per row, global columns, values),
+/// with the offset of each row's first entry.
 struct Rows {
   std::vector<HYPRE_Int> ncols;
   std::vector<HYPRE_BigInt> cols;
   std::vector<double> vals;
   std::vector<std::int64_t> first;
 };
-Rows permuted_rows(const Eigen::SparseMatrix<double>& M, const std::vector<HYPRE_BigInt>& perm) {
+
+/// The rows of the symmetric M in breadth-first order, each connected component from a
+/// pseudo-peripheral row (the last row reached by a first search from its lowest row), columns
+/// renumbered: contiguous blocks of this order are thick layers of the graph, so a block's rows
+/// have few neighbours in other blocks whatever the original numbering. `perm` gets the order
+/// (new -> old). A row is numbered when it is queued, so each row is written as soon as it is
+/// taken from the queue, while its entries are in cache (one pass instead of a search and a
+/// gather; 1e6-node packing network 0.37 -> 0.2 s).
+Rows breadth_first_rows(const Eigen::SparseMatrix<double>& M, std::vector<HYPRE_BigInt>& perm) {
   const auto n = static_cast<std::size_t>(M.rows());
-  std::vector<HYPRE_BigInt> inv(n);
-  for (std::size_t k = 0; k < n; ++k) inv[static_cast<std::size_t>(perm[k])] = static_cast<HYPRE_BigInt>(k);
+  const int* start = M.outerIndexPtr();
+  const int* idx = M.innerIndexPtr();
+  const double* val = M.valuePtr();
+  std::vector<HYPRE_BigInt> inv(n, -1);  // new number of a row, from the moment it is queued
+  std::vector<char> probe(n, 0);
+  std::vector<std::size_t> queue;
+  const auto far_end = [&](std::size_t root) {  // the first search: only its last row is kept
+    queue.assign(1, root);
+    probe[root] = 1;
+    for (std::size_t q = 0; q < queue.size(); ++q)
+      for (int k = start[queue[q]]; k < start[queue[q] + 1]; ++k)
+        if (!probe[idx[k]]) {
+          probe[idx[k]] = 1;
+          queue.push_back(static_cast<std::size_t>(idx[k]));
+        }
+    return queue.back();
+  };
   Rows out;
   out.ncols.resize(n);
   out.first.resize(n + 1, 0);
-  out.cols.reserve(static_cast<std::size_t>(M.nonZeros()));
-  out.vals.reserve(static_cast<std::size_t>(M.nonZeros()));
-  for (std::size_t k = 0; k < n; ++k) {
-    const auto r = static_cast<std::size_t>(perm[k]);
-    out.first[k] = static_cast<std::int64_t>(out.cols.size());
-    out.ncols[k] = static_cast<HYPRE_Int>(M.outerIndexPtr()[r + 1] - M.outerIndexPtr()[r]);
-    for (int q = M.outerIndexPtr()[r]; q < M.outerIndexPtr()[r + 1]; ++q) {
-      out.cols.push_back(inv[static_cast<std::size_t>(M.innerIndexPtr()[q])]);
-      out.vals.push_back(M.valuePtr()[q]);
+  out.cols.resize(static_cast<std::size_t>(M.nonZeros()));
+  out.vals.resize(static_cast<std::size_t>(M.nonZeros()));
+  perm.clear();
+  perm.reserve(n);
+  std::int64_t fill = 0;
+  for (std::size_t r0 = 0; r0 < n; ++r0) {
+    if (inv[r0] >= 0) continue;
+    const std::size_t root = far_end(r0);
+    inv[root] = static_cast<HYPRE_BigInt>(perm.size());
+    perm.push_back(static_cast<HYPRE_BigInt>(root));
+    for (auto q = static_cast<std::size_t>(inv[root]); q < perm.size(); ++q) {
+      const auto r = static_cast<std::size_t>(perm[q]);
+      for (int k = start[r]; k < start[r + 1]; ++k)
+        if (inv[idx[k]] < 0) {
+          inv[idx[k]] = static_cast<HYPRE_BigInt>(perm.size());
+          perm.push_back(idx[k]);
+        }
+      out.first[q] = fill;
+      out.ncols[q] = static_cast<HYPRE_Int>(start[r + 1] - start[r]);
+      for (int k = start[r]; k < start[r + 1]; ++k, ++fill) {
+        out.cols[fill] = inv[idx[k]];
+        out.vals[fill] = val[k];
+      }
     }
   }
-  out.first[n] = static_cast<std::int64_t>(out.cols.size());
+  out.first[n] = fill;
   return out;
 }
 
@@ -356,8 +356,7 @@ void HypreAmgPcg::setup(const Eigen::SparseMatrix<double>& M) {
   // blocks of several); rank r gets the contiguous block [n r / p, n (r + 1) / p).
   im.ranks = p;
   if (p > 1) im.id = g_next_id++;
-  im.perm = breadth_first_order(M);
-  const Rows all = permuted_rows(M, im.perm);
+  const Rows all = breadth_first_rows(M, im.perm);
   for (int r = p - 1; r >= 0; --r) {
     const std::int64_t lo = block_start(im.n, p, r), hi = block_start(im.n, p, r + 1);
     const std::int64_t e0 = all.first[lo], e1 = all.first[hi];

@@ -15,6 +15,7 @@
 #include "engine/core/numbers.hpp"
 #include "engine/graph/hypre_amg.hpp"
 #include "engine/graph/interaction_graph.hpp"
+#include "engine/graph/low_degree_elimination.hpp"
 #include "engine/core/parallel.hpp"
 
 namespace sparkdem {
@@ -322,6 +323,7 @@ struct LaplacianSolver::Impl {
   Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper, IC> cg_ic;
   Eigen::ConjugateGradient<SpMat, Eigen::Lower | Eigen::Upper, Eigen::DiagonalPreconditioner<double>> cg_diag;
   std::unique_ptr<HypreAmgPcg> amg;
+  LowDegreeElimination elim;  // Amg with amg_eliminate_low_degree: the rows eliminated before the AMG solve
   // Pseudo-transient: capacitance per free unknown of the cached spectral estimate, and that estimate.
   std::vector<double> pt_capacitance;
   EigenEstimate pt_lambda;
@@ -410,7 +412,8 @@ LaplacianSolver& LaplacianSolver::operator=(LaplacianSolver&&) noexcept = defaul
 void LaplacianSolver::set_options(const LaplacianOptions& opt) {
   if (opt.method != opt_.method || opt.amg_strong_threshold != opt_.amg_strong_threshold ||
       opt.amg_aggressive_levels != opt_.amg_aggressive_levels || opt.amg_spread_min_rows != opt_.amg_spread_min_rows ||
-      opt.amg_breadth_first != opt_.amg_breadth_first || opt.pseudo.eigen_tolerance != opt_.pseudo.eigen_tolerance ||
+      opt.amg_breadth_first != opt_.amg_breadth_first || opt.amg_eliminate_low_degree != opt_.amg_eliminate_low_degree ||
+      opt.pseudo.eigen_tolerance != opt_.pseudo.eigen_tolerance ||
       opt.pseudo.eigen_max_iterations != opt_.pseudo.eigen_max_iterations)
     invalidate();
   opt_ = opt;
@@ -645,7 +648,12 @@ void LaplacianSolver::factorize_(const LaplacianProblem& p, const std::vector<do
       if (!im.amg)
         im.amg = std::make_unique<HypreAmgPcg>(
             HypreAmgPcg::Settings{opt_.amg_strong_threshold, opt_.amg_aggressive_levels, opt_.amg_spread_min_rows, opt_.amg_breadth_first});
-      im.amg->setup(im.A);
+      if (opt_.amg_eliminate_low_degree) {
+        im.elim.factor(im.A);
+        im.amg->setup(im.elim.reduced());
+      } else {
+        im.amg->setup(im.A);
+      }
       break;
   }
   if (!ok)
@@ -689,8 +697,21 @@ Eigen::VectorXd LaplacianSolver::iterate_(const LaplacianProblem& p, const std::
     ok = im.cg_diag.info() == Eigen::Success;
   } else if (opt_.method == LaplacianMethod::Amg) {
     what = "AMG-preconditioned conjugate gradients";
-    x = guess;
-    const auto out = im.amg->solve(rhs, x, opt_.tolerance, max_it);
+    HypreAmgPcg::Outcome out;
+    if (opt_.amg_eliminate_low_degree) {
+      // The reduced system's residual is the full one on the kept rows (zero on the others), so
+      // ||r|| <= tolerance ||b|| of the full system is ||r2|| <= tolerance ||b|| / ||b2|| ||b2||.
+      Eigen::VectorXd work;
+      const Eigen::VectorXd rhs2 = im.elim.reduce_rhs(rhs, work);
+      Eigen::VectorXd x2 = im.elim.restrict_to_kept(guess);
+      const double b2 = rhs2.norm();
+      out = im.amg->solve(rhs2, x2, b2 > 0.0 ? opt_.tolerance * rhs.norm() / b2 : opt_.tolerance, max_it);
+      x = im.elim.expand(work, x2);
+      res.eliminated_rows = im.elim.eliminated();
+    } else {
+      x = guess;
+      out = im.amg->solve(rhs, x, opt_.tolerance, max_it);
+    }
     res.iterations = out.iterations;
     res.amg_ranks = im.amg->ranks();
     ok = out.converged;
