@@ -248,10 +248,6 @@ int main(int argc, char** argv) {
   return rc;
 }
 
-bool wanted_amg(const std::vector<std::string>& solvers) {
-  return std::find(solvers.begin(), solvers.end(), laplacian_method_name(LaplacianMethod::Amg)) != solvers.end();
-}
-
 /// The reference solve: Direct (LDLT) up to 2e5 nodes, else CG with the Jacobi preconditioner to a
 /// relative residual of 1e-13 (independent of the AMG being measured; on the 1e6-node packing network
 /// it agrees with BoomerAMG-PCG at 1e-13 to 1.3e-11 in the potentials). On one process. With a
@@ -394,18 +390,18 @@ int bench_main(int argc, char** argv, int ranks) {
         ref.status = "ok(reference)";
         rows.push_back(ref);
       }
+      const auto wanted = [&](LaplacianMethod m) {
+        return std::find(solvers.begin(), solvers.end(), laplacian_method_name(m)) != solvers.end();
+      };
       // Warm-up on this network: the first large solve of a process pays for faulting in its
       // memory (1e6 nodes: 3.2 s against 2.5-2.8 s for the next ones), which a reference solved
       // in the same process used to pay; with a cached reference nothing did.
-      if (wanted_amg(solvers) && net.nodes > 200000) {
+      if (wanted(LaplacianMethod::Amg) && net.nodes > 200000) {
         LaplacianOptions o = amg_defaults;
         o.method = LaplacianMethod::Amg;
         o.tolerance = 1e-2;
         (void)run(net, o, "warm-up");
       }
-      const auto wanted = [&](LaplacianMethod m) {
-        return std::find(solvers.begin(), solvers.end(), laplacian_method_name(m)) != solvers.end();
-      };
       for (auto m : {LaplacianMethod::CgIncompleteCholesky, LaplacianMethod::CgDiagonal, LaplacianMethod::Amg})
         for (double t : tols) {
           if (!wanted(m)) continue;
