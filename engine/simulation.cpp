@@ -273,14 +273,7 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
   rules.alive = alive_rule_;
   if (s_.bonds.contact_rule == BondTable::ContactRule::Exclude && s_.bonds.intact_count() > 0) rules.excluded = &s_.bonds.intact_keys();
   s_.contacts.rebuild(find_pairs(p.position, p.radius, skin), p.id, p.size(), rules);
-  s_.wall_candidates.assign(s_.walls.size(), {});
-  for (std::size_t k = 0; k < s_.walls.size(); ++k)
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      Vec3 n;
-      double d;
-      s_.walls[k].distance(p.position[i], n, d);
-      if (d < p.radius[i] + skin) s_.wall_candidates[k].push_back(static_cast<Index>(i));
-    }
+  s_.wall_candidates = wall_candidates(s_.walls, p.position, p.radius, skin);
   s_.verlet.mark_built(p.position, p.radius, wall_u);
 }
 
@@ -606,9 +599,6 @@ void Simulation::execute_plan(const StageConfig& cfg, double dt_used, double t_n
         break;
       case PlanItem::Kind::Neighbors:
         update_neighbors(skin_, cfg.sort_every_rebuilds);
-        break;
-      case PlanItem::Kind::ZeroForces:
-        zero_forces();
         break;
       case PlanItem::Kind::ContactPairs:
         pair_forces(dt_used);

@@ -289,7 +289,15 @@ class ContactModelT final : public ContactModel {
   /// second pass over it (the gather of every particle) in between.
   void pair_forces_split(ParticleStore& p, ContactTable& t, double dt, double time_scale, bool inertia_free) const {
     const int ranges = par::threads();
-    const auto& split = t.row_split(ranges);
+    // Ranges of equal expected work: a row whose spheres overlap now (or a persistent row kept
+    // alive by its law) will most likely run the law at this step and the next ones.
+    const auto& split = t.row_split(ranges, [&](std::int64_t r) {
+      const Index i = t.i(r), j = t.j(r);
+      const double reach = p.radius[i] + p.radius[j];
+      bool live = (p.position[i] - p.position[j]).squaredNorm() < reach * reach;
+      if constexpr (is_persistent<Law>()) live = live || (t.state_width() > 0 && law_.alive(t.state(r)));
+      return live;
+    });
     PassInputs in = pass_inputs(p, t, time_scale);
     in.inertia_free = inertia_free;
     auto& F = t.force();

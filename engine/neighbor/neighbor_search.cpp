@@ -25,31 +25,50 @@ struct Grid {
   std::int64_t cell(std::int64_t a, std::int64_t b, std::int64_t c) const { return (c * n[1] + b) * n[0] + a; }
 };
 
-}  // namespace
+/// The size levels and their cell grids: each particle's level, each level's cells (CSR, members
+/// in ascending index order).
+struct Grids {
+  std::vector<Grid> grid;
+  std::vector<int> level;
+  std::size_t total_cells = 0;
+};
 
-std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const std::vector<double>& r, double skin, NeighborStats* stats) {
+Grids build_grids(const std::vector<Vec3>& x, const std::vector<double>& r, double skin) {
   const std::size_t n = x.size();
-  std::vector<std::array<Index, 2>> out;
-  if (n < 2) return out;
-  double rmin = r[0], rmax = r[0];
-  Vec3 lo = x[0], hi = x[0];
-  for (std::size_t i = 0; i < n; ++i) {
+  Grids out;
+  // Bounds of the radii and of the centres (max / min reductions are exact: any thread count).
+  double rmin = r[0], rmax = r[0], lx = x[0][0], ly = x[0][1], lz = x[0][2], hx = lx, hy = ly, hz = lz;
+  const std::int64_t ni = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static) reduction(min : rmin, lx, ly, lz) reduction(max : rmax, hx, hy, hz) \
+    if (par::worth(ni, par::kLight))
+  for (std::int64_t i = 0; i < ni; ++i) {
     rmin = std::min(rmin, r[i]);
     rmax = std::max(rmax, r[i]);
-    lo = lo.cwiseMin(x[i]);
-    hi = hi.cwiseMax(x[i]);
+    lx = std::min(lx, x[i][0]);
+    ly = std::min(ly, x[i][1]);
+    lz = std::min(lz, x[i][2]);
+    hx = std::max(hx, x[i][0]);
+    hy = std::max(hy, x[i][1]);
+    hz = std::max(hz, x[i][2]);
   }
+  const Vec3 lo(lx, ly, lz), hi(hx, hy, hz);
   // Size levels: level L holds radii in [rmin 2^L, rmin 2^(L+1)).
   const int nlev = std::max(1, static_cast<int>(std::floor(std::log2(rmax / rmin))) + 1);
-  std::vector<int> level(n);
+  std::vector<int>& level = out.level;
+  level.assign(n, 0);
   std::vector<std::size_t> count(nlev, 0);
-  std::vector<Grid> grids(nlev);
-  for (std::size_t i = 0; i < n; ++i) {
-    level[i] = std::min(nlev - 1, static_cast<int>(std::floor(std::log2(r[i] / rmin))));
-    ++count[level[i]];
-    grids[level[i]].rmax = std::max(grids[level[i]].rmax, r[i]);
+  std::vector<Grid>& grids = out.grid;
+  grids.resize(nlev);
+  if (nlev == 1) {  // one size class (a monodisperse or narrow distribution): no logarithm per particle
+    count[0] = n;
+    grids[0].rmax = rmax;
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      level[i] = std::min(nlev - 1, static_cast<int>(std::floor(std::log2(r[i] / rmin))));
+      ++count[level[i]];
+      grids[level[i]].rmax = std::max(grids[level[i]].rmax, r[i]);
+    }
   }
-  std::size_t total_cells = 0;
   for (int L = 0; L < nlev; ++L) {
     Grid& g = grids[L];
     if (count[L] == 0) continue;
@@ -63,24 +82,39 @@ std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const s
       if (static_cast<double>(g.n[0]) * g.n[1] * g.n[2] <= cap) break;
       g.h *= 1.26;
     }
-    const std::int64_t nc = g.n[0] * g.n[1] * g.n[2];
-    total_cells += nc;
-    g.start.assign(nc + 1, 0);
-    std::vector<std::int64_t> cid;
-    std::vector<Index> who;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (level[i] != L) continue;
-      const std::int64_t c = g.cell(g.coord(x[i][0], 0), g.coord(x[i][1], 1), g.coord(x[i][2], 2));
-      cid.push_back(c);
-      who.push_back(static_cast<Index>(i));
-      ++g.start[c + 1];
-    }
-    for (std::int64_t c = 0; c < nc; ++c) g.start[c + 1] += g.start[c];
-    g.members.assign(who.size(), 0);
-    std::vector<std::int64_t> fill(g.start.begin(), g.start.end() - 1);
-    for (std::size_t k = 0; k < who.size(); ++k) g.members[fill[cid[k]]++] = who[k];  // ascending index per cell
+    out.total_cells += g.n[0] * g.n[1] * g.n[2];
   }
+  // Each particle's cell in its level's grid (in parallel), then a counting sort per level: the
+  // members of a cell in ascending index order.
+  std::vector<std::int64_t> cid(n);
+#pragma omp parallel for schedule(static) if (par::worth(ni, par::kLight))
+  for (std::int64_t i = 0; i < ni; ++i) {
+    const Grid& g = grids[level[i]];
+    cid[i] = g.cell(g.coord(x[i][0], 0), g.coord(x[i][1], 1), g.coord(x[i][2], 2));
+  }
+  for (int L = 0; L < nlev; ++L) {
+    Grid& g = grids[L];
+    if (count[L] == 0) continue;
+    const std::int64_t nc = g.n[0] * g.n[1] * g.n[2];
+    g.start.assign(nc + 1, 0);
+    for (std::size_t i = 0; i < n; ++i)
+      if (level[i] == L) ++g.start[cid[i] + 1];
+    for (std::int64_t c = 0; c < nc; ++c) g.start[c + 1] += g.start[c];
+    g.members.assign(count[L], 0);
+    std::vector<std::int64_t> fill(g.start.begin(), g.start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+      if (level[i] == L) g.members[fill[cid[i]]++] = static_cast<Index>(i);  // ascending index per cell
+  }
+  return out;
+}
 
+/// The candidate pairs of every particle against its own level (j > i) and the coarser ones,
+/// sorted by i then j: per-thread lists of contiguous particle ranges, joined in thread order.
+std::vector<std::array<Index, 2>> search_pairs(const Grids& gs, const std::vector<Vec3>& x, const std::vector<double>& r, double skin) {
+  const std::size_t n = x.size();
+  const int nlev = static_cast<int>(gs.grid.size());
+  const std::vector<int>& level = gs.level;
+  const std::vector<Grid>& grids = gs.grid;
   const int nthreads = omp_get_max_threads();
   std::vector<std::vector<std::array<Index, 2>>> local(nthreads);
 #pragma omp parallel if (par::worth(static_cast <std::int64_t>(n), par::kHeavy))
@@ -116,14 +150,54 @@ std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const s
       for (Index j : found) buf.push_back({i, j});
     }
   }
+  std::vector<std::array<Index, 2>> out;
   std::size_t total = 0;
   for (auto& b : local) total += b.size();
   out.reserve(total);
   for (auto& b : local) out.insert(out.end(), b.begin(), b.end());
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const std::vector<double>& r, double skin, NeighborStats* stats) {
+  if (x.size() < 2) return {};
+  const Grids gs = build_grids(x, r, skin);
+  std::vector<std::array<Index, 2>> out = search_pairs(gs, x, r, skin);
   if (stats) {
-    stats->levels = nlev;
-    stats->cells = total_cells;
+    stats->levels = static_cast<int>(gs.grid.size());
+    stats->cells = gs.total_cells;
     stats->pairs = out.size();
+  }
+  return out;
+}
+
+std::vector<std::vector<Index>> wall_candidates(const std::vector<Wall>& walls, const std::vector<Vec3>& x, const std::vector<double>& r,
+                                                double skin) {
+  const std::size_t nw = walls.size();
+  const std::int64_t n = static_cast<std::int64_t>(x.size());
+  std::vector<std::vector<Index>> out(nw);
+  if (nw == 0) return out;
+  // Each thread lists its static (contiguous, ascending) share of the particles per wall; the
+  // lists are joined in thread order.
+  std::vector<std::vector<std::vector<Index>>> local(omp_get_max_threads(), std::vector<std::vector<Index>>(nw));
+#pragma omp parallel if (par::worth(n * static_cast<std::int64_t>(nw), par::kLight))
+  {
+    auto& mine = local[omp_get_thread_num()];
+#pragma omp for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i)
+      for (std::size_t k = 0; k < nw; ++k) {
+        Vec3 nrm;
+        double d;
+        walls[k].distance(x[i], nrm, d);
+        if (d < r[i] + skin) mine[k].push_back(static_cast<Index>(i));
+      }
+  }
+  for (std::size_t k = 0; k < nw; ++k) {
+    std::size_t total = 0;
+    for (const auto& l : local) total += l[k].size();
+    out[k].reserve(total);
+    for (const auto& l : local) out[k].insert(out[k].end(), l[k].begin(), l[k].end());
   }
   return out;
 }

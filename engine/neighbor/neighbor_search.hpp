@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "engine/core/types.hpp"
+#include "engine/walls/wall.hpp"
 
 namespace sparkdem {
 
@@ -22,6 +23,11 @@ struct NeighborStats {
 /// All pairs (i, j), i != j, with |x_i - x_j| < r_i + r_j + skin.
 std::vector<std::array<Index, 2>> find_pairs(const std::vector<Vec3>& x, const std::vector<double>& r, double skin,
                                              NeighborStats* stats = nullptr);
+
+/// Per wall, the particles whose centre lies within r + skin of it (signed distance), in ascending
+/// index order whatever the thread count: one pass over the particles for all walls.
+std::vector<std::vector<Index>> wall_candidates(const std::vector<Wall>& walls, const std::vector<Vec3>& x, const std::vector<double>& r,
+                                                double skin);
 
 /// O(N^2) reference used by the tests.
 std::vector<std::array<Index, 2>> find_pairs_brute_force(const std::vector<Vec3>& x, const std::vector<double>& r, double skin);

@@ -21,7 +21,6 @@ StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<
     plan.items.push_back({K::IntegrateFirstHalf, "integrate_first_half", nullptr, {}});
     plan.items.push_back({K::Walls, "walls", nullptr, {}});
     plan.items.push_back({K::Neighbors, "neighbors", nullptr, {}});
-    plan.items.push_back({K::ZeroForces, "zero_forces", nullptr, {}});
     plan.items.push_back({K::ContactPairs, "contact_pairs", nullptr, {}});
     if (bonds) plan.items.push_back({K::Bonds, "bonds", nullptr, {}});
     plan.items.push_back({K::ContactWalls, "contact_walls", nullptr, {}});

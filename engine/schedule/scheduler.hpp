@@ -2,22 +2,22 @@
 /// The step plan: the ONE place that lists the sequence of a step. Built once per stage from
 /// the active modules' declarations; the simulation executes it item by item.
 ///
-///   1 integrate_first_half   half kick + drift (translation and rotation)
+///   1 integrate_first_half   half kick + drift (translation and rotation); clears the forces and
+///                            torques after the kick, their last read (nothing in 2-3 reads them)
 ///   2 walls                  prescribed wall offsets at the new time; servo walls integrate
 ///   3 neighbors              Verlet check; rebuild + history transfer when due
-///   4 zero_forces
-///   5 contact_pairs          the law's pair pass + per-particle gather
-///   5b bonds                 the bond law's pass + gather; broken bonds hand their state to the
+///   4 contact_pairs          the law's pair pass + per-particle gather
+///   4b bonds                 the bond law's pass + gather; broken bonds hand their state to the
 ///                            contact table (only when the scenario has a bond law)
-///   6 contact_walls          the law's wall pass
-///   7 <force modules>        e.g. gravity, background damping (declaration order)
-///   8 integrate_second_half  half kick
-///   9 <coupling modules>     after the mechanics, ordered by reads/writes (writer before reader),
+///   5 contact_walls          the law's wall pass
+///   6 <force modules>        e.g. gravity, background damping (declaration order)
+///   7 integrate_second_half  half kick
+///   8 <coupling modules>     after the mechanics, ordered by reads/writes (writer before reader),
 ///                            each on its own clock (every N steps, k substeps per step, adaptive
 ///                            substeps from its stable step, or on an event)
 ///
 /// A quasi-static stage (StageConfig::quasi_static, engine/integrate/quasi_static.hpp) replaces
-/// items 1-8 by one item, quasi_static_step, whose substeps (as many as max_strain_increment asks)
+/// items 1-7 by one item, quasi_static_step, whose substeps (as many as max_strain_increment asks)
 /// each run, in this order:
 ///   a neighbors             Verlet check, as item 3
 ///   b solve                 the contacts' affine forces (ContactModel::linear_rows) and the
@@ -28,7 +28,7 @@
 ///   d drift                 positions and orientations by the solved motion; walls to the
 ///                           substep's end (punches at their solved rate)
 ///   e contact_walls         the law's wall pass at the new positions
-/// and then item 9 as above. No force modules and no bonds (a SetupError).
+/// and then item 8 as above. No force modules and no bonds (a SetupError).
 #include <string>
 #include <vector>
 
@@ -37,7 +37,7 @@
 namespace sparkdem {
 
 struct PlanItem {
-  enum class Kind { IntegrateFirstHalf, Walls, Neighbors, ZeroForces, ContactPairs, Bonds, ContactWalls, Module, IntegrateSecondHalf, QuasiStatic };
+  enum class Kind { IntegrateFirstHalf, Walls, Neighbors, ContactPairs, Bonds, ContactWalls, Module, IntegrateSecondHalf, QuasiStatic };
   Kind kind;
   std::string name;
   Module* module = nullptr;  ///< for Kind::Module
@@ -57,10 +57,10 @@ struct StepPlan {
 /// not a positive integer.
 /// `core_fields` are fields always present (position, velocity, ...).
 /// `bonds`: the scenario has a bond law (adds the bond pass).
-/// `mechanics` false: a frozen stage (items 1-8 left out; the particles keep their positions and
+/// `mechanics` false: a frozen stage (items 1-7 left out; the particles keep their positions and
 /// the contact table of the stage start; only coupling modules run, e.g. a conduction run on a
 /// fixed packing). A force module in a frozen stage is a SetupError.
-/// `quasi_static`: items 1-8 are the one quasi_static_step item (a force module or bonds: SetupError).
+/// `quasi_static`: items 1-7 are the one quasi_static_step item (a force module or bonds: SetupError).
 StepPlan build_step_plan(const std::vector<Module*>& modules, const std::vector<std::string>& core_fields, bool bonds = false,
                          bool mechanics = true, bool quasi_static = false);
 

@@ -112,11 +112,17 @@ void PairRows::gather_particles(const std::vector<Index>& which, std::vector<Vec
   for (std::int64_t k = 0; k < n; ++k) gather_one(which[k], force, torque);
 }
 
-const PairRows::RowSplit& PairRows::row_split(int threads) const {
+const PairRows::RowSplit& PairRows::row_split(int threads, const std::function<bool(std::int64_t)>& heavy) const {
   if (split_.threads == threads) return split_;
   const std::int64_t rows = static_cast<std::int64_t>(size()), n = static_cast<std::int64_t>(inc_start_.size()) - 1;
   split_.row_begin.resize(threads + 1);
   for (int t = 0; t <= threads; ++t) split_.row_begin[t] = rows * t / threads;
+  if (heavy && threads > 1) {
+    std::vector<double> cost(rows + 1, 0.0);  // cost[r] = summed cost of the rows before r
+    for (std::int64_t r = 0; r < rows; ++r) cost[r + 1] = cost[r] + (heavy(r) ? kHeavyRowCost : 1.0);
+    for (int t = 1; t < threads; ++t)
+      split_.row_begin[t] = std::lower_bound(cost.begin(), cost.end(), cost[rows] * t / threads) - cost.begin();
+  }
   const auto range_of = [&](std::int64_t code) {
     const std::int64_t r = code >= 0 ? code : ~code;
     int t = 0;

@@ -9,6 +9,7 @@
 /// results are bit-identical for any number of threads.
 #include <cstdint>
 #include <string>
+#include <functional>
 #include <vector>
 
 #include "engine/core/archive.hpp"
@@ -84,8 +85,10 @@ class PairRows {
   /// Sum per-row forces/torques into particle arrays (adds to force/torque).
   void gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
 
-  /// The rows dealt to `threads` contiguous ranges, range t = [row_begin[t], row_begin[t + 1]) with
-  /// row_begin[t] = rows t / T, and
+  /// The rows dealt to `threads` contiguous ranges, range t = [row_begin[t], row_begin[t + 1]),
+  /// cut where the rows' summed cost reaches t / T of the whole (`heavy` rows, those the caller
+  /// expects to compute a force, cost kHeavyRowCost, the others 1; without `heavy`, row_begin[t] =
+  /// rows t / T), and
   /// per particle the range holding every row that touches it (`owner`, -1 when rows of two ranges
   /// touch it or none does); `boundary`: the particles touched by rows of two ranges. A thread that
   /// walks its range in row order may add its rows straight into the particles it owns: each sum
@@ -96,8 +99,14 @@ class PairRows {
     std::vector<std::int32_t> owner;
     std::vector<Index> boundary;
   };
-  /// The split for `threads` ranges (computed from the incidence, kept until it changes).
-  const RowSplit& row_split(int threads) const;
+  /// The split for `threads` ranges (computed from the incidence, kept until it changes; `heavy`
+  /// is asked only then, once per row).
+  const RowSplit& row_split(int threads, const std::function<bool(std::int64_t)>& heavy = {}) const;
+  /// The cost of a row in contact relative to one out of contact in a pair pass: a row out of
+  /// contact is a distance test and its state cleared, one in contact runs the law (square roots,
+  /// divisions, the history). A settled pile's rows are nearly all in contact and a falling
+  /// cloud's nearly none, so a pour split by row count gave the pile's thread most of the work.
+  static constexpr double kHeavyRowCost = 4.0;
   /// gather for the listed particles only.
   void gather_particles(const std::vector<Index>& which, std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
 

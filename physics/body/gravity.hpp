@@ -35,8 +35,12 @@ class Gravity final : public Module {
   void advance(State& s, const StepInfo&) override {
     auto& p = s.particles;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
+    // Local pointers and a local g: stores through p.force would otherwise reload them per particle.
+    Vec3* __restrict f = p.force.data();
+    const double* __restrict m = p.mass.data();
+    const Vec3 g = p_.acceleration;
 #pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-    for (std::int64_t i = 0; i < n; ++i) p.force[i] += p.mass[i] * p_.acceleration;
+    for (std::int64_t i = 0; i < n; ++i) f[i] += m[i] * g;
   }
 
  private:

@@ -113,7 +113,7 @@ inline double linear_damping_for_restitution(double e, double m_eff, double k) {
 /// saved on most rows of a bed at rest); 0 rotates on every call.
 /// @param[in,out] xi tangential displacement history [m] (3 values)
 /// @return tangential force on i [N]
-inline Vec3 tangential_history(const Vec3& n, const Vec3& vt, double k_t, double gamma_t, double mu, double fn_abs, double dt, double* xi,
+[[gnu::always_inline]] inline Vec3 tangential_history(const Vec3& n, const Vec3& vt, double k_t, double gamma_t, double mu, double fn_abs, double dt, double* xi,
                                double frame_epsilon = 0.0) {
   Vec3 s(xi[0], xi[1], xi[2]);
   const double fcrit = mu * fn_abs;

@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include <omp.h>
+
 #include "engine/neighbor/neighbor_search.hpp"
 #include "tests/support/scene.hpp"
 
@@ -67,6 +69,55 @@ TEST_CASE("find_pairs equals brute force for polydisperse sets (ratios 15, 50)",
       CHECK(normalised(find_pairs(x, r, skin)) == normalised(find_pairs_brute_force(x, r, skin)));
     }
   }
+}
+
+TEST_CASE("find_pairs and wall_candidates give the brute-force lists in the same order on 1 and 2 threads", "[neighbor]") {
+  // One size class (radii within a factor 2: the grid path without size levels), 12,000 spheres in
+  // a cube, six planes and a cylinder; 12,000 x 7 wall tests are above the light-loop minimum
+  // of either wait policy, so two threads really split the wall pass. Exact integer comparison.
+  const std::size_t n = 12000;
+  std::vector<Vec3> x;
+  std::vector<double> r;
+  const double box = test::random_polydisperse(n, 0.02, 1.8, 1.0, 4242, x, r);
+  const double skin = 0.004;
+  std::vector<Wall> walls;
+  for (int d = 0; d < 3; ++d)
+    for (int side = 0; side < 2; ++side) {
+      Wall w;
+      w.name = "p" + std::to_string(2 * d + side);
+      Vec3 nrm = Vec3::Zero();
+      nrm[d] = side == 0 ? 1.0 : -1.0;
+      w.shape = PlaneShape{side == 0 ? Vec3::Zero() : Vec3(box * Vec3::Ones()), nrm};
+      walls.push_back(w);
+    }
+  Wall cyl;
+  cyl.name = "cyl";
+  cyl.shape = CylinderShape{Vec3(0.5 * box, 0.5 * box, 0.0), Vec3::UnitZ(), 0.45 * box};
+  cyl.u = 0.01;
+  walls.push_back(cyl);
+  // The reference: every particle against every wall, in index order.
+  std::vector<std::vector<Index>> ref(walls.size());
+  for (std::size_t k = 0; k < walls.size(); ++k)
+    for (std::size_t i = 0; i < n; ++i) {
+      Vec3 nrm;
+      double d;
+      walls[k].distance(x[i], nrm, d);
+      if (d < r[i] + skin) ref[k].push_back(static_cast<Index>(i));
+    }
+  const PairList brute = find_pairs_brute_force(x, r, skin);
+  REQUIRE(brute.size() > n);
+  for (std::size_t k = 0; k < walls.size(); ++k) REQUIRE(ref[k].size() > 100);
+  const int before = omp_get_max_threads();
+  for (int threads : {1, 2}) {
+    INFO("threads " << threads);
+    omp_set_num_threads(threads);
+    NeighborStats st;
+    CHECK(find_pairs(x, r, skin, &st) == brute);  // one level: (i, j), j > i, sorted, as brute force lists them
+    CHECK(st.levels == 1);
+    CHECK(wall_candidates(walls, x, r, skin) == ref);
+  }
+  omp_set_num_threads(before);
+  CHECK(wall_candidates({}, x, r, skin).empty());
 }
 
 TEST_CASE("find_pairs handles degenerate inputs", "[neighbor]") {

@@ -169,7 +169,7 @@ TEST_CASE("build_step_plan: set-up errors and writer-before-reader order", "[sch
     CHECK(position_of(plan, "writer") < position_of(plan, "reader"));
     CHECK(position_of(plan, "reader") < position_of(plan, "last"));
     CHECK(position_of(plan, "writer") > position_of(plan, "integrate_second_half"));  // coupling after mechanics
-    CHECK(plan.items.size() == 7 + 3);                                                // the 7 mechanical items + 3 modules
+    CHECK(plan.items.size() == 6 + 3);                                                // the 6 mechanical items + 3 modules
   }
 }
 

@@ -35,7 +35,7 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 using namespace sparkdem;
 
-const std::vector<std::string> kCorePlan = {"integrate_first_half", "walls", "neighbors", "zero_forces", "contact_pairs", "contact_walls"};
+const std::vector<std::string> kCorePlan = {"integrate_first_half", "walls", "neighbors", "contact_pairs", "contact_walls"};
 
 std::vector<std::string> plan_with(const std::vector<std::string>& force_modules) {
   std::vector<std::string> p = kCorePlan;
