@@ -291,3 +291,43 @@ TEST_CASE("Tangential history survives rebuilds and spatial sorts (end to end)",
 }
 
 }  // namespace test_history
+
+namespace test_history {
+
+TEST_CASE("PairRows::row_split cuts at equal expected work and marks the particles of two ranges", "[history]") {
+  // A chain of 1,001 particles, rows (k, k + 1). Rows in contact (the caller's `heavy`) cost
+  // kHeavyRowCost, the others 1; the two ranges' costs must differ by at most one row's cost, and
+  // the one particle whose two rows straddle the cut is the only boundary particle.
+  ParticleStore p;
+  const int n = 1001;
+  for (int k = 0; k < n; ++k) p.add(Vec3(k, 0, 0), 0.6, 1.0);
+  std::vector<std::array<Index, 2>> pairs;
+  for (int k = 0; k + 1 < n; ++k) pairs.push_back({k, k + 1});
+  ContactTable t;
+  t.rebuild(pairs, p.id, p.size());
+  const std::int64_t rows = static_cast<std::int64_t>(t.size());
+  REQUIRE(rows == n - 1);
+  const auto cut_of = [&](const PairRows::RowSplit& s) {
+    REQUIRE(s.row_begin.size() == 3);
+    CHECK(s.row_begin[0] == 0);
+    CHECK(s.row_begin[2] == rows);
+    return s.row_begin[1];
+  };
+  SECTION("without costs: equal row counts") { CHECK(cut_of(t.row_split(2)) == rows / 2); }
+  SECTION("the first quarter in contact") {
+    const auto heavy = [&](std::int64_t r) { return r < rows / 4; };
+    const PairRows::RowSplit& s = t.row_split(2, heavy);
+    const std::int64_t c = cut_of(s);
+    double a = 0.0, b = 0.0;
+    for (std::int64_t r = 0; r < rows; ++r) (r < c ? a : b) += heavy(r) ? PairRows::kHeavyRowCost : 1.0;
+    CHECK(std::abs(a - b) <= PairRows::kHeavyRowCost);
+    CHECK(c < rows / 4);  // the heavy quarter alone is more than half the work
+    // Particle c is row c - 1's j and row c's i: the only one touched by both ranges.
+    REQUIRE(s.boundary.size() == 1);
+    CHECK(s.boundary[0] == c);
+    for (int k = 0; k < n; ++k)
+      if (k != c) CHECK(s.owner[k] == (k < c ? 0 : 1));
+  }
+}
+
+}  // namespace test_history
