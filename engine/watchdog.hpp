@@ -57,7 +57,10 @@ struct WatchdogConfig {
   /// Checks between in-memory copies of the last healthy state (also taken at the start of a stage
   /// with steps to run);
   /// 0 = no copies (a failure then leaves no checkpoint_before_failure.h5).
-  Step snapshot_every_checks = 10;
+  Step snapshot_every_checks = 100;
+  /// [B] A copy that a checkpoint would store in at most this many bytes is kept in memory; a
+  /// larger one is written to the scratch file OUTDIR/.healthy_state.h5 (io/scenario/pipeline.cpp).
+  std::int64_t snapshot_memory_max_bytes = std::int64_t{1} << 20;
 };
 
 /// What the watchdog needs to know about the running stage.

@@ -134,4 +134,23 @@ class MemoryArchive final : public Archive {
   bool reading_ = false;
 };
 
+/// A writing Archive that keeps nothing: it adds up the bytes a checkpoint of the visited items
+/// would hold (8 a number, 1 a character), so a caller can learn a state's size before choosing
+/// where to copy it.
+class ByteCountArchive final : public Archive {
+ public:
+  std::size_t bytes() const { return bytes_; }
+  bool reading() const override { return false; }
+  bool has(const std::string&) const override { return false; }
+  using Archive::visit;
+  void visit(const std::string&, std::vector<double>& v, int) override { bytes_ += 8 * v.size(); }
+  void visit(const std::string&, std::vector<std::int64_t>& v, int) override { bytes_ += 8 * v.size(); }
+  void visit(const std::string&, double&) override { bytes_ += 8; }
+  void visit(const std::string&, std::int64_t&) override { bytes_ += 8; }
+  void visit(const std::string&, std::string& s) override { bytes_ += s.size(); }
+
+ private:
+  std::size_t bytes_ = 0;
+};
+
 }  // namespace sparkdem

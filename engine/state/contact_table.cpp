@@ -50,54 +50,107 @@ class RowsByKey {
 
 }  // namespace
 
+namespace {
+
+/// Frees a vector's buffer (clear() keeps it).
+template <class T>
+void release(std::vector<T>& v) {
+  std::vector<T>().swap(v);
+}
+
+/// Column `col` of the new rows: row q takes `from(q)`; the old column is freed as the new one
+/// replaces it, so a rebuild holds one column twice at a time, never the whole table.
+template <class T, class From>
+void replace_column(std::vector<T>& col, std::size_t rows, From from) {
+  std::vector<T> next(rows);
+  for (std::size_t q = 0; q < rows; ++q) next[q] = from(q);
+  col.swap(next);
+}
+
+}  // namespace
+
 void ContactTable::rebuild(const std::vector<std::array<Index, 2>>& pairs, const std::vector<Id>& ids, std::size_t n_particles,
                            const ContactRebuildRules& rules) {
-  const std::size_t w = state_names_.size();
-  RowsByKey old(w > 0 ? size() : 0);
-  if (w > 0)
-    for (std::size_t r = 0; r < size(); ++r) old.insert(key(r), r);
-  std::vector<char> carried(size(), 0);
+  // The per-row results (overlaps, forces, torques, incidence) are zeroed by the rebuild and
+  // recomputed by the next force pass: freed first, their memory serves the new columns.
+  release(overlap_);
+  release(force_);
+  release(torque_i_);
+  release(torque_j_);
+  release(inc_row_);
+  const std::size_t w = state_names_.size(), old_rows = size();
+  // 1. Where each new row comes from. Candidates first (pair order): the old row of the same key,
+  //    whose state it carries, or kFresh; excluded pairs are skipped. Then the old rows their law
+  //    keeps alive although they are no longer candidates (old order).
+  constexpr std::int64_t kFresh = -1, kSkip = -2;
+  std::vector<std::int64_t> from_old(pairs.size());
   std::vector<Index> ni, nj;
-  std::vector<Id> nidi, nidj;
-  std::vector<double> nstate;
-  ni.reserve(pairs.size());
-  nj.reserve(pairs.size());
-  nidi.reserve(pairs.size());
-  nidj.reserve(pairs.size());
-  nstate.reserve(pairs.size() * w);
-  for (const auto& pr : pairs) {
-    Index a = pr[0], b = pr[1];
-    if (ids[a] > ids[b]) std::swap(a, b);
-    const std::uint64_t k = pair_key(ids[a], ids[b]);
-    if (rules.excluded && rules.excluded->count(k)) continue;
-    ni.push_back(a);
-    nj.push_back(b);
-    nidi.push_back(ids[a]);
-    nidj.push_back(ids[b]);
-    nstate.resize(nstate.size() + w, 0.0);
-    if (w > 0) {
-      const std::int64_t r = old.find(k);
-      if (r >= 0) {
-        std::copy_n(state_.begin() + r * w, w, nstate.end() - w);
-        carried[r] = 1;
+  std::vector<std::int64_t> alive_rows;
+  {
+    RowsByKey old(w > 0 ? old_rows : 0);
+    if (w > 0)
+      for (std::size_t r = 0; r < old_rows; ++r) old.insert(key(r), r);
+    std::vector<char> carried(old_rows, 0);
+    std::size_t candidates = 0;
+    for (std::size_t p = 0; p < pairs.size(); ++p) {
+      const Index a = pairs[p][0], b = pairs[p][1];
+      const std::uint64_t k = pair_key(ids[a], ids[b]);
+      if (rules.excluded && rules.excluded->count(k)) {
+        from_old[p] = kSkip;
+        continue;
       }
+      ++candidates;
+      from_old[p] = w > 0 ? old.find(k) : kFresh;
+      if (from_old[p] >= 0) carried[from_old[p]] = 1;
+    }
+    if (rules.alive && w > 0)
+      for (std::size_t r = 0; r < old_rows; ++r) {
+        if (carried[r] || !rules.alive(state(r))) continue;
+        if (rules.excluded && rules.excluded->count(key(r))) continue;
+        alive_rows.push_back(static_cast<std::int64_t>(r));
+      }
+    // 2. Local indices of the new rows (id_i < id_j).
+    ni.resize(candidates + alive_rows.size());
+    nj.resize(ni.size());
+    std::size_t q = 0;
+    for (std::size_t p = 0; p < pairs.size(); ++p) {
+      if (from_old[p] == kSkip) continue;
+      Index a = pairs[p][0], b = pairs[p][1];
+      if (ids[a] > ids[b]) std::swap(a, b);
+      ni[q] = a;
+      nj[q] = b;
+      ++q;
+    }
+    for (const std::int64_t r : alive_rows) {
+      ni[q] = i_[r];
+      nj[q] = j_[r];
+      ++q;
     }
   }
-  if (rules.alive && w > 0)
-    for (std::size_t r = 0; r < size(); ++r) {
-      if (carried[r] || !rules.alive(state(r))) continue;
-      if (rules.excluded && rules.excluded->count(key(r))) continue;
-      ni.push_back(i_[r]);
-      nj.push_back(j_[r]);
-      nidi.push_back(id_i_[r]);
-      nidj.push_back(id_j_[r]);
-      nstate.insert(nstate.end(), state_.begin() + r * w, state_.begin() + (r + 1) * w);
-    }
+  // 3. The old row of each new row (kFresh: none), then the columns one at a time.
+  const std::size_t rows = ni.size(), candidates = rows - alive_rows.size();
+  std::vector<std::int64_t> src(rows);
+  {
+    std::size_t q = 0;
+    for (const std::int64_t f : from_old)
+      if (f != kSkip) src[q++] = f;
+    for (const std::int64_t r : alive_rows) src[q++] = r;
+  }
+  release(from_old);
+  release(alive_rows);
+  replace_column(id_i_, rows, [&](std::size_t q) { return q < candidates ? ids[ni[q]] : id_i_[src[q]]; });
+  replace_column(id_j_, rows, [&](std::size_t q) { return q < candidates ? ids[nj[q]] : id_j_[src[q]]; });
   i_.swap(ni);
   j_.swap(nj);
-  id_i_.swap(nidi);
-  id_j_.swap(nidj);
-  state_.swap(nstate);
+  release(ni);
+  release(nj);
+  {
+    std::vector<double> next(rows * w, 0.0);
+    for (std::size_t q = 0; q < rows; ++q)
+      if (src[q] >= 0) std::copy_n(state_.begin() + src[q] * w, w, next.begin() + q * w);
+    state_.swap(next);
+  }
+  release(src);
   if (!pending_.empty()) {
     for (std::size_t r = 0; r < size(); ++r) {
       auto it = pending_.find(key(r));

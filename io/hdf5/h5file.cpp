@@ -171,13 +171,45 @@ H5File H5File::create(const fs::path& path, std::size_t userblock) {
   return H5File(path, id);
 }
 
+namespace {
+
+/// The caller's image as the core driver's buffer: HDF5 would otherwise copy the image into the
+/// property list and again into the driver (three copies of the file at the open). The callbacks
+/// hand out the caller's bytes wherever HDF5 asks for a buffer of the image's size, make the copy
+/// onto itself a no-op and never free them; anything else (a resize: the file is read-only) fails.
+/// Each holder of the callbacks (property list, its copies, the open file) owns a copy of the view.
+struct ImageView {
+  unsigned char* data;
+  std::size_t size;
+};
+const H5FD_file_image_callbacks_t shared_image_callbacks{
+    [](std::size_t size, H5FD_file_image_op_t, void* u) -> void* {
+      const auto* v = static_cast<const ImageView*>(u);
+      return size == v->size ? v->data : nullptr;
+    },
+    [](void* dest, const void* src, std::size_t, H5FD_file_image_op_t, void*) -> void* { return dest == src ? dest : nullptr; },
+    [](void*, std::size_t, H5FD_file_image_op_t, void*) -> void* { return nullptr; },
+    [](void*, H5FD_file_image_op_t, void*) -> herr_t { return 0; },
+    [](void* u) -> void* { return new ImageView(*static_cast<const ImageView*>(u)); },
+    [](void* u) -> herr_t {
+      delete static_cast<ImageView*>(u);
+      return 0;
+    },
+    nullptr};
+
+}  // namespace
+
 H5File H5File::open_image(const fs::path& path, std::span<const unsigned char> image) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   if (image.empty()) throw SetupError("HDF5 file '" + path.string() + "': the file image is empty");
   Handle fapl = own(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, path, "cannot create a property list");
   // Core (in-memory) driver without a backing store: nothing is ever written to disk.
   check(H5Pset_fapl_core(fapl.get(), 1 << 16, 0), path, "cannot select the in-memory driver");
-  check(H5Pset_file_image(fapl.get(), const_cast<unsigned char*>(image.data()), image.size()), path, "cannot set the file image");
+  ImageView view{const_cast<unsigned char*>(image.data()), image.size()};
+  H5FD_file_image_callbacks_t callbacks = shared_image_callbacks;
+  callbacks.udata = &view;  // copied by udata_copy into each holder
+  check(H5Pset_file_image_callbacks(fapl.get(), &callbacks), path, "cannot set the file image callbacks");
+  check(H5Pset_file_image(fapl.get(), view.data, image.size()), path, "cannot set the file image");
   // The core driver refuses to open an image under the name of an existing file, so the image
   // gets a name below the file itself, which cannot exist (a regular file has no children).
   const fs::path image_name = path / "in-memory-image";
@@ -186,11 +218,12 @@ H5File H5File::open_image(const fs::path& path, std::span<const unsigned char> i
   return H5File(path, id);
 }
 
-H5File H5File::open_read(const fs::path& path) {
+H5File H5File::open_read(const fs::path& path, const fs::path& open_as) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const fs::path& name = open_as.empty() ? path : open_as;
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw SetupError("HDF5 file '" + path.string() + "': file does not exist");
-  const hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (!fs::exists(name, ec)) throw SetupError("HDF5 file '" + path.string() + "': file does not exist");
+  const hid_t id = H5Fopen(name.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (id < 0) throw_error(path, "cannot open the file for reading");
   return H5File(path, id);
 }

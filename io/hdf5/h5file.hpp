@@ -29,11 +29,13 @@ class H5File {
   /// Creates (truncates) a file for writing. `userblock` bytes (0, or a power of two >= 512)
   /// are reserved at the start of the file for the caller (HDF5 neither writes nor reads them).
   static H5File create(const std::filesystem::path& path, std::size_t userblock = 0);
-  /// Opens an existing file read-only.
-  static H5File open_read(const std::filesystem::path& path);
+  /// Opens an existing file read-only; `open_as`, when given, is the name HDF5 opens (e.g. the
+  /// /proc/self/fd entry of a verified file) while `path` names the file in messages.
+  static H5File open_read(const std::filesystem::path& path, const std::filesystem::path& open_as = {});
   /// Opens, read-only, a file image held in memory (the complete bytes of an HDF5 file, user
   /// block included) with HDF5's core driver; the file on disk is never touched. `path` only
-  /// names the file in error messages. The bytes are copied, `image` can be released afterwards.
+  /// names the file in error messages. The bytes are not copied: HDF5 reads `image` itself, which
+  /// must outlive the returned file (and stay unchanged).
   static H5File open_image(const std::filesystem::path& path, std::span<const unsigned char> image);
 
   H5File(H5File&& other) noexcept;

@@ -152,7 +152,11 @@ void seal_checkpoint(const fs::path& file) {
   if (::close(fd) != 0) fail_errno(file, "cannot close it", errno);
 }
 
-std::vector<unsigned char> read_verified_checkpoint(const fs::path& file) {
+namespace {
+
+/// Opens `file` and verifies its header, length and checksum, streaming the payload through the
+/// hash in chunks (`keep`, when given, receives the whole file). Returns the open descriptor.
+int open_and_verify(const fs::path& file, std::vector<unsigned char>* keep) {
   Fd f{::open(file.c_str(), O_RDONLY | O_CLOEXEC)};
   if (f.fd < 0) {
     if (errno == ENOENT) fail(file, " does not exist");
@@ -197,14 +201,43 @@ std::vector<unsigned char> read_verified_checkpoint(const fs::path& file) {
   if (size < expected) fail(file, " is truncated: " + std::to_string(size) + " bytes, its header says " + std::to_string(expected));
   if (size > expected) fail(file, " is corrupt: " + std::to_string(size) + " bytes, its header says " + std::to_string(expected));
 
-  std::vector<unsigned char> bytes(static_cast<std::size_t>(size));
-  if (read_at(f.fd, bytes.data(), bytes.size(), 0, file) != bytes.size()) fail(file, ": it shrank while being read");
-  if (std::memcmp(bytes.data(), header.data(), header.size()) != 0) fail(file, ": it changed while being read");
-  const std::uint64_t actual = fnv1a64(std::span(bytes).subspan(kCheckpointHeaderBytes));
+  std::uint64_t actual = 0xcbf29ce484222325ULL;
+  if (keep) {
+    keep->resize(static_cast<std::size_t>(size));
+    if (read_at(f.fd, keep->data(), keep->size(), 0, file) != keep->size()) fail(file, ": it shrank while being read");
+    if (std::memcmp(keep->data(), header.data(), header.size()) != 0) fail(file, ": it changed while being read");
+    actual = fnv1a64(std::span(*keep).subspan(kCheckpointHeaderBytes));
+  } else {
+    std::vector<unsigned char> chunk(static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, payload)));
+    for (std::uint64_t offset = kCheckpointHeaderBytes; offset < size;) {
+      const std::size_t want = static_cast<std::size_t>(std::min<std::uint64_t>(chunk.size(), size - offset));
+      if (read_at(f.fd, chunk.data(), want, offset, file) != want) fail(file, ": it shrank while being read");
+      actual = fnv1a64(std::span(chunk).first(want), actual);
+      offset += want;
+    }
+  }
   if (actual != checksum)
     fail(file, " is corrupt: checksum mismatch (FNV-1a 64 of its " + std::to_string(payload) + " data bytes is " + hex64(actual) +
                    ", its header says " + hex64(checksum) + ")");
+  const int fd = f.fd;
+  f.fd = -1;
+  return fd;
+}
+
+}  // namespace
+
+std::vector<unsigned char> read_verified_checkpoint(const fs::path& file) {
+  std::vector<unsigned char> bytes;
+  ::close(open_and_verify(file, &bytes));
   return bytes;
 }
+
+VerifiedCheckpoint::VerifiedCheckpoint(const fs::path& file) : fd_(open_and_verify(file, nullptr)) {}
+
+VerifiedCheckpoint::~VerifiedCheckpoint() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+fs::path VerifiedCheckpoint::same_file_path() const { return fs::path("/proc/self/fd") / std::to_string(fd_); }
 
 }  // namespace sparkdem::io

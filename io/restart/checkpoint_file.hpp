@@ -25,9 +25,10 @@
 /// Writing (seal_checkpoint, used by Hdf5Archive::commit): HDF5 writes `name.tmp` with the
 /// user block reserved and closes it; the payload is then read back and hashed, the header is
 /// written into the user block, the file is fsynced, renamed to `name` and the directory
-/// fsynced. Reading (read_verified_checkpoint, used by Hdf5Archive::for_reading): the file is
-/// read into memory with plain file I/O and verified; HDF5 then opens those verified bytes from
-/// memory (never the file on disk again, so nothing can change between check and use).
+/// fsynced. Reading (VerifiedCheckpoint, used by Hdf5Archive::for_reading): the file is opened and
+/// verified with plain file I/O, streaming; HDF5 then opens the same open file through
+/// /proc/self/fd (so a file renamed over the name in between is not what HDF5 reads), or, where
+/// /proc is missing, the verified bytes from memory (read_verified_checkpoint).
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -58,5 +59,22 @@ void seal_checkpoint(const std::filesystem::path& file);
 /// not a sparkdem checkpoint, blank header (a tmp file its writer never sealed), unsupported
 /// format version, damaged header, longer than the header says, checksum mismatch.
 std::vector<unsigned char> read_verified_checkpoint(const std::filesystem::path& file);
+
+/// A sealed checkpoint verified as read_verified_checkpoint does (same errors), streaming the
+/// payload through the hash instead of holding it, and kept open. same_file_path() names the
+/// verified file itself (/proc/self/fd/N on Linux): opening it reaches the very bytes that were
+/// checked, whatever has replaced `file` in its directory since (sparkdem replaces files by rename
+/// and never rewrites one in place).
+class VerifiedCheckpoint {
+ public:
+  explicit VerifiedCheckpoint(const std::filesystem::path& file);
+  ~VerifiedCheckpoint();
+  VerifiedCheckpoint(const VerifiedCheckpoint&) = delete;
+  VerifiedCheckpoint& operator=(const VerifiedCheckpoint&) = delete;
+  std::filesystem::path same_file_path() const;
+
+ private:
+  int fd_;
+};
 
 }  // namespace sparkdem::io

@@ -1,5 +1,8 @@
 #include "io/restart/hdf5_archive.hpp"
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <system_error>
 #include <utility>
 
@@ -29,12 +32,21 @@ Hdf5Archive Hdf5Archive::for_writing(const fs::path& path) {
 }
 
 Hdf5Archive Hdf5Archive::for_reading(const fs::path& path) {
-  const std::vector<unsigned char> image = read_verified_checkpoint(path);
-  return Hdf5Archive(H5File::open_image(path, image), path, true);
+  std::error_code ec;
+  if (fs::is_directory("/proc/self/fd", ec)) {
+    const VerifiedCheckpoint verified(path);
+    return Hdf5Archive(H5File::open_read(path, verified.same_file_path()), path, true);
+  }
+  std::vector<unsigned char> image = read_verified_checkpoint(path);
+  H5File file = H5File::open_image(path, image);
+  Hdf5Archive ar(std::move(file), path, true);
+  ar.image_ = std::move(image);  // the vector's buffer, which the file reads, moves with it
+  return ar;
 }
 
 Hdf5Archive::Hdf5Archive(Hdf5Archive&& other) noexcept
     : Archive(),
+      image_(std::move(other.image_)),
       file_(std::move(other.file_)),
       path_(std::move(other.path_)),
       tmp_(std::move(other.tmp_)),
@@ -58,6 +70,15 @@ void Hdf5Archive::commit() {
   file_.close();
   seal_checkpoint(tmp_);
   rename_durably(tmp_, path_);
+  pending_ = false;
+}
+
+void Hdf5Archive::commit_unsealed() {
+  if (reading_) throw SetupError("checkpoint '" + path_.string() + "': commit_unsealed() on an archive opened for reading");
+  if (!pending_) throw SetupError("checkpoint '" + path_.string() + "': already committed");
+  file_.close();
+  if (std::rename(tmp_.c_str(), path_.c_str()) != 0)
+    throw SetupError("cannot rename '" + tmp_.string() + "' to '" + path_.string() + "': " + std::strerror(errno));
   pending_ = false;
 }
 

@@ -10,8 +10,9 @@
 /// to `path` (then fsyncs the directory), so a crash at any moment leaves either the previous
 /// checkpoint or the new one under `path`, never a partial one; an uncommitted archive removes
 /// its tmp file. Reading verifies the length and checksum with plain file I/O before any HDF5
-/// call, then lets HDF5 parse the verified bytes from memory (a reading archive holds the whole
-/// file in memory; opening it briefly needs twice that): a truncated, corrupt or foreign file
+/// call, then lets HDF5 read the verified file through its open descriptor (/proc/self/fd: the
+/// bytes that were checked, whatever is renamed over `path` meanwhile; where /proc is missing, from
+/// a copy of the verified bytes in memory, which the reading archive holds): a truncated, corrupt or foreign file
 /// gives a SetupError saying what is wrong, and never reaches the HDF5 library.
 #include <cstdint>
 #include <filesystem>
@@ -40,6 +41,10 @@ class Hdf5Archive final : public sparkdem::Archive {
   /// Writing mode: closes the file and atomically renames the tmp file to the final path.
   /// Nothing can be visited afterwards.
   void commit();
+  /// Writing mode: closes the file and renames the tmp file to the final path, without sealing
+  /// or syncing it: a scratch copy that no reader accepts (blank header) until seal_checkpoint()
+  /// makes it a checkpoint. For the watchdog's copy of the last healthy state.
+  void commit_unsealed();
   /// The final checkpoint path (not the tmp file).
   const std::filesystem::path& path() const { return path_; }
 
@@ -59,6 +64,7 @@ class Hdf5Archive final : public sparkdem::Archive {
   /// Reading mode: throws unless the stored array has `components` values per row.
   void require_components(const std::string& name, int components) const;
 
+  std::vector<unsigned char> image_;  ///< reading: the verified file HDF5 reads (declared before file_: outlives it)
   H5File file_;
   std::filesystem::path path_;  ///< final checkpoint path
   std::filesystem::path tmp_;   ///< file being written (writing mode)

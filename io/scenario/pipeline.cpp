@@ -19,6 +19,7 @@
 #include "engine/state/particle_set.hpp"
 #include "io/files/durable_file.hpp"
 #include "io/hdf5/results_writer.hpp"
+#include "io/restart/checkpoint_file.hpp"
 #include "io/restart/hdf5_archive.hpp"
 #include "io/scenario/sweep.hpp"
 #include "io/version/build_info.hpp"
@@ -52,6 +53,9 @@ class OutputObserver final : public Observer {
       : outdir_(outdir), log_(log), writer_(outdir), quiet_(quiet) {
     tty_ = isatty(fileno(stderr));
   }
+  ~OutputObserver() override { drop_healthy_file(); }
+  OutputObserver(const OutputObserver&) = delete;
+  OutputObserver& operator=(const OutputObserver&) = delete;
   /// Sweeps: checkpoints go to this file, and every state file carries this pipeline record.
   void set_checkpoint_file(const std::filesystem::path& f) { checkpoint_file_ = f; }
   void set_record(std::function<json()> record) { record_ = std::move(record); }
@@ -142,22 +146,44 @@ class OutputObserver final : public Observer {
               std::to_string(s.step) + ", stage '" + stage_ + "')");
     publish();
   }
-  /// The watchdog passed: keep an in-memory copy of what a checkpoint of this state would hold.
+  /// The watchdog passed: keep a copy of what a checkpoint of this state would hold, in memory
+  /// when a checkpoint would store it in at most watchdog.snapshot_memory_max_bytes, else as the
+  /// scratch file OUTDIR/.healthy_state.h5 (unsealed and not synced: the reader refuses it until
+  /// write_last_healthy seals it). A file's fixed cost (about a millisecond to create, write and
+  /// close an HDF5 file) would dominate a small copy; a large copy in memory would double the state.
   void healthy(State& s) override {
-    healthy_.begin();
-    write_state(healthy_, s, true);
-    healthy_.end();
+    ByteCountArchive size;
+    write_state(size, s, true);
+    if (static_cast<std::int64_t>(size.bytes()) <= cfg_.watchdog.snapshot_memory_max_bytes) {
+      drop_healthy_file();
+      healthy_.begin();
+      write_state(healthy_, s, true);
+      healthy_.end();
+    } else {
+      healthy_.clear();
+      healthy_in_file_ = false;
+      Hdf5Archive ar = Hdf5Archive::for_writing(healthy_file());
+      write_state(ar, s, true);
+      ar.commit_unsealed();
+      healthy_in_file_ = true;
+    }
     healthy_step_ = s.step;
   }
   /// After a failure: writes the last healthy copy as the sealed checkpoint
   /// OUTDIR/checkpoint_before_failure.h5 (loadable with --restart); returns its path, or an empty
   /// path when there is no copy of the failing stage.
   std::filesystem::path write_last_healthy() {
-    if (healthy_.empty()) return {};
+    if (healthy_.empty() && !healthy_in_file_) return {};
     const std::filesystem::path file = outdir_ / "checkpoint_before_failure.h5";
-    Hdf5Archive ar = Hdf5Archive::for_writing(file);
-    healthy_.replay(ar);
-    ar.commit();
+    if (healthy_in_file_) {
+      seal_checkpoint(healthy_file());
+      rename_durably(healthy_file(), file);
+      healthy_in_file_ = false;
+    } else {
+      Hdf5Archive ar = Hdf5Archive::for_writing(file);
+      healthy_.replay(ar);
+      ar.commit();
+    }
     log_.line("checkpoint before failure written: checkpoint_before_failure.h5 (step " + std::to_string(healthy_step_) + ", stage '" +
               stage_ + "')");
     return file;
@@ -167,6 +193,7 @@ class OutputObserver final : public Observer {
   /// soon as final_state.h5 is in place (before the log line and the index files, which may fail).
   void final_state(State& s, const std::function<void(const std::filesystem::path&)>& committed = {}) {
     healthy_.clear();  // a later failure is not this stage's
+    drop_healthy_file();
     write_checkpoint(outdir_ / "final_state.h5", s, false);
     if (committed) committed(outdir_ / "final_state.h5");
     log_.line("final state written: final_state.h5 (step " + std::to_string(s.step) + ", after stage '" + stage_ + "')");
@@ -296,7 +323,15 @@ class OutputObserver final : public Observer {
   Step k0_ = 0;
   std::filesystem::path checkpoint_file_;
   std::function<json()> record_;
-  MemoryArchive healthy_;  ///< the last state that passed the watchdog (see healthy())
+  std::filesystem::path healthy_file() const { return outdir_ / ".healthy_state.h5"; }
+  void drop_healthy_file() noexcept {
+    if (!healthy_in_file_) return;
+    std::error_code ec;
+    std::filesystem::remove(healthy_file(), ec);
+    healthy_in_file_ = false;
+  }
+  MemoryArchive healthy_;          ///< the last state that passed the watchdog (see healthy()), when small
+  bool healthy_in_file_ = false;   ///< the last healthy state is healthy_file() instead
   Step healthy_step_ = -1;
 };
 

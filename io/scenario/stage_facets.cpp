@@ -52,7 +52,8 @@ struct StageParams {
     double energy_growth_factor = 1e4;
     std::int64_t energy_window = 5;
     double energy_floor_fraction = 0.01;
-    std::int64_t snapshot_every_checks = 10;
+    std::int64_t snapshot_every_checks = 100;
+    std::int64_t snapshot_memory_max_bytes = std::int64_t{1} << 20;
   } watchdog;
 };
 ParamSpec<StageParams::Watchdog> watchdog_spec() {
@@ -87,8 +88,14 @@ ParamSpec<StageParams::Watchdog> watchdog_spec() {
   s.add("snapshot_every_checks", &P::snapshot_every_checks)
       .min(0)
       .doc(
-          "checks between in-memory copies of the last healthy state (one more at the start of a stage with steps to run; memory: about one "
-          "checkpoint; 0: none, and no checkpoint_before_failure.h5)");
+          "checks between copies of the last healthy state (one more at the start of a stage with steps to run; 0: none, and no "
+          "checkpoint_before_failure.h5)");
+  s.add("snapshot_memory_max_bytes", &P::snapshot_memory_max_bytes)
+      .unit("B")
+      .min(0)
+      .doc(
+          "a copy of the last healthy state that a checkpoint would store in at most this many bytes is kept in memory; a larger one is "
+          "written to the scratch file OUTDIR/.healthy_state.h5 (removed at the stage end), so a large state is not held twice");
   return s;
 }
 ParamSpec<StageParams::Stop> stop_spec() {
@@ -232,6 +239,7 @@ StageDef stage_from_params(const StageParams& p, const std::string& path) {
   c.watchdog.energy_window = p.watchdog.energy_window;
   c.watchdog.energy_floor_fraction = p.watchdog.energy_floor_fraction;
   c.watchdog.snapshot_every_checks = p.watchdog.snapshot_every_checks;
+  c.watchdog.snapshot_memory_max_bytes = p.watchdog.snapshot_memory_max_bytes;
   c.sort_every_rebuilds = p.sort_every_rebuilds;
   c.stability_check_every = p.stability_check_every;
   c.initial_overlap = p.initial_overlap;

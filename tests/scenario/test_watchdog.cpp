@@ -195,6 +195,46 @@ TEST_CASE("watchdog speed: a sphere falling from rest is stopped at the first ch
   check_restart_reproduces(scene, tmp.path / "a", e, tmp.path / "b");
 }
 
+TEST_CASE("watchdog copies: a copy above snapshot_memory_max_bytes goes to a scratch file and gives the same checkpoint", "[watchdog]") {
+  test::ScratchDir tmp("sparkdem_watchdog");
+  // The falling sphere above, copied every check: in memory (default limit, the state is about
+  // 2 KB) and as the scratch file (limit 0). Both checkpoints must hold the same state at step 50.
+  auto scene = [](std::int64_t limit, std::int64_t steps) {
+    return json{{"name", "fall"},
+                {"materials", material()},
+                {"contact", hooke(1.0)},
+                {"stages",
+                 {{{"name", "create"},
+                   {"type", "lattice"},
+                   {"generator", {{"lo", {0, 0, 0}}, {"hi", {0, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.002}}}},
+                  {{"name", "fall"},
+                   {"type", "dynamics"},
+                   {"dt", 1e-4},
+                   {"modules", {{"gravity", {{"acceleration", {0, 0, -10}}}}}},
+                   {"watchdog", {{"max_speed", 0.0505}, {"snapshot_every_checks", 1}, {"snapshot_memory_max_bytes", limit}}},
+                   {"stop", {{"steps", steps}}}}}}};
+  };
+  const PhysicsError m = run_failing(scene(1 << 20, 200), tmp.path / "memory");
+  const PhysicsError f = run_failing(scene(0, 200), tmp.path / "file");
+  CHECK(f.step() == m.step());
+  CHECK(check_pre_failure_checkpoint(tmp.path / "memory", m) == 50);
+  CHECK(check_pre_failure_checkpoint(tmp.path / "file", f) == 50);
+  CHECK(!fs::exists(tmp.path / "file" / ".healthy_state.h5"));  // renamed to the checkpoint
+  State a, b;
+  io::read_checkpoint(tmp.path / "memory" / "checkpoint_before_failure.h5", a);
+  io::read_checkpoint(tmp.path / "file" / "checkpoint_before_failure.h5", b);
+  CHECK(a.step == b.step);
+  CHECK(a.time == b.time);
+  CHECK(a.particles.position == b.particles.position);
+  CHECK(a.particles.velocity == b.particles.velocity);
+  check_restart_reproduces(scene(0, 200), tmp.path / "file", f, tmp.path / "again");
+  // A stage that ends well removes its scratch copy.
+  const json ok = run(scene(0, 40), tmp.path / "ok");
+  CHECK(ok["status"] == "completed");
+  CHECK(!fs::exists(tmp.path / "ok" / ".healthy_state.h5"));
+  CHECK(!fs::exists(tmp.path / "ok" / "checkpoint_before_failure.h5"));
+}
+
 TEST_CASE("watchdog overlap: two spheres driven into each other are stopped past half the smaller radius, naming both", "[watchdog]") {
   test::ScratchDir tmp("sparkdem_watchdog");
   // r = 1.0025 mm at 2 mm spacing: h0 = 5e-6 m; sphere 1 driven at 0.1 m/s, dt = 1e-5 s:
@@ -212,6 +252,7 @@ TEST_CASE("watchdog overlap: two spheres driven into each other are stopped past
                    {"dt", 1e-5},
                    {"sets", {"left", "right"}},
                    {"prescribe", {{"left", {0, 0, 0}}, {"right", {-0.1, 0, 0}}}},
+                   {"watchdog", {{"snapshot_every_checks", 10}}},
                    {"stop", {{"steps", 1000}}}}}}};
   const PhysicsError e = run_failing(scene, tmp.path / "a");
   CHECK(e.step() == 500);
@@ -275,7 +316,8 @@ TEST_CASE(
     "before any sphere moves its radius in a step",
     "[watchdog]") {
   test::ScratchDir tmp("sparkdem_watchdog");
-  const json scene = BondedPair::scene();
+  json scene = BondedPair::scene();
+  scene["stages"][2]["watchdog"] = {{"snapshot_every_checks", 10}};
   const PhysicsError e = run_failing(scene, tmp.path / "a");
   INFO(e.what());
   CHECK(e.quantity() == "kinetic energy");

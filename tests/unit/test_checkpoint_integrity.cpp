@@ -260,7 +260,7 @@ TEST_CASE("a correctly sealed file whose data is not HDF5 fails cleanly in HDF5"
   try {
     Hdf5Archive::for_reading(path);
     FAIL("a file of noise was opened as a checkpoint");
-  } catch (const SetupError& e) { CHECK_THAT(e.what(), Catch::Contains("HDF5 file '" + path.string() + "': cannot open the file image")); }
+  } catch (const SetupError& e) { CHECK_THAT(e.what(), Catch::Contains("HDF5 file '" + path.string() + "': cannot open the file")); }
   CHECK(H5Fget_obj_count(H5F_OBJ_ALL, H5F_OBJ_ALL) == 0);
 }
 
