@@ -86,6 +86,15 @@ struct EdgeOutput {
   std::vector<EdgeField> fields;
 };
 
+/// A module's one held edge output as Module::edge_outputs() returns it: none while `held` has no
+/// name, else one copy (`std::vector<EdgeOutput>{held}` would copy it twice: an initializer list
+/// cannot be moved from).
+inline std::vector<EdgeOutput> held_edge_output(const EdgeOutput& held) {
+  std::vector<EdgeOutput> out;
+  if (!held.name.empty()) out.push_back(held);
+  return out;
+}
+
 /// What a module needs and provides. Declaring is what makes allocation, output, restart and
 /// ordering automatic.
 struct Declarations {

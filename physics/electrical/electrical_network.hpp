@@ -150,7 +150,7 @@ class ElectricalNetwork final : public Module {
   /// ids of its ends (a wall is -1 - wall index), the current from the first to the second [A],
   /// its conductance [S] and dissipated power [W]. Empty before the first solve.
   std::vector<EdgeOutput> edge_outputs() const override {
-    return edges_.name.empty() ? std::vector<EdgeOutput>{} : std::vector<EdgeOutput>{edges_};
+    return held_edge_output(edges_);
   }
 
   /// Results of the last solve (held between solves).

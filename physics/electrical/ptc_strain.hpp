@@ -142,7 +142,7 @@ class PtcStrain final : public Module {
   std::vector<double> column_values(const State& s) const override;
   void visit(Archive& ar, const std::string& prefix) override;
   std::vector<EdgeOutput> edge_outputs() const override {
-    return contacts_.name.empty() ? std::vector<EdgeOutput>{} : std::vector<EdgeOutput>{contacts_};
+    return held_edge_output(contacts_);
   }
 
  private:
