@@ -165,24 +165,30 @@ void check_restart_reproduces(const json& scene, const fs::path& dir, const Phys
 json material() { return json::array({{{"name", "glass"}, {"density", 2500}}}); }
 json hooke(double kn) { return {{"law", "linear_spring_dashpot"}, {"params", {{"normal_stiffness", kn}, {"restitution", 0.5}}}}; }
 
+/// One sphere falling from rest under g = 10 m/s^2 at dt = 1e-4 s for `steps` steps, watched by
+/// `watchdog`.
+json falling_sphere(const json& watchdog, std::int64_t steps) {
+  return {{"name", "fall"},
+          {"materials", material()},
+          {"contact", hooke(1.0)},
+          {"stages",
+           {{{"name", "create"},
+             {"type", "lattice"},
+             {"generator", {{"lo", {0, 0, 0}}, {"hi", {0, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.002}}}},
+            {{"name", "fall"},
+             {"type", "dynamics"},
+             {"dt", 1e-4},
+             {"modules", {{"gravity", {{"acceleration", {0, 0, -10}}}}}},
+             {"watchdog", watchdog},
+             {"stop", {{"steps", steps}}}}}}};
+}
+
 }  // namespace
 
 TEST_CASE("watchdog speed: a sphere falling from rest is stopped at the first check after n g dt > max_speed", "[watchdog]") {
   test::ScratchDir tmp("sparkdem_watchdog");
   // g = 10 m/s^2, dt = 1e-4 s: v_n = n 1e-3 m/s passes 0.0505 m/s at n = 51; checks every 10 steps.
-  json scene = {{"name", "fall"},
-                {"materials", material()},
-                {"contact", hooke(1.0)},
-                {"stages",
-                 {{{"name", "create"},
-                   {"type", "lattice"},
-                   {"generator", {{"lo", {0, 0, 0}}, {"hi", {0, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.002}}}},
-                  {{"name", "fall"},
-                   {"type", "dynamics"},
-                   {"dt", 1e-4},
-                   {"modules", {{"gravity", {{"acceleration", {0, 0, -10}}}}}},
-                   {"watchdog", {{"max_speed", 0.0505}, {"snapshot_every_checks", 1}}},
-                   {"stop", {{"steps", 200}}}}}}};
+  const json scene = falling_sphere({{"max_speed", 0.0505}, {"snapshot_every_checks", 1}}, 200);
   const PhysicsError e = run_failing(scene, tmp.path / "a");
   CHECK(e.step() == 60);
   CHECK(e.quantity() == "velocity");
@@ -200,19 +206,7 @@ TEST_CASE("watchdog copies: a copy above snapshot_memory_max_bytes goes to a scr
   // The falling sphere above, copied every check: in memory (default limit, the state is about
   // 2 KB) and as the scratch file (limit 0). Both checkpoints must hold the same state at step 50.
   auto scene = [](std::int64_t limit, std::int64_t steps) {
-    return json{{"name", "fall"},
-                {"materials", material()},
-                {"contact", hooke(1.0)},
-                {"stages",
-                 {{{"name", "create"},
-                   {"type", "lattice"},
-                   {"generator", {{"lo", {0, 0, 0}}, {"hi", {0, 0, 0}}, {"spacing", 0.002}, {"diameter", 0.002}}}},
-                  {{"name", "fall"},
-                   {"type", "dynamics"},
-                   {"dt", 1e-4},
-                   {"modules", {{"gravity", {{"acceleration", {0, 0, -10}}}}}},
-                   {"watchdog", {{"max_speed", 0.0505}, {"snapshot_every_checks", 1}, {"snapshot_memory_max_bytes", limit}}},
-                   {"stop", {{"steps", steps}}}}}}};
+    return falling_sphere({{"max_speed", 0.0505}, {"snapshot_every_checks", 1}, {"snapshot_memory_max_bytes", limit}}, steps);
   };
   const PhysicsError m = run_failing(scene(1 << 20, 200), tmp.path / "memory");
   const PhysicsError f = run_failing(scene(0, 200), tmp.path / "file");
