@@ -3,8 +3,8 @@
 /// at its start (before step 0) and at its end, that stop a run going wrong with a PhysicsError
 /// naming the step, the time, the particles, the quantity, its value, the bound it broke and what
 /// to change. Simulation::run_stage calls it; io/scenario/pipeline.cpp keeps the last state that
-/// passed it in memory (Observer::healthy) and writes it as OUTDIR/checkpoint_before_failure.h5
-/// when the run fails.
+/// passed it (Observer::healthy: in memory when small, else in the scratch file
+/// OUTDIR/.healthy_state.h5) and writes it as OUTDIR/checkpoint_before_failure.h5 when the run fails.
 ///
 /// Checks, in this order (the first that fails is reported; a frozen stage, mechanics off, runs
 /// check 1 only, Simulation::run_stage: its geometry is given, e.g. an overlapping packing built
@@ -54,7 +54,7 @@ struct WatchdogConfig {
   double energy_growth_factor = 1e4;    ///< [1] 0 = no energy check
   Step energy_window = 5;               ///< checks over which the growth is measured (>= 1)
   double energy_floor_fraction = 0.01;  ///< [1] rms-speed floor as a fraction of the blow-up speed
-  /// Checks between in-memory copies of the last healthy state (also taken at the start of a stage
+  /// Checks between copies of the last healthy state (also taken at the start of a stage
   /// with steps to run);
   /// 0 = no copies (a failure then leaves no checkpoint_before_failure.h5).
   Step snapshot_every_checks = 100;

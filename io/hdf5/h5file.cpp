@@ -177,7 +177,8 @@ namespace {
 /// property list and again into the driver (three copies of the file at the open). The callbacks
 /// hand out the caller's bytes wherever HDF5 asks for a buffer of the image's size, make the copy
 /// onto itself a no-op and never free them; anything else (a resize: the file is read-only) fails.
-/// Each holder of the callbacks (property list, its copies, the open file) owns a copy of the view.
+/// HDF5 copies the view (udata_copy) into each property list that holds the callbacks; the core
+/// driver borrows the property list's, which only image_malloc reads, during the open.
 struct ImageView {
   unsigned char* data;
   std::size_t size;

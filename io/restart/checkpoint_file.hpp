@@ -27,8 +27,11 @@
 /// written into the user block, the file is fsynced, renamed to `name` and the directory
 /// fsynced. Reading (VerifiedCheckpoint, used by Hdf5Archive::for_reading): the file is opened and
 /// verified with plain file I/O, streaming; HDF5 then opens the same open file through
-/// /proc/self/fd (so a file renamed over the name in between is not what HDF5 reads), or, where
-/// /proc is missing, the verified bytes from memory (read_verified_checkpoint).
+/// /proc/self/fd, or, where /proc is missing, the verified bytes from memory
+/// (read_verified_checkpoint). A file renamed over the name or removed in between makes HDF5's
+/// open fail cleanly (it resolves the link, which then names a deleted file); a file rewritten in
+/// place while it is read is not caught (sparkdem never rewrites a checkpoint in place: it writes a
+/// tmp file and renames it).
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -62,9 +65,8 @@ std::vector<unsigned char> read_verified_checkpoint(const std::filesystem::path&
 
 /// A sealed checkpoint verified as read_verified_checkpoint does (same errors), streaming the
 /// payload through the hash instead of holding it, and kept open. same_file_path() names the
-/// verified file itself (/proc/self/fd/N on Linux): opening it reaches the very bytes that were
-/// checked, whatever has replaced `file` in its directory since (sparkdem replaces files by rename
-/// and never rewrites one in place).
+/// verified file itself (/proc/self/fd/N on Linux; see the header comment for what that does and
+/// does not rule out).
 class VerifiedCheckpoint {
  public:
   explicit VerifiedCheckpoint(const std::filesystem::path& file);

@@ -10,9 +10,9 @@
 /// to `path` (then fsyncs the directory), so a crash at any moment leaves either the previous
 /// checkpoint or the new one under `path`, never a partial one; an uncommitted archive removes
 /// its tmp file. Reading verifies the length and checksum with plain file I/O before any HDF5
-/// call, then lets HDF5 read the verified file through its open descriptor (/proc/self/fd: the
-/// bytes that were checked, whatever is renamed over `path` meanwhile; where /proc is missing, from
-/// a copy of the verified bytes in memory, which the reading archive holds): a truncated, corrupt or foreign file
+/// call, then lets HDF5 read the verified file through its open descriptor (/proc/self/fd; a file
+/// renamed over `path` meanwhile makes the open fail; where /proc is missing, from a copy of the
+/// verified bytes in memory, which the reading archive holds): a truncated, corrupt or foreign file
 /// gives a SetupError saying what is wrong, and never reaches the HDF5 library.
 #include <cstdint>
 #include <filesystem>

@@ -52,6 +52,10 @@ class OutputObserver final : public Observer {
   OutputObserver(const std::filesystem::path& outdir, bool quiet, RunLog& log)
       : outdir_(outdir), log_(log), writer_(outdir), quiet_(quiet) {
     tty_ = isatty(fileno(stderr));
+    // A killed run's scratch copy (and its half-written tmp file) is nobody's state any more.
+    std::error_code ec;
+    std::filesystem::remove(healthy_file(), ec);
+    std::filesystem::remove(healthy_file().string() + ".tmp", ec);
   }
   ~OutputObserver() override { drop_healthy_file(); }
   OutputObserver(const OutputObserver&) = delete;
@@ -159,15 +163,27 @@ class OutputObserver final : public Observer {
       healthy_.begin();
       write_state(healthy_, s, true);
       healthy_.end();
-    } else {
-      healthy_.clear();
-      healthy_in_file_ = false;
+      healthy_step_ = s.step;
+      return;
+    }
+    healthy_.clear();
+    if (!healthy_in_file_)
+      note(log_, "stage '" + stage_ + "': copies of the last healthy state go to " + healthy_file().filename().string() + " (" +
+                std::to_string(size.bytes()) + " bytes, above watchdog.snapshot_memory_max_bytes)");
+    try {
       Hdf5Archive ar = Hdf5Archive::for_writing(healthy_file());
       write_state(ar, s, true);
-      ar.commit_unsealed();
+      ar.commit_unsealed();  // replaces the previous copy at once
       healthy_in_file_ = true;
+      healthy_step_ = s.step;
+    } catch (const SetupError& e) {
+      // A safety copy that cannot be written (disk full) must not stop a healthy run: the run
+      // goes on without one, and a failure then leaves no checkpoint_before_failure.h5.
+      healthy_in_file_ = true;  // whatever is left of the previous copy is removed
+      drop_healthy_file();
+      healthy_step_ = -1;
+      note(log_, std::string("copy of the last healthy state not written: ") + e.what());
     }
-    healthy_step_ = s.step;
   }
   /// After a failure: writes the last healthy copy as the sealed checkpoint
   /// OUTDIR/checkpoint_before_failure.h5 (loadable with --restart); returns its path, or an empty
@@ -677,7 +693,7 @@ void run_plain_stage(Scenario& sc, std::size_t k, State& s, OutputObserver& obs,
   for (const auto& m : st.monitors) sim.add_monitor(m.get());
   if (resuming) {
     for (Module* m : mods) m->visit(*rp.archive, "modules/" + m->name());
-    rp.archive.reset();  // everything is restored: release the in-memory checkpoint image
+    rp.archive.reset();  // everything is restored: close the checkpoint
   }
   obs.set_stage(st.cfg.name, mods, st.cfg);
   log.line("stage '" + st.cfg.name + "' (" + std::to_string(k + 1) + " of " + std::to_string(sc.stages.size()) + ") " +
