@@ -52,10 +52,7 @@ class OutputObserver final : public Observer {
   OutputObserver(const std::filesystem::path& outdir, bool quiet, RunLog& log)
       : outdir_(outdir), log_(log), writer_(outdir), quiet_(quiet) {
     tty_ = isatty(fileno(stderr));
-    // A killed run's scratch copy (and its half-written tmp file) is nobody's state any more.
-    std::error_code ec;
-    std::filesystem::remove(healthy_file(), ec);
-    std::filesystem::remove(healthy_file().string() + ".tmp", ec);
+    remove_healthy_files();  // a killed run's scratch copy (and its tmp file) is nobody's state any more
   }
   ~OutputObserver() override { drop_healthy_file(); }
   OutputObserver(const OutputObserver&) = delete;
@@ -179,8 +176,8 @@ class OutputObserver final : public Observer {
     } catch (const SetupError& e) {
       // A safety copy that cannot be written (disk full) must not stop a healthy run: the run
       // goes on without one, and a failure then leaves no checkpoint_before_failure.h5.
-      healthy_in_file_ = true;  // whatever is left of the previous copy is removed
-      drop_healthy_file();
+      remove_healthy_files();  // whatever is left of the previous copy
+      healthy_in_file_ = false;
       healthy_step_ = -1;
       note(log_, std::string("copy of the last healthy state not written: ") + e.what());
     }
@@ -340,10 +337,14 @@ class OutputObserver final : public Observer {
   std::filesystem::path checkpoint_file_;
   std::function<json()> record_;
   std::filesystem::path healthy_file() const { return outdir_ / ".healthy_state.h5"; }
-  void drop_healthy_file() noexcept {
-    if (!healthy_in_file_) return;
+  void remove_healthy_files() noexcept {
     std::error_code ec;
     std::filesystem::remove(healthy_file(), ec);
+    std::filesystem::remove(tmp_name(healthy_file()), ec);
+  }
+  void drop_healthy_file() noexcept {
+    if (!healthy_in_file_) return;
+    remove_healthy_files();
     healthy_in_file_ = false;
   }
   MemoryArchive healthy_;          ///< the last state that passed the watchdog (see healthy()), when small
