@@ -3,7 +3,8 @@
 
 For every scenario file configs/*.json this tool writes a *short variant* (the same stages, keys,
 laws, modules, walls and sets, with every stepping stage capped at STEPS steps, every generator
-capped at PARTICLES particles and RELAX_ITERATIONS relaxation iterations, every sweep cut to its
+capped at PARTICLES particles (a generator given a box and a volume fraction, as cpc_fillers, gets
+the edge that holds PARTICLES) and RELAX_ITERATIONS relaxation iterations, every sweep cut to its
 first two items), runs it with `sparkdem run --threads 1`, and digests
 
   * the resolved scenario that `sparkdem check` prints for the *full* config (every key as parsed),
@@ -29,11 +30,13 @@ import glob
 import hashlib
 import io
 import json
+import math
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
+import time
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CONFIGS = os.path.join(REPO, "configs")
@@ -42,7 +45,21 @@ STEPS = 40
 PARTICLES = 300
 RELAX_ITERATIONS = 200
 SWEEP_ITEMS = 2
-TIMEOUT_S = 30  # a short variant slower than this (on one thread) is recorded as skipped, not run by `check`
+TIMEOUT_S = 30  # `check` fails a short variant slower than this (on one thread): CI's limit per test
+# `make` records a short variant slower than this as skipped (never run by `check`): a third of
+# TIMEOUT_S, because two CI tests share the two cores and a loaded machine runs a variant 1.7x slower
+# than an idle one (cpc_ptc_temperature: 18 s alone, 30 s in CI at 598 s, stop 55).
+MAKE_LIMIT_S = 10
+
+
+def cap_box_length(gen):
+    """A generator that fills a cube of edge box_length to a volume fraction (cpc_fillers: N =
+    phi L^3 / (4/3 pi R^3)) gets the edge whose cube holds PARTICLES spheres, if it is shorter."""
+    keys = ("box_length", "volume_fraction", "radius")
+    if not all(isinstance(gen.get(k), (int, float)) and gen[k] > 0 for k in keys):
+        return
+    edge = (PARTICLES * 4.0 / 3.0 * math.pi * gen["radius"] ** 3 / gen["volume_fraction"]) ** (1.0 / 3.0)
+    gen["box_length"] = min(gen["box_length"], float(f"{edge:.4g}"))
 
 
 def short_variant(scene):
@@ -55,6 +72,7 @@ def short_variant(scene):
         if isinstance(gen, dict):
             if isinstance(gen.get("particles"), int):
                 gen["particles"] = min(gen["particles"], PARTICLES)
+            cap_box_length(gen)
             if isinstance(gen.get("max_iterations"), int):
                 gen["max_iterations"] = min(gen["max_iterations"], RELAX_ITERATIONS)
         sweep = stage.get("sweep")
@@ -120,8 +138,9 @@ def resolved_digest(sparkdem, config):
     return hashlib.sha256((str(p.returncode) + "\n" + p.stdout).encode()).hexdigest()
 
 
-def digest_config(sparkdem, name, workdir):
-    """{'check': digest of the resolved full config, 'run': digest of the short run, 'exit': code}."""
+def digest_config(sparkdem, name, workdir, limit_s=TIMEOUT_S):
+    """{'check': digest of the resolved full config, 'run': digest of the short run, 'exit': code},
+    or {'skipped': why} when the short run takes over limit_s seconds."""
     config = os.path.join(CONFIGS, name)
     # The variant sits in a copy of configs/ so that includes and CSV paths resolve as in the original.
     tree = os.path.join(workdir, "configs")
@@ -135,11 +154,14 @@ def digest_config(sparkdem, name, workdir):
     outdir = os.path.join(workdir, "out_" + name[:-5])
     shutil.rmtree(outdir, ignore_errors=True)
     env = dict(os.environ, OMP_NUM_THREADS="1", OMP_WAIT_POLICY="PASSIVE")
+    t0 = time.monotonic()
     try:
         p = subprocess.run([sparkdem, "run", "--threads", "1", "--quiet", "--report-only", "-o", outdir, variant],
                            capture_output=True, text=True, env=env, cwd=workdir, timeout=TIMEOUT_S)
     except subprocess.TimeoutExpired:
-        return {"skipped": f"the short variant runs over {TIMEOUT_S} s on one thread"}
+        p = None
+    if p is None or time.monotonic() - t0 > limit_s:
+        return {"skipped": f"the short variant runs over {limit_s} s on one thread"}
     return {"check": resolved_digest(sparkdem, config), "exit": p.returncode,
             "run": output_digest(outdir) if os.path.isdir(outdir) else "",
             "stderr_tail": p.stderr.strip().splitlines()[-1:] if p.returncode else []}
@@ -173,12 +195,13 @@ def main(argv=None):
         if ref is not None and "skipped" in ref.get(name, {}):
             print(f"{name}: skipped ({ref[name]['skipped']})", flush=True)
             continue
-        got[name] = digest_config(a.sparkdem, name, workdir)
+        got[name] = digest_config(a.sparkdem, name, workdir, MAKE_LIMIT_S if a.command == "make" else TIMEOUT_S)
         g = got[name]
         print(f"{name}: " + (g["skipped"] if "skipped" in g else
                              f"exit {g['exit']} run {g['run'][:12]} check {g['check'][:12]}"), flush=True)
     if a.command == "make":
-        rules = {"steps": STEPS, "particles": PARTICLES, "relax_iterations": RELAX_ITERATIONS, "sweep_items": SWEEP_ITEMS}
+        rules = {"steps": STEPS, "particles": PARTICLES, "relax_iterations": RELAX_ITERATIONS, "sweep_items": SWEEP_ITEMS,
+                 "box_length_particles": PARTICLES, "make_limit_s": MAKE_LIMIT_S}
         if a.config:
             # Remake only the named configs (a change meant to alter their results): the other entries
             # keep theirs; each remade entry names the binary that made it.

@@ -166,8 +166,8 @@ def ensemble_scene(tmp):
     st = scene["stages"][0]
     st["generator"]["particles"] = 150
     st["generator"]["ke_per_mass_below"] = 1e-12  # runs to its step budget
-    st["stop"]["steps"] = 40000
-    st["output"]["checkpoint_every"] = 2000
+    st["stop"]["steps"] = 20000  # each item long enough to be killed inside (checkpoints every 1000 steps)
+    st["output"]["checkpoint_every"] = 1000
     st["sweep"]["seeds"] = [1, 2, 3, 4, 5, 6]
     p = tmp / "ensemble.json"
     p.write_text(json.dumps(scene))
