@@ -131,7 +131,7 @@ void LatticeGenerator::validate(const State& scene, std::vector<Diagnostic>& err
     errors.push_back({"", "the lattice would create " + std::to_string(n) + " particles (more than 1e9); check spacing, lo and hi"});
     return;
   }
-  if (n > 1e6) return;  // cheap only up to ~1e6 particles: a larger lattice is not generated just to check it
+  if (n > kCheapParticles) return;  // a larger lattice is not generated just to check it
   State scratch;
   scratch.materials = scene.materials;
   scratch.walls = scene.walls;
