@@ -3,7 +3,7 @@
 Run from the repository root as `/usr/bin/python3 -m tools.perf CMD` (docs/running.md, "Python tools"):
 
     perf list                               the cases: scene, peers, threads, ranks, repeats, figures, result file
-    perf run --case GLOB ... [--repeats N] [--threads T ...] [--quick] [--sparkdem PATH] [--build DIR]
+    perf run --case GLOB ... [--repeats N] [--threads T ...] [--scenes S ...] [--quick] [--sparkdem PATH] [--build DIR]
              [--workdir DIR] [--record]
     perf report [DOC ...]                   the ledger's perf section, ledger.md and the perf tables of DOC
                                             (default docs/performance.md) from the cases' result files
@@ -119,11 +119,12 @@ def run_case(case, a):
     workdir = os.path.join(os.path.abspath(a.workdir), case.id)
     ctx = harness.Context(case, workdir, a.sparkdem, os.path.abspath(a.build), a.repeats, a.threads, a.quick)
     ctx.result = os.path.join(workdir, os.path.basename(case.result))
+    ctx.scenes = getattr(a, "scenes", [])
     load0, started = os.getloadavg(), time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
     print(f"{case.id}: load average {load0[0]:.2f} on {os.cpu_count()} cores; work directory {workdir}", flush=True)
     case.run(ctx)
     load1 = os.getloadavg()
-    meta = {"case": case.id, "quick": a.quick, "repeats": ctx.repeats, "threads": ctx.threads,
+    meta = {"case": case.id, "quick": a.quick, "repeats": ctx.repeats, "threads": ctx.threads, "scenes": ctx.scenes,
             "command": " ".join(["python3 -m tools.perf"] + sys.argv[1:]), "started": started,
             "finished": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), "load_before": list(load0),
             "load_after": list(load1), "load_max": max([load0[0], load1[0]] + [m["load_after"] for m in ctx.launches]),
@@ -224,6 +225,8 @@ def main(argv=None):
     p.add_argument("--threads", type=int, nargs="+", default=[],
                    help="the sparkdem thread counts of the case mechanics (default 1 2)")
     p.add_argument("--quick", action="store_true", help="the smallest scale that runs every step (never recorded)")
+    p.add_argument("--scenes", nargs="+", default=[],
+                   help="the case mechanics: run these scenes only; the other scenes' rows are kept from the committed result")
     p.add_argument("--sparkdem", default=os.environ.get("SPARKDEM_BIN", os.path.join(REPO, "build", "sparkdem")))
     p.add_argument("--build", default=os.path.join(REPO, "build"), help="build directory (benchmark executables)")
     p.add_argument("--workdir", default=os.path.join(REPO, "build", "perf"))

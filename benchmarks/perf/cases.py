@@ -50,11 +50,7 @@ def dynamics_scene(config, steps=None, frame_every=0):
     """A config's scene with the benchmark's output (time series every 500 steps, final frame, no
     checkpoint) and, when given, its last dynamics stage's step count changed."""
     c = harness.load_config(config) if not os.path.isabs(config) else json.load(open(config))
-    dyn = [s for s in c["stages"] if s.get("type", "dynamics") == "dynamics"][-1]
-    dyn["output"] = {"frame_every": frame_every, "timeseries_every": 500, "checkpoint_every": 0}
-    if steps:
-        dyn["stop"] = {"steps": steps}
-    return c
+    return dynamics_scene_of(c, steps, frame_every)
 
 
 # ---------------------------------------------------------------- mechanics against LAMMPS
@@ -64,6 +60,13 @@ MECH_SCENES = {
              "peer": "/work/shared/peers/lammps_pour.in", "steps": 30000, "quick_steps": 1000},
     "dense_bed": {"config": "benchmarks/mechanics/dense_bed.json", "lammps": "benchmarks/mechanics/lammps_dense_bed.in",
                   "peer": None, "steps": 10000, "quick_steps": 500},
+    # Packed beds (benchmarks/mechanics/packed_bed.py): the stage `pack` run once, `bed` timed from its state.
+    "poly_box_bed": {"config": "benchmarks/mechanics/poly_box_bed.json",
+                     "lammps": "benchmarks/mechanics/lammps_poly_box_bed.in", "peer": None, "steps": 10000,
+                     "quick_steps": 500, "packed": True},
+    "poly_cylinder_bed": {"config": "benchmarks/mechanics/poly_cylinder_bed.json",
+                          "lammps": "benchmarks/mechanics/lammps_poly_cylinder_bed.in", "peer": None, "steps": 10000,
+                          "quick_steps": 500, "packed": True},
 }
 # (variant, threads, OMP_WAIT_POLICY; None = the runtime's default), in the order of a round
 MECH_VARIANTS = [("sparkdem_t1", 1, None), ("lammps_serial", 1, None), ("sparkdem_t2", 2, None),
@@ -89,7 +92,10 @@ def mechanics_scene(ctx, name):
     spec = MECH_SCENES[name]
     steps = spec["quick_steps"] if ctx.quick else spec["steps"]
     ctx.log(f"{name}: LAMMPS input {check_peer_input(spec)}; {steps} steps")
-    scene = ctx.write_scene(dynamics_scene(spec["config"], steps), name)
+    if spec.get("packed"):
+        scene = ctx.write_scene(packed_bed_scene(ctx, name, spec, steps), name)
+    else:
+        scene = ctx.write_scene(dynamics_scene(spec["config"], steps), name)
     lmp = ctx.need("lmp", "lammps")
 
     def one(variant, rep):
@@ -110,6 +116,28 @@ def mechanics_scene(ctx, name):
     variants = [v[0] for v in MECH_VARIANTS if v[0] == "lammps_serial" or v[1] in ctx.threads]
     runs = harness.interleave(variants, ctx.repeats, one, ctx.log)
     return mechanics_rows(name, runs, ap)
+
+
+def packed_bed_scene(ctx, name, spec, steps):
+    """A packed bed's timed scene: its `pack` stage run once (2 threads, not timed), `bed` from
+    that state; the same particles and walls written for LAMMPS into NAME_lammps/."""
+    from benchmarks.mechanics import packed_bed
+    config = harness.load_config(spec["config"])
+    pack, _ = packed_bed.split_stages(config)
+    out, meta = ctx.sparkdem_run(pack, f"{name}_pack", threads=2)
+    state = os.path.join(out, "final_state.h5")
+    walls = packed_bed.write_lammps_bed(state, ctx.path(f"{name}_lammps"))
+    ctx.log(f"{name}: packed in {meta['wall_s']:.1f} s; walls {walls}")
+    return dynamics_scene_of(packed_bed.bed_scene(config, state), steps)
+
+
+def dynamics_scene_of(c, steps=None, frame_every=0):
+    """dynamics_scene for a scene dict."""
+    dyn = [s for s in c["stages"] if s.get("type", "dynamics") == "dynamics"][-1]
+    dyn["output"] = {"frame_every": frame_every, "timeseries_every": 500, "checkpoint_every": 0}
+    if steps:
+        dyn["stop"] = {"steps": steps}
+    return c
 
 
 def mechanics_rows(name, runs, ap):
@@ -143,12 +171,23 @@ MECH_FIELDS = ["scene", "variant", "particles", "steps", "repeats", "loop_s_medi
 
 
 def run_mechanics(ctx):
+    """Every scene of MECH_SCENES, or those of --scenes with the other scenes' rows kept from the
+    committed result (each row names the commit it was measured on)."""
     load, v = os.getloadavg()[0], ctx.versions(["lammps"])
+    names = getattr(ctx, "scenes", None) or list(MECH_SCENES)
+    unknown = [n for n in names if n not in MECH_SCENES]
+    if unknown:
+        raise ValueError(f"unknown mechanics scenes {unknown} (known: {', '.join(MECH_SCENES)})")
     rows = []
-    for name in MECH_SCENES:
-        rows += mechanics_scene(ctx, name)
-    for r in rows:
-        r.update({"commit": v["sparkdem"], "lammps": v["lammps"], "load_average_at_start": f"{load:.2f}"})
+    for name in names:
+        new = mechanics_scene(ctx, name)
+        for r in new:
+            r.update({"commit": v["sparkdem"], "lammps": v["lammps"], "load_average_at_start": f"{load:.2f}"})
+        rows += new
+    committed = os.path.join(REPO, "benchmarks", "mechanics", "results.csv")
+    if names != list(MECH_SCENES) and os.path.exists(committed):
+        kept = [r for r in rows_of(committed) if r["scene"] not in names]
+        rows = sorted(kept + rows, key=lambda r: list(MECH_SCENES).index(r["scene"]))
     write_csv_atomic(ctx.result, rows, MECH_FIELDS)
 
 
@@ -549,8 +588,9 @@ def records_stable_step(path):
 # ---------------------------------------------------------------- the table
 
 CASES = [
-    Case("mechanics", "configs/pour.json (23,976 spheres, 30,000 steps) and benchmarks/mechanics/dense_bed.json "
-         "(27,000 spheres, 10,000 steps)", ["lammps"], [1, 2], [1], 5,
+    Case("mechanics", "configs/pour.json (23,976 spheres, 30,000 steps), benchmarks/mechanics/dense_bed.json "
+         "(27,000 spheres, 10,000 steps) and the packed beds poly_box_bed.json (20,000) and poly_cylinder_bed.json "
+         "(16,000; 10,000 steps each)", ["lammps"], [1, 2], [1], 5,
          {"perf/mechanics/<scene>/<variant>": "run-loop wall time, median of interleaved repeats with min/max; "
           "ratio LAMMPS serial time / this time; 2-thread speed-up; KE and coordination against LAMMPS"},
          "benchmarks/mechanics/results.csv", run_mechanics, records_mechanics, needs=["lmp (lammps)"]),
