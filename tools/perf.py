@@ -73,6 +73,26 @@ def cmd_list(a):
     return 0
 
 
+RUN_KEYS = ("versions", "load_before", "load_after", "load_max", "finished", "repeats")
+
+
+def scene_run(meta, scene):
+    """The run that measured a scene's rows: the sidecar's own, or, for a scene kept from an earlier
+    run by `--scenes`, that run's (meta["kept_runs"][scene])."""
+    return meta.get("kept_runs", {}).get(scene) or meta
+
+
+def kept_runs(case, scenes):
+    """For `perf run --scenes`: the runs of the committed result's other scenes (their sidecar
+    entries), so that their kept rows keep their own commit and load."""
+    committed = os.path.join(REPO, case.result + ".meta.json")
+    if not scenes or not os.path.exists(committed):
+        return {}
+    old = json.load(open(committed))
+    names = {r.get("scene") for r in case.records(os.path.join(REPO, case.result))} - set(scenes) - {None}
+    return {n: {k: scene_run(old, n)[k] for k in RUN_KEYS} for n in sorted(names)}
+
+
 def records_of(case, path):
     """The case's perf records of a result file, with their origin, load and versions (sidecar)."""
     meta_path = path + ".meta.json"
@@ -82,10 +102,11 @@ def records_of(case, path):
         r["case"] = case.id
         r["source"] = os.path.relpath(path, REPO) if path.startswith(REPO) else path
         if meta:  # the commit is the measured binary's (a case's own commit column says the same)
-            r.update({"origin": "harness", "commit": meta["versions"]["sparkdem"],
-                      "load_before": meta["load_before"][0], "load_after": meta["load_after"][0],
-                      "load_max": meta["load_max"], "versions": meta["versions"], "measured_at": meta["finished"]})
-            r.setdefault("repeats", meta["repeats"])
+            run = scene_run(meta, r.get("scene"))
+            r.update({"origin": "harness", "commit": run["versions"]["sparkdem"],
+                      "load_before": run["load_before"][0], "load_after": run["load_after"][0],
+                      "load_max": run["load_max"], "versions": run["versions"], "measured_at": run["finished"]})
+            r.setdefault("repeats", run["repeats"])
         else:
             r["origin"] = f"imported (written by {WRITTEN_BEFORE_BY.get(case.id, 'an earlier script')})"
     return recs
@@ -125,6 +146,7 @@ def run_case(case, a):
     case.run(ctx)
     load1 = os.getloadavg()
     meta = {"case": case.id, "quick": a.quick, "repeats": ctx.repeats, "threads": ctx.threads, "scenes": ctx.scenes,
+            "kept_runs": kept_runs(case, ctx.scenes),
             "command": " ".join(["python3 -m tools.perf"] + sys.argv[1:]), "started": started,
             "finished": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()), "load_before": list(load0),
             "load_after": list(load1), "load_max": max([load0[0], load1[0]] + [m["load_after"] for m in ctx.launches]),

@@ -33,5 +33,25 @@ class Guard(unittest.TestCase):
         self.assertEqual(len(perf.slowdowns([rec("a", 10.6)], [rec("a", 10.0)], limit=0.05)), 1)
 
 
+class KeptScenes(unittest.TestCase):
+    """`perf run --scenes`: rows kept from an earlier run keep that run's commit and load."""
+
+    def test_scene_run(self):
+        run = lambda commit, load: {"versions": {"sparkdem": commit}, "load_before": [load], "load_after": [load],
+                                    "load_max": load, "finished": "t", "repeats": 5}
+        meta = dict(run("new", 1.0), kept_runs={"pour": run("old", 0.5)})
+        self.assertEqual(perf.scene_run(meta, "pour")["versions"]["sparkdem"], "old")
+        self.assertEqual(perf.scene_run(meta, "poly_box_bed")["versions"]["sparkdem"], "new")
+        self.assertEqual(perf.scene_run(meta, None)["load_max"], 1.0)
+
+    def test_committed_mechanics_records(self):
+        # The committed mechanics result: each record's commit is its own row's commit column.
+        case = next(c for c in perf.case_table.CASES if c.id == "mechanics")
+        path = perf.os.path.join(perf.REPO, case.result)
+        rows = {f"perf/mechanics/{r['scene']}/{r['variant']}": r["commit"] for r in perf.case_table.rows_of(path)}
+        for r in perf.records_of(case, path):
+            self.assertTrue(r["commit"].startswith(rows[r["id"]]), (r["id"], r["commit"], rows[r["id"]]))
+
+
 if __name__ == "__main__":
     unittest.main()
