@@ -157,7 +157,7 @@ def digest_config(sparkdem, name, workdir, limit_s=TIMEOUT_S):
     t0 = time.monotonic()
     try:
         p = subprocess.run([sparkdem, "run", "--threads", "1", "--quiet", "--report-only", "-o", outdir, variant],
-                           capture_output=True, text=True, env=env, cwd=workdir, timeout=TIMEOUT_S)
+                           capture_output=True, text=True, env=env, cwd=workdir, timeout=limit_s)
     except subprocess.TimeoutExpired:
         p = None
     if p is None or time.monotonic() - t0 > limit_s:

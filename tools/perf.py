@@ -172,6 +172,8 @@ def run_case(case, a):
 def cmd_run(a):
     if a.record and a.quick:
         raise ValueError("--quick results are smoke tests: they are never recorded")
+    if a.scenes and any(c.id != "mechanics" for c in selected(a.case)):
+        raise ValueError("--scenes applies to the case mechanics only")
     failed, slower = [], 0
     for case in selected(a.case):
         try:

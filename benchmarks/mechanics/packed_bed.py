@@ -20,12 +20,10 @@ def split_stages(config):
     return dict(config, stages=gen), dyn[-1]
 
 
-def bed_scene(config, final_state, steps=None):
+def bed_scene(config, final_state):
     """The config with only its bed stage, started from the pack's final state."""
     _, bed = split_stages(config)
     bed = dict(bed, from_snapshot=os.path.abspath(final_state))
-    if steps:
-        bed["stop"] = {"steps": steps}
     return dict(config, stages=[bed])
 
 

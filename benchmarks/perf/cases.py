@@ -92,11 +92,11 @@ def mechanics_scene(ctx, name):
     spec = MECH_SCENES[name]
     steps = spec["quick_steps"] if ctx.quick else spec["steps"]
     ctx.log(f"{name}: LAMMPS input {check_peer_input(spec)}; {steps} steps")
+    lmp = ctx.need("lmp", "lammps")
     if spec.get("packed"):
         scene = ctx.write_scene(packed_bed_scene(ctx, name, spec, steps), name)
     else:
         scene = ctx.write_scene(dynamics_scene(spec["config"], steps), name)
-    lmp = ctx.need("lmp", "lammps")
 
     def one(variant, rep):
         _, threads, policy = next(v for v in MECH_VARIANTS if v[0] == variant)
@@ -186,7 +186,7 @@ def run_mechanics(ctx):
         rows += new
     committed = os.path.join(REPO, "benchmarks", "mechanics", "results.csv")
     if names != list(MECH_SCENES) and os.path.exists(committed):
-        kept = [r for r in rows_of(committed) if r["scene"] not in names]
+        kept = [r for r in rows_of(committed) if r["scene"] not in names and r["scene"] in MECH_SCENES]
         rows = sorted(kept + rows, key=lambda r: list(MECH_SCENES).index(r["scene"]))
     write_csv_atomic(ctx.result, rows, MECH_FIELDS)
 

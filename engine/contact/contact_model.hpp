@@ -332,30 +332,6 @@ class ContactModelT final : public ContactModel {
     t.gather_particles(split.boundary, p.force, p.torque);
   }
 
-  /// One wall row: the force on particle i, its torque and the force's normal component, or
-  /// false (and the row's history cleared) when the particle does not touch the wall.
-  struct WallRow {
-    Vec3 force, torque;
-    double normal;
-  };
-  bool wall_row(const ParticleStore& p, const Wall& wall, Index i, double* state, int width, const double* temp, double dt,
-                double time_scale, bool inertia_free, WallRow& row) const {
-    Vec3 nrm;
-    double dist;
-    wall.distance(p.position[i], nrm, dist);
-    if (p.radius[i] - dist <= 0.0) {
-      for (int c = 0; c < width; ++c) state[c] = 0.0;
-      return false;
-    }
-    ContactGeometry g = wall_geometry(p, i, nrm, dist, temp, time_scale);
-    if (inertia_free) g.m_eff = 0.0;
-    const Vec3 vw = wall.u_dot * nrm;
-    const RelativeMotion m = relative_motion(g, p.velocity[i], vw, p.omega[i], Vec3::Zero());
-    const ContactForces f = law_(g, m, dt, state);
-    row = {f.force, -g.arm_i * g.n.cross(f.tangential), f.force.dot(g.n)};
-    return true;
-  }
-
   /// Particle-wall rows, wall by wall in candidate order: each row's force and torque are added to
   /// its particle, and to the wall's load in fixed blocks of kBlock rows. On a team of threads the
   /// rows are computed first (wall_pass_rows) and added after in that same order, so results do not
@@ -404,45 +380,6 @@ class ContactModelT final : public ContactModel {
     return loads;
   }
 
-  /// The rows of every wall computed by a team of threads: every (wall, run of kWallTaskRows
-  /// candidates) is a task writing its rows into the wall's buffer (tasks touch disjoint buffer
-  /// entries and each wall's own history column, so they run in any order). One parallel loop for
-  /// all walls: a loop per wall over blocks of kBlock left a thread idle on each wall of one block
-  /// (two threads took 0.8x the time of one on the packed beds of benchmarks/mechanics).
-  struct WallRowBuffer {
-    std::vector<WallRow> row;
-    std::vector<char> touching;
-  };
-  static constexpr std::size_t kWallTaskRows = 128;
-  const std::vector<WallRowBuffer>& wall_pass_rows(const ParticleStore& p, const std::vector<Wall>& walls,
-                                                   const std::vector<std::vector<Index>>& cand, const std::vector<double*>& hist,
-                                                   int w, const double* temp, double dt, double time_scale, bool inertia_free) const {
-    struct Task {
-      std::size_t wall, lo, hi;
-    };
-    std::vector<Task> tasks;
-    thread_local std::vector<WallRowBuffer> buffers;  // kept between steps: no allocation per step once grown
-    buffers.resize(walls.size());
-    for (std::size_t k = 0; k < walls.size(); ++k) {
-      const std::size_t n = cand[k].size();
-      buffers[k].row.resize(n);
-      buffers[k].touching.assign(n, 0);
-      for (std::size_t lo = 0; lo < n; lo += kWallTaskRows) tasks.push_back({k, lo, std::min(n, lo + kWallTaskRows)});
-    }
-    WallRowBuffer* out = buffers.data();
-#pragma omp parallel for schedule(dynamic, 1)
-    for (std::int64_t b = 0; b < static_cast<std::int64_t>(tasks.size()); ++b) {
-      const Task& task = tasks[b];
-      WallRowBuffer& o = out[task.wall];
-      for (std::size_t q = task.lo; q < task.hi; ++q) {
-        const Index i = cand[task.wall][q];
-        double* state = w > 0 ? hist[task.wall] + static_cast<std::size_t>(i) * w : nullptr;
-        o.touching[q] = wall_row(p, walls[task.wall], i, state, w, temp, dt, time_scale, inertia_free, o.row[q]);
-      }
-    }
-    return buffers;
-  }
-
   double stable_dt(const ParticleStore& p, const ContactTable& t, const std::vector<Wall>& walls,
                    const std::vector<double>* extra_rows = nullptr) const override {
     double dt = std::numeric_limits<double>::infinity();
@@ -481,6 +418,70 @@ class ContactModelT final : public ContactModel {
   }
 
  private:
+  /// One wall row: the force on particle i, its torque and the force's normal component, or
+  /// false (and the row's history cleared) when the particle does not touch the wall.
+  struct WallRow {
+    Vec3 force, torque;
+    double normal;
+  };
+  bool wall_row(const ParticleStore& p, const Wall& wall, Index i, double* state, int width, const double* temp, double dt,
+                double time_scale, bool inertia_free, WallRow& row) const {
+    Vec3 nrm;
+    double dist;
+    wall.distance(p.position[i], nrm, dist);
+    if (p.radius[i] - dist <= 0.0) {
+      for (int c = 0; c < width; ++c) state[c] = 0.0;
+      return false;
+    }
+    ContactGeometry g = wall_geometry(p, i, nrm, dist, temp, time_scale);
+    if (inertia_free) g.m_eff = 0.0;
+    const Vec3 vw = wall.u_dot * nrm;
+    const RelativeMotion m = relative_motion(g, p.velocity[i], vw, p.omega[i], Vec3::Zero());
+    const ContactForces f = law_(g, m, dt, state);
+    row = {f.force, -g.arm_i * g.n.cross(f.tangential), f.force.dot(g.n)};
+    return true;
+  }
+
+  /// The rows of every wall computed by a team of threads: every (wall, run of kWallTaskRows
+  /// candidates) is a task writing its rows into the wall's buffer (tasks touch disjoint buffer
+  /// entries and each wall's own history column, so they run in any order). One parallel loop for
+  /// all walls: a loop per wall over blocks of kBlock left a thread idle on each wall of one block
+  /// (two threads ran at 0.8x the speed of one on the packed beds of benchmarks/mechanics).
+  struct WallRowBuffer {
+    std::vector<WallRow> row;
+    std::vector<char> touching;
+  };
+  static constexpr std::size_t kWallTaskRows = 128;
+  const std::vector<WallRowBuffer>& wall_pass_rows(const ParticleStore& p, const std::vector<Wall>& walls,
+                                                   const std::vector<std::vector<Index>>& cand, const std::vector<double*>& hist,
+                                                   int w, const double* temp, double dt, double time_scale, bool inertia_free) const {
+    struct Task {
+      std::size_t wall, lo, hi;
+    };
+    std::vector<Task> tasks;
+    // The calling thread's buffers, kept (never shrunk) between steps: no reallocation once grown.
+    thread_local std::vector<WallRowBuffer> buffers;
+    buffers.resize(walls.size());
+    for (std::size_t k = 0; k < walls.size(); ++k) {
+      const std::size_t n = cand[k].size();
+      buffers[k].row.resize(n);
+      buffers[k].touching.resize(n);  // every entry is written by its task
+      for (std::size_t lo = 0; lo < n; lo += kWallTaskRows) tasks.push_back({k, lo, std::min(n, lo + kWallTaskRows)});
+    }
+    WallRowBuffer* out = buffers.data();
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::int64_t b = 0; b < static_cast<std::int64_t>(tasks.size()); ++b) {
+      const Task& task = tasks[b];
+      WallRowBuffer& o = out[task.wall];
+      for (std::size_t q = task.lo; q < task.hi; ++q) {
+        const Index i = cand[task.wall][q];
+        double* state = w > 0 ? hist[task.wall] + static_cast<std::size_t>(i) * w : nullptr;
+        o.touching[q] = wall_row(p, walls[task.wall], i, state, w, temp, dt, time_scale, inertia_free, o.row[q]);
+      }
+    }
+    return buffers;
+  }
+
   /// Per-particle Gershgorin rows of the mass-weighted stiffness [1/s^2] and damping [1/s]
   /// matrices (stable_dt): block = every spring's block-norm row; axis (3 per particle) = the
   /// normal springs' exact scalar rows per translation axis; other = the tangential springs'

@@ -131,7 +131,12 @@ void LatticeGenerator::validate(const State& scene, std::vector<Diagnostic>& err
     errors.push_back({"", "the lattice would create " + std::to_string(n) + " particles (more than 1e9); check spacing, lo and hi"});
     return;
   }
-  if (n > kCheapParticles) return;  // a larger lattice is not generated just to check it
+  if (n > kCheapParticles) {
+    // Not generated just to check it: the walls' interiors (half-spaces, a cylinder's inside) are
+    // convex, so the lattice lies inside every wall when its 8 corner points do.
+    check_corners(scene, errors);
+    return;
+  }
   State scratch;
   scratch.materials = scene.materials;
   scratch.walls = scene.walls;
@@ -159,10 +164,7 @@ void LatticeGenerator::validate(const State& scene, std::vector<Diagnostic>& err
                                 std::to_string(first) + ") lie outside wall '" + w.name + "': the walls do not enclose the particles"});
   }
 }
-void LatticeGenerator::generate(State& s) {
-  const double rho = material_density(s, p_.material);
-  const double r = 0.5 * p_.diameter;
-  std::array<std::int64_t, 3> a{}, b{};
+void LatticeGenerator::index_range(std::array<std::int64_t, 3>& a, std::array<std::int64_t, 3>& b) const {
   for (int d = 0; d < 3; ++d) {
     // Lattice indices must fit an int64 (a huge lo or hi would overflow the cast below).
     if (!(std::abs(p_.lo[d] / p_.spacing) < 9e15)) throw ConfigError("/lo", "lo / spacing is out of range (|lo / spacing| >= 9e15)");
@@ -170,6 +172,33 @@ void LatticeGenerator::generate(State& s) {
     a[d] = static_cast<std::int64_t>(std::ceil(p_.lo[d] / p_.spacing - 1e-9));
     b[d] = static_cast<std::int64_t>(std::floor(p_.hi[d] / p_.spacing + 1e-9));
   }
+}
+void LatticeGenerator::check_corners(const State& scene, std::vector<Diagnostic>& errors) const {
+  std::array<std::int64_t, 3> a{}, b{};
+  try {
+    index_range(a, b);
+  } catch (const ConfigError& e) {
+    errors.insert(errors.end(), e.diagnostics().begin(), e.diagnostics().end());
+    return;
+  }
+  for (const auto& w : scene.walls)
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 x((c & 1 ? b[0] : a[0]) * p_.spacing, (c & 2 ? b[1] : a[1]) * p_.spacing, (c & 4 ? b[2] : a[2]) * p_.spacing);
+      Vec3 normal;
+      double d;
+      w.distance(x, normal, d);
+      if (d < 0.0) {
+        errors.push_back({"", "the lattice's corner point (" + std::to_string(x[0]) + ", " + std::to_string(x[1]) + ", " +
+                                  std::to_string(x[2]) + ") lies outside wall '" + w.name + "': the walls do not enclose the particles"});
+        break;
+      }
+    }
+}
+void LatticeGenerator::generate(State& s) {
+  const double rho = material_density(s, p_.material);
+  const double r = 0.5 * p_.diameter;
+  std::array<std::int64_t, 3> a{}, b{};
+  index_range(a, b);
   for (std::int64_t k = a[2]; k <= b[2]; ++k)
     for (std::int64_t j = a[1]; j <= b[1]; ++j)
       for (std::int64_t i = a[0]; i <= b[0]; ++i)

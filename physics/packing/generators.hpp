@@ -11,6 +11,8 @@
 ///            uniform in r(1 +- spread), or drawn from a size distribution (kept as drawn)
 /// Container walls created: deposit -> "die" (cylinder) + "bottom" (plane);
 /// fill and relax -> "die" + "bottom" + "top" (cylinder) or "xlo","xhi","ylo","yhi","bottom","top" (box).
+#include <array>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -41,8 +43,8 @@ class LatticeGenerator final : public Generator {
   std::string name() const override { return "lattice"; }
   void generate(State& s) override;
   double estimated_particles() const override;
-  /// At most 1e9 particles; up to kCheapParticles, a scratch generation in the scene's walls must
-  /// have every centre inside every wall.
+  /// At most 1e9 particles; every centre inside every wall: up to kCheapParticles by a scratch
+  /// generation in the scene's walls, above by the lattice's 8 corners (the walls are convex).
   void validate(const State& scene, std::vector<Diagnostic>& errors) const override;
   /// `sparkdem check` generates a lattice of up to kCheapParticles (to set up the stages after it);
   /// a larger one (1e6 particles take about 0.5 s) is left out like a relaxation.
@@ -51,6 +53,9 @@ class LatticeGenerator final : public Generator {
   std::map<std::string, double> report(const State& s) const override;
 
  private:
+  /// The lattice's index range a..b per axis (ConfigError "/lo", "/hi" when out of int64 range).
+  void index_range(std::array<std::int64_t, 3>& a, std::array<std::int64_t, 3>& b) const;
+  void check_corners(const State& scene, std::vector<Diagnostic>& errors) const;
   Params p_;
 };
 

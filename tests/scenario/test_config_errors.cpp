@@ -186,6 +186,13 @@ TEST_CASE("each class of configuration error names its JSON path (exit 2, no out
     json j = valid_scene();
     j["stages"][0]["generator"]["hi"] = {0.03, 0.015, 0.02};  // 12 columns in x; the xhi wall is at 0.0175 m
     expect_rejected(j, {{"/stages/0/generator", "outside wall 'xhi'"}});
+    // Above LatticeGenerator::kCheapParticles (401,931 points here) the check is the lattice's 8
+    // corners, without generating it: the same wall is named, and an enclosed lattice loads.
+    j["stages"][0]["generator"]["spacing"] = 2.5e-4;
+    j["stages"][0]["generator"]["diameter"] = 2e-4;
+    expect_rejected(j, {{"/stages/0/generator", "corner point (0.030000, 0.002500, 0.002500) lies outside wall 'xhi'"}});
+    j["stages"][0]["generator"]["hi"] = {0.015, 0.015, 0.02};
+    CHECK_NOTHROW(sparkdem::io::load_scenario(j, registry(), SPARKDEM_SOURCE_DIR));
   }
   SECTION("container too small for the requested particles") {
     // 5000 spheres of mean radius 0.1 mm (spread 0.125) in a 1 mm^3 box: solid fraction
