@@ -140,7 +140,7 @@ def run_case(case, a):
     workdir = os.path.join(os.path.abspath(a.workdir), case.id)
     ctx = harness.Context(case, workdir, a.sparkdem, os.path.abspath(a.build), a.repeats, a.threads, a.quick)
     ctx.result = os.path.join(workdir, os.path.basename(case.result))
-    ctx.scenes = getattr(a, "scenes", [])
+    ctx.scenes = a.scenes
     load0, started = os.getloadavg(), time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())
     print(f"{case.id}: load average {load0[0]:.2f} on {os.cpu_count()} cores; work directory {workdir}", flush=True)
     case.run(ctx)

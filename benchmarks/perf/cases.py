@@ -174,7 +174,7 @@ def run_mechanics(ctx):
     """Every scene of MECH_SCENES, or those of --scenes with the other scenes' rows kept from the
     committed result (each row names the commit it was measured on)."""
     load, v = os.getloadavg()[0], ctx.versions(["lammps"])
-    names = getattr(ctx, "scenes", None) or list(MECH_SCENES)
+    names = ctx.scenes or list(MECH_SCENES)
     unknown = [n for n in names if n not in MECH_SCENES]
     if unknown:
         raise ValueError(f"unknown mechanics scenes {unknown} (known: {', '.join(MECH_SCENES)})")
@@ -184,7 +184,7 @@ def run_mechanics(ctx):
         for r in new:
             r.update({"commit": v["sparkdem"], "lammps": v["lammps"], "load_average_at_start": f"{load:.2f}"})
         rows += new
-    committed = os.path.join(REPO, "benchmarks", "mechanics", "results.csv")
+    committed = os.path.join(REPO, ctx.case.result)
     if names != list(MECH_SCENES) and os.path.exists(committed):
         kept = [r for r in rows_of(committed) if r["scene"] not in names and r["scene"] in MECH_SCENES]
         rows = sorted(kept + rows, key=lambda r: list(MECH_SCENES).index(r["scene"]))

@@ -172,6 +172,7 @@ class Context:
         self.repeats = repeats or case.repeats
         self.threads = threads or case.threads
         self.ranks_list = case.ranks
+        self.scenes = []  # the case mechanics: --scenes (empty: every scene)
         self.launches = []
         os.makedirs(workdir, exist_ok=True)
 
