@@ -307,11 +307,10 @@ void Simulation::advance_walls(double t_stage, double dt, double t_area) {
 void Simulation::zero_forces() {
   auto& p = s_.particles;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-  for (std::int64_t i = 0; i < n; ++i) {
+  par::for_each(n, par::kLight, [&](std::int64_t i) {
     p.force[i].setZero();
     p.torque[i].setZero();
-  }
+  });
 }
 
 void Simulation::pair_forces(double dt) { law_.pair_forces(s_.particles, s_.contacts, dt, time_scale_, inertia_free_); }
@@ -360,12 +359,9 @@ bool Simulation::event_due(const PlanItem& it, Step step) const {
   if (std::isfinite(t.moved_beyond)) {
     const auto& x0 = p.fields.data(base + "x0");
     const double lim2 = t.moved_beyond * t.moved_beyond;
-    int moved = 0;
-#pragma omp parallel for schedule(static) reduction(max : moved) if (par::worth(n, par::kLight))
-    for (std::int64_t i = 0; i < n; ++i) {
-      const Vec3 d = p.position[i] - Vec3(x0[3 * i], x0[3 * i + 1], x0[3 * i + 2]);
-      if (d.squaredNorm() > lim2) moved = 1;
-    }
+    const bool moved = par::any_of(n, par::kLight, [&](std::int64_t i) {
+      return (p.position[i] - Vec3(x0[3 * i], x0[3 * i + 1], x0[3 * i + 2])).squaredNorm() > lim2;
+    });
     if (moved) return true;
   }
   if (!t.field.empty()) {

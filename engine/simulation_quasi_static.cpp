@@ -94,12 +94,11 @@ void Simulation::commit_quasi_static(const QuasiStaticSolution& sol, const Quasi
   }
   zero_forces();
   pair_forces(h);
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-  for (std::int64_t i = 0; i < n; ++i) {
+  par::for_each(n, par::kLight, [&](std::int64_t i) {
     p.position[i] += h * p.velocity[i];
     const double w2 = p.omega[i].squaredNorm();
     if (w2 > 0.0) p.orientation[i] = renormalised(rotation_quaternion(p.omega[i], w2, h) * p.orientation[i]);
-  }
+  });
   for (std::size_t k = 0; k < s_.walls.size(); ++k) {
     Wall& w = s_.walls[k];
     const double u_old = w.u;

@@ -53,10 +53,9 @@ bool field_ok(double x, FieldCheck c) { return c == FieldCheck::Finite ? std::is
 void check_finite(const State& s, const WatchdogContext& ctx) {
   const auto& p = s.particles;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
-  int bad = 0;
-#pragma omp parallel for schedule(static) reduction(max : bad) if (par::worth(n, par::kLight))
-  for (std::int64_t i = 0; i < n; ++i)
-    if (!(finite3(p.position[i]) && finite3(p.velocity[i]) && finite3(p.omega[i]) && finite3(p.force[i]) && finite3(p.torque[i]))) bad = 1;
+  bool bad = par::any_of(n, par::kLight, [&](std::int64_t i) {
+    return !(finite3(p.position[i]) && finite3(p.velocity[i]) && finite3(p.omega[i]) && finite3(p.force[i]) && finite3(p.torque[i]));
+  });
   std::vector<std::string> fields;
   for (const auto& name : p.fields.names()) {
     const FieldCheck c = p.fields.info(name).check;
@@ -64,11 +63,7 @@ void check_finite(const State& s, const WatchdogContext& ctx) {
     fields.push_back(name);
     const auto& f = p.fields.data(name);
     const std::int64_t m = static_cast<std::int64_t>(f.size());
-    int fb = 0;
-#pragma omp parallel for schedule(static) reduction(max : fb) if (par::worth(m, par::kLight))
-    for (std::int64_t k = 0; k < m; ++k)
-      if (!field_ok(f[k], c)) fb = 1;
-    bad = std::max(bad, fb);
+    bad = par::any_of(m, par::kLight, [&](std::int64_t k) { return !field_ok(f[k], c); }) || bad;
   }
   if (!bad) return;
   // Detail: every quantity with its particles, in the reporting order.
@@ -107,12 +102,10 @@ void check_speed(const State& s, const WatchdogConfig& c, const WatchdogContext&
   const auto& p = s.particles;
   if (!(ctx.dt > 0.0) && !(c.max_speed > 0.0)) return;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
-  int bad = 0;
-#pragma omp parallel for schedule(static) reduction(max : bad) if (par::worth(n, par::kLight))
-  for (std::int64_t i = 0; i < n; ++i) {
+  const bool bad = par::any_of(n, par::kLight, [&](std::int64_t i) {
     const double vmax = c.max_speed > 0.0 ? c.max_speed : p.radius[i] / ctx.dt;
-    if (p.velocity[i].squaredNorm() > vmax * vmax) bad = 1;
-  }
+    return p.velocity[i].squaredNorm() > vmax * vmax;
+  });
   if (!bad) return;
   struct Hit {
     double ratio, speed, bound;
@@ -144,10 +137,7 @@ void check_overlap(const State& s, const WatchdogConfig& c, const WatchdogContex
   const auto& t = s.contacts;
   const auto& ov = t.overlap();
   const std::int64_t rows = static_cast<std::int64_t>(t.size());
-  int bad = 0;
-#pragma omp parallel for schedule(static) reduction(max : bad) if (par::worth(rows, par::kLight))
-  for (std::int64_t r = 0; r < rows; ++r)
-    if (ov[r] > bound * std::min(p.radius[t.i(r)], p.radius[t.j(r)])) bad = 1;
+  const bool bad = par::any_of(rows, par::kLight, [&](std::int64_t r) { return ov[r] > bound * std::min(p.radius[t.i(r)], p.radius[t.j(r)]); });
   if (!bad) return;
   struct Hit {
     double ratio;

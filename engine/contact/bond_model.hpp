@@ -121,13 +121,12 @@ class BondModelT final : public BondModel {
     auto& Ti = b.torque_i();
     auto& Tj = b.torque_j();
     std::vector<std::uint8_t> broke(b.size(), 0);
-#pragma omp parallel for schedule(static) if (par::worth(rows, par::kHeavy))
-    for (std::int64_t r = 0; r < rows; ++r) {
+    par::for_each(rows, par::kHeavy, [&](std::int64_t r) {
       if (b.broken(r)) {
         F[r].setZero();
         Ti[r].setZero();
         Tj[r].setZero();
-        continue;
+        return;
       }
       const Index i = b.i(r), j = b.j(r);
       const BondGeometry g = detail::bond_geometry(p, b, r);
@@ -137,7 +136,7 @@ class BondModelT final : public BondModel {
       Ti[r] = f.torque_i;
       Tj[r] = f.torque_j;
       broke[r] = f.broken ? std::max<std::uint8_t>(f.mode, 1) : 0;
-    }
+    });
     std::vector<BondFailure> out;
     for (std::size_t r = 0; r < b.size(); ++r)
       if (broke[r]) out.push_back({r, broke[r]});

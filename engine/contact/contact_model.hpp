@@ -233,12 +233,12 @@ class ContactModelT final : public ContactModel {
     auto& F = t.force();
     auto& Ti = t.torque_i();
     auto& Tj = t.torque_j();
-#pragma omp parallel for schedule(static) if (par::worth(rows, par::kHeavy))
-    for (std::int64_t r = 0; r < rows; ++r)
+    par::for_each(rows, par::kHeavy, [&](std::int64_t r) {
       if (!row_forces(p, t, r, dt, in, F[r], Ti[r], Tj[r])) {
         Ti[r].setZero();
         Tj[r].setZero();
       }
+    });
   }
 
   void pair_forces(ParticleStore& p, ContactTable& t, double dt, double time_scale = 1.0, bool inertia_free = false) const override {

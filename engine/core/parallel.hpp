@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <string>
+#include <utility>
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -81,5 +82,67 @@ inline int team_size() {
 
 /// True when a loop of n items of that kind is worth a parallel region.
 inline bool worth(std::int64_t n, Kind kind) { return n >= min_items(kind); }
+
+/// body() on a team of threads when `parallel` holds and there is more than one thread; else once
+/// on the calling thread, outside any OpenMP region. A region of one thread (what a false `if`
+/// clause or OMP_NUM_THREADS=1 opens) still builds a team and wakes its barrier through the
+/// kernel (a futex call): 1.2-1.5 us a region on this machine against 0.01 us for the same loop
+/// without it, most of the run time of a few-particle scene on one thread and a fifth of the test
+/// suite's (benchmarks/threads/README.md, "Regions of one thread"). The body's loops are orphaned
+/// worksharing constructs (`#pragma omp for`), which outside a region run on the calling thread.
+/// Called by a thread already on a team (omp_in_parallel), the body gets a team of its own, as
+/// `#pragma omp parallel if (parallel)` gives, so its loops never bind to the caller's team.
+template <class Body>
+inline void region(bool parallel, Body&& body) {
+#ifdef _OPENMP
+  if (omp_in_parallel() || (parallel && omp_get_max_threads() > 1)) {
+#pragma omp parallel if (parallel)
+    body();
+    return;
+  }
+#endif
+  body();
+}
+
+/// f(i) for i in [0, n), statically scheduled over a team when `parallel` holds (region).
+template <class F>
+inline void loop(bool parallel, std::int64_t n, F&& f) {
+  region(parallel, [&] {
+#pragma omp for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i) f(i);
+  });
+}
+
+/// f(i) for i in [0, n), on a team when worth(n, kind) (loop).
+template <class F>
+inline void for_each(std::int64_t n, Kind kind, F&& f) {
+  loop(worth(n, kind), n, std::forward<F>(f));
+}
+
+/// An order-independent reduction over i in [0, n) (max, min, or: the merge must give the same
+/// result in any order, so results do not depend on the thread count): each thread folds its
+/// static share into its own copy of init with acc(T&, i), and the copies are merged into the
+/// result with merge(T& out, const T& mine). (An OpenMP reduction clause cannot name a variable
+/// captured by the body's lambda in clang: "reduction variable must be shared".)
+template <class T, class Acc, class Merge>
+inline T reduce(std::int64_t n, Kind kind, const T& init, Acc&& acc, Merge&& merge) {
+  T out = init;
+  region(worth(n, kind), [&] {
+    T mine = init;
+#pragma omp for schedule(static) nowait
+    for (std::int64_t i = 0; i < n; ++i) acc(mine, i);
+#pragma omp critical(sparkdem_par_reduce)
+    merge(out, mine);
+  });
+  return out;
+}
+
+/// True when pred(i) holds for some i in [0, n) (reduce; a thread stops calling pred once it holds).
+template <class Pred>
+inline bool any_of(std::int64_t n, Kind kind, Pred&& pred) {
+  return reduce(
+      n, kind, false, [&](bool& m, std::int64_t i) { m = m || static_cast<bool>(pred(i)); },
+      [](bool& out, bool m) { out = out || m; });
+}
 
 }  // namespace sparkdem::par

@@ -56,12 +56,11 @@ template <class F>
 double block_sum(std::int64_t n, F&& f) {
   const std::int64_t nb = blocks(n);
   std::vector<double> part(static_cast<std::size_t>(nb), 0.0);
-#pragma omp parallel for schedule(static) if (nb > 1)
-  for (std::int64_t k = 0; k < nb; ++k) {
+  par::loop(nb > 1, nb, [&](std::int64_t k) {
     double s = 0.0;
     for (std::int64_t i = k * kBlock; i < std::min(n, (k + 1) * kBlock); ++i) s += f(i);
     part[k] = s;
-  }
+  });
   double s = 0.0;
   for (double x : part) s += x;
   return s;
@@ -146,15 +145,14 @@ void laplacian_apply(const EdgeIncidence& inc, std::span<const double> g, std::s
   if (g.size() != inc.edges)
     throw SetupError("laplacian_apply: " + std::to_string(g.size()) + " conductances for " + std::to_string(inc.edges) + " edges");
   const auto nn = static_cast<std::int64_t>(n);
-#pragma omp parallel for schedule(static) if (par::worth(nn, par::kHeavy))
-  for (std::int64_t v = 0; v < nn; ++v) {
+  par::for_each(nn, par::kHeavy, [&](std::int64_t v) {
     double s = 0.0;
     for (std::int64_t k = inc.start[v]; k < inc.start[v + 1]; ++k) {
       const double ge = g[inc.edge[k]];
       if (ge != 0.0) s += ge * (x[v] - x[inc.other[k]]);
     }
     y[v] = s;
-  }
+  });
 }
 
 void laplacian_apply(std::size_t nodes, std::span<const Index> a, std::span<const Index> b, std::span<const double> g,
@@ -239,13 +237,10 @@ EigenEstimate max_generalized_eigenvalue(const SpMat& A, std::span<const double>
   std::vector<double> alpha, beta;
   double b_prev = 0.0;
   for (int k = 1; k <= max_iterations; ++k) {
-#pragma omp parallel for schedule(static) if (m > kBlock)
-    for (std::int64_t i = 0; i < m; ++i) sq[i] = s[i] * q[i];
-#pragma omp parallel for schedule(static) if (m > kBlock)
-    for (std::int64_t i = 0; i < m; ++i) w[i] = s[i] * row_dot(A, sq.data(), i) - b_prev * q_prev[i];
+    par::loop(m > kBlock, m, [&](std::int64_t i) { sq[i] = s[i] * q[i]; });
+    par::loop(m > kBlock, m, [&](std::int64_t i) { w[i] = s[i] * row_dot(A, sq.data(), i) - b_prev * q_prev[i]; });
     const double a = block_sum(m, [&](std::int64_t i) { return q[i] * w[i]; });
-#pragma omp parallel for schedule(static) if (m > kBlock)
-    for (std::int64_t i = 0; i < m; ++i) w[i] -= a * q[i];
+    par::loop(m > kBlock, m, [&](std::int64_t i) { w[i] -= a * q[i]; });
     const double b = std::sqrt(block_sum(m, [&](std::int64_t i) { return w[i] * w[i]; }));
     alpha.push_back(a);
     // Ritz values of the k x k tridiagonal matrix: every step while k is small, then every 10th
@@ -272,8 +267,7 @@ EigenEstimate max_generalized_eigenvalue(const SpMat& A, std::span<const double>
     if (b == 0.0) break;  // invariant subspace; theta exact (caught above unless theta == 0)
     beta.push_back(b);
     q_prev.swap(q);
-#pragma omp parallel for schedule(static) if (m > kBlock)
-    for (std::int64_t i = 0; i < m; ++i) q[i] = w[i] / b;
+    par::loop(m > kBlock, m, [&](std::int64_t i) { q[i] = w[i] / b; });
     b_prev = b;
   }
   return est;
@@ -344,8 +338,7 @@ std::pair<int, double> pseudo_transient(const SpMat& A, const Eigen::VectorXd& b
   double min_cn = std::numeric_limits<double>::infinity();
   int min_at = 0;
   for (int it = 1; it <= max_it; ++it) {
-#pragma omp parallel for schedule(static) if (nb > 1)
-    for (std::int64_t k = 0; k < nb; ++k) {
+    par::loop(nb > 1, nb, [&](std::int64_t k) {
       double ind = 0.0, dmax = 0.0, xmax = 0.0, cn = 0.0, xc = 0.0;
       for (std::int64_t i = k * kBlock; i < std::min(m, (k + 1) * kBlock); ++i) {
         const double d = dt / cap[i] * (b[i] - row_dot(A, x.data(), i));
@@ -364,7 +357,7 @@ std::pair<int, double> pseudo_transient(const SpMat& A, const Eigen::VectorXd& b
       p_xmax[k] = xmax;
       p_cn[k] = cn;
       p_xn[k] = xc;
-    }
+    });
     x.swap(xn);
     double ind = 0.0, dmax = 0.0, xmax = 0.0, cn2 = 0.0, xc2 = 0.0;
     for (std::int64_t k = 0; k < nb; ++k) {

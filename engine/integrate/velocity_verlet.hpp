@@ -44,50 +44,57 @@ inline Quat renormalised(const Quat& q) {
 /// last read of the old ones is this kick; the plan's items between it and the pair pass, walls
 /// and neighbours, read none: engine/schedule/scheduler.hpp). One pass over the particle arrays
 /// instead of two. The arrays are read through local pointers: stores through the ParticleStore's
-/// vectors would otherwise make the compiler reload every array's base on each particle.
+/// vectors would otherwise make the compiler reload every array's base on each particle (declared in the
+/// region's body: captured by the lambda, they would be read through its closure).
 inline void verlet_first_half(ParticleStore& p, double dt) {
   const std::int64_t n = static_cast<std::int64_t>(p.size());
-  Vec3* __restrict x = p.position.data();
-  Vec3* __restrict v = p.velocity.data();
-  Vec3* __restrict w = p.omega.data();
-  Vec3* __restrict f = p.force.data();
-  Vec3* __restrict t = p.torque.data();
-  Quat* __restrict q = p.orientation.data();
-  const double* __restrict m = p.mass.data();
-  const double* __restrict inertia = p.inertia.data();
-  const std::int32_t* __restrict fixed = p.fixed.data();
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-  for (std::int64_t i = 0; i < n; ++i) {
-    if (fixed[i]) {                                  // prescribed velocity (zero = frozen): moved, not integrated
-      if (fixed[i] == 1) x[i] += dt * v[i];          // 2: a rotating set, moved by the simulation
-    } else {
-      v[i] += 0.5 * dt / m[i] * f[i];
-      x[i] += dt * v[i];
-      w[i] += 0.5 * dt / inertia[i] * t[i];
-      const double w2 = w[i].squaredNorm();
-      if (w2 > 0.0 && dt > 0.0)  // most spheres of a settling bed do not spin
-        q[i] = renormalised(rotation_quaternion(w[i], w2, dt) * q[i]);
+  par::region(par::worth(n, par::kLight), [&] {
+    Vec3* __restrict x = p.position.data();
+    Vec3* __restrict v = p.velocity.data();
+    Vec3* __restrict w = p.omega.data();
+    Vec3* __restrict f = p.force.data();
+    Vec3* __restrict t = p.torque.data();
+    Quat* __restrict q = p.orientation.data();
+    const double* __restrict m = p.mass.data();
+    const double* __restrict inertia = p.inertia.data();
+    const std::int32_t* __restrict fixed = p.fixed.data();
+    const double h = dt;
+#pragma omp for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i) {
+      if (fixed[i]) {                                // prescribed velocity (zero = frozen): moved, not integrated
+        if (fixed[i] == 1) x[i] += h * v[i];         // 2: a rotating set, moved by the simulation
+      } else {
+        v[i] += 0.5 * h / m[i] * f[i];
+        x[i] += h * v[i];
+        w[i] += 0.5 * h / inertia[i] * t[i];
+        const double w2 = w[i].squaredNorm();
+        if (w2 > 0.0 && h > 0.0)  // most spheres of a settling bed do not spin
+          q[i] = renormalised(rotation_quaternion(w[i], w2, h) * q[i]);
+      }
+      f[i].setZero();
+      t[i].setZero();
     }
-    f[i].setZero();
-    t[i].setZero();
-  }
+  });
 }
 
 inline void verlet_second_half(ParticleStore& p, double dt) {
   const std::int64_t n = static_cast<std::int64_t>(p.size());
-  Vec3* __restrict v = p.velocity.data();
-  Vec3* __restrict w = p.omega.data();
-  const Vec3* __restrict f = p.force.data();
-  const Vec3* __restrict t = p.torque.data();
-  const double* __restrict m = p.mass.data();
-  const double* __restrict inertia = p.inertia.data();
-  const std::int32_t* __restrict fixed = p.fixed.data();
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-  for (std::int64_t i = 0; i < n; ++i) {
-    if (fixed[i]) continue;
-    v[i] += 0.5 * dt / m[i] * f[i];
-    w[i] += 0.5 * dt / inertia[i] * t[i];
-  }
+  par::region(par::worth(n, par::kLight), [&] {
+    Vec3* __restrict v = p.velocity.data();
+    Vec3* __restrict w = p.omega.data();
+    const Vec3* __restrict f = p.force.data();
+    const Vec3* __restrict t = p.torque.data();
+    const double* __restrict m = p.mass.data();
+    const double* __restrict inertia = p.inertia.data();
+    const std::int32_t* __restrict fixed = p.fixed.data();
+    const double h = dt;
+#pragma omp for schedule(static)
+    for (std::int64_t i = 0; i < n; ++i) {
+      if (fixed[i]) continue;
+      v[i] += 0.5 * h / m[i] * f[i];
+      w[i] += 0.5 * h / inertia[i] * t[i];
+    }
+  });
 }
 
 }  // namespace sparkdem

@@ -37,21 +37,27 @@ Grids build_grids(const std::vector<Vec3>& x, const std::vector<double>& r, doub
   const std::size_t n = x.size();
   Grids out;
   // Bounds of the radii and of the centres (max / min reductions are exact: any thread count).
-  double rmin = r[0], rmax = r[0], lx = x[0][0], ly = x[0][1], lz = x[0][2], hx = lx, hy = ly, hz = lz;
+  struct Bounds {
+    double rmin, rmax;
+    Vec3 lo, hi;
+  };
   const std::int64_t ni = static_cast<std::int64_t>(n);
-#pragma omp parallel for schedule(static) reduction(min : rmin, lx, ly, lz) reduction(max : rmax, hx, hy, hz) \
-    if (par::worth(ni, par::kLight))
-  for (std::int64_t i = 0; i < ni; ++i) {
-    rmin = std::min(rmin, r[i]);
-    rmax = std::max(rmax, r[i]);
-    lx = std::min(lx, x[i][0]);
-    ly = std::min(ly, x[i][1]);
-    lz = std::min(lz, x[i][2]);
-    hx = std::max(hx, x[i][0]);
-    hy = std::max(hy, x[i][1]);
-    hz = std::max(hz, x[i][2]);
-  }
-  const Vec3 lo(lx, ly, lz), hi(hx, hy, hz);
+  const Bounds b = par::reduce(
+      ni, par::kLight, Bounds{r[0], r[0], x[0], x[0]},
+      [&](Bounds& m, std::int64_t i) {
+        m.rmin = std::min(m.rmin, r[i]);
+        m.rmax = std::max(m.rmax, r[i]);
+        m.lo = m.lo.cwiseMin(x[i]);
+        m.hi = m.hi.cwiseMax(x[i]);
+      },
+      [](Bounds& out, const Bounds& m) {
+        out.rmin = std::min(out.rmin, m.rmin);
+        out.rmax = std::max(out.rmax, m.rmax);
+        out.lo = out.lo.cwiseMin(m.lo);
+        out.hi = out.hi.cwiseMax(m.hi);
+      });
+  const double rmin = b.rmin, rmax = b.rmax;
+  const Vec3 lo = b.lo, hi = b.hi;
   // Size levels: level L holds radii in [rmin 2^L, rmin 2^(L+1)).
   const int nlev = std::max(1, static_cast<int>(std::floor(std::log2(rmax / rmin))) + 1);
   std::vector<int>& level = out.level;
@@ -87,11 +93,10 @@ Grids build_grids(const std::vector<Vec3>& x, const std::vector<double>& r, doub
   // Each particle's cell in its level's grid (in parallel), then a counting sort per level: the
   // members of a cell in ascending index order.
   std::vector<std::int64_t> cid(n);
-#pragma omp parallel for schedule(static) if (par::worth(ni, par::kLight))
-  for (std::int64_t i = 0; i < ni; ++i) {
+  par::for_each(ni, par::kLight, [&](std::int64_t i) {
     const Grid& g = grids[level[i]];
     cid[i] = g.cell(g.coord(x[i][0], 0), g.coord(x[i][1], 1), g.coord(x[i][2], 2));
-  }
+  });
   for (int L = 0; L < nlev; ++L) {
     Grid& g = grids[L];
     if (count[L] == 0) continue;
@@ -115,11 +120,9 @@ std::vector<std::array<Index, 2>> search_pairs(const Grids& gs, const std::vecto
   const int nlev = static_cast<int>(gs.grid.size());
   const std::vector<int>& level = gs.level;
   const std::vector<Grid>& grids = gs.grid;
-  const int nthreads = omp_get_max_threads();
-  std::vector<std::vector<std::array<Index, 2>>> local(nthreads);
-#pragma omp parallel if (par::worth(static_cast <std::int64_t>(n), par::kHeavy))
-  {
-    auto& buf = local[omp_get_thread_num()];
+  std::vector<std::vector<std::array<Index, 2>>> local(par::threads());
+  par::region(par::worth(static_cast<std::int64_t>(n), par::kHeavy), [&] {
+    auto& buf = local[par::thread_num()];
     std::vector<Index> found;
 #pragma omp for schedule(static)
     for (std::int64_t ii = 0; ii < static_cast<std::int64_t>(n); ++ii) {
@@ -149,7 +152,7 @@ std::vector<std::array<Index, 2>> search_pairs(const Grids& gs, const std::vecto
       std::sort(found.begin(), found.end());
       for (Index j : found) buf.push_back({i, j});
     }
-  }
+  });
   std::vector<std::array<Index, 2>> out;
   std::size_t total = 0;
   for (auto& b : local) total += b.size();
@@ -180,10 +183,9 @@ std::vector<std::vector<Index>> wall_candidates(const std::vector<Wall>& walls, 
   if (nw == 0) return out;
   // Each thread lists its static (contiguous, ascending) share of the particles per wall; the
   // lists are joined in thread order.
-  std::vector<std::vector<std::vector<Index>>> local(omp_get_max_threads(), std::vector<std::vector<Index>>(nw));
-#pragma omp parallel if (par::worth(n * static_cast<std::int64_t>(nw), par::kLight))
-  {
-    auto& mine = local[omp_get_thread_num()];
+  std::vector<std::vector<std::vector<Index>>> local(par::threads(), std::vector<std::vector<Index>>(nw));
+  par::region(par::worth(n * static_cast<std::int64_t>(nw), par::kLight), [&] {
+    auto& mine = local[par::thread_num()];
 #pragma omp for schedule(static)
     for (std::int64_t i = 0; i < n; ++i)
       for (std::size_t k = 0; k < nw; ++k) {
@@ -192,7 +194,7 @@ std::vector<std::vector<Index>> wall_candidates(const std::vector<Wall>& walls, 
         walls[k].distance(x[i], nrm, d);
         if (d < r[i] + skin) mine[k].push_back(static_cast<Index>(i));
       }
-  }
+  });
   for (std::size_t k = 0; k < nw; ++k) {
     std::size_t total = 0;
     for (const auto& l : local) total += l[k].size();
@@ -215,16 +217,22 @@ std::vector<std::array<Index, 2>> find_pairs_brute_force(const std::vector<Vec3>
 bool VerletTracker::needs_rebuild(const std::vector<Vec3>& x, const std::vector<double>& r, double skin,
                                   const std::vector<double>& wall_u) const {
   if (x.size() != x0_.size() || wall_u.size() != u0_.size()) return true;
-  double dmax2 = 0.0, drmax = 0.0, du = 0.0;
+  double du = 0.0;
   for (std::size_t k = 0; k < wall_u.size(); ++k) du = std::max(du, std::abs(wall_u[k] - u0_[k]));
   const std::int64_t n = static_cast<std::int64_t>(x.size());
   // max-reductions are exact, so the decision does not depend on the thread count
-#pragma omp parallel for schedule(static) reduction(max : dmax2, drmax) if (par::worth(n, par::kLight))
-  for (std::int64_t i = 0; i < n; ++i) {
-    dmax2 = std::max(dmax2, (x[i] - x0_[i]).squaredNorm());
-    drmax = std::max(drmax, r[i] - r0_[i]);
-  }
-  return 2.0 * (std::sqrt(dmax2) + drmax + du) > skin;
+  using Moves = std::array<double, 2>;  // {max |x - x0|^2, max r - r0}
+  const Moves m = par::reduce(
+      n, par::kLight, Moves{0.0, 0.0},
+      [&](Moves& a, std::int64_t i) {
+        a[0] = std::max(a[0], (x[i] - x0_[i]).squaredNorm());
+        a[1] = std::max(a[1], r[i] - r0_[i]);
+      },
+      [](Moves& out, const Moves& a) {
+        out[0] = std::max(out[0], a[0]);
+        out[1] = std::max(out[1], a[1]);
+      });
+  return 2.0 * (std::sqrt(m[0]) + m[1] + du) > skin;
 }
 
 }  // namespace sparkdem

@@ -102,14 +102,12 @@ void PairRows::gather_one(std::int64_t p, std::vector<Vec3>& force, std::vector<
 
 void PairRows::gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
   const std::int64_t n = static_cast<std::int64_t>(force.size());
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-  for (std::int64_t p = 0; p < n; ++p) gather_one(p, force, torque);
+  par::for_each(n, par::kLight, [&](std::int64_t p) { gather_one(p, force, torque); });
 }
 
 void PairRows::gather_particles(const std::vector<Index>& which, std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
   const std::int64_t n = static_cast<std::int64_t>(which.size());
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-  for (std::int64_t k = 0; k < n; ++k) gather_one(which[k], force, torque);
+  par::for_each(n, par::kLight, [&](std::int64_t k) { gather_one(which[k], force, torque); });
 }
 
 const PairRows::RowSplit& PairRows::row_split(int threads, const std::function<bool(std::int64_t)>& heavy) const {

@@ -36,11 +36,13 @@ class Gravity final : public Module {
     auto& p = s.particles;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
     // Local pointers and a local g: stores through p.force would otherwise reload them per particle.
-    Vec3* __restrict f = p.force.data();
-    const double* __restrict m = p.mass.data();
-    const Vec3 g = p_.acceleration;
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-    for (std::int64_t i = 0; i < n; ++i) f[i] += m[i] * g;
+    par::region(par::worth(n, par::kLight), [&] {
+      Vec3* __restrict f = p.force.data();
+      const double* __restrict m = p.mass.data();
+      const Vec3 g = p_.acceleration;
+#pragma omp for schedule(static)
+      for (std::int64_t i = 0; i < n; ++i) f[i] += m[i] * g;
+    });
   }
 
  private:
@@ -70,12 +72,11 @@ class ViscousDamping final : public Module {
   void advance(State& s, const StepInfo&) override {
     auto& p = s.particles;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-    for (std::int64_t i = 0; i < n; ++i) {
-      if (p.fixed[i]) continue;  // prescribed: its force is a reported reaction, not integrated
+    par::for_each(n, par::kLight, [&](std::int64_t i) {
+      if (p.fixed[i]) return;  // prescribed: its force is a reported reaction, not integrated
       p.force[i] -= p_.rate * p.mass[i] * p.velocity[i];
       p.torque[i] -= p_.rate * p.inertia[i] * p.omega[i];
-    }
+    });
   }
 
  private:
@@ -111,16 +112,15 @@ class LocalDamping final : public Module {
     auto& p = s.particles;
     const std::int64_t n = static_cast<std::int64_t>(p.size());
     auto sign = [](double x) { return x > 0.0 ? 1.0 : x < 0.0 ? -1.0 : 0.0; };
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-    for (std::int64_t i = 0; i < n; ++i) {
+    par::for_each(n, par::kLight, [&](std::int64_t i) {
       // A prescribed (or frozen) particle is not integrated: its force is the reaction of the
       // rest of the system (set_<name>_f*, tension_test), which damping must not alter.
-      if (p.fixed[i]) continue;
+      if (p.fixed[i]) return;
       for (int k = 0; k < 3; ++k) {
         p.force[i][k] -= p_.coefficient * std::abs(p.force[i][k]) * sign(p.velocity[i][k]);
         p.torque[i][k] -= p_.coefficient * std::abs(p.torque[i][k]) * sign(p.omega[i][k]);
       }
-    }
+    });
   }
 
  private:

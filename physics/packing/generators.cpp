@@ -682,15 +682,21 @@ class RelaxForces {
     if (tracker_.needs_rebuild(p.position, p.radius, skin_)) rebuild();
     const std::int64_t np = static_cast<std::int64_t>(pairs_.size()), n = static_cast<std::int64_t>(p.size());
     const std::size_t nw = s_.walls.size();
-    double om = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : om) if (par::worth(np, par::kHeavy))
-    for (std::int64_t r = 0; r < np; ++r)
-      om = std::max(om, relax_pair(k_, p.position[pairs_[r][0]], p.position[pairs_[r][1]], p.radius[pairs_[r][0]],
-                                   p.radius[pairs_[r][1]], fpair_[r])
-                            .overlap);
-    double fm = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : fm, om) if (par::worth(n, par::kHeavy))
-    for (std::int64_t i = 0; i < n; ++i) {
+    const auto max_into = [](double& out, double m) { out = std::max(out, m); };
+    double om = par::reduce(
+        np, par::kHeavy, 0.0,
+        [&](double& m, std::int64_t r) {
+          m = std::max(m, relax_pair(k_, p.position[pairs_[r][0]], p.position[pairs_[r][1]], p.radius[pairs_[r][0]],
+                                     p.radius[pairs_[r][1]], fpair_[r])
+                              .overlap);
+        },
+        max_into);
+    using Peaks = std::array<double, 2>;  // {max |F|, max overlap ratio against a wall}
+    const auto peak_into = [](Peaks& out, const Peaks& m) {
+      out[0] = std::max(out[0], m[0]);
+      out[1] = std::max(out[1], m[1]);
+    };
+    const Peaks peaks = par::reduce(n, par::kHeavy, Peaks{0.0, 0.0}, [&](Peaks& m, std::int64_t i) {
       Vec3 f = Vec3::Zero();
       for (std::int64_t c = inc_start_[i]; c < inc_start_[i + 1]; ++c) {
         if (inc_row_[c] >= 0)
@@ -701,13 +707,13 @@ class RelaxForces {
       for (std::size_t w = 0; w < nw; ++w) {
         if (!near_wall_[i * nw + w]) continue;
         Vec3 fw;
-        om = std::max(om, relax_wall(k_, s_.walls[w], p.position[i], p.radius[i], fw).overlap);
+        m[1] = std::max(m[1], relax_wall(k_, s_.walls[w], p.position[i], p.radius[i], fw).overlap);
         f += fw;
       }
       F[i] = f;
-      fm = std::max(fm, f.norm());
-    }
-    return {fm, om};
+      m[0] = std::max(m[0], f.norm());
+    }, peak_into);
+    return {peaks[0], std::max(om, peaks[1])};
   }
   /// U at the current positions, serially in the order of the pair list, then particles x walls.
   double energy() const {
@@ -737,15 +743,16 @@ class RelaxForces {
     // Wall candidates: within r + skin of the wall at the build (valid until the next rebuild, as
     // the pairs); the others have q > 1 against that wall and feel no force from it.
     near_wall_.assign(N * nw, 0);
-    const std::int64_t n = static_cast<std::int64_t>(N);
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-    for (std::int64_t i = static_cast<std::int64_t>(first_); i < n; ++i)
+    const std::int64_t n = static_cast<std::int64_t>(N), first = static_cast<std::int64_t>(first_);
+    par::for_each(n - first, par::kLight, [&](std::int64_t k) {
+      const std::int64_t i = first + k;
       for (std::size_t w = 0; w < nw; ++w) {
         Vec3 nrm;
         double d;
         s_.walls[w].distance(p.position[i], nrm, d);
         near_wall_[i * nw + w] = d < p.radius[i] + skin_;
       }
+    });
   }
   State& s_;
   std::size_t first_;
@@ -797,8 +804,7 @@ void RelaxGenerator::relax(State& s, std::size_t first) {
     }
     // FIRE mixing v = (1 - alpha) v + alpha |v| F/|F| (P > 0) or v = 0 (P <= 0), then
     // semi-implicit Euler with a displacement cap of max_step * r.
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-    for (std::int64_t i = 0; i < n; ++i) {
+    par::for_each(n, par::kLight, [&](std::int64_t i) {
       if (mix < 1.0)
         v_[i] = (1.0 - mix) * v_[i] + vf * F[i];
       else
@@ -808,7 +814,7 @@ void RelaxGenerator::relax(State& s, std::size_t first) {
       const double cap = p_.max_step * p.radius[i];
       if (dx.norm() > cap) dx *= cap / dx.norm();
       p.position[i] += dx;
-    }
+    });
     std::tie(fmax, overlap_max) = forces.evaluate(F);
   }
   result_["fire_iterations"] = static_cast<double>(it) + (result_.count("fire_iterations") ? result_["fire_iterations"] : 0.0);

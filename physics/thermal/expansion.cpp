@@ -43,11 +43,10 @@ void apply(State& s, double alpha, double t0, TempOf temp) {
   const auto& rr = p.fields.data("radius_ref");
   const double* g = p.fields.has(kRadiusFactorField) ? p.fields.data(kRadiusFactorField).data() : nullptr;
   const std::int64_t n = static_cast<std::int64_t>(p.size());
-#pragma omp parallel for schedule(static) if (par::worth(n, par::kLight))
-  for (std::int64_t i = 0; i < n; ++i) {
+  par::for_each(n, par::kLight, [&](std::int64_t i) {
     p.radius[i] = expanded_radius(rr[i], alpha, temp(i), t0) * (g && g[i] > 0.0 ? g[i] : 1.0);
     p.inertia[i] = 0.4 * p.mass[i] * p.radius[i] * p.radius[i];
-  }
+  });
   // A non-finite or non-positive radius (from a non-finite temperature or reference radius)
   // stops the run here, before the neighbour search meets it.
   for (std::size_t i = 0; i < p.size(); ++i)
