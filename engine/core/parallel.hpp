@@ -89,7 +89,9 @@ inline bool worth(std::int64_t n, Kind kind) { return n >= min_items(kind); }
 /// kernel (a futex call): 1.2-1.5 us a region on this machine against 0.01 us for the same loop
 /// without it, most of the run time of a few-particle scene on one thread and a fifth of the test
 /// suite's (benchmarks/threads/README.md, "Regions of one thread"). The body's loops are orphaned
-/// worksharing constructs (`#pragma omp for`), which outside a region run on the calling thread.
+/// worksharing constructs (`#pragma omp for`), which outside a region run on the calling thread;
+/// a loop that ends the body takes `nowait` (the region's end is its barrier: one join, as the
+/// combined `parallel for` had, not two).
 /// Called by a thread already on a team (omp_in_parallel), the body gets a team of its own, as
 /// `#pragma omp parallel if (parallel)` gives, so its loops never bind to the caller's team.
 template <class Body>
@@ -108,7 +110,7 @@ inline void region(bool parallel, Body&& body) {
 template <class F>
 inline void loop(bool parallel, std::int64_t n, F&& f) {
   region(parallel, [&] {
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait
     for (std::int64_t i = 0; i < n; ++i) f(i);
   });
 }

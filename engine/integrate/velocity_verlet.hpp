@@ -59,7 +59,7 @@ inline void verlet_first_half(ParticleStore& p, double dt) {
     const double* __restrict inertia = p.inertia.data();
     const std::int32_t* __restrict fixed = p.fixed.data();
     const double h = dt;
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait
     for (std::int64_t i = 0; i < n; ++i) {
       if (fixed[i]) {                                // prescribed velocity (zero = frozen): moved, not integrated
         if (fixed[i] == 1) x[i] += h * v[i];         // 2: a rotating set, moved by the simulation
@@ -88,7 +88,7 @@ inline void verlet_second_half(ParticleStore& p, double dt) {
     const double* __restrict inertia = p.inertia.data();
     const std::int32_t* __restrict fixed = p.fixed.data();
     const double h = dt;
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait
     for (std::int64_t i = 0; i < n; ++i) {
       if (fixed[i]) continue;
       v[i] += 0.5 * h / m[i] * f[i];

@@ -124,7 +124,7 @@ std::vector<std::array<Index, 2>> search_pairs(const Grids& gs, const std::vecto
   par::region(par::worth(static_cast<std::int64_t>(n), par::kHeavy), [&] {
     auto& buf = local[par::thread_num()];
     std::vector<Index> found;
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait
     for (std::int64_t ii = 0; ii < static_cast<std::int64_t>(n); ++ii) {
       const Index i = static_cast<Index>(ii);
       found.clear();
@@ -186,7 +186,7 @@ std::vector<std::vector<Index>> wall_candidates(const std::vector<Wall>& walls, 
   std::vector<std::vector<std::vector<Index>>> local(par::threads(), std::vector<std::vector<Index>>(nw));
   par::region(par::worth(n * static_cast<std::int64_t>(nw), par::kLight), [&] {
     auto& mine = local[par::thread_num()];
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait
     for (std::int64_t i = 0; i < n; ++i)
       for (std::size_t k = 0; k < nw; ++k) {
         Vec3 nrm;

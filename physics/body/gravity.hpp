@@ -40,7 +40,7 @@ class Gravity final : public Module {
       Vec3* __restrict f = p.force.data();
       const double* __restrict m = p.mass.data();
       const Vec3 g = p_.acceleration;
-#pragma omp for schedule(static)
+#pragma omp for schedule(static) nowait
       for (std::int64_t i = 0; i < n; ++i) f[i] += m[i] * g;
     });
   }
