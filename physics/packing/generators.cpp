@@ -777,7 +777,8 @@ void RelaxGenerator::relax(State& s, std::size_t first) {
   double alpha = 0.1;
   int since_neg = 0;
   RelaxForces forces(s, first, k, 0.5 * rbar);
-  auto [fmax, overlap_max] = forces.evaluate(F);
+  double fmax = 0.0, overlap_max = 0.0;  // not a structured binding: clang 14 cannot capture one in a lambda
+  std::tie(fmax, overlap_max) = forces.evaluate(F);
   const double ftol = p_.force_tolerance * k / rbar;
   // Converged: forces below the tolerance, or (max_overlap > 0) overlaps small enough.
   auto converged = [&]() { return fmax <= ftol || (p_.max_overlap > 0.0 && overlap_max <= p_.max_overlap); };
