@@ -63,7 +63,7 @@ void check_finite(const State& s, const WatchdogContext& ctx) {
     fields.push_back(name);
     const auto& f = p.fields.data(name);
     const std::int64_t m = static_cast<std::int64_t>(f.size());
-    bad = par::any_of(m, par::kLight, [&](std::int64_t k) { return !field_ok(f[k], c); }) || bad;
+    bad = bad || par::any_of(m, par::kLight, [&](std::int64_t k) { return !field_ok(f[k], c); });
   }
   if (!bad) return;
   // Detail: every quantity with its particles, in the reporting order.

@@ -364,8 +364,7 @@ class ContactModelT final : public ContactModel {
           if (computed) {
             if (!(*computed)[k].touching[q]) continue;
             row = (*computed)[k].row[q];
-          } else if (!wall_row(p, walls[k], i, w > 0 ? hist[k] + static_cast<std::size_t>(i) * w : nullptr, w, temp, dt,
-                               time_scale, inertia_free, row)) {
+          } else if (!wall_row(p, walls[k], i, wall_state(hist[k], i, w), w, temp, dt, time_scale, inertia_free, row)) {
             continue;
           }
           p.force[i] += row.force;
@@ -452,6 +451,9 @@ class ContactModelT final : public ContactModel {
     std::vector<char> touching;
   };
   static constexpr std::size_t kWallTaskRows = 128;
+  /// Particle i's history row in a wall's state columns (w per particle), or none for a law without state.
+  static double* wall_state(double* columns, Index i, int w) { return w > 0 ? columns + static_cast<std::size_t>(i) * w : nullptr; }
+
   const std::vector<WallRowBuffer>& wall_pass_rows(const ParticleStore& p, const std::vector<Wall>& walls,
                                                    const std::vector<std::vector<Index>>& cand, const std::vector<double*>& hist,
                                                    int w, const double* temp, double dt, double time_scale, bool inertia_free) const {
@@ -475,8 +477,7 @@ class ContactModelT final : public ContactModel {
       WallRowBuffer& o = out[task.wall];
       for (std::size_t q = task.lo; q < task.hi; ++q) {
         const Index i = cand[task.wall][q];
-        double* state = w > 0 ? hist[task.wall] + static_cast<std::size_t>(i) * w : nullptr;
-        o.touching[q] = wall_row(p, walls[task.wall], i, state, w, temp, dt, time_scale, inertia_free, o.row[q]);
+        o.touching[q] = wall_row(p, walls[task.wall], i, wall_state(hist[task.wall], i, w), w, temp, dt, time_scale, inertia_free, o.row[q]);
       }
     }
     return buffers;
