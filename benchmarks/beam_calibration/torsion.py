@@ -25,12 +25,13 @@ E_mu <- E_mu / k and the criterion slope with it (s_crit / k); iterations stop w
 the first-break twist's: the first bond breaks where the criterion reaches the strength, so
 strength = s_crit x theta_y, theta_y = tau_y L / (G r) = 0.0416 rad, from the last iteration.
 
---write writes configs/materials/cast_iron_beams_torsion.json (the beams configs/torsion_crack.json
-includes) and configs/materials/cast_iron_beams_torsion.calibration.json (every run, the fit, the
-command).
+--write writes the beams file the config's bonds $include (configs/torsion_crack.json:
+configs/materials/cast_iron_beams_torsion.json; configs/torsion_contact.json, the paper's contact
+definition of issue 58: cast_iron_beams_torsion_contact.json) and its .calibration.json beside it
+(every run, the fit, the command).
 
     python3 -m benchmarks.beam_calibration.torsion --sparkdem BIN --workdir DIR [--n 5000]
-        [--seeds 101,102,103] [--twist 0.03] [--reuse] [--write]
+        [--seeds 101,102,103] [--twist 0.03] [--config configs/torsion_crack.json] [--reuse] [--write]
 """
 import concurrent.futures
 import csv
@@ -45,13 +46,19 @@ from benchmarks.torsion_crack import run_torsion as rt
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 CONFIG = os.path.join(REPO, "configs", "torsion_crack.json")
-BEAMS = os.path.join(REPO, "configs", "materials", "cast_iron_beams_torsion.json")
 TENSION = os.path.join(REPO, "configs", "materials", "cast_iron_beams.json")
 THETA_Y = rt.PREDICTED_ONSET  # tau_y L / (G r) [rad]
 
 
-def scene(n, seed, beams, twist):
-    j = rt.scene_for(CONFIG, n, seed)
+def beams_file(config):
+    """The beams file the config's bonds include (the file --write rewrites)."""
+    with open(config) as f:
+        inc = json.load(f)["bonds"]["params"]["$include"]
+    return os.path.normpath(os.path.join(os.path.dirname(os.path.abspath(config)), inc))
+
+
+def scene(config, n, seed, beams, twist):
+    j = rt.scene_for(config, n, seed)
     j["bonds"]["params"] = dict(beams, strength=1e30)
     st = j["stages"][1]
     st["modules"].pop("electrical_network")
@@ -78,7 +85,7 @@ def fit(out):
 
 
 def run_one(a, it, beams, n, seed):
-    out, s = run_study_scene(os.path.abspath(a.sparkdem), a.workdir, f"it{it}_N{n}_s{seed}", scene(n, seed, beams, a.twist),
+    out, s = run_study_scene(os.path.abspath(a.sparkdem), a.workdir, f"it{it}_N{n}_s{seed}", scene(a.config, n, seed, beams, a.twist),
                              reuse=a.reuse)
     pk = next(x for x in s["stages"] if x["name"] == "pack")["packing"]
     return dict(iteration=it, N=n, seed=seed, young_modulus_Pa=beams["young_modulus"], **fit(out),
@@ -89,6 +96,7 @@ def run_one(a, it, beams, n, seed):
 def main():
     ap = study_parser(__doc__, "5000", "", seeds_default="101,102,103")
     ap.add_argument("--twist", type=float, default=0.03)
+    ap.add_argument("--config", default=CONFIG, help="the pin's scenario (its bonds $include is the beams file)")
     ap.add_argument("--tolerance", type=float, default=0.002)
     ap.add_argument("--max-iterations", type=int, default=3)
     ap.add_argument("--jobs", type=int, default=2)
@@ -115,10 +123,11 @@ def main():
     print(f"E_mu {beams['young_modulus']:.6g} Pa, radius_ratio {beams['radius_ratio']:.6g}, strength {beams['strength']:.6g} Pa "
           f"(residual k - 1 = {k - 1.0:+.5f})")
     if a.write:
-        write_json_atomic(BEAMS, beams)
-        write_json_atomic(BEAMS.replace(".json", ".calibration.json"), {
+        out = beams_file(a.config)
+        write_json_atomic(out, beams)
+        write_json_atomic(out.replace(".json", ".calibration.json"), {
             "command": "python3 -m benchmarks.beam_calibration.torsion " + " ".join(sys.argv[1:]),
-            "scene": f"configs/torsion_crack.json (strength 1e30, no electrical network, twist {a.twist} rad)",
+            "scene": f"{os.path.relpath(a.config, REPO)} (strength 1e30, no electrical network, twist {a.twist} rad)",
             "theta_y_rad": THETA_Y, "residual_k_minus_1": k - 1.0, "criterion_slope_Pa_per_rad": s_crit,
             "params": beams, "runs": runs})
 

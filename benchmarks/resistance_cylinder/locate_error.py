@@ -16,6 +16,7 @@ Geometry and rho_e are seed 001's (r_d = 1 mm, l_d = 5 mm, 304L 0.73e-6 Ohm m).
 """
 import glob
 import json
+import os
 import sys
 
 import h5py
@@ -59,6 +60,24 @@ def ring_kappa(f, edges, length=LD, rd=RD):
     ia = np.array([index[int(a)] for a in pairs[keep, 0]])
     ib = np.array([index[int(b)] for b in pairs[keep, 1]])
     return ring_kappa_arrays(x, phi, ia, ib, branch_i[keep], edges, length, rd)
+
+
+def deep_bulk(out, depth=6.0, rho=RHO, rd=RD, length=LD):
+    """Issue 58's gate G3 and the electrodes' share of G4, from a run's output directory `out`:
+    deep_kappa_rho  kappa rho_e of the disc r < r_d - depth r_mean (ring_kappa over 21 planes of the
+                    middle half; 1 = the continuum), the bulk free of the wall layering
+    electrode_share (R - R_mid) / R, R_mid = |dphi/dz| x (distance of the end sets' centroids) / I"""
+    with h5py.File(sorted(glob.glob(os.path.join(out, "frames", "*.h5")))[-1], "r") as f:
+        p = f["particles"]
+        r_mean = float(p["radius"][:].mean())
+        z = p["position"][:][:, 2]
+        hi, lo = p["set_end_high"][:].ravel() > 0.5, p["set_end_low"][:].ravel() > 0.5
+        kappa, grad = ring_kappa(f, [0.0, rd - depth * r_mean], length, rd)
+    with open(os.path.join(out, "summary.json")) as f:
+        fin = [t for t in json.load(f)["stages"] if "electrical_resistance" in t.get("final", {})][-1]["final"]
+    r_mid = grad * (z[hi].mean() - z[lo].mean()) / fin["electrical_current"]
+    return {"deep_kappa_rho": float(kappa[0] * rho), "deep_radius_m": rd - depth * r_mean,
+            "electrode_share": float((fin["electrical_resistance"] - r_mid) / fin["electrical_resistance"])}
 
 
 def analyse(run):

@@ -98,7 +98,8 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
       S.resize(g.nodes());
       for (std::size_t v = 0; v < g.nodes(); ++v) S[v] = m.alpha_constant * p.radius[v] * p.radius[v];
     } else {
-      S = el::transmission_surfaces(el::TransmissionSurfaceModel::platonic(), p.position, p.radius, g.a, g.b);
+      S = m.eccentricity ? el::transmission_surfaces(el::TransmissionSurfaceModel::platonic(), *m.eccentricity, p.radius, g.a, g.b)
+                         : el::transmission_surfaces(el::TransmissionSurfaceModel::platonic(), p.position, p.radius, g.a, g.b);
     }
     for (std::size_t e = 0; e < g.size(); ++e)
       if (g.overlap[e] >= -m.touch_tolerance || g.kind[e] == EdgeKind::Bond)

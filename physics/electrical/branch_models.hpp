@@ -46,6 +46,9 @@ struct BranchModel {
   /// touching: conductance [S] of a pair of the graph that does not touch (after the
   /// displacement), e.g. the polymer film of an opened filler contact (0: none).
   double open_conductance = 0.0;
+  /// transmission_surface: per-particle eccentricity e_i [1] of a reference state (nullptr: e_i
+  /// from the current positions and edges).
+  const std::vector<double>* eccentricity = nullptr;
 };
 
 /// Conductance per graph edge; `share_a` receives the resistance share of side a per edge.

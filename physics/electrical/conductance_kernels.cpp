@@ -322,10 +322,17 @@ std::vector<double> eccentricities(std::span<const Vec3> positions_m, std::span<
 
 std::vector<double> transmission_surfaces(const TransmissionSurfaceModel& model, std::span<const Vec3> positions_m,
                                           std::span<const double> radii_m, std::span<const Index> edge_a, std::span<const Index> edge_b) {
-  const std::vector<double> e = eccentricities(positions_m, radii_m, edge_a, edge_b);
-  const std::vector<int> n = coordination_numbers(positions_m.size(), edge_a, edge_b);
-  std::vector<double> s(e.size());
-  for (std::size_t i = 0; i < s.size(); ++i) s[i] = model.surface(n[i], e[i], radii_m[i]);
+  return transmission_surfaces(model, eccentricities(positions_m, radii_m, edge_a, edge_b), radii_m, edge_a, edge_b);
+}
+
+std::vector<double> transmission_surfaces(const TransmissionSurfaceModel& model, std::span<const double> eccentricity,
+                                          std::span<const double> radii_m, std::span<const Index> edge_a, std::span<const Index> edge_b) {
+  if (eccentricity.size() != radii_m.size())
+    throw ConfigError("", "transmission_surfaces: " + std::to_string(eccentricity.size()) + " eccentricities but " +
+                              std::to_string(radii_m.size()) + " radii");
+  const std::vector<int> n = coordination_numbers(radii_m.size(), edge_a, edge_b);
+  std::vector<double> s(radii_m.size());
+  for (std::size_t i = 0; i < s.size(); ++i) s[i] = model.surface(n[i], eccentricity[i], radii_m[i]);
   return s;
 }
 

@@ -347,6 +347,11 @@ std::vector<double> eccentricities(std::span<const Vec3> positions_m, std::span<
 std::vector<double> transmission_surfaces(const TransmissionSurfaceModel& model, std::span<const Vec3> positions_m,
                                           std::span<const double> radii_m, std::span<const Index> edge_a, std::span<const Index> edge_b);
 
+/// The same with the eccentricities given (e.g. of a reference state), the coordination from the
+/// edges.
+std::vector<double> transmission_surfaces(const TransmissionSurfaceModel& model, std::span<const double> eccentricity,
+                                          std::span<const double> radii_m, std::span<const Index> edge_a, std::span<const Index> edge_b);
+
 /// Branch resistance of seed 001 [Ohm] (Eqs. 4-5): R_ij = rho_e l_ij / sqrt(S_i S_j),
 /// l_ij = centre distance [m] (> 0), S [m^2] (> 0), rho_e bulk resistivity [Ohm m] (> 0).
 /// On a simple cubic lattice (S = 4 r^2, l = 2 r) this is rho_e/(2 r) per branch, which

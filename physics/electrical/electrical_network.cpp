@@ -233,6 +233,10 @@ ParamSpec<ElectricalNetwork::Params> ElectricalNetwork::spec() {
       .unit("1")
       .nonnegative()
       .doc("transmission_surface: hold alpha fixed and f(e) = 1 (0: the alpha(n), f(e) model)");
+  s.add("eccentricity", &P::eccentricity)
+      .choices({"current", "reference"})
+      .doc("transmission_surface: e_i of Eq. 3 from the positions of each solve, or of the first solve (kept in the "
+           "particle field electrical_eccentricity_reference: elastic strain does not flip f(e) at e = 0.4)");
   s.add("unit_conductance", &P::unit_conductance).unit("S").positive().doc("touching / tunnelling: conductance of a touching pair");
   s.add("touch_tolerance", &P::touch_tolerance)
       .unit("m")
@@ -280,6 +284,9 @@ ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
   branch_ = BranchModel{p.model,        p.contact_radius, p.neck,           p.hemisphere,         p.gb_epsilon,
                         p.gb_thickness, p.gbf_correction, p.alpha_constant, p.touch_tolerance,    p.unit_conductance,
                         p.tunnel_g0,    p.tunnel_length,  p.tunnel_cutoff,  p.displacement_field, p.open_conductance};
+  if (p.eccentricity == "reference" && (p.model != "transmission_surface" || p.alpha_constant > 0.0))
+    throw ConfigError("/eccentricity", "a reference eccentricity needs model transmission_surface with alpha(n), f(e) "
+                                       "(alpha_constant 0), found model '" + p.model + "'");
   if (!p.displacement_field.empty() && p.model != "touching" && p.model != "tunnelling")
     throw ConfigError("/displacement_field", "a displacement field needs model touching or tunnelling, found '" + p.model + "'");
   LaplacianOptions o;
@@ -304,10 +311,12 @@ void ElectricalNetwork::declare(Declarations& d) const {
   // Geometry and temperature as they were at the end of the previous step (or as earlier modules
   // of this step left them): a feedback loop with heat_conduction, which reads this step's
   // joule_power and writes the temperature and the expanded radii, is not an ordering cycle.
+  if (reference_eccentricity()) d.particle_fields.push_back({kEccentricityField, 1, "1", -1.0, true, FieldCheck::None});
   d.reads_previous = {"position", "radius"};
   if (p_.temperature_field) d.reads_previous.push_back("temperature");
   if (!p_.displacement_field.empty()) d.reads.push_back(p_.displacement_field);
   d.writes = {"electric_potential", "joule_power", "signal/electrical_resistance"};
+  if (reference_eccentricity()) d.writes.push_back(kEccentricityField);
   if (!p_.voltage_signal.empty()) d.reads.push_back("signal/" + p_.voltage_signal);
 }
 
@@ -344,7 +353,21 @@ std::vector<double> ElectricalNetwork::conductances(const State& s, const Intera
   // transmission_surface with `resistivity`: rho_e(T) = resistivity * kappa_ref / kappa(T).
   if (p_.model == "transmission_surface" && p_.resistivity > 0.0)
     for (double& x : k) x /= p_.resistivity * p_.conductivity;
-  return branch_conductances(branch_, s, g, k, share_a);
+  if (!reference_eccentricity()) return branch_conductances(branch_, s, g, k, share_a);
+  BranchModel m = branch_;
+  m.eccentricity = &s.particles.fields.data(kEccentricityField);
+  return branch_conductances(m, s, g, k, share_a);
+}
+
+void ElectricalNetwork::record_reference_eccentricity(State& s, const InteractionGraph& g) const {
+  if (!reference_eccentricity()) return;
+  auto& e0 = s.particles.fields.data(kEccentricityField);
+  std::vector<double> e;  // the current eccentricities, computed only when a particle has none yet
+  for (std::size_t i = 0; i < e0.size(); ++i)
+    if (e0[i] < 0.0) {
+      if (e.empty()) e = el::eccentricities(s.particles.position, s.particles.radius, g.a, g.b);
+      e0[i] = e[i];
+    }
 }
 
 std::vector<double> ElectricalNetwork::particle_conductivities(const State& s) const {
@@ -693,6 +716,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   const InteractionGraph g = build_interaction_graph(s, go);
   std::vector<double> G, share;
   try {  // the sphere-element topology builds its own conductances from the neck radii
+    record_reference_eccentricity(s, g);
     if (p_.topology != "sphere_element") G = conductances(s, g, share);
   } catch (const ConfigError& e) { throw PhysicsError(info.step, {}, "electrical conductance", e.what()); }
   const bool allow_empty = p_.empty_electrode == "open";

@@ -16,7 +16,12 @@
 ///                         from the contact law's neck column, or Coble (Eq. 21) / constant volume
 ///                         from the overlap; grain-boundary-fraction correction (Eq. 22-25)
 ///   transmission_surface  R_ij = rho_e l_ij / sqrt(S_i S_j), S_i = alpha(n_i) r_i^2 / f(e_i) (seed
-///                         001 Eq. 2-5); `alpha_constant` > 0 holds alpha fixed and f = 1
+///                         001 Eq. 2-5); `alpha_constant` > 0 holds alpha fixed and f = 1;
+///                         `eccentricity` "current" evaluates e_i on the positions of each solve,
+///                         "reference" on those of the first solve (particle field
+///                         electrical_eccentricity_reference, checkpointed): Eq. 3's switch at
+///                         e = 0.4 then does not flip f under elastic strain (steps of R of
+///                         1e-4-1e-3 in an elastic twist; issue 58), while n_i follows the bonds
 ///   touching              G = unit_conductance for every touching pair (seed 002)
 ///   tunnelling            touching pairs unit_conductance, gaps g0 exp(-2 gap/xi) up to the cut-off
 ///
@@ -124,6 +129,7 @@ class ElectricalNetwork final : public Module {
     // transmission_surface
     double resistivity = 0.0;
     double alpha_constant = 0.0;
+    std::string eccentricity = "current";
     // touching, tunnelling
     double unit_conductance = 1.0;
     double touch_tolerance = 0.0;
@@ -138,6 +144,8 @@ class ElectricalNetwork final : public Module {
   explicit ElectricalNetwork(const Params& p);
 
   std::string name() const override { return "electrical_network"; }
+  /// Particle field of the reference eccentricities (eccentricity = "reference"; -1: not yet set).
+  static constexpr const char* kEccentricityField = "electrical_eccentricity_reference";
   Phase phase() const override { return Phase::Coupling; }
   void declare(Declarations& d) const override;
   void bind(State& s) override;
@@ -178,6 +186,9 @@ class ElectricalNetwork final : public Module {
   /// Branch conductances [S] per graph edge, and the share of each branch resistance on side a
   /// (NaN when the model puts all of it at the contact).
   std::vector<double> conductances(const State& s, const InteractionGraph& g, std::vector<double>& share_a) const;
+  bool reference_eccentricity() const { return p_.eccentricity == "reference" && p_.model == "transmission_surface"; }
+  /// eccentricity = "reference": e_i of every particle that has none yet, from the current graph.
+  void record_reference_eccentricity(State& s, const InteractionGraph& g) const;
   /// Bulk conductivity per particle [S/m]: at `temperature`, or at its `temperature` field value.
   std::vector<double> particle_conductivities(const State& s) const;
   Params p_;

@@ -2,11 +2,14 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
+#include <string>
 
 #include "engine/core/error.hpp"
 #include "engine/core/format.hpp"
 #include "engine/state/state.hpp"
 #include "engine/core/numbers.hpp"
+#include "physics/mechanics/resistance_trend.hpp"
 
 namespace sparkdem::physics {
 
@@ -42,6 +45,41 @@ double axial_centroid(const State& s, const std::vector<double>& set, const Vec3
     }
   return n > 0.0 ? z / n : kNaN;
 }
+
+/// A crossing through the persistence filter: a candidate span starts where `cond` first holds,
+/// is confirmed (mark kKey + k = the span's first twist) once the twist has advanced by
+/// `persistence` with the condition held throughout, and is rejected (counted in k + "/rejected")
+/// when it falls back before.
+void held(std::map<std::string, double>& m, const std::string& k, bool cond, double theta, double persistence) {
+  if (m.count(kKey + k)) return;
+  const std::string c = kKey + k + "/candidate";
+  if (!cond) {
+    if (m.erase(c) > 0) m[kKey + k + "/rejected"] += 1.0;
+    return;
+  }
+  if (!m.count(c)) m[c] = theta;
+  if (std::abs(theta - m[c]) >= persistence) m[kKey + k] = m[c];
+}
+
+const std::string kTrend = kKey + "trend/";
+
+trend::Sums load_sums(const std::map<std::string, double>& m) {
+  trend::Sums t;
+  auto get = [&](const std::string& k) {
+    const auto it = m.find(kTrend + k);
+    return it == m.end() ? 0.0 : it->second;
+  };
+  for (std::size_t p = 0; p < t.xp.size(); ++p) t.xp[p] = get("xp" + std::to_string(p));
+  for (std::size_t p = 0; p < t.xu.size(); ++p) t.xu[p] = get("xu" + std::to_string(p));
+  t.uu = get("uu");
+  return t;
+}
+
+void store_sums(std::map<std::string, double>& m, const trend::Sums& t) {
+  for (std::size_t p = 0; p < t.xp.size(); ++p) m[kTrend + "xp" + std::to_string(p)] = t.xp[p];
+  for (std::size_t p = 0; p < t.xu.size(); ++p) m[kTrend + "xu" + std::to_string(p)] = t.xu[p];
+  m[kTrend + "uu"] = t.uu;
+}
 }  // namespace
 
 ParamSpec<TorsionTest::Params> TorsionTest::spec() {
@@ -70,6 +108,20 @@ ParamSpec<TorsionTest::Params> TorsionTest::spec() {
       .unit("rad")
       .nonnegative()
       .doc("a resistance crossing counts only if it holds over this twist span (0: unfiltered)");
+  s.add("resistance_trend_fit_twist", &Params::resistance_trend_fit_twist)
+      .unit("rad")
+      .nonnegative()
+      .doc("the elastic trend of R / R0 (a quadratic in the twist) is fitted over the twists up to this; past it, the "
+           "trend onset is the first twist where R / R0 exceeds the trend by the threshold, held over "
+           "resistance_persistence (0: no trend onset)");
+  s.add("resistance_trend_sigmas", &Params::resistance_trend_sigmas)
+      .unit("1")
+      .positive()
+      .doc("trend onset threshold: this many residual standard deviations of the trend fit, plus resistance_trend_floor");
+  s.add("resistance_trend_floor", &Params::resistance_trend_floor)
+      .unit("1")
+      .nonnegative()
+      .doc("added to the trend onset threshold: a relative change of R the network solver cannot resolve");
   s.add("report_twists", &Params::report_twists)
       .unit("rad")
       .doc("twists at which R / R0 is recorded (columns torsion_resistance_ratio_at_<twist>)");
@@ -126,26 +178,47 @@ void TorsionTest::advance(State& s, const StepInfo&) {
     m[kKey + "fit_tT"] += theta * v[1];
   }
   first("onset_break", !intact);
-  // Resistance crossings through the persistence filter: a candidate span starts where the
-  // condition first holds, is confirmed once the twist has advanced by resistance_persistence
-  // with the condition held throughout, and is rejected (counted) when it falls back before.
-  auto held = [&](const std::string& k, bool cond) {
-    if (m.count(kKey + k)) return;
-    const std::string c = kKey + k + "/candidate";
-    if (!cond) {
-      if (m.erase(c) > 0) m[kKey + k + "/rejected"] += 1.0;
-      return;
-    }
-    if (!m.count(c)) m[c] = theta;
-    if (std::abs(theta - m[c]) >= p_.resistance_persistence) m[kKey + k] = m[c];
-  };
-  held("onset_resistance", ratio - 1.0 > p_.resistance_threshold);
-  held("jump", ratio >= p_.resistance_jump_ratio);
-  held("separation", std::isinf(ratio));
+  // Resistance crossings through the persistence filter (held above).
+  const double span = p_.resistance_persistence;
+  held(m, "onset_resistance", ratio - 1.0 > p_.resistance_threshold, theta, span);
+  held(m, "jump", ratio >= p_.resistance_jump_ratio, theta, span);
+  held(m, "separation", std::isinf(ratio), theta, span);
+  advance_trend(s, theta, ratio);
   for (double t : p_.report_twists) {
     const std::string k = "report/" + format_number(t);
     if (std::abs(theta) >= t && !m.count(kKey + k)) m[kKey + k] = ratio;
   }
+}
+
+void TorsionTest::advance_trend(State& s, double theta, double ratio) {
+  const double fit_twist = p_.resistance_trend_fit_twist;
+  if (!(fit_twist > 0.0) || std::isnan(theta) || std::isnan(ratio)) return;
+  auto& m = s.marks;
+  // A sample is each new value of R (R is held between re-solves) at the twist of its re-solve:
+  // a held value compared with the trend at a later twist would ripple with the re-solve interval.
+  const auto last = m.find(kTrend + "last");
+  const bool fresh = last == m.end() || last->second != ratio;
+  if (fresh) {
+    m[kTrend + "last"] = ratio;
+    m[kTrend + "last_twist"] = theta;
+  }
+  if (std::abs(theta) <= fit_twist) {
+    if (fresh && std::isfinite(ratio)) {
+      trend::Sums t = load_sums(m);
+      t.add(theta / fit_twist, ratio - 1.0);
+      store_sums(m, t);
+    }
+    return;
+  }
+  held(m, "onset_trend", trend_departure(s) > 1.0, theta, p_.resistance_persistence);
+}
+
+double TorsionTest::trend_departure(const State& s) const {
+  const double last = mark(s, "trend/last"), twist = mark(s, "trend/last_twist");
+  if (!(p_.resistance_trend_fit_twist > 0.0) || std::isnan(last) || !(std::abs(twist) > p_.resistance_trend_fit_twist))
+    return kNaN;
+  return trend::departure(trend::fit(load_sums(s.marks)), twist / p_.resistance_trend_fit_twist, last - 1.0,
+                          p_.resistance_trend_sigmas, p_.resistance_trend_floor);
 }
 
 std::vector<std::string> TorsionTest::columns() const {
@@ -164,6 +237,10 @@ std::vector<std::string> TorsionTest::columns() const {
                                 "torsion_resistance_jump_twist",
                                 "torsion_resistance_rejected_rises",
                                 "torsion_resistance_rejected_jumps"};
+  if (p_.resistance_trend_fit_twist > 0.0)
+    for (const char* k : {"torsion_resistance_trend_onset_twist", "torsion_resistance_trend_departure",
+                          "torsion_resistance_trend_samples"})
+      c.push_back(k);
   for (double t : p_.report_twists) c.push_back(report_column(t));
   return c;
 }
@@ -217,7 +294,13 @@ std::vector<double> TorsionTest::column_values(const State& s) const {
   const double rejected_rises = mark(s, "onset_resistance/rejected"), rejected_jumps = mark(s, "jump/rejected");
   v[13] = std::isnan(rejected_rises) ? 0.0 : rejected_rises;
   v[14] = std::isnan(rejected_jumps) ? 0.0 : rejected_jumps;
-  for (std::size_t k = 0; k < p_.report_twists.size(); ++k) v[15 + k] = mark(s, "report/" + format_number(p_.report_twists[k]));
+  std::size_t next = 15;
+  if (p_.resistance_trend_fit_twist > 0.0) {
+    v[next++] = mark(s, "onset_trend");
+    v[next++] = trend_departure(s);
+    v[next++] = load_sums(s.marks).n();
+  }
+  for (std::size_t k = 0; k < p_.report_twists.size(); ++k) v[next + k] = mark(s, "report/" + format_number(p_.report_twists[k]));
   return v;
 }
 

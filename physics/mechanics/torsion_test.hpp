@@ -24,6 +24,13 @@
 ///                held span began (0: the first crossing, unfiltered). A crossing that falls back
 ///                before the span ends (the crack halves rattling, the elastic noise) is rejected
 ///                and counted (torsion_resistance_rejected_rises / _jumps)
+///   trend onset  with `resistance_trend_fit_twist` > 0: the first twist past it where R / R0 leaves
+///                its elastic trend (a quadratic fitted on the twists up to it) by more than
+///                `resistance_trend_sigmas` times the fit's residual deviation plus
+///                `resistance_trend_floor`, held over `resistance_persistence` (resistance_trend.hpp;
+///                issue 58 item 5). Samples are the new values of R at the twist of their re-solve;
+///                columns torsion_resistance_trend_onset_twist, _departure (the newest sample's
+///                departure in units of the threshold) and _samples (fit samples)
 ///   reports      R / R0 when the twist first reaches each of `report_twists`
 ///   stiffness    torsion_stiffness_ratio = k / (G J / L), k the least-squares slope of T against
 ///                theta through the origin over every call before the first break (averages out
@@ -44,6 +51,9 @@
 /// | resistance_threshold | 1    | onset of the resistance rise: R / R0 - 1 above this          |
 /// | resistance_jump_ratio| 1    | R / R0 of the jump onset (2: the twist where R doubles)      |
 /// | resistance_persistence| rad | twist span a resistance crossing must hold to count          |
+/// | resistance_trend_fit_twist | rad | twist span of the elastic trend fit (0: no trend onset) |
+/// | resistance_trend_sigmas | 1  | departure threshold in residual deviations of the fit        |
+/// | resistance_trend_floor | 1   | added to the threshold: the solver's relative tolerance on R |
 /// | report_twists        | rad  | twists at which R / R0 is recorded                           |
 #include <string>
 #include <vector>
@@ -68,6 +78,9 @@ class TorsionTest final : public Module {
     double resistance_threshold = 0.01;
     double resistance_jump_ratio = 2.0;
     double resistance_persistence = 0.0;
+    double resistance_trend_fit_twist = 0.0;
+    double resistance_trend_sigmas = 5.0;
+    double resistance_trend_floor = 1e-6;
     std::vector<double> report_twists;
   };
   static ParamSpec<Params> spec();
@@ -85,6 +98,12 @@ class TorsionTest final : public Module {
   static std::string report_column(double theta);
 
  private:
+  /// The trend onset's sampling, fit and filter (no-op without resistance_trend_fit_twist).
+  void advance_trend(State& s, double theta, double ratio);
+  /// The departure of the newest sample of R from the trend (NaN before a fit exists, and while the
+  /// newest sample lies inside the fit span).
+  double trend_departure(const State& s) const;
+
   Params p_;
   Vec3 a_;  ///< unit axis
 };

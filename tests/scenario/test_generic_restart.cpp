@@ -195,6 +195,11 @@ std::vector<Case> all_cases() {
   grown_press["stages"][1]["modules"]["mass_conserving_radii"] = json::object();
   grown_press["stages"][1]["contact"]["params"]["neck"] = "intersection";
   grown_press["stages"][1]["contact"]["params"]["stop_flow_at_dense"] = true;
+  json pin_trend = with_steps(load_data("torsion_small.json"), 1, 600);
+  pin_trend["stages"][1]["modules"]["electrical_network"]["eccentricity"] = "reference";
+  pin_trend["stages"][1]["modules"]["electrical_network"]["clock"]["max_interval"] = 20;
+  pin_trend["stages"][1]["modules"]["torsion_test"]["resistance_trend_fit_twist"] = 2e-3;
+  pin_trend["stages"][1]["modules"]["torsion_test"]["resistance_persistence"] = 1e-4;
   return {
       {"lattice + bonded pull with event, adaptive and every-N mock modules, electrical network, time scaling",
        load_data("restart_contracts.json"), 1, 180},
@@ -217,6 +222,9 @@ std::vector<Case> all_cases() {
       {"cohesive-beam pin twisted through bond failure: rotating prescribed set, local_damping, electrical_network on the intact bonds, "
        "torsion_test",
        with_steps(load_data("torsion_small.json"), 1, 600), 1, 263},
+      {"cohesive-beam pin with reference eccentricities and the R-trend onset: the trend's sums and the reference field in the "
+       "checkpoint",
+       pin_trend, 1, 263},
       {"bonded tension test: cohesive_beam, prescribed sets, tension_test reference field, local_damping",
        with_steps(load_data("tension_small.json"), 1, 600), 1, 233},
       {"cpc_fillers configuration, then Hertz settling with electrical_network and contact_percolation on every-N clocks",

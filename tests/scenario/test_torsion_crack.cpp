@@ -230,4 +230,33 @@ TEST_CASE("pin torsion (configs/torsion_crack.json at N = 1000): elastic torque,
   check_intact(intact_rows(out / "timeseries.csv"));
 }
 
+TEST_CASE("pin torsion at gap <= 0 (configs/torsion_contact.json at N = 600), unbreakable beams: no crack onset from R",
+          "[torsion][beam][electrical][scenario]") {
+  // Issue 58 item 5: the detector must stay silent on an elastic-only twist. The shipped scene
+  // (beams between elements in contact, the R-trend detector's committed constants) at N = 600
+  // with the beam strength 1e30, twisted to 0.07 rad (1.7 x the predicted onset): no bond breaks,
+  // so any trend onset would be a false alarm. R still moves: the elements' transmission
+  // surfaces follow their current eccentricity (Eq. 3's switch at e = 0.4), steps the fit's
+  // residual deviation has to cover.
+  json scene = json::parse(std::ifstream(fs::path(SPARKDEM_SOURCE_DIR) / "configs/torsion_contact.json"));
+  const double scale = std::cbrt(5000.0 / 600.0);
+  scene["stages"][0]["generator"]["particles"] = 600;
+  for (auto& s : scene["particle_sets"]) s["thickness"] = s["thickness"].get<double>() * scale;
+  scene["bonds"]["params"]["strength"] = 1e30;
+  scene["stages"][1]["stop"] = {{"time", 0.07 / 375.0}};
+  scene["checks"] = json::array();
+  test::ScratchDir tmp("sparkdem_torsion_contact_elastic");
+  fs::path out;
+  const json summary = run_scene(scene, fs::path(SPARKDEM_SOURCE_DIR) / "configs", tmp, out);
+  REQUIRE(summary["status"] == "completed");
+  const json& f = summary["stages"][1]["final"];
+  INFO("twist " << f["torsion_twist"] << " rad, trend samples " << f["torsion_resistance_trend_samples"] << ", last departure "
+                << f["torsion_resistance_trend_departure"] << ", R/R0 " << f["torsion_resistance_ratio"]);
+  CHECK(std::abs(f["torsion_twist"].get<double>() - 0.07) < 1e-3);
+  CHECK(f["bonds_broken"].get<double>() == 0.0);
+  CHECK(f["torsion_resistance_trend_samples"].get<double>() >= 6.0);
+  CHECK(f["torsion_resistance_trend_onset_twist"].is_null());  // NaN (never detected) is written as null
+  CHECK(std::abs(f["torsion_resistance_trend_departure"].get<double>()) < 1.0);
+}
+
 }  // namespace test_torsion_crack
