@@ -72,7 +72,8 @@ def deep_bulk(out, depth=6.0, rho=RHO, rd=RD, length=LD):
         r_mean = float(p["radius"][:].mean())
         z = p["position"][:][:, 2]
         hi, lo = p["set_end_high"][:].ravel() > 0.5, p["set_end_low"][:].ravel() > 0.5
-        kappa, grad = ring_kappa(f, [0.0, rd - depth * r_mean], length, rd)
+        # the outer ring closes the edges: ring_kappa clips a crossing beyond the last edge into the last ring
+        kappa, grad = ring_kappa(f, [0.0, rd - depth * r_mean, 2.0 * rd], length, rd)
     with open(os.path.join(out, "summary.json")) as f:
         fin = [t for t in json.load(f)["stages"] if "electrical_resistance" in t.get("final", {})][-1]["final"]
     r_mid = grad * (z[hi].mean() - z[lo].mean()) / fin["electrical_current"]
