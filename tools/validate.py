@@ -395,7 +395,7 @@ def records_from_run_file(ledger, path, ledger_path, fast_bands):
     runs = [dict(r, n=rf["N"]) for r in rf["runs"]]
     out = []
     for fig in case.figures:
-        if fig.tiers and rf["tier"] not in fig.tiers:
+        if not fig.applies(rf["tier"], rf["N"]):
             continue
         rec = make_record(case, fig, rf["tier"], rf["N"], runs, rf, first, fast_bands,
                           ledger.get("tuned_marks", {}).get(fig.id, []))
@@ -602,7 +602,7 @@ def cmd_run(a):
             if not a.no_record:
                 write_run_file(rf, c, a.tier, n, runs, meta)
             for fig in c.figures:
-                if fig.tiers and a.tier not in fig.tiers:
+                if not fig.applies(a.tier, n):
                     continue
                 rec = rules.finite(make_record(c, fig, a.tier, n, runs, meta, first, fast_bands,
                                                ledger.get("tuned_marks", {}).get(fig.id, [])))

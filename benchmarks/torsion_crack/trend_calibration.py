@@ -11,7 +11,7 @@ final twist, and fixes the constants by a rule that does not look at any onset f
   fit span     0.02 rad, half the predicted onset tau_y L / (G r), fixed before the runs; checked:
                no calibration run breaks a bond inside it
   sigmas       5, fixed before the runs (a five-sigma departure)
-  floor        2 x the largest positive excess of R/R0 - 1 over its trend + sigmas x sigma among the
+  floor        2 x the largest excess of |R/R0 - 1 - trend| over sigmas x sigma among the
                samples after the fit span and before the run's first broken bond, over all
                calibration runs (no calibration run would alarm before its first break, with a
                margin of 2), rounded up to one significant digit; at least 1e-6
@@ -25,7 +25,8 @@ value of R at the twist of its re-solve), so the rule reads the elastic part of 
 
 --write sets the floor in configs/torsion_contact.json and writes
 benchmarks/torsion_crack/trend_calibration.json (per run: first break, samples, sigma, the largest
-pre-break excess, and the onset the module reported with the constants it ran with).
+pre-break excess, the onset the fixed constants give on the run's samples, and the onset the module
+reported with the constants it ran with).
 """
 import argparse
 import concurrent.futures
@@ -62,7 +63,7 @@ def samples(out):
 
 def excess(rows):
     """The trend fit (quadratic in theta / FIT_SPAN over the samples inside it), its residual sigma,
-    and the largest (u - trend - SIGMAS sigma) over the samples past the span before the first break."""
+    and the largest |u - trend| - SIGMAS sigma over the samples past the span before the first break."""
     fit = [(t / FIT_SPAN, u) for t, u, b in rows if abs(t) <= FIT_SPAN]
     x, u = np.array([f[0] for f in fit]), np.array([f[1] for f in fit])
     A = np.vstack([np.ones_like(x), x, x * x]).T
@@ -75,9 +76,26 @@ def excess(rows):
         if b > 0:
             break
         xt = t / FIT_SPAN
-        worst = max(worst, v - (c[0] + xt * (c[1] + xt * c[2])) - SIGMAS * sigma)
-    return {"fit_samples": len(x), "sigma": sigma, "worst_excess": worst,
+        worst = max(worst, abs(v - (c[0] + xt * (c[1] + xt * c[2]))) - SIGMAS * sigma)
+    return {"fit_samples": len(x), "sigma": sigma, "worst_excess": worst, "coefficients": [float(v) for v in c],
             "broken_in_fit_span": max([b for t, _, b in rows if abs(t) <= FIT_SPAN] or [0.0])}
+
+
+def onset(rows, e, floor):
+    """The module's rule replayed on the samples: the first twist past the span from which
+    |u - trend| > SIGMAS sigma + floor holds until the twist has advanced by PERSISTENCE."""
+    c, thr, start = e["coefficients"], SIGMAS * e["sigma"] + floor, None
+    for t, v, _ in rows:
+        if abs(t) <= FIT_SPAN:
+            continue
+        xt = t / FIT_SPAN
+        if abs(v - (c[0] + xt * (c[1] + xt * c[2]))) > thr:
+            start = t if start is None else start
+            if t - start >= PERSISTENCE:
+                return start
+        else:
+            start = None
+    return math.nan
 
 
 def run_one(a, n, seed):
@@ -85,9 +103,10 @@ def run_one(a, n, seed):
     scene["checks"] = []
     out, s = run_study_scene(os.path.abspath(a.sparkdem), a.workdir, f"N{n}_s{seed}", scene, reuse=a.reuse)
     fin = [st for st in s["stages"] if "torsion_twist" in st.get("final", {})][-1]["final"]
+    rows = samples(out)
     return dict(N=n, seed=seed, first_break_rad=fin.get("torsion_break_onset_twist"),
                 module_onset_rad=fin.get("torsion_resistance_trend_onset_twist"), wall_time_s=s["wall_time_s"],
-                **excess(samples(out)))
+                rows=rows, **excess(rows))
 
 
 def main():
@@ -110,9 +129,11 @@ def main():
     mag = 10.0 ** math.floor(math.log10(raw))
     floor = math.ceil(raw / mag) * mag
     for r in runs:
+        r["onset_rad"] = onset(r.pop("rows"), r, floor)
         print(f"seed {r['seed']}: first break {r['first_break_rad']}, fit samples {r['fit_samples']}, sigma {r['sigma']:.3g}, "
               f"largest pre-break excess {r['worst_excess']:.3g}, broken inside the fit span {r['broken_in_fit_span']:.0f}, "
-              f"module onset {r['module_onset_rad']} ({r['wall_time_s']:.0f} s)")
+              f"onset with the fixed constants {r['onset_rad']:.5f} (module, as run: {r['module_onset_rad']}) "
+              f"({r['wall_time_s']:.0f} s)")
     print(f"floor = {floor:.3g} (2 x the largest excess {worst:.3g}, one significant digit up, at least 1e-6)")
     if a.write:
         with open(a.config) as f:

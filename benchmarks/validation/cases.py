@@ -23,17 +23,21 @@ REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 class Figure:
     def __init__(self, id, key, source, reference_origin, band, calibrated_on="", tuned=(), variants=(),
-                 min_seeds=3, tiers=None, absolute=False, kind="validation", calibration_sizes=()):
+                 min_seeds=3, tiers=None, absolute=False, kind="validation", calibration_sizes=(), sizes=None):
         """band: the relative half-width, or {N: half-width} where VALIDATION.md sets it per size
         (the largest listed N at or below the run's N applies); absolute: the error is measured -
         reference and the band a half-width in the figure's unit (e.g. porosity +-0.02).
         kind: "validation", or "construction" for a figure the set-up makes true (reported, never
         judged); calibration_sizes: the N whose full-tier record is the calibration run's own
-        residual (kind "calibration"); the fast tier is "regression" (tools/ledger.py: record_kind)."""
+        residual (kind "calibration"); the fast tier is "regression" (tools/ledger.py: record_kind).
+        tiers / sizes: the tiers and N the figure is defined at (None: all of the case's)."""
         self.absolute, self.kind, self.calibration_sizes = absolute, kind, list(calibration_sizes)
         self.id, self.key, self.source, self.reference_origin = id, key, source, reference_origin
         self.band, self.calibrated_on, self.tuned, self.variants = band, calibrated_on, list(tuned), list(variants)
-        self.min_seeds, self.tiers = min_seeds, tiers
+        self.min_seeds, self.tiers, self.sizes = min_seeds, tiers, sizes
+
+    def applies(self, tier, n):
+        return (not self.tiers or tier in self.tiers) and (not self.sizes or n in self.sizes)
 
     def band_at(self, n):
         if not isinstance(self.band, dict):
@@ -147,7 +151,7 @@ CYLINDER = Case(
      Figure("seed001/cylinder_resistance_table3", "R_table3", CYLINDER_SRC + ": reproduce",
             "R_th (1 + e_III(N)), e_III Table III's error at N (4.65 / 3.77 / 2.85 % at 5k / 10k / 20k): the error "
             "against GranOO's own; band 1.5 points (issue 58 item 3: 2.9 +- 1.5 % at N = 20,000)", 0.015,
-            tuned=CONTACT_SEEN, tiers=["full"]),
+            tuned=CONTACT_SEEN, tiers=["full"], sizes=sorted(TABLE3)),
      Figure("seed001/cylinder_deep_bulk", "deep", CYLINDER_SRC + ": gate G3 of issue 58",
             "kappa rho_e = 1 (the continuum) in the disc r < r_d - 6 r_mean: the axial current of the branches crossing "
             "21 planes of the middle half over the disc area and the fitted potential gradient "

@@ -13,7 +13,11 @@
 ///              deviation (n >= kMinSamples, otherwise no trend and no onset)
 ///   departure  d = (u - u(x)) / (k sigma + eps), k = `sigmas`, eps = `floor` (the network
 ///              solver's relative tolerance on R); the onset is the first twist past theta_fit
-///              where d > 1 holds persistently (the caller's persistence filter)
+///              where |d| > 1 holds persistently (the caller's persistence filter). Both signs:
+///              in seed 001's network a broken bond can lower R, because S_i = alpha(n_i) r_i^2
+///              grows as n_i falls (alpha(3) = 13.6 against alpha(6) = 4), widening the element's
+///              remaining branches (calibration seed 102 at N = 5000: the first break moves R by
+///              -6.2e-5, the next ones raise it)
 ///
 /// The quadratic term carries the elastic drift of R: the beams' lengths change at first order
 /// in the shear with both signs, so the mean change is of second order in theta. u and x are

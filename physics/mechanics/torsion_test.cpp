@@ -112,8 +112,8 @@ ParamSpec<TorsionTest::Params> TorsionTest::spec() {
       .unit("rad")
       .nonnegative()
       .doc("the elastic trend of R / R0 (a quadratic in the twist) is fitted over the twists up to this; past it, the "
-           "trend onset is the first twist where R / R0 exceeds the trend by the threshold, held over "
-           "resistance_persistence (0: no trend onset)");
+           "trend onset is the first twist where R / R0 departs from the trend (either sign) by more than the threshold, "
+           "held over resistance_persistence (0: no trend onset)");
   s.add("resistance_trend_sigmas", &Params::resistance_trend_sigmas)
       .unit("1")
       .positive()
@@ -210,7 +210,7 @@ void TorsionTest::advance_trend(State& s, double theta, double ratio) {
     }
     return;
   }
-  held(m, "onset_trend", trend_departure(s) > 1.0, theta, p_.resistance_persistence);
+  held(m, "onset_trend", std::abs(trend_departure(s)) > 1.0, theta, p_.resistance_persistence);
 }
 
 double TorsionTest::trend_departure(const State& s) const {

@@ -25,7 +25,7 @@
 ///                before the span ends (the crack halves rattling, the elastic noise) is rejected
 ///                and counted (torsion_resistance_rejected_rises / _jumps)
 ///   trend onset  with `resistance_trend_fit_twist` > 0: the first twist past it where R / R0 leaves
-///                its elastic trend (a quadratic fitted on the twists up to it) by more than
+///                its elastic trend (a quadratic fitted on the twists up to it), either sign, by more than
 ///                `resistance_trend_sigmas` times the fit's residual deviation plus
 ///                `resistance_trend_floor`, held over `resistance_persistence` (resistance_trend.hpp;
 ///                issue 58 item 5). Samples are the new values of R at the twist of their re-solve;

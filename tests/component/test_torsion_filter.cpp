@@ -89,13 +89,14 @@ TEST_CASE("torsion_test resistance onsets: unfiltered first crossing; a persiste
 namespace {
 /// The trend onset on a scripted R/R0: an elastic quadratic drift 1 + 0.3 theta^2 with a
 /// deterministic +-1e-7 ripple, held for 5 calls at each value (a re-solve every 5 steps), and
-/// from step `rise_at` (twist rise_at x 0.1 mrad; < 0: never) a jump of 1e-5 and a rise of 2e-5 per mrad. Returns (onset, samples, departure
+/// from step `rise_at` (twist rise_at x 0.1 mrad; < 0: never) a jump `jump`, and from step
+/// `slope_from` (< 0: rise_at) a rise of 2e-5 per mrad. Returns (onset, samples, departure
 /// at the last call) from the module's columns.
 struct TrendResult {
   double onset, samples, departure;
 };
 
-TrendResult run_trend(int rise_at) {
+TrendResult run_trend(int rise_at, double jump = 1e-5, int slope_from = -1) {
   State s;
   test::add_sphere(s, Vec3(0, 0, 0), 1e-4, 7000.0);
   test::add_sphere(s, Vec3(0, 0, 2e-4), 1e-4, 7000.0);
@@ -119,7 +120,9 @@ TrendResult run_trend(int rise_at) {
     if (k % 5 == 0) {
       const double ripple = ((k / 5) % 2 == 0 ? 1.0 : -1.0) * 1e-7;
       ratio = 1.0 + 0.3 * theta * theta + (k == 0 ? 0.0 : ripple);
-      if (rise_at >= 0 && k >= rise_at) ratio += 2e-2 * 1e-4 * (k - rise_at) + 1e-5;
+      if (rise_at >= 0 && k >= rise_at) ratio += jump;
+      const int from = slope_from >= 0 ? slope_from : rise_at;
+      if (from >= 0 && k >= from) ratio += 2e-2 * 1e-4 * (k - from);
     }
     s.marks["signal/R"] = 2.0 * ratio;
     t.advance(s, StepInfo{k, 0.0, 0.0});
@@ -149,6 +152,11 @@ TEST_CASE("torsion_test trend onset: no detection on an elastic drift, the first
   const TrendResult cracked = run_trend(400);
   CHECK(cracked.onset == Approx(0.04).epsilon(1e-9));  // the first twist of the rise (step 400)
   CHECK(cracked.departure > 100.0);
+  // A drop of 1e-5 from 0.04 rad (a broken bond that widens its elements' other branches) and a
+  // rise only from 0.06 rad: detected at the drop.
+  const TrendResult dropped = run_trend(400, -1e-5, 600);
+  CHECK(dropped.onset == Approx(0.04).epsilon(1e-9));
+  CHECK(dropped.departure > 100.0);
 }
 
 TEST_CASE("resistance trend kernel: the quadratic and its residual deviation are exact on exact data", "[torsion]") {
