@@ -634,7 +634,8 @@ def run_jobs(runner, jobs, a):
             r = f.result()
             results.setdefault((c.id, n), []).append(r)
             status = r["error"] or ", ".join(
-                f"{k} {100 * (v['measured'] - v['reference']) / abs(v['reference']):+.2f} %"
+                (f"{k} {100 * (v['measured'] - v['reference']) / abs(v['reference']):+.2f} %" if v["reference"]
+                 else f"{k} {v['measured'] - v['reference']:+.4g} (absolute)")
                 if is_finite(v["measured"]) else f"{k} not evaluated" for k, v in r["figures"].items())
             print(f"  {c.id} N={n} seed={s}: {r['wall_s']:.1f} s wall, {r['cpu_s']:.1f} s CPU: {status}", flush=True)
     return results
