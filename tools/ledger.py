@@ -211,14 +211,21 @@ def check_rules(ledger, head_ledger=None, ledger_dir="."):
 
 
 def duplicate_figures(recs):
-    """Two figures of one case, tier and N with identical values in every run: one run counted twice."""
-    bad, by_run = [], {}
+    """Two figures of one case, tier and N with identical values, references and band in every run: one
+    run counted twice. One measured value judged against two references or two bands (a paper's own
+    error beside the continuum's, a reproduce band beside a tighter one) is two comparisons; figures
+    that equal each other by design list each other in `shares_values_with` (cases.py)."""
+    bad, by_run, shares = [], {}, {}
     for r in recs:
-        vals = tuple((p["seed"], p["measured"]) for p in r.get("per_seed") or [] if p.get("measured") is not None)
+        vals = tuple((p["seed"], p["measured"], p.get("reference")) for p in r.get("per_seed") or []
+                     if p.get("measured") is not None)
         if vals:
-            by_run.setdefault((r["case"].split("/")[0], r["tier"], r["N"], vals), []).append(r["case"])
-    for (src, tier, n, _), ids in by_run.items():
-        if len(ids) > 1:
+            band = json.dumps(r.get("band"), sort_keys=True)
+            by_run.setdefault((r["case"].split("/")[0], r["tier"], r["N"], vals, band), []).append(r["case"])
+        shares[r["case"]] = set(r.get("shares_values_with") or [])
+    for (src, tier, n, _, _), ids in by_run.items():
+        declared = all(b in shares.get(a, set()) or a in shares.get(b, set()) for a in ids for b in ids if a < b)
+        if len(ids) > 1 and not declared:
             bad.append(f"{', '.join(ids)} N={n} ({tier}): identical values in every run, one run counted twice")
     return bad
 

@@ -302,6 +302,7 @@ def make_record(case, fig, tier, n, runs, meta, first_values, fast_bands, marks=
            "wall_s": round(sum(r["wall_s"] for r in runs), 2), "cpu_s": round(sum(r["cpu_s"] for r in runs), 2),
            "threads": meta["threads"], "commit": meta["commit"], "clean": meta["clean"], "date": meta["date"],
            "configs": meta["configs"], "variants": fig.variants,
+           **({"shares_values_with": fig.shares_values_with} if fig.shares_values_with else {}),
            **({"error_kind": "absolute"} if fig.absolute else {}),
            **({"provisional": True} if meta.get("provisional") else {}),
            "tuned_after_seeing": tuned,
@@ -367,7 +368,7 @@ def judge_full(rec, fig):
 
 RECOMPUTED_FIELDS = ("kind", "measured", "reference", "error", "mean", "std", "count", "per_seed", "extra", "band",
                      "pass", "inside_band", "verdict", "tuned_after_seeing", "wall_s", "cpu_s", "commit", "clean",
-                     "provisional", "null_reason")
+                     "provisional", "null_reason", "shares_values_with")
 
 
 def run_file_path(ledger_path, tier, case_id, n):

@@ -23,18 +23,22 @@ REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 class Figure:
     def __init__(self, id, key, source, reference_origin, band, calibrated_on="", tuned=(), variants=(),
-                 min_seeds=3, tiers=None, absolute=False, kind="validation", calibration_sizes=(), sizes=None):
+                 min_seeds=3, tiers=None, absolute=False, kind="validation", calibration_sizes=(), sizes=None,
+                 shares_values_with=()):
         """band: the relative half-width, or {N: half-width} where VALIDATION.md sets it per size
         (the largest listed N at or below the run's N applies); absolute: the error is measured -
         reference and the band a half-width in the figure's unit (e.g. porosity +-0.02).
         kind: "validation", or "construction" for a figure the set-up makes true (reported, never
         judged); calibration_sizes: the N whose full-tier record is the calibration run's own
         residual (kind "calibration"); the fast tier is "regression" (tools/ledger.py: record_kind).
-        tiers / sizes: the tiers and N the figure is defined at (None: all of the case's)."""
+        tiers / sizes: the tiers and N the figure is defined at (None: all of the case's);
+        shares_values_with: figures this one may equal in every run by design (check-ledger's
+        one-run-counted-twice rule lets them)."""
         self.absolute, self.kind, self.calibration_sizes = absolute, kind, list(calibration_sizes)
         self.id, self.key, self.source, self.reference_origin = id, key, source, reference_origin
         self.band, self.calibrated_on, self.tuned, self.variants = band, calibrated_on, list(tuned), list(variants)
         self.min_seeds, self.tiers, self.sizes = min_seeds, tiers, sizes
+        self.shares_values_with = list(shares_values_with)
 
     def applies(self, tier, n):
         return (not self.tiers or tier in self.tiers) and (not self.sizes or n in self.sizes)
@@ -436,7 +440,8 @@ TORSION_CONTACT = Case(
             variants=["extra: twists of R doubling (jump_twist_rad) and separation, R/R0 at 0.07 rad"]),
      Figure("seed001/torsion_contact_onset_from_R", "onset_trend", TORSION_SRC + "; crack detection from R (issue 58 "
             "item 5)", "theta = tau_y L / (G r) = 0.0416 rad against the first persistent departure of R/R0 from its "
-            "elastic trend (torsion_test resistance_trend_*)", 0.05, calibrated_on=TORSION_CONTACT_CAL + "; " + TREND_CAL),
+            "elastic trend (torsion_test resistance_trend_*)", 0.05, calibrated_on=TORSION_CONTACT_CAL + "; " + TREND_CAL,
+            shares_values_with=["seed001/torsion_contact_first_break"]),  # the network is re-solved at each break
      Figure("seed001/torsion_contact_onset_from_R_vs_break", "trend_vs_break", TORSION_SRC + "; crack detection from R",
             "the same run's first broken bond (the detector against the crack it must see): within 5 %", 0.05,
             calibrated_on=TREND_CAL),

@@ -74,6 +74,18 @@ class Rules(unittest.TestCase):
         b["per_seed"] = [{"seed": 1, "measured": 2.0}]
         self.assertEqual(self.check({"records": [a, b]}), [])
 
+    def test_one_value_against_two_references_or_a_declared_pair_passes(self):
+        a = record(per_seed=[{"seed": 1, "measured": 1.0, "reference": 1.0}], band=0.05)
+        b = record(case="seed001/fig_b", per_seed=[{"seed": 1, "measured": 1.0, "reference": 1.1}], band=0.05)
+        self.assertEqual(self.check({"records": [a, b]}), [])  # two references: two comparisons
+        b["per_seed"][0]["reference"] = 1.0
+        self.assertTrue(any("counted twice" in x for x in self.check({"records": [a, b]})))
+        b["band"] = 0.092  # a reproduce band beside a tighter one
+        self.assertEqual(self.check({"records": [a, b]}), [])
+        b["band"] = 0.05
+        b["shares_values_with"] = ["seed001/fig_a"]  # equal by design (a detector that fires at the break)
+        self.assertEqual(self.check({"records": [a, b]}), [])
+
     def test_only_validation_records_pass(self):
         for kind in ("calibration", "construction", "regression"):
             bad = self.check({"records": [record(kind=kind)]})
