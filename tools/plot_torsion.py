@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Pin torsion plots (seed 001 Fig. 16) from a run of configs/torsion_crack.json.
+"""Pin torsion plots (seed 001 Fig. 16) from a run of configs/torsion_contact.json or torsion_crack.json.
 
 usage: tools/plot_torsion.py RUN_DIR [-o OUT_DIR] [--stage NAME]
 
@@ -9,7 +9,7 @@ and RUN_DIR/broken_bonds.csv, and writes to OUT_DIR (default RUN_DIR):
                      (right axis, log) and the broken-bond count (bottom panel), the onsets marked
   torsion_table.csv  the data of torsion.png, per time-series row: twist, torque, elastic torque,
                      tau_max/tau_y, R/R0, broken bonds, kinetic/elastic energy ratio
-  torsion_onsets.csv the onset twists marked in torsion.png (first break, R rise, separation)
+  torsion_onsets.csv the onset twists marked in torsion.png (first break, R rise, R off its trend, separation)
   torsion_breaks.png the broken bonds' midpoints (z against angle around the axis), coloured by
                      the twist at which they broke
   torsion_breaks.csv its data: per broken bond, angle [rad], z [m], twist at break [rad]
@@ -59,6 +59,8 @@ def main():
     onset_break = num(last["torsion_break_onset_twist"])
     onset_r = num(last["torsion_resistance_onset_twist"])
     separation = num(last["torsion_separation_twist"])
+    # the R-trend onset (configs/torsion_contact.json: resistance_trend_fit_twist > 0), else NaN
+    onset_trend = num(last.get("torsion_resistance_trend_onset_twist", "nan"))
 
     with open(os.path.join(out, "torsion_table.csv"), "w", newline="") as f:
         w = csv.writer(f)
@@ -70,7 +72,8 @@ def main():
     with open(os.path.join(out, "torsion_onsets.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["onset", "twist_rad"])
-        w.writerows([["first_break", onset_break], ["resistance_rise", onset_r], ["separation", separation]])
+        w.writerows([["first_break", onset_break], ["resistance_rise", onset_r], ["resistance_trend", onset_trend],
+                     ["separation", separation]])
 
     import matplotlib
     matplotlib.use("Agg")
@@ -86,7 +89,8 @@ def main():
         ax2.plot([t for t, _ in finite], [r for _, r in finite], "r-", label="R / R0")
     ax2.set_yscale("log")
     ax2.set_ylabel("R / R0 (red)")
-    for x, lab, c in [(onset_break, "first break", "b"), (onset_r, "R rise", "r"), (separation, "separation", "m")]:
+    for x, lab, c in [(onset_break, "first break", "b"), (onset_r, "R rise 1 %", "r"),
+                      (onset_trend, "R leaves its trend", "g"), (separation, "separation", "m")]:
         if math.isfinite(x):
             ax.axvline(x, color=c, ls="--", lw=0.8, label="%s %.4f rad" % (lab, x))
     ax.legend(loc="upper left", fontsize=8)
@@ -116,8 +120,8 @@ def main():
             axc.set_ylabel("z [mm]")
             fig.tight_layout()
             fig.savefig(os.path.join(out, "torsion_breaks.png"), dpi=120)
-    print("onset (first break) %.5g rad, resistance rise %.5g rad, separation %.5g rad; outputs in %s"
-          % (onset_break, onset_r, separation, out))
+    print("onset (first break) %.5g rad, resistance rise %.5g rad, R off its trend %.5g rad, separation %.5g rad; "
+          "outputs in %s" % (onset_break, onset_r, onset_trend, separation, out))
 
 
 if __name__ == "__main__":
