@@ -1075,6 +1075,6 @@ CASES = [PACKING, CYLINDER, CYLINDER_GAP002, CYLINDER_FIT, JOULE_ROD, NOTCH, PLA
 HEADLINE = [("seed000/nial_kappa_0.216", 17876), ("seed000/nial_kappa_0.050", 17876),
             ("seed000/table1_porosity_sample3", 300), ("seed001/cylinder_resistance", 20000),
             ("seed001/joule_rod_rise", 5000), ("seed001/notch_resistance", 20664), ("seed001/plate_P1", 20000),
-            ("seed001/beam_E_M", 10000), ("seed001/torsion_onset", 5000), ("seed002/phi_c_uniform", 0),
+            ("seed001/beam_E_M", 10000), ("seed001/torsion_contact_onset_from_R", 5000), ("seed002/phi_c_uniform", 0),
             ("seed002/t_exponent", 0), ("seed002/switch_strain_rkpm_uniform", 0),
             ("closed/thermal_stiff_hottest", 0)]
