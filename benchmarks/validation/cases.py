@@ -183,7 +183,8 @@ def run_cylinder_fit(ctx):
     import numpy as np
     here = os.path.join(REPO, "benchmarks", "validation", "runs", "full", "seed001_cylinder")
     x, y, share, used = [], [], [], []
-    now = {f: h for f, h in __import__("tools.validate", fromlist=["config_hashes"]).config_hashes(CYLINDER).items()}
+    from tools.validate import config_hashes
+    now = config_hashes(CYLINDER)
     for path in sorted(glob.glob(os.path.join(here, "N*.json"))):
         rf = load_json(path)
         if rf.get("configs") != now:

@@ -35,8 +35,9 @@ double scripted_ratio(int k) {
   return 1.0 + 1e-4 * k;              // elastic drift, below the 1 % threshold
 }
 
-Script run_script(double persistence) {
-  State s;
+/// A two-element pin (bottom and top sets, one sphere each) and the torsion_test parameters of
+/// its scripts, resistance read from signal "R".
+physics::TorsionTest::Params two_element_pin(State& s) {
   test::add_sphere(s, Vec3(0, 0, 0), 1e-4, 7000.0);
   test::add_sphere(s, Vec3(0, 0, 2e-4), 1e-4, 7000.0);
   test::id_set(s, "bottom", {s.particles.id[0]});
@@ -46,6 +47,20 @@ Script run_script(double persistence) {
   p.shear_modulus = 1e10;
   p.yield_shear_stress = 1e8;
   p.resistance_signal = "R";
+  return p;
+}
+
+/// The value of column `name` among the module's columns.
+double column(const std::vector<std::string>& cols, const std::vector<double>& v, const std::string& name) {
+  for (std::size_t i = 0; i < cols.size(); ++i)
+    if (cols[i] == name) return v[i];
+  FAIL("no column " << name);
+  return 0.0;
+}
+
+Script run_script(double persistence) {
+  State s;
+  physics::TorsionTest::Params p = two_element_pin(s);
   p.resistance_persistence = persistence;
   physics::TorsionTest t(p);
   const double R0 = 2.0;  // [Ohm]
@@ -60,12 +75,7 @@ Script run_script(double persistence) {
   }
   const auto cols = t.columns();
   v = t.column_values(s);
-  auto col = [&](const std::string& n) {
-    for (std::size_t i = 0; i < cols.size(); ++i)
-      if (cols[i] == n) return v[i];
-    FAIL("no column " << n);
-    return 0.0;
-  };
+  auto col = [&](const std::string& n) { return column(cols, v, n); };
   return {col("torsion_resistance_onset_twist"), col("torsion_resistance_jump_twist"), col("torsion_separation_twist"),
           col("torsion_resistance_rejected_rises"), col("torsion_resistance_rejected_jumps")};
 }
@@ -98,15 +108,7 @@ struct TrendResult {
 
 TrendResult run_trend(int rise_at, double jump = 1e-5, int slope_from = -1) {
   State s;
-  test::add_sphere(s, Vec3(0, 0, 0), 1e-4, 7000.0);
-  test::add_sphere(s, Vec3(0, 0, 2e-4), 1e-4, 7000.0);
-  test::id_set(s, "bottom", {s.particles.id[0]});
-  test::id_set(s, "top", {s.particles.id[1]});
-  physics::TorsionTest::Params p;
-  p.radius = 1e-4;
-  p.shear_modulus = 1e10;
-  p.yield_shear_stress = 1e8;
-  p.resistance_signal = "R";
+  physics::TorsionTest::Params p = two_element_pin(s);
   p.resistance_persistence = 1e-3;
   p.resistance_trend_fit_twist = 0.02;
   p.resistance_trend_sigmas = 5.0;
@@ -129,12 +131,7 @@ TrendResult run_trend(int rise_at, double jump = 1e-5, int slope_from = -1) {
   }
   const auto cols = t.columns();
   const auto v = t.column_values(s);
-  auto col = [&](const std::string& n) {
-    for (std::size_t i = 0; i < cols.size(); ++i)
-      if (cols[i] == n) return v[i];
-    FAIL("no column " << n);
-    return 0.0;
-  };
+  auto col = [&](const std::string& n) { return column(cols, v, n); };
   return {col("torsion_resistance_trend_onset_twist"), col("torsion_resistance_trend_samples"),
           col("torsion_resistance_trend_departure")};
 }
