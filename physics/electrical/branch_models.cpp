@@ -31,7 +31,9 @@ void resolve_touch_tolerance(BranchModel& m, double touch_tolerance_relative, co
   m.touch_tolerance = touch_tolerance_relative * s.particles.mean_radius();
 }
 
-std::vector<double> sintered_neck_radii(const BranchModel& m, const State& s, const InteractionGraph& g) {
+namespace {
+/// The necks before the grain-boundary-fraction correction (Eqs. 21 and CV, capped at r_min).
+std::vector<double> uncorrected_neck_radii(const BranchModel& m, const State& s, const InteractionGraph& g) {
   const auto& p = s.particles;
   auto radius = [&](Index v) { return g.is_wall_node(v) ? kInf : p.radius[v]; };
   std::vector<double> a(g.size(), 0.0);
@@ -47,12 +49,42 @@ std::vector<double> sintered_neck_radii(const BranchModel& m, const State& s, co
     // without the grain-boundary-fraction correction nothing else caps it.
     a[e] = std::min(a[e], std::min(ra, rb));
   }
-  if (m.gbf_correction) {
-    std::vector<double> node_r(g.nodes());
-    for (std::size_t v = 0; v < g.nodes(); ++v) node_r[v] = radius(static_cast<Index>(v));
-    a = el::corrected_neck_radii(g.a, g.b, a, node_r);
-  }
   return a;
+}
+
+std::vector<double> neck_graph_radii(const State& s, const InteractionGraph& g) {
+  std::vector<double> node_r(g.nodes());
+  for (std::size_t v = 0; v < g.nodes(); ++v) node_r[v] = g.is_wall_node(static_cast<Index>(v)) ? kInf : s.particles.radius[v];
+  return node_r;
+}
+}  // namespace
+
+std::vector<double> sintered_neck_radii(const BranchModel& m, const State& s, const InteractionGraph& g) {
+  std::vector<double> a = uncorrected_neck_radii(m, s, g);
+  if (m.gbf_correction) a = el::corrected_neck_radii(g.a, g.b, a, neck_graph_radii(s, g));
+  return a;
+}
+
+NetworkNecks network_necks(const BranchModel& m, const State& s, const InteractionGraph& g) {
+  const std::vector<double> raw = uncorrected_neck_radii(m, s, g);
+  const std::vector<double> node_r = neck_graph_radii(s, g);
+  const std::vector<double> a = m.gbf_correction ? el::corrected_neck_radii(g.a, g.b, raw, node_r) : raw;
+  const std::vector<double> alpha = el::grain_boundary_fraction_factors(g.a, g.b, raw, node_r);
+  NetworkNecks out;
+  std::vector<char> has_neck(g.nodes(), 0);
+  for (std::size_t e = 0; e < g.size(); ++e) {
+    if (!(a[e] > 0.0) || g.is_wall_node(g.a[e]) || g.is_wall_node(g.b[e])) continue;
+    out.ratios.push_back(a[e] / std::min(node_r[g.a[e]], node_r[g.b[e]]));
+    has_neck[g.a[e]] = has_neck[g.b[e]] = 1;
+  }
+  double with = 0.0, bound = 0.0;
+  for (std::size_t v = 0; v < g.nodes(); ++v)
+    if (has_neck[v]) {
+      with += 1.0;
+      if (alpha[v] < 1.0) bound += 1.0;
+    }
+  out.bound_share = with > 0.0 ? bound / with : kNaN;
+  return out;
 }
 
 double hemisphere_access_conductance(const BranchModel& m, double kappa_S_per_m, double r_m, double a_m) {

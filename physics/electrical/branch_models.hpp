@@ -62,6 +62,17 @@ std::vector<double> branch_conductances(const BranchModel& m, const State& s, co
 /// grain-boundary-fraction correction (Eqs. 21-25) when enabled.
 std::vector<double> sintered_neck_radii(const BranchModel& m, const State& s, const InteractionGraph& g);
 
+/// sintered_neck: the necks the network conducts through, between particles (after Eqs. 21-25,
+/// as sintered_neck_radii), as x = a / r_min per neck, and the share of the particles with a neck
+/// whose grain-boundary fraction binds (Eq. 25: alpha_i = 2 r_i / sqrt(sum a^2) < 1 on the
+/// uncorrected necks; reported whether or not the correction is on). Issue 59: seed 000's Fig. 6
+/// histogram on the necks the network uses.
+struct NetworkNecks {
+  std::vector<double> ratios;  ///< a / r_min [1]
+  double bound_share = 0.0;    ///< [1]; NaN without necks
+};
+NetworkNecks network_necks(const BranchModel& m, const State& s, const InteractionGraph& g);
+
 /// sintered_neck: the half-particle conductance [S] of the model's hemisphere law (Eqs. 19-20).
 double hemisphere_access_conductance(const BranchModel& m, double kappa_S_per_m, double r_m, double a_m);
 

@@ -10,6 +10,7 @@
 #include "physics/electrical/branch_models.hpp"
 #include "physics/electrical/conductance_kernels.hpp"
 #include "physics/electrical/sphere_element.hpp"
+#include "physics/packing/neck_statistics.hpp"
 #include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
@@ -370,6 +371,12 @@ void ElectricalNetwork::record_reference_eccentricity(State& s, const Interactio
     }
 }
 
+void ElectricalNetwork::record_network_necks(const State& s, const InteractionGraph& g) {
+  NetworkNecks n = network_necks(branch_, s, g);
+  const NeckStatistics st = neck_statistics(std::move(n.ratios), 10);  // Fig. 6: 10 bins on [0, 1]
+  r_.necks = {st.necks, st.median, st.max_bin_percent, st.last_bin_percent, n.bound_share};
+}
+
 std::vector<double> ElectricalNetwork::particle_conductivities(const State& s) const {
   std::vector<double> k(s.particles.size(), kappa_);
   if (p_.temperature_field) {
@@ -716,6 +723,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   const InteractionGraph g = build_interaction_graph(s, go);
   std::vector<double> G, share;
   try {  // the sphere-element topology builds its own conductances from the neck radii
+    if (branch_.model == "sintered_neck") record_network_necks(s, g);
     record_reference_eccentricity(s, g);
     if (p_.topology != "sphere_element") G = conductances(s, g, share);
   } catch (const ConfigError& e) { throw PhysicsError(info.step, {}, "electrical conductance", e.what()); }
@@ -806,6 +814,9 @@ std::vector<std::string> ElectricalNetwork::columns() const {
       "electrical_length",           "electrical_solves"};
   if (p_.topology == "sphere_element") c.push_back("electrical_negative_share");
   if (p_.solver == "amg") c.push_back("electrical_amg_ranks");
+  if (branch_.model == "sintered_neck")
+    c.insert(c.end(), {"network_necks", "network_neck_median_a_over_rmin", "network_neck_max_bin_percent",
+                       "network_neck_last_bin_percent", "network_neck_gbf_bound_share"});
   return c;
 }
 
@@ -815,6 +826,7 @@ std::vector<double> ElectricalNetwork::column_values(const State&) const {
                            r_.iterations, r_.seconds,         r_.length,           r_.solves};
   if (p_.topology == "sphere_element") v.push_back(r_.negative_share);
   if (p_.solver == "amg") v.push_back(r_.amg_ranks);
+  if (branch_.model == "sintered_neck") v.insert(v.end(), r_.necks.begin(), r_.necks.end());
   return v;
 }
 
@@ -832,6 +844,11 @@ void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
   }
   if (p_.solver == "amg" && (!ar.reading() || ar.has(prefix + "/amg_ranks"))) ar.visit(prefix + "/amg_ranks", r_.amg_ranks);
   if (p_.topology == "sphere_element") ar.visit(prefix + "/negative_share", r_.negative_share);
+  if (branch_.model == "sintered_neck" && (!ar.reading() || ar.has(prefix + "/network_necks"))) {
+    ar.visit(prefix + "/network_necks", r_.necks);
+    if (r_.necks.size() != 5)
+      throw SetupError("checkpoint electrical_network network_necks has " + std::to_string(r_.necks.size()) + " values, expected 5");
+  }
   solver_.visit(ar, prefix + "/solver");
   // The resolved gap tolerance (touch_tolerance_relative: from the radii at the stage start).
   if (!ar.reading() || ar.has(prefix + "/touch_tolerance_m")) {

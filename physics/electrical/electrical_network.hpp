@@ -38,7 +38,11 @@
 /// time-series columns electrical_current [A] (leaving the high electrode), its mismatch with the
 /// low electrode, electrical_resistance [Ohm] (+inf without a spanning path), the effective
 /// conductivity kappa_eff = I L / (dV A) (seed 000 Eq. 28), electrical_power [W] (sum I^2 R) and
-/// its mismatch with V I, the Kirchhoff residual, floating nodes, iterations, solve time.
+/// its mismatch with V I, the Kirchhoff residual, floating nodes, iterations, solve time; with
+/// model sintered_neck also the necks the network conducts through (after Eqs. 21-25) as seed
+/// 000's Fig. 6 reads them: network_necks, network_neck_median_a_over_rmin,
+/// network_neck_max_bin_percent, network_neck_last_bin_percent (10 bins of a / r_min on [0, 1]) and
+/// network_neck_gbf_bound_share (particles whose Eq. 25 binds, of those with a neck).
 ///
 /// Clock: on an event by default — on the initial state, when any particle moved more than
 /// `resolve_distance` (default 0.05 x the smallest radius), a bond broke, (temperature_field) a
@@ -72,6 +76,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/core/numbers.hpp"
 #include "engine/graph/interaction_graph.hpp"
 #include "engine/graph/laplacian.hpp"
 #include "engine/model/module.hpp"
@@ -179,6 +184,9 @@ class ElectricalNetwork final : public Module {
     double power_particles = 0.0;  ///< part of `power` that heats particles (joule_power summed) [W]; the rest heats wall electrodes
     double negative_share = 0.0;   ///< sphere_element: sum of the negative element conductances over the positive ones [-]
     double amg_ranks = 1.0;        ///< amg: MPI ranks the last solve was spread over
+    /// sintered_neck: seed 000's Fig. 6 statistics of the necks the network conducts through
+    /// (after Eqs. 21-25; 10 bins of a / r_min) and the share of particles Eq. 25 binds.
+    std::vector<double> necks = {0.0, kNaN, kNaN, kNaN, kNaN};
   };
   const Result& result() const { return r_; }
 
@@ -189,6 +197,8 @@ class ElectricalNetwork final : public Module {
   bool reference_eccentricity() const { return p_.eccentricity == "reference" && p_.model == "transmission_surface"; }
   /// eccentricity = "reference": e_i of every particle that has none yet, from the current graph.
   void record_reference_eccentricity(State& s, const InteractionGraph& g) const;
+  /// sintered_neck: Result::necks from the current graph.
+  void record_network_necks(const State& s, const InteractionGraph& g);
   /// Bulk conductivity per particle [S/m]: at `temperature`, or at its `temperature` field value.
   std::vector<double> particle_conductivities(const State& s) const;
   Params p_;
