@@ -129,3 +129,76 @@ def quasi_static_gates(columns, punch="top"):
     for name, passes in GATES.items():
         out[name + "_pass"] = None if vals[name] is None else passes(vals[name])
     return out
+
+
+# Issue 59's gates of a uniform hot press, fixed before kappa is compared (they replace issue 36's
+# core-minus-compact and all-bins gates, which no press of this size distribution can meet):
+#   G1 uniform: the interior's relative density (by mass, one largest diameter from every wall:
+#      the compact monitor's porosity_mass_interior) over the whole sample's rises by at most 2 %
+#      over the same ratio in the packing before the press (a uniform compaction keeps it);
+#   G2 die: the 99.5th percentile over particles of (distance from the die axis + radius) is at
+#      least 0.99 of the die radius;
+#   G4 necks (seed 000 Fig. 6) on the necks the network uses (after Eqs. 21-25: the sintered_neck
+#      network's network_neck_* columns): the last bin (0.9-1.0) at most 25 %, and the median
+#      rising strictly over the snapshots (checked across snapshots: median_rises).
+# G3 (rate: kappa without the layer moves < 1 % at half the rate) needs a second run.
+UNIFORM_GATES = {"g1_density_ratio_rise": lambda v: v <= 0.02, "g2_envelope_p995_over_die": lambda v: v >= 0.99,
+                 "g4_network_neck_last_bin_percent": lambda v: v <= 25.0}
+
+
+def density_ratio(columns):
+    """Interior over whole relative density by mass from compact-monitor columns (None if absent)."""
+    core, whole = columns.get("porosity_mass_interior"), columns.get("porosity_mass")
+    if core is None or whole is None or not np.isfinite(float(core)) or not np.isfinite(float(whole)):
+        return None
+    return (1.0 - float(core)) / (1.0 - float(whole))
+
+
+def envelope_p995(h5_path, die="die"):
+    """The 99.5th percentile over particles of (distance from the die axis + radius) over the die
+    radius, from a checkpoint-format snapshot (state/walls/<die>/geometry: point, axis, radius)."""
+    import h5py
+    with h5py.File(h5_path, "r") as f:
+        x = f["state/particles/position"][()]
+        r = f["state/particles/radius"][()]
+        g = f[f"state/walls/{die}/geometry"][()][0]
+    point, axis = g[0:3], g[3:6] / np.linalg.norm(g[3:6])
+    d = x - point
+    radial = np.linalg.norm(d - np.outer(d @ axis, axis), axis=1)
+    return float(np.percentile(radial + r, 99.5) / g[6])
+
+
+def uniform_press_gates(out_dir, summary, press="hot_press", packing_stage="heat", network_sweep="conductivity_no_gb"):
+    """Issue 59's gate quantities per snapshot of `press`: {snapshot index: {name: value, name + "_pass":
+    bool, and beside them the packing's density ratio, the fullest network-neck bin, the median and
+    the share of particles Eq. 25 binds}}, plus the key "median_rises" (bool, or None) across them.
+    The packing's ratio is the first time-series row of `packing_stage` (its state before the press)."""
+    import os
+    ts = timeseries(out_dir)
+    stage_index = next(k for k, s in enumerate(summary["stages"]) if s["name"] == packing_stage)
+    first = int(np.argmax(ts["stage"] == stage_index))
+    packing = density_ratio({c: ts[c][first] for c in ("porosity_mass_interior", "porosity_mass") if c in ts})
+    rows = {}
+    st = find_stage(summary, network_sweep)
+    for row in (st or {}).get("sweep", {}).get("rows", []):
+        if row.get("phase", "validate") == "validate" and "values" in row:
+            rows[row["snapshot_index"]] = row["values"]
+    out = {}
+    for taken in find_stage(summary, press).get("snapshots", {}).get("taken", []):
+        k, cols = taken["index"], taken.get("columns", {})
+        ratio, net = density_ratio(cols), rows.get(k, {})
+        env = (cols["envelope_p995_radius"] / cols["die_radius"] if "envelope_p995_radius" in cols  # the compact monitor's
+               else envelope_p995(os.path.join(out_dir, taken["file"])))  # runs from before the column
+        vals = {"g1_density_ratio_rise": ratio / packing - 1.0 if ratio is not None and packing else None,
+                "g2_envelope_p995_over_die": env,
+                "g4_network_neck_last_bin_percent": net.get("network_neck_last_bin_percent")}
+        out[k] = dict(vals, g1_density_ratio=ratio, g1_density_ratio_packing=packing,
+                      network_neck_max_bin_percent=net.get("network_neck_max_bin_percent"),
+                      network_neck_median_a_over_rmin=net.get("network_neck_median_a_over_rmin"),
+                      network_neck_gbf_bound_share=net.get("network_neck_gbf_bound_share"))
+        for name, passes in UNIFORM_GATES.items():
+            out[k][name + "_pass"] = None if vals[name] is None else passes(vals[name])
+    medians = [out[k]["network_neck_median_a_over_rmin"] for k in sorted(out)]
+    out["median_rises"] = (all(b > a for a, b in zip(medians, medians[1:]))
+                           if medians and all(m is not None for m in medians) else None)
+    return out

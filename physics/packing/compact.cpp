@@ -59,7 +59,7 @@ ParamSpec<CompactParams> compact_spec() {
                  "clipped to the die and the punches, sphere-sphere lens volumes subtracted), porosity_interior, porosity_mass (lenses not "
                  "subtracted: mass-conserving, for sintered compacts), "
                  "relative_density, compact_height, envelope_radius, porosity_envelope (by mass in the sample's own envelope), "
-                 "die_radius, porosity_mass_interior");
+                 "die_radius, porosity_mass_interior, envelope_p995_radius (99.5th percentile of axis distance + radius)");
   s.add("die", &P::die).doc("the die: a cylinder wall (its current radius R)");
   s.add("bottom", &P::bottom).doc("lower punch: a plane wall normal to the die axis");
   s.add("top", &P::top).doc("upper punch: a plane wall normal to the die axis, facing the lower one");
@@ -107,8 +107,26 @@ CylinderRegion compact_region(const State& s, const CompactParams& p) {
 
 std::vector<std::string> CompactMonitor::columns(const State&) const {
   return {"porosity",      "porosity_interior", "relative_density",  "compact_height",        "porosity_mass",
-          "envelope_radius", "porosity_envelope", "die_radius", "porosity_mass_interior"};
+          "envelope_radius", "porosity_envelope", "die_radius", "porosity_mass_interior", "envelope_p995_radius"};
 }
+
+namespace {
+/// The 99.5th percentile of (distance from the region's axis + radius) over the particles.
+double envelope_p995(const std::vector<Vec3>& positions, const std::vector<double>& radii, const CylinderRegion& region) {
+  std::vector<double> v(positions.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const Vec3 d = positions[i] - region.base;
+    v[i] = (d - d.dot(region.axis) * region.axis).norm() + radii[i];
+  }
+  const double at = 0.995 * static_cast<double>(v.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(at));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(lo), v.end());
+  const double below = v[lo];
+  if (lo + 1 >= v.size()) return below;
+  const double above = *std::min_element(v.begin() + static_cast<std::ptrdiff_t>(lo) + 1, v.end());
+  return below + (at - static_cast<double>(lo)) * (above - below);
+}
+}  // namespace
 
 double envelope_volume(const std::vector<Vec3>& positions, const std::vector<double>& radii, const CylinderRegion& region,
                        double cell_diameters) {
@@ -161,7 +179,7 @@ std::vector<double> free_radii(const ParticleStore& p) {
 std::vector<double> CompactMonitor::values(const State& s) const {
   const CylinderRegion region = compact_region(s, p_);
   const auto& p = s.particles;
-  if (p.size() == 0) return {1.0, 1.0, 0.0, region.height, 1.0, 0.0, 1.0, region.radius, 1.0};
+  if (p.size() == 0) return {1.0, 1.0, 0.0, region.height, 1.0, 0.0, 1.0, region.radius, 1.0, 0.0};
   const auto pairs = find_pairs(p.position, p.radius, 0.0);
   // Each region's spheres once; the lenses subtracted for `porosity`, not for the porosities by
   // mass (in sintering DEM the overlap stands for shrinkage; the lens material sits in the neck).
@@ -194,7 +212,9 @@ std::vector<double> CompactMonitor::values(const State& s) const {
   const double v_env = envelope_volume(p.position, p.radius, region, p_.envelope_cell);
   const double porosity_envelope = 1.0 - compact_solid_volume(p.position, r_mass, {}, all) / v_env;
   const double r_env = std::sqrt(v_env / (kPi * region.height));
-  return {porosity, interior, 1.0 - porosity, region.height, porosity_mass, r_env, porosity_envelope, region.radius, interior_mass};
+  return {porosity,          interior,      1.0 - porosity, region.height,
+          porosity_mass,     r_env,         porosity_envelope, region.radius,
+          interior_mass,     envelope_p995(p.position, p.radius, region)};
 }
 
 }  // namespace sparkdem::physics

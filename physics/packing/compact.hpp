@@ -94,7 +94,10 @@ double envelope_volume(const std::vector<Vec3>& positions, const std::vector<dou
 /// from the die wall on cooling is measured on its own size, as a sample taken out of the die
 /// (issue 21 item 7); die_radius = R [m] (envelope_radius / die_radius: does the compact fill
 /// its die?); porosity_mass_interior: porosity_mass of the interior region (core against
-/// compact: a uniform densification has them equal; issue 36's quasi-static gates). Overlapping pairs are found afresh from the current positions
+/// compact: a uniform densification has them equal; issue 36's quasi-static gates);
+/// envelope_p995_radius [m]: the 99.5th percentile over particles of (distance from the die axis +
+/// radius), linear between order statistics as numpy's percentile (issue 59's G2: does the pressed
+/// compact stay on its die wall?). Overlapping pairs are found afresh from the current positions
 /// (cell-grid search, O(N); deterministic order), so bonded pairs and pairs of any law count.
 /// Registered as the monitor (stage key) "compact" in physics/register_all.cpp.
 class CompactMonitor final : public Monitor {

@@ -141,7 +141,8 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   const auto cols = mon.columns(s);
   const auto vals = mon.values(s);
   REQUIRE(cols == std::vector<std::string>{"porosity", "porosity_interior", "relative_density", "compact_height", "porosity_mass",
-                                           "envelope_radius", "porosity_envelope", "die_radius", "porosity_mass_interior"});
+                                           "envelope_radius", "porosity_envelope", "die_radius", "porosity_mass_interior",
+                                           "envelope_p995_radius"});
   const double V = sphere_volume(r), VL = lens_volume(r, r, 1.6e-3);
   const double H = 8.8e-3, R = 4.5e-3;
   const double porosity = 1.0 - (4.0 * V - VL - cap_volume(r, 0.3e-3)) / (kPi * R * R * H);
@@ -160,6 +161,10 @@ TEST_CASE("compact monitor: porosity in the die between the punches at their cur
   CHECK(std::abs(vals[7] - R) <= 1e-18);
   // Interior by mass: A and B whole (the lens not subtracted).
   CHECK(std::abs(vals[8] - (1.0 - 2.0 * V / (kPi * 2.3e-3 * 2.3e-3 * (H - 4.4e-3)))) <= 1e-12);
+  // 99.5th percentile of axis distance + radius, linear between order statistics (numpy's rule):
+  // sorted 1, 1, 1 + sqrt(5), 4.4 mm; position 0.995 x 3 = 2.985 between the third and the fourth.
+  const double third = (1.0 + std::sqrt(5.0)) * 1e-3, fourth = 4.4e-3;
+  CHECK(std::abs(vals[9] - (third + 0.985 * (fourth - third))) <= 1e-15);
   // The die axis may point either way; the punches must face each other across it.
   std::get<CylinderShape>(s.walls[0].shape).axis = -Vec3::UnitZ();
   CHECK(std::abs(mon.values(s)[0] - porosity) <= 1e-12);
