@@ -594,27 +594,32 @@ NOTCH = Case(
 TABLE1 = {0.216: 4.33e6, 0.164: 6.14e6, 0.106: 7.44e6, 0.050: 8.77e6}
 
 
-def element_stage(snapshot, gb_thickness, scene):
-    """A zero-step stage on `snapshot` with the scene's conductivity module switched to the sphere-element
-    topology (issue 21; physics/electrical/sphere_element.hpp), layer thickness gb_thickness [m]."""
+ELEMENT = {"topology": "sphere_element"}
+FE_TABLE = {"hemisphere": "fe_table"}
+
+
+def element_stage(snapshot, gb_thickness, scene, network=ELEMENT):
+    """A zero-step stage on `snapshot` with the scene's conductivity module changed by `network`
+    (default: the sphere-element topology of issue 21, physics/electrical/sphere_element.hpp; FE_TABLE:
+    the hemisphere FE table instead of Eq. 19's linear law), layer thickness gb_thickness [m]."""
     mod = json.loads(json.dumps(only_stage(scene, name="conductivity_no_gb")["modules"]["electrical_network"]))
-    mod.update({"topology": "sphere_element", "gb_thickness": gb_thickness})
+    mod.update(network, gb_thickness=gb_thickness)
     return {"name": "element", "type": "dynamics", "sets": ["top_electrode", "bottom_electrode"], "from_snapshot": snapshot,
             "dt_fraction": 0.1, "stop": {"steps": 0}, "modules": {"electrical_network": mod}}
 
 
-def element_kappa(ctx, scene, snapshots, gb_thickness, name):
-    """kappa_eff [S/m] of the sphere-element network on each snapshot (one scene, a stage each)."""
+def element_kappa(ctx, scene, snapshots, gb_thickness, name, network=ELEMENT):
+    """kappa_eff [S/m] of the `network` variant on each snapshot (one scene, a stage each)."""
     c = json.loads(json.dumps(scene))
-    c["stages"] = [dict(element_stage(sn, gb_thickness, scene), name=f"element_{k}") for k, sn in enumerate(snapshots)]
+    c["stages"] = [dict(element_stage(sn, gb_thickness, scene, network), name=f"element_{k}") for k, sn in enumerate(snapshots)]
     out = ctx.sparkdem(c, name=name)
     import csv as _csv
     rows = list(_csv.DictReader(open(os.path.join(out, "timeseries.csv"))))
     return [float(next(r for r in rows if int(r["stage"]) == k)["electrical_conductivity_eff"]) for k in range(len(snapshots))]
 
 
-def element_figures(ctx, scene, out, at, target_index):
-    """The sphere-element network on the run's snapshots: without the layer, and with the layer's
+def element_figures(ctx, scene, out, at, target_index, network=ELEMENT, tag="element"):
+    """The `network` variant on the run's snapshots: without the layer, and with the layer's
     thickness calibrated on snapshot `target_index` (networks.calibrate_thickness, epsilon as in the
     scene) then applied to every snapshot. Returns (no layer, calibrated, delta)."""
     snaps = [os.path.abspath(os.path.join(out, "snapshots", f"hot_press_{k}.h5")) for k in range(len(at))]
@@ -622,14 +627,31 @@ def element_figures(ctx, scene, out, at, target_index):
     if any(sn is None for sn in snaps):
         return {}, {}, None
     from benchmarks.sps_nial.networks import calibrate_thickness
-    bare = element_kappa(ctx, scene, snaps, 0.0, "element_no_layer")
+    bare = element_kappa(ctx, scene, snaps, 0.0, f"{tag}_no_layer", network)
     delta, _ = calibrate_thickness(
-        lambda d: element_kappa(ctx, scene, [snaps[target_index]], d, f"element_cal_{math.log(d):.6f}")[0], TABLE1[at[target_index]])
-    cal = element_kappa(ctx, scene, snaps, delta, "element_calibrated")
+        lambda d: element_kappa(ctx, scene, [snaps[target_index]], d, f"{tag}_cal_{math.log(d):.6f}", network)[0],
+        TABLE1[at[target_index]])
+    cal = element_kappa(ctx, scene, snaps, delta, f"{tag}_calibrated", network)
     return dict(enumerate(bare)), dict(enumerate(cal)), delta
 
 
-def run_nial(config, element=False):
+def variant_kappa_figures(ctx, c, out, at, taken, network, tag):
+    """Figures {tag}_kappa_P of a network variant on the run's snapshots (calibrated on 0.164)."""
+    res = {}
+    bare, calibrated, delta = element_figures(ctx, c, out, at, at.index(0.164), network, tag)
+    for idx, p in enumerate(at):
+        ref = next((k for q, k in TABLE1.items() if abs(q - p) < 1e-9), None)
+        if ref is None or idx not in calibrated:
+            continue
+        hs = 9.8e6 * 2.0 * (1.0 - taken.get(idx, {}).get("value", p)) / (2.0 + taken.get(idx, {}).get("value", p))
+        res[f"{tag}_kappa_{p:.3f}"] = fig(calibrated[idx], ref, porosity_taken=taken.get(idx, {}).get("value"),
+                                          kappa_without_layer=bare.get(idx), delta_gb_calibrated_m=delta,
+                                          hashin_shtrikman_bound_mass_porosity=hs,
+                                          kappa_without_layer_over_bound=bare.get(idx, float("nan")) / hs)
+    return res
+
+
+def run_nial(config, element=False, fe_table=False):
     def run(ctx):
         from tools import sps_outputs as so
         c = ctx.config(config)
@@ -645,6 +667,7 @@ def run_nial(config, element=False):
         at = at["at"] if isinstance(at, dict) else at
         gb, nogb = so.sweep_values(s, "conductivity_gb"), so.sweep_values(s, "conductivity_no_gb")
         cal = so.calibration(s, "conductivity_gb") or {}
+        uniform = so.uniform_press_gates(out, s)
         res = {}
         for idx, p in enumerate(at):
             ref = next((k for q, k in TABLE1.items() if abs(q - p) < 1e-9), None)
@@ -652,21 +675,92 @@ def run_nial(config, element=False):
                 continue
             gates = {f"qs_{k}": v for k, v in so.quasi_static_gates(taken.get(idx, {}).get("columns", {})).items()
                      if v is not None and not k.endswith("_pass")}
+            gates.update({f"u_{k}": v for k, v in uniform.get(idx, {}).items() if v is not None and not k.endswith("_pass")})
+            if uniform.get("median_rises") is not None:
+                gates["u_g4_median_rises"] = float(uniform["median_rises"])
             res[f"kappa_{p:.3f}"] = fig(gb[idx], ref, porosity_taken=taken.get(idx, {}).get("value"),
                                         kappa_without_layer=nogb.get(idx), delta_gb_calibrated_m=cal.get("value"), **gates)
         if element and 0.164 in at:
-            bare, calibrated, delta = element_figures(ctx, c, out, at, at.index(0.164))
-            for idx, p in enumerate(at):
-                ref = next((k for q, k in TABLE1.items() if abs(q - p) < 1e-9), None)
-                if ref is None or idx not in calibrated:
-                    continue
-                hs = 9.8e6 * 2.0 * (1.0 - taken.get(idx, {}).get("value", p)) / (2.0 + taken.get(idx, {}).get("value", p))
-                res[f"element_kappa_{p:.3f}"] = fig(calibrated[idx], ref, porosity_taken=taken.get(idx, {}).get("value"),
-                                                    kappa_without_layer=bare.get(idx), delta_gb_calibrated_m=delta,
-                                                    hashin_shtrikman_bound_mass_porosity=hs,
-                                                    kappa_without_layer_over_bound=bare.get(idx, float("nan")) / hs)
+            res.update(variant_kappa_figures(ctx, c, out, at, taken, ELEMENT, "element"))
+        if fe_table and 0.164 in at:
+            res.update(variant_kappa_figures(ctx, c, out, at, taken, FE_TABLE, "fe_table"))
         return res
     return run
+
+
+def affine_stage(scene, snapshot, scale, origin, gb_thickness, name):
+    """A zero-step stage on the packed `snapshot` mapped by `affine` (engine/state/affine_map.hpp),
+    with the scene's no-layer network (layer thickness gb_thickness [m]) and its compact monitor."""
+    mod = json.loads(json.dumps(only_stage(scene, name="conductivity_no_gb")["modules"]["electrical_network"]))
+    mod["gb_thickness"] = gb_thickness
+    return {"name": name, "type": "dynamics", "sets": ["top_electrode", "bottom_electrode"], "from_snapshot": snapshot,
+            "affine": {"scale": list(scale), "origin": list(origin)}, "dt_fraction": 0.1, "stop": {"steps": 0},
+            "modules": {"electrical_network": mod}, "compact": only_stage(scene, name="hot_press")["compact"]}
+
+
+def affine_rows(ctx, scene, snapshot, scales, origin, gb_thickness, name):
+    """The last time-series row of each affine stage (one scene, a stage per scale)."""
+    c = json.loads(json.dumps(scene))
+    c["stages"] = [affine_stage(scene, snapshot, sc, origin, gb_thickness, f"affine_{k}") for k, sc in enumerate(scales)]
+    out = ctx.sparkdem(c, name=name)
+    import csv as _csv
+    rows = list(_csv.DictReader(open(os.path.join(out, "timeseries.csv"))))
+    def number(v):
+        try:
+            return float(v)
+        except (TypeError, ValueError):
+            return float("nan")
+    return [{k: number(v) for k, v in [r for r in rows if int(r["stage"]) == q][-1].items()} for q in range(len(scales))]
+
+
+def run_nial_affine(ctx):
+    """Issue 59's uniform references: the packed state of sps_nial.json (its pack stage, this seed)
+    densified by an affine map to each of Table 1's porosities by mass, isotropically (positions,
+    die and punches x s about the die axis on the lower punch, s^3 = (1 - p0) / (1 - p)) and
+    uniaxially (heights x (1 - p0) / (1 - p)), through the main scenario's network (no layer; the
+    layer's thickness calibrated on 0.164 as there). No press: what a uniform microstructure of
+    this packing gives. p0: the packed state's own porosity by mass (first pass)."""
+    from benchmarks.sps_nial.networks import calibrate_thickness
+    from tools import sps_outputs as so
+    c = ctx.config("configs/sps_nial.json")
+    c["seed"] = ctx.seed
+    packed = json.loads(json.dumps(c))
+    packed["stages"] = [c["stages"][0]]
+    snap = os.path.abspath(os.path.join(ctx.sparkdem(packed, name="packed"), "final_state.h5"))
+    import h5py
+    with h5py.File(snap, "r") as f:
+        bottom = f["state/walls/bottom/geometry"][()][0]
+        die = f["state/walls/die/geometry"][()][0]
+        u_bottom = float(f["state/walls/bottom/u"][()])
+    origin = [die[0], die[1], bottom[2] + u_bottom * bottom[5]]
+    p0 = affine_rows(ctx, c, snap, [[1.0, 1.0, 1.0]], origin, 0.0, "packed_porosity")[0]
+    targets = sorted(TABLE1, reverse=True)
+    res = {}
+    for mode in ("isotropic", "uniaxial"):
+        ratio = [(1.0 - p0["porosity_mass"]) / (1.0 - p) for p in targets]
+        scales = [[r ** (1 / 3)] * 3 if mode == "isotropic" else [1.0, 1.0, r] for r in ratio]
+        bare = affine_rows(ctx, c, snap, scales, origin, 0.0, f"{mode}_no_layer")
+        k_cal = targets.index(0.164)
+        delta, _ = calibrate_thickness(lambda d: affine_rows(ctx, c, snap, [scales[k_cal]], origin, d,
+                                                             f"{mode}_cal_{math.log(d):.6f}")[0]["electrical_conductivity_eff"],
+                                       TABLE1[0.164])
+        cal = affine_rows(ctx, c, snap, scales, origin, delta, f"{mode}_calibrated")
+        packing_ratio = so.density_ratio(p0)
+        medians = [r["network_neck_median_a_over_rmin"] for r in bare]
+        for k, p in enumerate(targets):
+            b, ratio_k = bare[k], so.density_ratio(bare[k])
+            hs = 9.8e6 * 2.0 * (1.0 - b["porosity_mass"]) / (2.0 + b["porosity_mass"])
+            res[f"{mode}_kappa_{p:.3f}"] = fig(
+                cal[k]["electrical_conductivity_eff"], TABLE1[p], porosity_taken=b["porosity_mass"], packing_porosity=p0["porosity_mass"],
+                scale=scales[k][2], kappa_without_layer=b["electrical_conductivity_eff"], delta_gb_calibrated_m=delta,
+                kappa_without_layer_over_bound=b["electrical_conductivity_eff"] / hs,
+                u_g1_density_ratio_rise=ratio_k / packing_ratio - 1.0, u_g2_envelope_p995_over_die=b["envelope_p995_radius"] / b["die_radius"],
+                u_g4_network_neck_last_bin_percent=b["network_neck_last_bin_percent"],
+                u_network_neck_max_bin_percent=b["network_neck_max_bin_percent"],
+                u_network_neck_median_a_over_rmin=b["network_neck_median_a_over_rmin"],
+                u_network_neck_gbf_bound_share=b["network_neck_gbf_bound_share"],
+                u_g4_median_rises=float(all(y > x for x, y in zip(medians, medians[1:]))))
+    return res
 
 
 NIAL_SRC = "seed 000 (NiAl SPS), Table 1: effective conductivity of the measured samples, evaluated cold"
@@ -678,19 +772,42 @@ NIAL_TUNED = [{"parameter": "configs/sps_nial.json#/stages/1/walls/top/max_speed
 NIAL = Case(
     "seed000/nial", ["configs/sps_nial.json"],
     {"full": {"sizes": [17876], "seeds": [2024, 2025, 2026]}},
-    run_nial("configs/sps_nial.json", element=True),
-    [Figure(f"seed000/nial_kappa_{p:.3f}", f"kappa_{p:.3f}", NIAL_SRC, NIAL_REF + f" at porosity {p}", 0.05,
+    run_nial("configs/sps_nial.json", element=True, fe_table=True),
+    [Figure(f"seed000/nial_kappa_{p:.3f}", f"kappa_{p:.3f}", NIAL_SRC + "; the paper's network (Eq. 19 reading A)",
+            NIAL_REF + f" at porosity {p}", 0.05,
             calibrated_on=NIAL_CAL, tuned=NIAL_TUNED,
             variants=["without the grain-boundary layer (extra.kappa_without_layer)",
                       "quasi-static gates of the snapshot (issue 36; extra.qs_*: kinetic energy / punch work <= 1e-4, core - compact "
-                      "mass porosity within 0.02, envelope / die radius >= 0.99, fullest neck bin <= 25 %; tools/sps_outputs.GATES)"])
+                      "mass porosity within 0.02, envelope / die radius >= 0.99, fullest neck bin <= 25 %; tools/sps_outputs.GATES)",
+                      "uniform-press gates of the snapshot (issue 59; extra.u_*: G1 interior / whole relative density by mass "
+                      "rises <= 2 % over the packing's, G2 99.5th percentile of axis distance + radius >= 0.99 die radius, G4 "
+                      "the network's necks: last bin <= 25 %, median rising over the snapshots; tools/sps_outputs.UNIFORM_GATES)"])
      for p in (0.216, 0.106, 0.050)]
+    + [Figure(f"seed000/nial_fe_table_kappa_{p:.3f}", f"fe_table_kappa_{p:.3f}",
+              NIAL_SRC + "; hemisphere FE table instead of Eq. 19 (an option beside the paper's law, issue 59)",
+              NIAL_REF + f" at porosity {p}", 0.05, calibrated_on=NIAL_CAL + ", for the FE-table network",
+              tuned=NIAL_TUNED,
+              variants=["without the grain-boundary layer (extra.kappa_without_layer, its ratio to the Hashin-Shtrikman bound at "
+                        "the mass porosity in extra.kappa_without_layer_over_bound)"])
+       for p in (0.216, 0.106, 0.050)]
     + [Figure(f"seed000/nial_element_kappa_{p:.3f}", f"element_kappa_{p:.3f}", NIAL_SRC + "; sphere-element network (issue 21)",
               NIAL_REF + f" at porosity {p}", 0.05, calibrated_on=NIAL_CAL + ", for the sphere-element network",
               tuned=NIAL_TUNED,
               variants=["without the grain-boundary layer (extra.kappa_without_layer, its ratio to the Hashin-Shtrikman bound at "
                         "the mass porosity in extra.kappa_without_layer_over_bound)"])
        for p in (0.216, 0.106, 0.050)])
+NIAL_AFFINE_SRC = ("issue 59 item 4: the packed state of configs/sps_nial.json densified by an affine map to the porosity by "
+                   "mass, through the main scenario's network (the paper's, Eq. 19 reading A; layer calibrated on 0.164): a "
+                   "uniform microstructure's answer, no press (cases.run_nial_affine)")
+NIAL_AFFINE = Case(
+    "seed000/nial_affine", ["configs/sps_nial.json"],
+    {"full": {"sizes": [17876], "seeds": [2024, 2025, 2026]}},
+    run_nial_affine,
+    [Figure(f"seed000/nial_affine_{mode}_kappa_{p:.3f}", f"{mode}_kappa_{p:.3f}", NIAL_AFFINE_SRC + f"; {mode} map",
+            NIAL_REF + f" at porosity {p}", 0.05, calibrated_on=NIAL_CAL + f", for the {mode} map", kind="construction",
+            variants=["without the layer (extra.kappa_without_layer, over the Hashin-Shtrikman bound: "
+                      "extra.kappa_without_layer_over_bound); the uniform-press gates of the mapped state (extra.u_*)"])
+     for mode in ("isotropic", "uniaxial") for p in (0.216, 0.106, 0.050)])
 NIAL_SMALL = Case(
     "seed000/nial_small", ["configs/sps_nial_small.json"],
     {"fast": {"sizes": [300], "seeds": [1]}},
@@ -1068,7 +1185,7 @@ THERMAL_STIFF = Case(
             "(C_L (500 + 3 x 300) + C_t 300) / (4 C_L + C_t) - 300 K", 1e-9, min_seeds=1)])
 
 
-CASES = [PACKING, CYLINDER, CYLINDER_GAP002, CYLINDER_FIT, JOULE_ROD, NOTCH, PLATE, BEAM, BEAM_CONTACT, TORSION, TORSION_CONTACT, NIAL, NIAL_SMALL, TABLE1_DENSIFICATION, TABLE1_DENSIFICATION_QS, CPC, CPC_POOLED, CPC_SEG, CPC_SEG_R, SWITCH_BONDED, RKPM_TWO_SPHERE, SWITCH_RKPM, SWITCH_RKPM_VARIANTS,
+CASES = [PACKING, CYLINDER, CYLINDER_GAP002, CYLINDER_FIT, JOULE_ROD, NOTCH, PLATE, BEAM, BEAM_CONTACT, TORSION, TORSION_CONTACT, NIAL, NIAL_AFFINE, NIAL_SMALL, TABLE1_DENSIFICATION, TABLE1_DENSIFICATION_QS, CPC, CPC_POOLED, CPC_SEG, CPC_SEG_R, SWITCH_BONDED, RKPM_TWO_SPHERE, SWITCH_RKPM, SWITCH_RKPM_VARIANTS,
          SWITCH_RKPM_TUNED, SWITCH_RKPM_CONVERGED,
          THERMAL_STIFF]
 

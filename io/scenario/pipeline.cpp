@@ -14,6 +14,7 @@
 #include "engine/core/error.hpp"
 #include "engine/core/memory.hpp"
 #include "engine/core/memory_archive.hpp"
+#include "engine/state/affine_map.hpp"
 #include "engine/state/delete_particles.hpp"
 #include "engine/state/pair_transfer.hpp"
 #include "engine/state/particle_set.hpp"
@@ -549,6 +550,7 @@ StagePrep prepare_stage(State& s, StageDef& st, const Scenario& sc, bool resumin
       if (gap >= 0.0) place_plane_at_clearance(w, s.particles.position, s.particles.radius, gap);
       s.walls.push_back(std::move(w));
     }
+    if (st.affine_scale != Vec3::Ones()) apply_affine_scale(s, st.affine_origin, st.affine_scale);
     if (st.generator && (!dry_run || st.generator->cheap_to_generate()))
       st.generator->generate(s);
     else if (st.generator)

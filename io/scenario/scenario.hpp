@@ -46,6 +46,10 @@ struct StageDef {
   /// particle surface when the stage starts (a punch put on top of a packing); < 0: as given.
   std::vector<double> add_wall_clearance;
   std::vector<std::string> remove_walls;
+  /// `affine`: x -> affine_origin + diag(affine_scale) (x - affine_origin) of positions and walls
+  /// at the stage start (after from_snapshot and the wall edits); all ones: none.
+  Vec3 affine_scale = Vec3::Ones();
+  Vec3 affine_origin = Vec3::Zero();
   std::string from_snapshot;       ///< load particles, contacts and walls from a checkpoint
   double create_bonds_gap = -1.0;  ///< >= 0: bond every pair with gap <= this at the stage start [m]
   /// true: create_bonds_gap is a fraction [1] of the mean radius at the stage start (after the

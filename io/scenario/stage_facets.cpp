@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "engine/core/format.hpp"
 #include "io/scenario/json_binder.hpp"
 #include "io/restart/state_file.hpp"
 #include "io/scenario/scenario_parts.hpp"
@@ -463,6 +464,38 @@ void bind_add_walls(const json& value, const std::string& at, StageBuild& b) {
   }
 }
 
+struct AffineParams {
+  std::vector<double> scale;
+  std::vector<double> origin = {0.0, 0.0, 0.0};
+};
+ParamSpec<AffineParams> affine_spec() {
+  ParamSpec<AffineParams> s("affine", "object",
+                            "a homogeneous affine map of the scene at the stage start (after from_snapshot and the wall edits, "
+                            "before the generator): positions and walls x -> origin + diag(scale) (x - origin), radii kept "
+                            "(LAMMPS change_box ... remap; engine/state/affine_map.hpp); planes must be normal to a coordinate axis "
+                            "and a cylinder's axis along one with equal scales across it");
+  s.add("scale", &AffineParams::scale).unit("1").doc("[sx, sy, sz], each > 0");
+  s.add("origin", &AffineParams::origin).unit("m").doc("the fixed point [x, y, z]");
+  return s;
+}
+
+/// "affine": {"scale": [sx, sy, sz], "origin": [x, y, z]}.
+void bind_affine(const json& value, const std::string& at, StageBuild& b) {
+  json rs;
+  const std::size_t before = b.errors.size();
+  const AffineParams q = build(affine_spec(), value, at, b.errors, rs);
+  b.resolved["affine"] = rs;
+  if (b.errors.size() != before) return;
+  if (q.scale.size() != 3) b.errors.push_back({at + "/scale", "expected 3 numbers [sx, sy, sz], found " + std::to_string(q.scale.size())});
+  if (q.origin.size() != 3) b.errors.push_back({at + "/origin", "expected 3 numbers [x, y, z], found " + std::to_string(q.origin.size())});
+  for (std::size_t k = 0; k < q.scale.size(); ++k)
+    if (!std::isfinite(q.scale[k]) || !(q.scale[k] > 0.0))
+      b.errors.push_back({at + "/scale/" + std::to_string(k), "expected a finite number > 0, found " + format_number(q.scale[k], 12)});
+  if (b.errors.size() != before) return;
+  b.st.affine_scale = Vec3(q.scale[0], q.scale[1], q.scale[2]);
+  b.st.affine_origin = Vec3(q.origin[0], q.origin[1], q.origin[2]);
+}
+
 /// "remove_walls": names of walls removed at the stage start.
 void bind_remove_walls(const json& value, const std::string& at, StageBuild& b) {
   b.resolved["remove_walls"] = value;
@@ -753,6 +786,7 @@ std::vector<StageFacet> stage_facets(const Registry& reg) {
       {"contact", "object {\"law\": contact law, \"params\": {...}}", "the stage's own contact law (else the scenario's)", {}, false, bind_contact},
       {"add_walls", "array of walls", "walls added at the stage start (see \"wall\")", wall_schema(), false, bind_add_walls},
       {"remove_walls", "array of wall names", "walls removed at the stage start", {}, false, bind_remove_walls},
+      {"affine", "object", affine_spec().spec().doc, affine_spec().spec(), false, bind_affine},
       {"walls", "object {wall name: motion}", "wall motions during the stage (see \"motion\")", motion_schema(), false, bind_walls},
       {"sets", "array of particle-set names", "particle sets evaluated at the stage start (fields set/<name>)", {}, false, bind_sets},
       {"delete_sets",
