@@ -161,11 +161,12 @@ def envelope_p995(h5_path, die="die"):
     with h5py.File(h5_path, "r") as f:
         x = f["state/particles/position"][()]
         r = f["state/particles/radius"][()]
-        g = f[f"state/walls/{die}/geometry"][()][0]
+        g = f[f"state/walls/{die}/geometry"][()][0]  # axis point (3), axis (3), radius at u = 0
+        u = float(f[f"state/walls/{die}/u"][()])
     point, axis = g[0:3], g[3:6] / np.linalg.norm(g[3:6])
     d = x - point
     radial = np.linalg.norm(d - np.outer(d @ axis, axis), axis=1)
-    return float(np.percentile(radial + r, 99.5) / g[6])
+    return float(np.percentile(radial + r, 99.5) / (g[6] - u))
 
 
 def uniform_press_gates(out_dir, summary, press="hot_press", packing_stage="heat", network_sweep="conductivity_no_gb"):
@@ -175,7 +176,9 @@ def uniform_press_gates(out_dir, summary, press="hot_press", packing_stage="heat
     The packing's ratio is the first time-series row of `packing_stage` (its state before the press)."""
     import os
     ts = timeseries(out_dir)
-    stage_index = next(k for k, s in enumerate(summary["stages"]) if s["name"] == packing_stage)
+    stage_index = next((k for k, s in enumerate(summary["stages"]) if s["name"] == packing_stage), None)
+    if stage_index is None or not np.any(ts["stage"] == stage_index):
+        raise ValueError(f"uniform_press_gates: no time-series row of the packing stage '{packing_stage}' in {out_dir}")
     first = int(np.argmax(ts["stage"] == stage_index))
     packing = density_ratio({c: ts[c][first] for c in ("porosity_mass_interior", "porosity_mass") if c in ts})
     rows = {}

@@ -750,6 +750,8 @@ def run_nial_affine(ctx):
         medians = [r["network_neck_median_a_over_rmin"] for r in bare]
         for k, p in enumerate(targets):
             b, ratio_k = bare[k], so.density_ratio(bare[k])
+            if ratio_k is None or packing_ratio is None:
+                raise ValueError(f"nial_affine: no interior porosity at {mode} {p} (the compact's interior is empty)")
             hs = 9.8e6 * 2.0 * (1.0 - b["porosity_mass"]) / (2.0 + b["porosity_mass"])
             res[f"{mode}_kappa_{p:.3f}"] = fig(
                 cal[k]["electrical_conductivity_eff"], TABLE1[p], porosity_taken=b["porosity_mass"], packing_porosity=p0["porosity_mass"],

@@ -9,7 +9,8 @@
 ///   cylinder: its axis must lie along a coordinate axis and the two scales across it must be
 ///          equal; the axis point maps and the current radius R = radius - u becomes s_perp R.
 /// The neighbour state is invalidated (the next step rebuilds it); contact rows stay (their
-/// overlaps are recomputed from the positions). Throws SetupError on a wall it cannot map or a
+/// overlaps are recomputed from the positions); bonds keep their reference lengths (a bonded
+/// body mapped is strained by the map); particle fields (displacements, velocities) are not mapped. Throws SetupError on a wall it cannot map or a
 /// scale that is not finite and > 0.
 #include "engine/state/state.hpp"
 

@@ -550,7 +550,13 @@ StagePrep prepare_stage(State& s, StageDef& st, const Scenario& sc, bool resumin
       if (gap >= 0.0) place_plane_at_clearance(w, s.particles.position, s.particles.radius, gap);
       s.walls.push_back(std::move(w));
     }
-    if (st.affine_scale != Vec3::Ones()) apply_affine_scale(s, st.affine_origin, st.affine_scale);
+    if (st.affine_scale != Vec3::Ones()) {
+      try {
+        apply_affine_scale(s, st.affine_origin, st.affine_scale);
+      } catch (const SetupError& e) {
+        throw SetupError(st.path + "/affine: " + e.what());
+      }
+    }
     if (st.generator && (!dry_run || st.generator->cheap_to_generate()))
       st.generator->generate(s);
     else if (st.generator)

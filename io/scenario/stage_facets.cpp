@@ -491,6 +491,8 @@ void bind_affine(const json& value, const std::string& at, StageBuild& b) {
   for (std::size_t k = 0; k < q.scale.size(); ++k)
     if (!std::isfinite(q.scale[k]) || !(q.scale[k] > 0.0))
       b.errors.push_back({at + "/scale/" + std::to_string(k), "expected a finite number > 0, found " + format_number(q.scale[k], 12)});
+  if (b.js.is_object() && b.js.contains("generator"))
+    b.errors.push_back({at, "a stage with a generator makes its particles after the map; give `affine` to the next stage instead"});
   if (b.errors.size() != before) return;
   b.st.affine_scale = Vec3(q.scale[0], q.scale[1], q.scale[2]);
   b.st.affine_origin = Vec3(q.origin[0], q.origin[1], q.origin[2]);

@@ -66,10 +66,9 @@ std::vector<double> sintered_neck_radii(const BranchModel& m, const State& s, co
 }
 
 NetworkNecks network_necks(const BranchModel& m, const State& s, const InteractionGraph& g) {
-  const std::vector<double> raw = uncorrected_neck_radii(m, s, g);
+  const std::vector<double> a = sintered_neck_radii(m, s, g);  // the necks the network conducts through
   const std::vector<double> node_r = neck_graph_radii(s, g);
-  const std::vector<double> a = m.gbf_correction ? el::corrected_neck_radii(g.a, g.b, raw, node_r) : raw;
-  const std::vector<double> alpha = el::grain_boundary_fraction_factors(g.a, g.b, raw, node_r);
+  const std::vector<double> alpha = el::grain_boundary_fraction_factors(g.a, g.b, uncorrected_neck_radii(m, s, g), node_r);
   NetworkNecks out;
   std::vector<char> has_neck(g.nodes(), 0);
   for (std::size_t e = 0; e < g.size(); ++e) {

@@ -702,7 +702,9 @@ void open_circuit(State& s, const Params& p, Result& r, EdgeOutput& edges) {
   std::fill(q.begin(), q.end(), 0.0);
   edges = EdgeOutput{};
   const double solves = r.solves;
+  const std::vector<double> necks = r.necks;  // the graph's, recorded before the electrodes were found empty
   r = Result{};
+  r.necks = necks;
   r.resistance = kInf;
   r.voltage = p.voltage;
   r.length = p.length > 0.0 ? p.length : kNaN;

@@ -113,6 +113,7 @@ std::vector<std::string> CompactMonitor::columns(const State&) const {
 namespace {
 /// The 99.5th percentile of (distance from the region's axis + radius) over the particles.
 double envelope_p995(const std::vector<Vec3>& positions, const std::vector<double>& radii, const CylinderRegion& region) {
+  if (positions.empty()) return 0.0;
   std::vector<double> v(positions.size());
   for (std::size_t i = 0; i < v.size(); ++i) {
     const Vec3 d = positions[i] - region.base;

@@ -27,16 +27,16 @@ TEST_CASE("affine map: a compact in its die densified isotropically and uniaxial
   const Vec3 o(0.5e-3, 0.5e-3, 1.2e-3), S(0.9, 0.9, 0.8);
   const std::vector<Vec3> x0 = s.particles.position;
   apply_affine_scale(s, o, S);
-  for (std::size_t i = 0; i < x0.size(); ++i) CHECK((s.particles.position[i] - (o + S.cwiseProduct(x0[i] - o))).norm() <= 1e-18);
-  CHECK(s.particles.radius[0] == 0.5e-3);
-  CHECK(std::abs(s.walls[0].cylinder_radius() - 0.9 * 4.6e-3) <= 1e-18);
-  CHECK(s.walls[0].u == 0.4e-3);
+  for (std::size_t i = 0; i < x0.size(); ++i) CHECK((s.particles.position[i] - (o + S.cwiseProduct(x0[i] - o))).norm() <= 1e-14 * 1e-3);
+  CHECK(std::abs(s.particles.radius[0] - 0.5e-3) <= 0.0);  // radii are not mapped
+  CHECK(std::abs(s.walls[0].cylinder_radius() - 0.9 * 4.6e-3) <= 1e-14 * 1e-3);
+  CHECK(std::abs(s.walls[0].u - 0.4e-3) <= 0.0);  // the offset is kept
   const auto surface = [&](int k) {
     const auto& p = std::get<PlaneShape>(s.walls[static_cast<std::size_t>(k)].shape);
     return (p.point + s.walls[static_cast<std::size_t>(k)].u * p.normal).z();
   };
-  CHECK(std::abs(surface(1) - 1.2e-3) <= 1e-18);                        // on the fixed point
-  CHECK(std::abs(surface(2) - (1.2e-3 + 0.8 * (11e-3 - 1.2e-3))) <= 1e-18);  // heights x 0.8
+  CHECK(std::abs(surface(1) - 1.2e-3) <= 1e-14 * 1e-3);                        // on the fixed point
+  CHECK(std::abs(surface(2) - (1.2e-3 + 0.8 * (11e-3 - 1.2e-3))) <= 1e-14 * 1e-3);  // heights x 0.8
   // The signed distance of every particle to every wall scales with the map across that wall.
   Vec3 n;
   double d;
@@ -50,7 +50,13 @@ TEST_CASE("affine map: walls it cannot map and scales that are not > 0 are refus
   test::add_sphere(s, Vec3::Zero(), 1e-3, 5910.0);
   s.walls.push_back(test::plane_wall("tilted", Vec3::Zero(), Vec3(1, 1, 0).normalized()));
   CHECK_THROWS_AS(apply_affine_scale(s, Vec3::Zero(), Vec3(0.9, 0.9, 1.0)), SetupError);
-  CHECK_NOTHROW(apply_affine_scale(s, Vec3::Zero(), Vec3(0.9, 0.9, 0.9)));  // isotropic maps any plane
+  // An isotropic map takes any plane: its surface point maps and the particle keeps its distance x s.
+  Vec3 n;
+  double before, after;
+  s.walls[0].distance(Vec3(1e-3, 0.0, 0.0), n, before);
+  CHECK_NOTHROW(apply_affine_scale(s, Vec3::Zero(), Vec3(0.9, 0.9, 0.9)));
+  s.walls[0].distance(Vec3(0.9e-3, 0.0, 0.0), n, after);
+  CHECK(std::abs(after - 0.9 * before) <= 1e-17);
   s.walls.clear();
   Wall die;
   die.name = "die";
