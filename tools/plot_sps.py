@@ -10,7 +10,9 @@ files). Writes into OUT_DIR (default RUN_DIR):
                                 conductivity sweep stage, the measured NiAl samples (seed 000
                                 Table 1) with a +-5 % band and the bulk kappa_0;
   neck_histograms.png           per snapshot the histogram of a / r_min over the sintered necks
-                                (10 bins on [0, 1], % of necks; seed 000 Fig. 6);
+                                (10 bins on [0, 1], % of necks; seed 000 Fig. 6) of the contact
+                                law's neck_radius; the network conducts through the CV necks
+                                after Eq. 25, summarised by its network_neck_* columns;
   densification.png             porosity against physical time and against temperature during
                                 the hot press, the snapshots marked;
   calibration_map.png           kappa_eff of the calibration snapshot over (delta_gb, epsilon)
@@ -211,7 +213,7 @@ def plot_necks(d, run, plt, path, csv_path):
                          "median_a_over_rmin", "percent_in_last_bin"], data)
     ax.set_xticks(np.linspace(0, 1, NECK_BINS + 1))
     ax.set_xlim(0, 1)
-    ax.set_xlabel("a / r_min (neck radius / smaller particle radius)")
+    ax.set_xlabel("a / r_min: the sintering law's neck (the network's necks: network_neck_* columns)")
     ax.set_ylabel("necks [%]")
     ax.grid(alpha=0.3, axis="y")
     ax.legend(fontsize=8)
