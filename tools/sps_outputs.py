@@ -189,19 +189,31 @@ def uniform_press_gates(out_dir, summary, press="hot_press", packing_stage="heat
     out = {}
     for taken in find_stage(summary, press).get("snapshots", {}).get("taken", []):
         k, cols = taken["index"], taken.get("columns", {})
-        ratio, net = density_ratio(cols), rows.get(k, {})
         env = (cols["envelope_p995_radius"] / cols["die_radius"] if "envelope_p995_radius" in cols  # the compact monitor's
                else envelope_p995(os.path.join(out_dir, taken["file"])))  # runs from before the column
-        vals = {"g1_density_ratio_rise": ratio / packing - 1.0 if ratio is not None and packing else None,
-                "g2_envelope_p995_over_die": env,
-                "g4_network_neck_last_bin_percent": net.get("network_neck_last_bin_percent")}
-        out[k] = dict(vals, g1_density_ratio=ratio, g1_density_ratio_packing=packing,
-                      network_neck_max_bin_percent=net.get("network_neck_max_bin_percent"),
-                      network_neck_median_a_over_rmin=net.get("network_neck_median_a_over_rmin"),
-                      network_neck_gbf_bound_share=net.get("network_neck_gbf_bound_share"))
-        for name, passes in UNIFORM_GATES.items():
-            out[k][name + "_pass"] = None if vals[name] is None else passes(vals[name])
-    medians = [out[k]["network_neck_median_a_over_rmin"] for k in sorted(out)]
-    out["median_rises"] = (all(b > a for a, b in zip(medians, medians[1:]))
-                           if medians and all(m is not None for m in medians) else None)
+        out[k] = uniform_gate_values(cols, rows.get(k, {}), packing, env)
+    out["median_rises"] = median_rises([out[k]["network_neck_median_a_over_rmin"] for k in sorted(out)])
     return out
+
+
+def uniform_gate_values(columns, network, packing_ratio, envelope_over_die):
+    """One state's UNIFORM_GATES quantities, each with its verdict (name + "_pass"), and beside them
+    its density ratio, the packing's, and the network's neck statistics: `columns` the compact
+    monitor's, `network` the sintered_neck network's (network_neck_*), `packing_ratio` the packing's
+    density_ratio, `envelope_over_die` G2's quantity."""
+    ratio = density_ratio(columns)
+    vals = {"g1_density_ratio_rise": ratio / packing_ratio - 1.0 if ratio is not None and packing_ratio else None,
+            "g2_envelope_p995_over_die": envelope_over_die,
+            "g4_network_neck_last_bin_percent": network.get("network_neck_last_bin_percent")}
+    out = dict(vals, g1_density_ratio=ratio, g1_density_ratio_packing=packing_ratio,
+               network_neck_max_bin_percent=network.get("network_neck_max_bin_percent"),
+               network_neck_median_a_over_rmin=network.get("network_neck_median_a_over_rmin"),
+               network_neck_gbf_bound_share=network.get("network_neck_gbf_bound_share"))
+    for name, passes in UNIFORM_GATES.items():
+        out[name + "_pass"] = None if vals[name] is None else passes(vals[name])
+    return out
+
+
+def median_rises(medians):
+    """G4's second half: the medians rise strictly over the snapshots (None when one is missing)."""
+    return all(b > a for a, b in zip(medians, medians[1:])) if medians and all(m is not None for m in medians) else None

@@ -19,25 +19,16 @@ import concurrent.futures
 import json
 import os
 
-from benchmarks.perf.harness import print_means, run_study_scene, study_parser, write_csv_atomic
-from tools import sps_outputs as so
+from benchmarks.perf.harness import load_config, print_means, run_study_scene, study_parser, write_csv_atomic
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 LEDGER_RUNS = os.path.join(REPO, "benchmarks/validation/runs/full/seed001_torsion_contact")
 
 
-def load(rel):
-    path = os.path.join(REPO, rel)
-    with open(path) as f:
-        c = json.load(f)
-    so.absolute_includes(c, os.path.dirname(path))
-    return c
-
-
 def pin_in_tension(n, seed):
     """The torsion pin's scene with its twist replaced by the tension scene's pull and hold."""
-    pin = load("configs/torsion_contact.json")
-    tension = load("configs/calibration/cast_iron_tension.json")
+    pin = load_config("configs/torsion_contact.json")
+    tension = load_config("configs/calibration/cast_iron_tension.json")
     pin["seed"] = seed
     pin["stages"][0]["generator"]["particles"] = n
     pin["bonds"]["params"]["strength"] = 1e30

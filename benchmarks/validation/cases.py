@@ -18,6 +18,8 @@ import math
 import os
 import sys
 
+from benchmarks.sps_nial.networks import KAPPA_B, hs as hs_factor  # the bulk kappa_0 and the Hashin-Shtrikman factor
+
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
@@ -644,7 +646,7 @@ def variant_kappa_figures(ctx, c, out, at, taken, network, tag):
         ref = next((k for q, k in TABLE1.items() if abs(q - p) < 1e-9), None)
         if ref is None or idx not in calibrated:
             continue
-        hs = 9.8e6 * 2.0 * (1.0 - taken.get(idx, {}).get("value", p)) / (2.0 + taken.get(idx, {}).get("value", p))
+        hs = KAPPA_B * hs_factor(taken.get(idx, {}).get("value", p))
         res[f"{tag}_kappa_{p:.3f}"] = fig(calibrated[idx], ref, porosity_taken=taken.get(idx, {}).get("value"),
                                           kappa_without_layer=bare.get(idx), delta_gb_calibrated_m=delta,
                                           hashin_shtrikman_bound_mass_porosity=hs,
@@ -703,15 +705,15 @@ def affine_rows(ctx, scene, snapshot, scales, origin, gb_thickness, name):
     """The last time-series row of each affine stage (one scene, a stage per scale)."""
     c = json.loads(json.dumps(scene))
     c["stages"] = [affine_stage(scene, snapshot, sc, origin, gb_thickness, f"affine_{k}") for k, sc in enumerate(scales)]
-    out = ctx.sparkdem(c, name=name)
-    import csv as _csv
-    rows = list(_csv.DictReader(open(os.path.join(out, "timeseries.csv"))))
-    def number(v):
-        try:
-            return float(v)
-        except (TypeError, ValueError):
-            return float("nan")
-    return [{k: number(v) for k, v in [r for r in rows if int(r["stage"]) == q][-1].items()} for q in range(len(scales))]
+    import numpy as np
+    from tools import sps_outputs as so
+    ts = so.timeseries(ctx.sparkdem(c, name=name))
+    last = [int(np.flatnonzero(ts["stage"] == q)[-1]) for q in range(len(scales))]
+    return [{col: float(v[i]) for col, v in ts.items()} for i in last]
+
+
+AFFINE_GATE_EXTRAS = ("g1_density_ratio_rise", "g2_envelope_p995_over_die", "g4_network_neck_last_bin_percent",
+                      "network_neck_max_bin_percent", "network_neck_median_a_over_rmin", "network_neck_gbf_bound_share")
 
 
 def run_nial_affine(ctx):
@@ -747,22 +749,18 @@ def run_nial_affine(ctx):
                                        TABLE1[0.164])
         cal = affine_rows(ctx, c, snap, scales, origin, delta, f"{mode}_calibrated")
         packing_ratio = so.density_ratio(p0)
-        medians = [r["network_neck_median_a_over_rmin"] for r in bare]
+        rises = so.median_rises([r["network_neck_median_a_over_rmin"] for r in bare])
         for k, p in enumerate(targets):
-            b, ratio_k = bare[k], so.density_ratio(bare[k])
-            if ratio_k is None or packing_ratio is None:
+            b = bare[k]
+            g = so.uniform_gate_values(b, b, packing_ratio, b["envelope_p995_radius"] / b["die_radius"])
+            if g["g1_density_ratio_rise"] is None:
                 raise ValueError(f"nial_affine: no interior porosity at {mode} {p} (the compact's interior is empty)")
-            hs = 9.8e6 * 2.0 * (1.0 - b["porosity_mass"]) / (2.0 + b["porosity_mass"])
+            gates = {f"u_{key}": g[key] for key in AFFINE_GATE_EXTRAS}
             res[f"{mode}_kappa_{p:.3f}"] = fig(
                 cal[k]["electrical_conductivity_eff"], TABLE1[p], porosity_taken=b["porosity_mass"], packing_porosity=p0["porosity_mass"],
                 scale=scales[k][2], kappa_without_layer=b["electrical_conductivity_eff"], delta_gb_calibrated_m=delta,
-                kappa_without_layer_over_bound=b["electrical_conductivity_eff"] / hs,
-                u_g1_density_ratio_rise=ratio_k / packing_ratio - 1.0, u_g2_envelope_p995_over_die=b["envelope_p995_radius"] / b["die_radius"],
-                u_g4_network_neck_last_bin_percent=b["network_neck_last_bin_percent"],
-                u_network_neck_max_bin_percent=b["network_neck_max_bin_percent"],
-                u_network_neck_median_a_over_rmin=b["network_neck_median_a_over_rmin"],
-                u_network_neck_gbf_bound_share=b["network_neck_gbf_bound_share"],
-                u_g4_median_rises=float(all(y > x for x, y in zip(medians, medians[1:]))))
+                kappa_without_layer_over_bound=b["electrical_conductivity_eff"] / (KAPPA_B * hs_factor(b["porosity_mass"])),
+                **gates, u_g4_median_rises=float(rises))
     return res
 
 

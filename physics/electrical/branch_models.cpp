@@ -57,18 +57,23 @@ std::vector<double> neck_graph_radii(const State& s, const InteractionGraph& g) 
   for (std::size_t v = 0; v < g.nodes(); ++v) node_r[v] = g.is_wall_node(static_cast<Index>(v)) ? kInf : s.particles.radius[v];
   return node_r;
 }
+
+/// The network's necks from the uncorrected ones: Eqs. 22-25 when the model has the correction.
+std::vector<double> corrected_if_enabled(const BranchModel& m, const InteractionGraph& g, std::vector<double> raw,
+                                         const std::vector<double>& node_r) {
+  return m.gbf_correction ? el::corrected_neck_radii(g.a, g.b, raw, node_r) : raw;
+}
 }  // namespace
 
 std::vector<double> sintered_neck_radii(const BranchModel& m, const State& s, const InteractionGraph& g) {
-  std::vector<double> a = uncorrected_neck_radii(m, s, g);
-  if (m.gbf_correction) a = el::corrected_neck_radii(g.a, g.b, a, neck_graph_radii(s, g));
-  return a;
+  return corrected_if_enabled(m, g, uncorrected_neck_radii(m, s, g), neck_graph_radii(s, g));
 }
 
 NetworkNecks network_necks(const BranchModel& m, const State& s, const InteractionGraph& g) {
-  const std::vector<double> a = sintered_neck_radii(m, s, g);  // the necks the network conducts through
+  const std::vector<double> raw = uncorrected_neck_radii(m, s, g);
   const std::vector<double> node_r = neck_graph_radii(s, g);
-  const std::vector<double> alpha = el::grain_boundary_fraction_factors(g.a, g.b, uncorrected_neck_radii(m, s, g), node_r);
+  const std::vector<double> a = corrected_if_enabled(m, g, raw, node_r);  // the necks the network conducts through
+  const std::vector<double> alpha = el::grain_boundary_fraction_factors(g.a, g.b, raw, node_r);
   NetworkNecks out;
   std::vector<char> has_neck(g.nodes(), 0);
   for (std::size_t e = 0; e < g.size(); ++e) {

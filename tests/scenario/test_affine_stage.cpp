@@ -26,12 +26,7 @@ json mapped_scene(const json& affine) {
 }
 
 State run_to(const json& scene, const fs::path& out) {
-  io::Scenario sc = io::load_scenario(scene, test::registry(), fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data");
-  io::RunOptions opt;
-  opt.outdir = out;
-  opt.quiet = true;
-  opt.threads = 1;
-  (void)io::run_scenario(sc, opt);
+  (void)test::run_scene(scene, fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data", out);
   State s;
   io::read_checkpoint(out / "final_state.h5", s);
   return s;
