@@ -6,8 +6,10 @@ rests on, as pure functions over the ledger's JSON:
 - provenance: the commit a binary was built from and whether its tree was clean (`sparkdem
   --version`), and whether engine/ or physics/ changed since a record's commit;
 - kinds and verdicts: `validation` (pass, miss, tuned, failed), `calibration` (the fitted run's
-  residual), `construction` (true by construction: reported, never judged), `regression` (fast
-  tier: inside or outside its band, never a pass); a `provisional` record never counts;
+  residual), `construction` (true by construction: reported, never judged), `study` (a scan
+  variant or a reading of numerics the source does not give: inside or outside its band, never a
+  pass, not in the headline table), `regression` (fast tier: inside or outside its band, never a
+  pass); a `provisional` record never counts;
 - tuned marks: added, never removed (`tuned_marks` is append-only; every record of a figure carries
   every mark of that figure);
 - the checks `python3 -m tools.validate check-ledger` runs: no record from a dirty tree unless provisional
@@ -22,7 +24,7 @@ import subprocess
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-KINDS = ("validation", "calibration", "construction", "regression")
+KINDS = ("validation", "calibration", "construction", "regression", "study")
 LEGACY_NOTE = ("made before run files were kept (issue 34, 2026-11-27): its runs are not in the repository, so its "
                "figures cannot be recomputed; rerun the case from a clean commit to make it traceable")
 
@@ -114,6 +116,8 @@ def verdict(rec):
         v = "inside band" if rec.get("inside_band") else "outside band"
     elif rec["kind"] == "calibration":
         v = "calibration residual"
+    elif rec["kind"] == "study":
+        v = "study: " + ("inside band" if rec.get("inside_band") else "outside band")
     else:
         v = "by construction"
     if rec.get("provisional"):
@@ -130,6 +134,7 @@ def counts(records):
             "calibration_records": sum(1 for r in live if r["kind"] == "calibration"),
             "construction_records": sum(1 for r in live if r["kind"] == "construction"),
             "regression_records": sum(1 for r in live if r["kind"] == "regression"),
+            "study_records": sum(1 for r in live if r["kind"] == "study"),
             "provisional_records": sum(1 for r in records if r.get("provisional")),
             "legacy_records": sum(1 for r in records if r.get("legacy"))}
 

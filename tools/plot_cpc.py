@@ -62,7 +62,7 @@ def make_config(a):
             "modules": {
                 "electrical_network": {"model": "touching", "high": "x_lo", "low": "x_hi", "unit_conductance": 1.0,
                                        "touch_tolerance": tol, "solver": "direct", "empty_electrode": "open"},
-                "contact_percolation": {"high": "x_lo", "low": "x_hi", "touch_tolerance": tol,
+                "contact_percolation": {"high": "x_lo", "low": "x_hi", "touch_gap_rel": tol / (2 * R),
                                         "cluster_resistances": True}},
             "sweep": {"seeds": seeds, "collect": COLLECT}})
     cfg = scenario(a.name,

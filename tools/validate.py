@@ -357,7 +357,7 @@ def judge_full(rec, fig):
         rec["pass"] = False
         return
     inside = (abs(rec["error"]) <= band and not rec.get("failed_runs") and rec["count"] >= fig.min_seeds)
-    if rec["kind"] == "calibration":
+    if rec["kind"] in ("calibration", "study"):
         rec["pass"], rec["inside_band"] = False, inside
     else:
         rec["pass"] = inside and not rec["tuned_after_seeing"] and not rec.get("provisional")
@@ -704,7 +704,7 @@ def table_rows(ledger, kind):
 
 
 def ledger_table(ledger, kind, changed=None):
-    """A generated markdown table: kind validation, calibration (with construction), regression,
+    """A generated markdown table: kind validation, calibration (with construction), study, regression,
     legacy, provisional, headline, commits or perf. changed: {commit: "yes"/"no"/"unknown"} adds
     the column "engine/ or physics/ changed since" (ledger.md only: it moves with every commit)."""
     if kind.startswith("perf"):  # "perf" (every perf case) or "perf CASE" (tools/perf.py list)
@@ -781,12 +781,16 @@ def write_markdown(ledger, path):
              f"Validation records (full tier, traceable): {c['validation_records']}: {c['pass']} pass, {c['miss']} "
              f"miss, {c['tuned']} tuned after seeing (never a pass), {c['failed']} failed. Apart: "
              f"{c['calibration_records']} calibration and {c['construction_records']} construction records (not "
-             f"judged), {c['regression_records']} regression records (fast tier), {c['provisional_records']} "
+             f"judged), {c['study_records']} study records (scan variants: reported, never judged), "
+             f"{c['regression_records']} regression records (fast tier), {c['provisional_records']} "
              f"provisional and {c['legacy_records']} legacy records (no run file: not counted).", "",
              "## Full tier (validations against a paper, a closed form or a reference tool)", "",
              ledger_table(ledger, "validation", ch), "",
              "## Calibration residuals and figures true by construction (reported, never judged)", "",
              ledger_table(ledger, "calibration", ch), "",
+             "## Studies (scan variants and readings of numerics the paper does not give: reported beside the "
+             "validations, never judged, left out of the headline table)", "",
+             ledger_table(ledger, "study", ch), "",
              "## Fast tier (regression guards; bands from measured scatter: inside or outside, never a pass)", "",
              ledger_table(ledger, "regression", ch), "",
              "## Provisional records (from a dirty tree; never counted)", "",
@@ -906,7 +910,7 @@ def cmd_derive_bands(a):
 
 
 # A generated table in a document: groups (opening marker, kind, table, closing marker).
-TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|calibration|regression|legacy|provisional|headline|commits|perf(?: [a-z_]+)?) -->\n)"
+TABLE_BLOCK = re.compile(r"(<!-- ledger:table (validation|calibration|study|regression|legacy|provisional|headline|commits|perf(?: [a-z_]+)?) -->\n)"
                          r"(.*?)(<!-- ledger:end -->)", re.S)
 
 

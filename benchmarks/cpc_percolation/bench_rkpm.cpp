@@ -155,14 +155,14 @@ void box(double L, double h, double support, int order, int sub, double nu, doub
   d.hi = lo + Vec3::Constant((hi - lo).maxCoeff());
   const rkpm::Result res = rkpm::solve_unit(x, r, d, p);
   ptc::MatrixParams mp;
-  mp.min_gap = 0.1;
-  mp.cutoff_gap = 1.0;
+  mp.min_gap_rel = 0.1 / (2 * R);  // h_min = 0.1 R, h_max = 1 R
+  mp.cutoff_gap_rel = 1.0 / (2 * R);
   const ptc::SpringNetwork net = ptc::build_network(x, r, mp);
   const ptc::UnitSolution sb = ptc::solve_unit(n, net, mp);
   double mr = 0.0, mb = 0.0;
   std::size_t nc = 0, negr = 0, negb = 0;
   for (std::size_t e = 0; e < net.size(); ++e)
-    if (net.gap[e] <= 2e-3) {
+    if (net.gap[e] <= 1e-3 * net.distance[e]) {
       const double o = net.normal[e].dot(res.sphere_displacement[net.b[e]] - res.sphere_displacement[net.a[e]]) / (2 * R);
       mr += o;
       mb += sb.opening[e] / (2 * R);

@@ -59,7 +59,7 @@ def collect(with_strain):
 
 
 def stage(name, lam, seeds, box=70.0, node_spacing=3.0, with_strain=True, **rk):
-    mod = {"high": "x_lo", "low": "x_hi", "touch_tolerance": 0.002, "break_gap": 0.002, "opening_strain": 0.01,
+    mod = {"high": "x_lo", "low": "x_hi", "touch_gap_rel": 0.001, "break_gap_rel": 0.001, "opening_strain": 0.01,
            "eps0_values": EPS0, "opening_histogram_edges": OPEN_EDGES, "matrix_model": "rkpm",
            "node_spacing": node_spacing, "support_factor": 2.0, "quadrature_order": 2, "cell_subdivision": 2,
            "cut_cell_depth": 1, "surface_points": 32, "surface_spacing": 0.5, "cg_tolerance": 1e-10,
@@ -72,7 +72,7 @@ def stage(name, lam, seeds, box=70.0, node_spacing=3.0, with_strain=True, **rk):
     return {"name": name, "type": "cpc_fillers",
             "generator": {"radius": 1.0, "box_length": box, "volume_fraction": 0.25, "aggregation_lambda": lam},
             "dt": 1.0, "stop": {"steps": 0}, "sets": ["x_lo", "x_hi"],
-            "modules": {"contact_percolation": {"high": "x_lo", "low": "x_hi", "touch_tolerance": 0.002},
+            "modules": {"contact_percolation": {"high": "x_lo", "low": "x_hi", "touch_gap_rel": 0.001},
                         "ptc_strain": mod},
             "sweep": {"seeds": list(seeds), "collect": collect(with_strain)}}
 
@@ -122,17 +122,21 @@ def main():
     # where the two-sphere test passes at 29 nodes per edge): 24 R box, segregated (it spans the box),
     # 4 configurations, node spacing 3, 2, 1.5 R; the fillers' affine expansion against the
     # rigid-inclusion closed form.
+    # Issue 60 item 3: the uniform dispersion (lambda = 0) beside it, the same spacings.
     converged = []
-    for h in (3.0, 2.0, 1.5):
-        st = stage(f"L24_lambda35_rkpm_alpha10_h{h:g}", 35.0, seeds, box=24.0, node_spacing=h, bond_penalty=10.0)
-        st["sweep"]["collect"].append("ptc_strain_composite_volumetric_strain")
-        converged.append(st)
+    for lam in (35.0, 0.0):
+        for h in (3.0, 2.0, 1.5):
+            st = stage(f"L24_lambda{lam:g}_rkpm_alpha10_h{h:g}", lam, seeds, box=24.0, node_spacing=h, bond_penalty=10.0)
+            st["sweep"]["collect"].append("ptc_strain_composite_volumetric_strain")
+            converged.append(st)
     out = {
         "cpc_ptc_rkpm_converged.json": scenario(
             "cpc_ptc_rkpm_converged", COMMON + " Issue 39 item 3: free expansion at alpha R / E = 10 (the SI test's unit, "
             "where the two-sphere test passes), segregated (lambda = 35 R), 24 R box, node spacing 3, 2 and 1.5 R on the "
             "same 4 configurations: the switching strain's resolution study and the fillers' affine expansion "
-            "(composite_volumetric_strain) against the rigid-inclusion Hashin-Shtrikman estimate.", converged),
+            "(composite_volumetric_strain) against the rigid-inclusion Hashin-Shtrikman estimate. Issue 60 item 3: the same "
+            "three spacings on 4 uniform configurations (lambda = 0) beside the segregated ones; every gap threshold "
+            "relative to R_i + R_j and closing contacts on (closing_gap_rel 0.05, the module's default).", converged),
         "cpc_ptc_rkpm_tuned.json": scenario(
             "cpc_ptc_rkpm_tuned", COMMON + " Issue 39 item 2: the paper's unstated numerics (alpha's unit, the boundary "
             "penalty beta on every face, the support rho / h) set to the one variant that the selection rule of "

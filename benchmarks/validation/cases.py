@@ -30,8 +30,9 @@ class Figure:
         """band: the relative half-width, or {N: half-width} where VALIDATION.md sets it per size
         (the largest listed N at or below the run's N applies); absolute: the error is measured -
         reference and the band a half-width in the figure's unit (e.g. porosity +-0.02).
-        kind: "validation", or "construction" for a figure the set-up makes true (reported, never
-        judged); calibration_sizes: the N whose full-tier record is the calibration run's own
+        kind: "validation", "construction" for a figure the set-up makes true (reported, never
+        judged), or "study" for a scan variant or a reading of numerics the source does not give
+        (issue 60: reported beside the validations, never judged, not in the headline table); calibration_sizes: the N whose full-tier record is the calibration run's own
         residual (kind "calibration"); the fast tier is "regression" (tools/ledger.py: record_kind).
         tiers / sizes: the tiers and N the figure is defined at (None: all of the case's);
         shares_values_with: figures this one may equal in every run by design (check-ledger's
@@ -888,7 +889,7 @@ def run_cpc(config, n_seeds):
     return run
 
 
-PHI_C = {"configs/cpc_percolation.json": 0.235, "configs/cpc_percolation_segregated.json": 0.04,
+PHI_C = {"configs/cpc_percolation.json": 0.235, "configs/cpc_percolation_t_grid.json": 0.235, "configs/cpc_percolation_segregated.json": 0.04,
          "configs/cpc_percolation_segregated_radius.json": 0.04}
 CPC_SRC = "seed 002 (Barbieri et al.), percolation of rigid fillers in a cube of L = 70 R"
 CPC = Case(
@@ -910,6 +911,17 @@ CPC_POOLED = Case(
     {"full": {"sizes": [0], "seeds": [1, 2, 3]}},
     run_cpc("configs/cpc_percolation.json", 30),
     [Figure("seed002/t_exponent_30", "t", CPC_SRC + ", uniform, 30 configurations per phi per ensemble",
+            "t = 2.07 (paper); band ±0.1 = ±4.8 % relative; fit range phi - phi_c in [0.01, 0.12] (issue 22's range)",
+            0.048, min_seeds=3)])
+# Issue 60 item 5: the same fit on a finer phi grid (11 points inside the fit range instead of the 5
+# of configs/cpc_percolation.json), 30 configurations per phi per ensemble as cpc_uniform_30; the
+# reference and band fixed before the run (those of t_exponent_30).
+CPC_T_GRID = Case(
+    "seed002/cpc_uniform_t_grid", ["configs/cpc_percolation_t_grid.json"],
+    {"full": {"sizes": [0], "seeds": [1, 2, 3]}},
+    run_cpc("configs/cpc_percolation_t_grid.json", 30),
+    [Figure("seed002/t_exponent_t_grid", "t", CPC_SRC + ", uniform, 30 configurations per phi per ensemble, 18 phi "
+            "(11 inside the fit range)",
             "t = 2.07 (paper); band ±0.1 = ±4.8 % relative; fit range phi - phi_c in [0.01, 0.12] (issue 22's range)",
             0.048, min_seeds=3)])
 CPC_SEG = Case(
@@ -1099,7 +1111,7 @@ SWITCH_RKPM_VARIANTS = Case(
                     {f"{d}_{t}": f"L70_lambda{lam}_rkpm_{t}" for d, lam in (("uniform", 0), ("segregated", 35))
                      for t in VARIANT_TAGS}, 2, False),
     [Figure(f"seed002/switch_strain_rkpm_{d}_{t}", f"{d}_{t}", RKPM_SRC + f", {d}, variant {t} (one choice changed)",
-            RKPM_REF.replace("4 configurations", "2 configurations"), 0.10, min_seeds=1)
+            RKPM_REF.replace("4 configurations", "2 configurations"), 0.10, min_seeds=1, kind="study")
      for d in ("uniform", "segregated") for t in VARIANT_TAGS])
 
 RKPM_TUNED_WHY = ("chosen by the selection rule of benchmarks/cpc_percolation/numerics_scan.py on Fig. 4, Fig. 7 and the "
@@ -1111,7 +1123,7 @@ SWITCH_RKPM_TUNED = Case(
     run_switch_rkpm("configs/cpc_ptc_rkpm_tuned.json", {"uniform": "L70_lambda0_rkpm_tuned",
                                                          "segregated": "L70_lambda35_rkpm_tuned"}, 4, False),
     [Figure(f"seed002/switch_strain_rkpm_tuned_{d}", d, RKPM_SRC + f", {d}, the numerics chosen on Figs. 4 and 7 "
-            "(alpha R / E, beta h / E on every face, rho / h)", RKPM_REF, 0.10, min_seeds=1,
+            "(alpha R / E, beta h / E on every face, rho / h)", RKPM_REF, 0.10, min_seeds=1, kind="study",
             tuned=[{"parameter": f"configs/cpc_ptc_rkpm_tuned.json#{k}", "why": RKPM_TUNED_WHY}
                    for k in ("bond_penalty", "boundary", "boundary_penalty", "support_factor")])
      for d in ("uniform", "segregated")])
@@ -1126,31 +1138,40 @@ def hs_rigid_volumetric(phi, nu):
 
 
 def run_switch_rkpm_converged(ctx):
+    """Per dispersion (the stages' aggregation lambda: 0 uniform, > 0 segregated) the switching
+    strain and tr A at each node spacing; the finest spacing carries the figures."""
     c = ctx.config("configs/cpc_ptc_rkpm_converged.json")
     for st in c["stages"]:
         st["sweep"]["seeds"] = list(range((ctx.seed - 1) * 4 + 1, ctx.seed * 4 + 1))
     out = ctx.sparkdem(c)
-    per_h = {}
+    per = {}  # uniform -> {h: (switch mean/std, trA mean/std, phi, nu)}
     for st in c["stages"]:
         rows = rkpm_rows(out, st["name"])
-        h = st["modules"]["ptc_strain"]["node_spacing"]
+        m = st["modules"]["ptc_strain"]
         eps = [float(r["ptc_strain_switching_strain"]) for r in rows]
-        tra = [float(r["ptc_strain_composite_volumetric_strain"]) / st["modules"]["ptc_strain"]["opening_strain"]
-               for r in rows]
+        tra = [float(r["ptc_strain_composite_volumetric_strain"]) / m["opening_strain"] for r in rows]
         phi = sum(float(r["packing.volume_fraction"]) for r in rows) / len(rows)
-        per_h[h] = (mean_std(eps), mean_std(tra), phi, st["modules"]["ptc_strain"]["poisson_ratio"])
-    coarse_first = sorted(per_h, reverse=True)
-    (m, sd), (ta, tsd), phi, nu = per_h[coarse_first[-1]]  # the finest spacing carries the figures
-    coarser = per_h[coarse_first[-2]][0][0]
-    n = len(rows)
-    return {"switch": fig(m, SWITCH[False], std=sd, configurations=n, last_refinement_change=m / coarser - 1.0,
-                          **{f"h{h:g}R": per_h[h][0][0] for h in coarse_first}),
-            "expansion": fig(ta, hs_rigid_volumetric(phi, nu), std=tsd, configurations=n, phi=phi,
-                             **{f"trA_h{h:g}R": per_h[h][1][0] for h in coarse_first})}
+        uniform = st["generator"].get("aggregation_lambda", 0.0) == 0.0
+        per.setdefault(uniform, {})[m["node_spacing"]] = (mean_std(eps), mean_std(tra), phi, m["poisson_ratio"], len(rows))
+    figs = {}
+    for uniform, per_h in per.items():
+        tag = "_uniform" if uniform else ""
+        coarse_first = sorted(per_h, reverse=True)
+        (m, sd), (ta, tsd), phi, nu, n = per_h[coarse_first[-1]]
+        coarser = per_h[coarse_first[-2]][0][0]
+        figs["switch" + tag] = fig(m, SWITCH[uniform], std=sd, configurations=n, last_refinement_change=m / coarser - 1.0,
+                                   measured_composites=MEASURED_SWITCH,
+                                   **{f"h{h:g}R": per_h[h][0][0] for h in coarse_first})
+        figs["expansion" + tag] = fig(ta, hs_rigid_volumetric(phi, nu), std=tsd, configurations=n, phi=phi,
+                                      **{f"trA_h{h:g}R": per_h[h][1][0] for h in coarse_first})
+    return figs
 
 
+# The paper's measured Ag / Cu composites switch at 0.4-0.6 % thermal strain (seed 002, Fig. 5's discussion).
+MEASURED_SWITCH = [0.004, 0.006]
 CONVERGED_SRC = ("seed 002, free expansion at alpha R / E = 10 (the SI test's unit; two-sphere test within 0.05 %), "
                  "segregated (lambda = 35 R), 24 R box, node spacing 1.5 R (3 and 2 R beside it)")
+CONVERGED_UNI_SRC = CONVERGED_SRC.replace("segregated (lambda = 35 R)", "uniform (lambda = 0)")
 SWITCH_RKPM_CONVERGED = Case(
     "seed002/switch_rkpm_converged", ["configs/cpc_ptc_rkpm_converged.json"],
     {"full": {"sizes": [0], "seeds": [1]}},
@@ -1163,7 +1184,16 @@ SWITCH_RKPM_CONVERGED = Case(
             "volumetric strain tr A per unit eps0 (ptc_strain_composite_volumetric_strain)",
             "closed form: 3 K_m / K_HS, rigid spheres in the Hashin-Shtrikman bulk modulus (Levin's relation) at the "
             "packing's phi and nu = 0.35 (2.03 at phi = 25 %), fixed in the physics review before any run; band 5 % "
-            "(set after the 2-configuration scan of numerics_scan_resolution_L24.csv had been seen)", 0.05, min_seeds=1)])
+            "(set after the 2-configuration scan of numerics_scan_resolution_L24.csv had been seen)", 0.05, min_seeds=1),
+     # Issue 60 item 3: the uniform dispersion beside it (references and bands as the segregated ones, fixed before the run).
+     Figure("seed002/switch_strain_rkpm_converged_uniform", "switch_uniform", CONVERGED_UNI_SRC + ": switching strain, "
+            "the converged continuum (last refinement within 10 %)",
+            "3.15 % (paper, Fig. 5, uniform), band 10 % (VALIDATION.md); the paper's measured Ag / Cu composites "
+            "switch at 0.4-0.6 % thermal strain", 0.10, min_seeds=1),
+     Figure("seed002/composite_expansion_rkpm_converged_uniform", "expansion_uniform", CONVERGED_UNI_SRC + ": the "
+            "fillers' affine volumetric strain tr A per unit eps0",
+            "closed form: 3 K_m / K_HS at the packing's phi and nu = 0.35; band 5 % (as the segregated figure)", 0.05,
+            min_seeds=1)])
 
 
 # ---------------------------------------------------------------- closed forms
@@ -1186,7 +1216,7 @@ THERMAL_STIFF = Case(
             "(C_L (500 + 3 x 300) + C_t 300) / (4 C_L + C_t) - 300 K", 1e-9, min_seeds=1)])
 
 
-CASES = [PACKING, CYLINDER, CYLINDER_GAP002, CYLINDER_FIT, JOULE_ROD, NOTCH, PLATE, BEAM, BEAM_CONTACT, TORSION, TORSION_CONTACT, NIAL, NIAL_AFFINE, NIAL_SMALL, TABLE1_DENSIFICATION, TABLE1_DENSIFICATION_QS, CPC, CPC_POOLED, CPC_SEG, CPC_SEG_R, SWITCH_BONDED, RKPM_TWO_SPHERE, SWITCH_RKPM, SWITCH_RKPM_VARIANTS,
+CASES = [PACKING, CYLINDER, CYLINDER_GAP002, CYLINDER_FIT, JOULE_ROD, NOTCH, PLATE, BEAM, BEAM_CONTACT, TORSION, TORSION_CONTACT, NIAL, NIAL_AFFINE, NIAL_SMALL, TABLE1_DENSIFICATION, TABLE1_DENSIFICATION_QS, CPC, CPC_POOLED, CPC_T_GRID, CPC_SEG, CPC_SEG_R, SWITCH_BONDED, RKPM_TWO_SPHERE, SWITCH_RKPM, SWITCH_RKPM_VARIANTS,
          SWITCH_RKPM_TUNED, SWITCH_RKPM_CONVERGED,
          THERMAL_STIFF]
 

@@ -13,7 +13,7 @@ write_error_vs_time(records, path, verdict) draws the full-tier records of the l
     [-band, +band] where the band is a number;
   * marker by verdict(rec): filled = pass, open = miss, red x = tuned, red triangle at the panel's
     top = failed (no error value); any other verdict string gets its own marker and legend
-    entry. Records of kind "calibration" or "construction" are drawn grey, not judged. Records of
+    entry. Records of kind "calibration", "construction" or "study" are drawn grey, not judged. Records of
     kind "regression" and fast-tier records are left out. A record flagged "provisional" has
     "prov." after its N.
 
@@ -24,7 +24,7 @@ import os
 
 SOURCE_ORDER = ["seed000", "seed001", "seed002", "closed"]
 TINTS = ["#eef3fa", "#faf1e8", "#edf7ee", "#f6eef8"]
-NOT_JUDGED = ("calibration", "construction")
+NOT_JUDGED = ("calibration", "construction", "study")
 LEFT_OUT = ("regression",)
 COLUMNS = 6
 DPI = 120
@@ -33,7 +33,7 @@ STYLE = {  # role -> (legend label, marker, colour, filled)
     "miss": ("miss (open)", "o", "tab:blue", False),
     "tuned": ("tuned after seeing (never a pass)", "x", "tab:red", True),
     "failed": ("failed: no error value (at the top)", "^", "darkred", False),
-    "not judged": ("calibration/construction (not judged)", "D", "0.55", True),
+    "not judged": ("calibration/construction/study (not judged)", "D", "0.55", True),
 }
 SPARE_MARKERS = ["s", "P", "*", "h", "v", "<", ">"]
 
@@ -223,7 +223,7 @@ NOTE = ("Full-tier records only: fast-tier records (kind regression) are left ou
         "error (e.g. porosity): that difference x 100, as the panel's axis says. Labels: N (none when the case has "
         "no N; 'prov.': provisional; '*': legacy, no run file, cannot be recomputed, never counted). "
         "Where the band differs between N, its strip steps between their run times. "
-        "Calibration/construction records are drawn grey and not judged.")
+        "Calibration/construction/study records are drawn grey and not judged.")
 
 
 def write_error_vs_time(records, path, verdict):

@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -57,6 +58,9 @@ struct Spec {
   std::string category;  ///< "contact_law", "module", "stage", "wall", "motion", ...
   std::string doc;
   std::vector<ParamInfo> params;
+  /// Keys that no longer exist, each with the message that says what replaced it (the scenario
+  /// loader refuses them with that message instead of "unknown key").
+  std::vector<std::pair<std::string, std::string>> retired;
   const ParamInfo* find(const std::string& n) const {
     for (const auto& p : params)
       if (p.name == n) return &p;
@@ -131,6 +135,10 @@ class ParamSpec {
     spec_.category = std::move(category);
     spec_.doc = std::move(doc);
   }
+
+  /// A key that was removed: scenarios that still give it are refused with `message` (which
+  /// names the key to use instead).
+  void retire(std::string name, std::string message) { spec_.retired.emplace_back(std::move(name), std::move(message)); }
 
   ParamEditor add(std::string name, double P::*m) {
     return add_impl(std::move(name), ParamKind::Real, ParamValue{P{}.*m}, [m](P& p, const ParamValue& v) { p.*m = std::get<double>(v); });

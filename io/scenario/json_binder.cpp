@@ -131,6 +131,13 @@ void bind_level(const json& obj, const Spec& spec, const std::string& prefix, co
   for (auto it = obj.begin(); it != obj.end(); ++it) {
     const std::string key = it.key();
     if (std::find(all.begin(), all.end(), key) != all.end()) continue;
+    if (prefix.empty()) {
+      const auto gone = std::find_if(spec.retired.begin(), spec.retired.end(), [&](const auto& r) { return r.first == key; });
+      if (gone != spec.retired.end()) {
+        errors.push_back({path + "/" + key, "\"" + key + "\" is no longer a key of '" + spec.name + "': " + gone->second});
+        continue;
+      }
+    }
     const auto dym = did_you_mean(key, all);
     errors.push_back({path + "/" + key, "unknown key \"" + key + "\" in " + (spec.name.empty() ? "this object" : "'" + spec.name + "'") +
                                             (dym.empty() ? "" : " (did you mean \"" + dym + "\"?)")});

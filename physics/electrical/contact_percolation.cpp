@@ -1,4 +1,5 @@
 #include "physics/electrical/contact_percolation.hpp"
+#include "physics/electrical/ptc_gaps.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -95,10 +96,12 @@ ParamSpec<ContactPercolation::Params> ContactPercolation::spec() {
                  "resistance over spanning clusters");
   s.add("high", &P::high).doc("electrode particle set on one face (e.g. touching_wall of the cpc_fillers wall xlo)");
   s.add("low", &P::low).doc("electrode particle set on the opposite face");
-  s.add("touch_tolerance", &P::touch_tolerance)
-      .unit("m")
+  s.add("touch_gap_rel", &P::touch_gap_rel)
+      .unit("1")
       .nonnegative()
-      .doc("pairs with a surface gap up to this touch (paper: 0.1 % of D = 2e-3 R); use the electrical_network's value");
+      .doc("pairs with a surface gap up to this x (R_i + R_j) touch (paper: 0.1 % of D = 1e-3); for equal fillers the "
+           "electrical_network's touch_tolerance_relative (of the mean radius) is twice this");
+  s.retire("touch_tolerance", ptc::retired_gap("touch_tolerance", "touch_gap_rel", "0.1 % of D: 1e-3, i.e. the old 2e-3 m at R = 1 m"));
   s.add("length", &P::length).unit("m").nonnegative().doc("L of rho = R_eq L; 0: the box edge recorded by cpc_fillers");
   s.add("cluster_resistances", &P::cluster_resistances)
       .doc("also solve each spanning cluster alone (unit conductances): the paper's arithmetic mean of R over spanning clusters");
@@ -133,12 +136,13 @@ void ContactPercolation::bind(State& s) {
 void ContactPercolation::advance(State& s, const StepInfo&) {
   GraphOptions go;
   go.bonds = false;
-  go.near_gap = p_.touch_tolerance;
+  const auto& r = s.particles.radius;
+  go.near_gap = r.empty() ? 0.0 : 2.0 * *std::max_element(r.begin(), r.end()) * p_.touch_gap_rel;
   const InteractionGraph g = build_interaction_graph(s, go);
   std::vector<Index> a, b;
   for (std::size_t e = 0; e < g.size(); ++e)
     if ((g.kind[e] == EdgeKind::Contact || g.kind[e] == EdgeKind::Near || g.kind[e] == EdgeKind::Neck) &&
-        g.overlap[e] >= -p_.touch_tolerance) {
+        g.overlap[e] >= -p_.touch_gap_rel * (r[g.a[e]] + r[g.b[e]])) {
       a.push_back(g.a[e]);
       b.push_back(g.b[e]);
     }

@@ -5,10 +5,12 @@
 /// composites", §II.4 and SM S3; /work/shared/physics/cpc-and-networks.md §1.3-1.4.
 ///
 /// Contact graph: particles i, j touch when their surface gap r_ij - (R_i + R_j) is <=
-/// `touch_tolerance` [m] (overlapping pairs included; the paper: in the final contact set
-/// within 0.1 % of D, i.e. touch_tolerance = 2e-3 R). It is built by the shared
+/// `touch_gap_rel` x (R_i + R_j) (overlapping pairs included; the paper: in the final contact set
+/// within 0.1 % of D, i.e. touch_gap_rel = 1e-3; relative, so a scene scaled in size keeps its
+/// network; the absolute `touch_tolerance` [m] is refused). It is built by the shared
 /// InteractionGraph (contacts plus near pairs up to the tolerance), the same graph the
-/// electrical_network module's `touching` model conducts on: give both the same tolerance.
+/// electrical_network module's `touching` model conducts on: for equal fillers its
+/// touch_tolerance_relative (of the mean radius) = 2 touch_gap_rel gives the same set.
 /// Per evaluation the module reports
 ///   spanning                 1 if one cluster holds particles of both electrode sets, else 0
 ///   spanning_clusters        number of such clusters
@@ -76,7 +78,7 @@ class ContactPercolation final : public Module {
   struct Params {
     std::string high = "x_lo";
     std::string low = "x_hi";
-    double touch_tolerance = 0.0;  ///< [m]
+    double touch_gap_rel = 0.0;  ///< [1] of R_i + R_j
     double length = 0.0;           ///< [m] 0: State::marks["cpc_fillers/box_length"]
     bool cluster_resistances = false;
     double unit_conductance = 1.0;  ///< [S] (cluster_resistances)

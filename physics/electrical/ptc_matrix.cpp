@@ -22,14 +22,16 @@ namespace {
 
 SpringNetwork build_network(const std::vector<Vec3>& x, const std::vector<double>& r, const MatrixParams& p) {
   if (x.size() != r.size()) throw SetupError("ptc_matrix: positions and radii differ in length");
-  if (!(p.min_gap > 0.0)) throw SetupError("ptc_matrix: min_gap h_min must be > 0 [m]");
-  if (!(p.cutoff_gap >= p.touch_tolerance))
-    throw SetupError("ptc_matrix: cutoff_gap h_max must be >= touch_tolerance (touching pairs need springs)");
+  if (!(p.min_gap_rel > 0.0)) throw SetupError("ptc_matrix: min_gap_rel (h_min / D) must be > 0");
+  if (!(p.cutoff_gap_rel >= p.touch_gap_rel))
+    throw SetupError("ptc_matrix: cutoff_gap_rel must be >= touch_gap_rel (touching pairs need springs)");
   if (!(p.matrix_modulus > 0.0) || !(p.bond_area > 0.0)) throw SetupError("ptc_matrix: matrix_modulus and bond_area must be > 0");
   SpringNetwork net;
   if (x.empty()) return net;
-  // find_pairs returns d < r_i + r_j + skin: a skin slightly above h_max keeps gap == h_max.
-  auto pairs = find_pairs(x, r, p.cutoff_gap * (1.0 + 1e-12) + 1e-300);
+  // find_pairs returns d < r_i + r_j + skin: a skin slightly above the largest h_max keeps
+  // gap == h_max; each pair is then cut at its own h_max = cutoff_gap_rel (R_i + R_j).
+  const double r_max = *std::max_element(r.begin(), r.end());
+  auto pairs = find_pairs(x, r, 2.0 * r_max * p.cutoff_gap_rel * (1.0 + 1e-12) + 1e-300);
   for (auto& pr : pairs)
     if (pr[0] > pr[1]) std::swap(pr[0], pr[1]);
   std::sort(pairs.begin(), pairs.end());
@@ -38,14 +40,15 @@ SpringNetwork build_network(const std::vector<Vec3>& x, const std::vector<double
     const double dist = d.norm();
     if (!(dist > 0.0))
       throw SetupError("ptc_matrix: fillers " + std::to_string(pr[0]) + " and " + std::to_string(pr[1]) + " have coincident centres");
-    const double h = dist - r[pr[0]] - r[pr[1]];
-    if (h > p.cutoff_gap) continue;
+    const double D = r[pr[0]] + r[pr[1]], h = dist - D;
+    if (h > p.cutoff_gap_rel * D) continue;
     net.a.push_back(pr[0]);
     net.b.push_back(pr[1]);
     net.gap.push_back(h);
     net.normal.push_back(d / dist);
-    net.stiffness.push_back(p.matrix_modulus * p.bond_area / std::max(h, p.min_gap));
-    net.eigen_gap.push_back(h > p.touch_tolerance ? h : 0.0);
+    net.stiffness.push_back(p.matrix_modulus * p.bond_area / std::max(h, p.min_gap_rel * D));
+    net.eigen_gap.push_back(h > p.touch_gap_rel * D ? h : 0.0);
+    net.distance.push_back(D);
   }
   return net;
 }
@@ -111,14 +114,19 @@ UnitSolution solve_unit(std::size_t n, const SpringNetwork& net, const MatrixPar
   return out;
 }
 
-Contacts touching_contacts(const SpringNetwork& net, const UnitSolution& sol, double touch_tolerance) {
+std::size_t Contacts::touching_count() const { return static_cast<std::size_t>(std::count(touching.begin(), touching.end(), char{1})); }
+
+Contacts candidate_contacts(const SpringNetwork& net, const UnitSolution& sol, double touch_gap_rel, double closing_gap_rel) {
   Contacts c;
+  const double reach = std::max(touch_gap_rel, closing_gap_rel);
   for (std::size_t e = 0; e < net.size(); ++e)
-    if (net.gap[e] <= touch_tolerance) {
+    if (net.gap[e] <= reach * net.distance[e]) {
       c.a.push_back(net.a[e]);
       c.b.push_back(net.b[e]);
       c.gap.push_back(net.gap[e]);
       c.opening.push_back(sol.opening[e]);
+      c.distance.push_back(net.distance[e]);
+      c.touching.push_back(net.gap[e] <= touch_gap_rel * net.distance[e] ? 1 : 0);
     }
   return c;
 }
@@ -146,21 +154,34 @@ double affine_volumetric_strain(const std::vector<Vec3>& x, const std::vector<Ve
   return f.solve(cux.transpose()).trace();
 }
 
-std::vector<double> break_strains(const Contacts& c, double break_gap) {
-  std::vector<double> out(c.size(), kInf);
-  for (std::size_t e = 0; e < c.size(); ++e)
-    if (c.opening[e] > 0.0) out[e] = (std::max(break_gap, c.gap[e]) - c.gap[e]) / c.opening[e];
-  return out;
+Intervals conduction_intervals(const Contacts& c, double touch_gap_rel, double break_gap_rel) {
+  Intervals iv;
+  iv.lo.assign(c.size(), -kInf);
+  iv.hi.assign(c.size(), kInf);
+  for (std::size_t e = 0; e < c.size(); ++e) {
+    // Conducts while h + eps0 delta <= T: a half-line in eps0 (header rule).
+    const double h = c.gap[e], d = c.opening[e];
+    const double T = c.touching[e] ? std::max(break_gap_rel * c.distance[e], h) : touch_gap_rel * c.distance[e];
+    if (d > 0.0)
+      iv.hi[e] = (T - h) / d;
+    else if (d < 0.0)
+      iv.lo[e] = (T - h) / d;
+    else if (h > T) {
+      iv.lo[e] = kInf;
+      iv.hi[e] = -kInf;
+    }
+  }
+  return iv;
 }
 
-StrainPoint evaluate(std::size_t n, const Contacts& c, std::span<const double> eps_break, double eps0, double unit_conductance,
+StrainPoint evaluate(std::size_t n, const Contacts& c, const Intervals& iv, double eps0, double unit_conductance,
                      std::span<const Index> high, std::span<const Index> low, LaplacianSolver& solver) {
-  if (eps_break.size() != c.size()) throw SetupError("ptc_matrix: one break strain per contact expected");
+  if (iv.lo.size() != c.size() || iv.hi.size() != c.size()) throw SetupError("ptc_matrix: one conduction interval per contact expected");
   StrainPoint sp;
   sp.eps0 = eps0;
   std::vector<Index> a, b;
   for (std::size_t e = 0; e < c.size(); ++e)
-    if (eps0 <= eps_break[e]) {
+    if (iv.lo[e] <= eps0 && eps0 <= iv.hi[e]) {
       a.push_back(c.a[e]);
       b.push_back(c.b[e]);
     }
@@ -178,37 +199,79 @@ StrainPoint evaluate(std::size_t n, const Contacts& c, std::span<const double> e
   return sp;
 }
 
-double switching_strain(std::size_t n, const Contacts& c, std::span<const double> eps_break, std::span<const Index> high,
-                        std::span<const Index> low) {
-  if (eps_break.size() != c.size()) throw SetupError("ptc_matrix: one break strain per contact expected");
-  if (n == 0 || high.empty() || low.empty()) return 0.0;
-  std::vector<Index> parent(n);
-  std::iota(parent.begin(), parent.end(), Index{0});
-  std::vector<char> hi(n, 0), lo(n, 0);
-  for (Index v : high) hi[v] = 1;
-  for (Index v : low) lo[v] = 1;
-  for (std::size_t v = 0; v < n; ++v)
-    if (hi[v] && lo[v]) return kInf;  // a filler on both faces spans without contacts
-  auto find = [&](Index v) {
-    while (parent[v] != v) {
-      parent[v] = parent[parent[v]];
-      v = parent[v];
+namespace {
+
+/// Union-find over the fillers that tells when the electrodes connect.
+class Spanning {
+ public:
+  Spanning(std::size_t n, std::span<const Index> high, std::span<const Index> low) : parent_(n), hi_(n, 0), lo_(n, 0) {
+    std::iota(parent_.begin(), parent_.end(), Index{0});
+    for (Index v : high) hi_[v] = 1;
+    for (Index v : low) lo_[v] = 1;
+    for (std::size_t v = 0; v < n; ++v) spans_ = spans_ || (hi_[v] && lo_[v]);  // a filler on both faces
+  }
+  /// Joins a and b; true once the electrodes are connected.
+  bool join(Index a, Index b) {
+    Index ra = find(a), rb = find(b);
+    if (ra != rb) {
+      if (rb < ra) std::swap(ra, rb);
+      parent_[rb] = ra;
+      hi_[ra] = hi_[ra] || hi_[rb];
+      lo_[ra] = lo_[ra] || lo_[rb];
+      spans_ = spans_ || (hi_[ra] && lo_[ra]);
+    }
+    return spans_;
+  }
+  bool spans() const { return spans_; }
+
+ private:
+  Index find(Index v) {
+    while (parent_[v] != v) {
+      parent_[v] = parent_[parent_[v]];
+      v = parent_[v];
     }
     return v;
-  };
-  std::vector<std::size_t> order(c.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return eps_break[x] > eps_break[y]; });
-  for (std::size_t e : order) {
-    Index ra = find(c.a[e]), rb = find(c.b[e]);
-    if (ra == rb) continue;
-    if (rb < ra) std::swap(ra, rb);
-    parent[rb] = ra;
-    hi[ra] = hi[ra] || hi[rb];
-    lo[ra] = lo[ra] || lo[rb];
-    if (hi[ra] && lo[ra]) return eps_break[e];
   }
-  return 0.0;
+  std::vector<Index> parent_;
+  std::vector<char> hi_, lo_;
+  bool spans_ = false;
+};
+
+}  // namespace
+
+double switching_strain(std::size_t n, const Contacts& c, const Intervals& iv, std::span<const Index> high, std::span<const Index> low) {
+  if (iv.lo.size() != c.size() || iv.hi.size() != c.size()) throw SetupError("ptc_matrix: one conduction interval per contact expected");
+  if (n == 0 || high.empty() || low.empty()) return 0.0;
+  if (Spanning(n, high, low).spans()) return kInf;
+  // 1. The contacts conducting from eps0 = 0 on, in decreasing break strain.
+  std::vector<std::size_t> order;
+  for (std::size_t e = 0; e < c.size(); ++e)
+    if (iv.lo[e] <= 0.0 && iv.hi[e] >= 0.0) order.push_back(e);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return iv.hi[x] > iv.hi[y]; });
+  Spanning first(n, high, low);
+  double eps1 = -1.0;
+  for (std::size_t e : order)
+    if (first.join(c.a[e], c.b[e])) {
+      eps1 = iv.hi[e];
+      break;
+    }
+  if (eps1 < 0.0) return 0.0;
+  if (std::isinf(eps1)) return eps1;
+  // 2. Closing contacts (lo > 0) may carry the network past eps1: check each later break strain.
+  const bool closing = std::any_of(iv.lo.begin(), iv.lo.end(), [](double v) { return v > 0.0 && std::isfinite(v); });
+  if (!closing) return eps1;
+  std::vector<double> breaks;
+  for (double v : iv.hi)
+    if (v >= eps1 && std::isfinite(v)) breaks.push_back(v);
+  std::sort(breaks.begin(), breaks.end());
+  breaks.erase(std::unique(breaks.begin(), breaks.end()), breaks.end());
+  for (double eb : breaks) {
+    Spanning after(n, high, low);  // the set just above eb: joined by eb, not broken at eb
+    for (std::size_t e = 0; e < c.size() && !after.spans(); ++e)
+      if (iv.lo[e] <= eb && iv.hi[e] > eb) after.join(c.a[e], c.b[e]);
+    if (!after.spans()) return eb;
+  }
+  return kInf;
 }
 
 }  // namespace sparkdem::physics::ptc

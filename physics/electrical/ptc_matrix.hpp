@@ -15,7 +15,7 @@
 ///     k_ij = E_m A / max(h_ij, h_min)                                      [N/m]
 /// (a polymer column of cross-section A [m^2] and length max(h, h_min): a thin polymer layer is
 /// stiff, h_min caps the stiffness of touching and overlapping pairs) and eigen-elongation
-///     e_ij = eps0 h*_ij,  h*_ij = h_ij if h_ij > touch_tolerance, else 0  [m]
+///     e_ij = eps0 h*_ij,  h*_ij = h_ij if h_ij > touch_gap_rel D_ij, else 0  [m]
 /// (only the polymer expands; the gap of a touching pair holds no polymer, so no eigenstrain).
 /// Energy W(u) = 1/2 sum_ij k_ij (n_ij . (u_j - u_i) - e_ij)^2 (linearised kinematics: small
 /// eps0). Stationarity gives the sparse symmetric positive semi-definite system
@@ -43,24 +43,31 @@
 /// opening) and perturbs the openings by a relative O(delta mean(k) / lambda_min+(K)).
 /// Solver: Eigen SimplicialLDLT (AMD ordering), exact up to rounding.
 ///
+/// LENGTHS ARE RELATIVE to the pair's contact distance D_ij = R_i + R_j (the filler diameter D
+/// for equal fillers): h_max = cutoff_gap_rel D_ij, h_min = min_gap_rel D_ij, and the touch and
+/// break thresholds below. The openings are then invariant under a scaling of every length (the
+/// paper states its rule as 0.1 % of D; absolute thresholds held only because R = 1 m).
+///
 /// CONNECTION RULE (note §1.3, §4 "break criterion"; the paper does not state it). The initial
-/// contact set is the pairs with h_ij <= touch_tolerance (the paper's 0.1 % of D; the same
-/// set as contact_percolation). Contacts never form under strain (compressed pairs only overlap
-/// more; the note notes new connections could form: ignored). A contact conducts at eps0 while
-///     h_ij + eps0 delta_ij <= max(break_gap, h_ij),
-/// i.e. it opens when its gap exceeds break_gap; a contact that starts with a gap above
-/// break_gap (inside the tolerance) opens at its first positive opening. Two readings:
-///  - break_gap = 0, the note's inference "the gap becomes positive" (the opening exceeds the
+/// contact set is the pairs with h_ij <= touch_gap_rel D_ij (the paper's 0.1 % of D; the same
+/// set as contact_percolation). A touching contact conducts at eps0 while
+///     h_ij + eps0 delta_ij <= max(break_gap_rel D_ij, h_ij),
+/// i.e. it opens when its gap exceeds the break threshold; a contact that starts with a gap above
+/// it (inside the touch tolerance) opens at its first positive opening. A pair that does not
+/// touch at eps0 = 0 but lies within closing_gap_rel D_ij (a closing candidate) joins the network
+/// once its gap closes to the touch threshold,
+///     h_ij + eps0 delta_ij <= touch_gap_rel D_ij
+/// (the paper: "new connections might be realized ... (negative strain)": on cooling, or where
+/// the matrix squeezes two fillers together). Both are the half-line {eps0 : h + eps0 delta <= T}
+/// with T = max(break_gap_rel D, h) (touching) or touch_gap_rel D (candidate): the contact
+/// conducts for lo <= eps0 <= hi (conduction_intervals). Two readings of the break threshold:
+///  - break_gap_rel = 0, the note's inference "the gap becomes positive" (the opening exceeds the
 ///    residual overlap). MEASURED on cpc_fillers at phi = 25 %, L = 70 R: about half of the
 ///    contact set (gap <= 0.1 % of D) ends the contact algorithm at a small POSITIVE gap, and
 ///    all of those with a positive opening break at once: Z falls from 1.58 to 0.88 at
 ///    eps0 = 0.5 % and the network no longer spans at any eps0 > 0 (switching strain 0);
-///  - break_gap = touch_tolerance (the ptc_strain default): the same rule before and after
+///  - break_gap_rel = touch_gap_rel (the ptc_strain default): the same rule before and after
 ///    straining, "touching = gap <= 0.1 % of D"; eps0 = 0 reproduces contact_percolation.
-/// Its break strain is
-///     eps_b = (max(break_gap, h_ij) - h_ij) / delta_ij  (delta_ij > 0),  +inf otherwise,
-/// and it conducts for eps0 < eps_b (at eps0 = eps_b the gap equals the threshold: still
-/// conducting, strict inequality below is for eps0 > eps_b).
 /// Electrics: unit conductance per conducting contact, the whole network in one system with all
 /// electrode fillers of a face at one potential (parallel spanning clusters: 1/R = sum 1/R_k),
 /// rho = R_eq L. Z = 2 (conducting contacts) / N.
@@ -73,12 +80,12 @@
 namespace sparkdem::physics::ptc {
 
 struct MatrixParams {
-  double matrix_modulus = 1.0;    ///< E_m [Pa]
-  double bond_area = 1.0;         ///< A [m^2]
-  double min_gap = 1e-2;          ///< h_min [m], > 0
-  double cutoff_gap = 1.0;        ///< h_max [m]: springs between pairs with gap <= this
-  double touch_tolerance = 2e-3;  ///< [m] touching: gap <= this (no eigenstrain; contact set)
-  double regularisation = 1e-9;   ///< delta [1]: ground spring delta mean(k) on free DOFs
+  double matrix_modulus = 1.0;   ///< E_m [Pa]
+  double bond_area = 1.0;        ///< A [m^2]
+  double min_gap_rel = 5e-3;     ///< h_min / D_ij [1], > 0
+  double cutoff_gap_rel = 0.5;   ///< h_max / D_ij [1]: springs between pairs with gap <= h_max
+  double touch_gap_rel = 1e-3;   ///< touching: gap <= this x D_ij [1] (no eigenstrain; contact set)
+  double regularisation = 1e-9;  ///< delta [1]: ground spring delta mean(k) on free DOFs
 };
 
 /// The spring network: pairs (a[e] < b[e]) with gap [m], unit normal a -> b and stiffness [N/m].
@@ -88,10 +95,11 @@ struct SpringNetwork {
   std::vector<Vec3> normal;       ///< n_ij (from a to b)
   std::vector<double> stiffness;  ///< k_ij [N/m]
   std::vector<double> eigen_gap;  ///< h*_ij [m]: eigen-elongation per unit eps0
+  std::vector<double> distance;   ///< D_ij = R_i + R_j [m]
   std::size_t size() const { return a.size(); }
 };
 
-/// Every pair of fillers with gap <= p.cutoff_gap (and >= -(R_i + R_j): coincident centres are
+/// Every pair of fillers with gap <= p.cutoff_gap_rel D_ij (and >= -(R_i + R_j): coincident centres are
 /// a SetupError), sorted by (a, b).
 SpringNetwork build_network(const std::vector<Vec3>& x, const std::vector<double>& r, const MatrixParams& p);
 
@@ -103,15 +111,20 @@ struct UnitSolution {
 /// One sparse solve for eps0 = 1 on nodes 0..n-1; fillers in `fixed` are held at u = 0.
 UnitSolution solve_unit(std::size_t n, const SpringNetwork& net, const MatrixParams& p, std::span<const Index> fixed = {});
 
-/// The touching contacts (the initial contact set) with their initial gap and unit opening.
+/// The contacts that may conduct: the touching ones (the initial contact set) and the closing
+/// candidates, with their initial gap and unit opening.
 struct Contacts {
   std::vector<Index> a, b;
-  std::vector<double> gap;      ///< h_ij at eps0 = 0 [m] (<= touch_tolerance)
-  std::vector<double> opening;  ///< delta_ij [m per unit eps0]
+  std::vector<double> gap;       ///< h_ij at eps0 = 0 [m]
+  std::vector<double> opening;   ///< delta_ij [m per unit eps0]
+  std::vector<double> distance;  ///< D_ij = R_i + R_j [m]
+  std::vector<char> touching;    ///< 1: in the initial contact set (gap <= touch_gap_rel D); 0: a closing candidate
   std::size_t size() const { return a.size(); }
+  std::size_t touching_count() const;
 };
-/// Springs of net with gap <= touch_tolerance, with the openings of sol.
-Contacts touching_contacts(const SpringNetwork& net, const UnitSolution& sol, double touch_tolerance);
+/// Springs of net with gap <= max(touch_gap_rel, closing_gap_rel) D_ij, with the openings of sol
+/// (closing_gap_rel = 0: the touching contacts only).
+Contacts candidate_contacts(const SpringNetwork& net, const UnitSolution& sol, double touch_gap_rel, double closing_gap_rel);
 
 /// The composite's volumetric strain read from the fillers: tr A of the least-squares affine fit
 /// u_i ~ A x_i + b over every filler (A = C_ux C_xx^-1 with the centred covariances
@@ -121,8 +134,13 @@ Contacts touching_contacts(const SpringNetwork& net, const UnitSolution& sol, do
 /// fillers not on one plane (else SetupError).
 double affine_volumetric_strain(const std::vector<Vec3>& x, const std::vector<Vec3>& u);
 
-/// Break strain of every contact (header rule): eps_b [1], +inf if it never opens.
-std::vector<double> break_strains(const Contacts& c, double break_gap);
+/// Per contact, the strains between which it conducts (header rule): lo <= eps0 <= hi [1], each
+/// possibly infinite; an empty interval (a candidate that never closes) has lo = +inf, hi = -inf.
+/// For a touching contact, hi is its break strain (+inf if it never opens under expansion).
+struct Intervals {
+  std::vector<double> lo, hi;
+};
+Intervals conduction_intervals(const Contacts& c, double touch_gap_rel, double break_gap_rel);
 
 struct StrainPoint {
   double eps0 = 0.0;
@@ -132,15 +150,16 @@ struct StrainPoint {
   double resistance = 0.0;     ///< R_eq [Ohm] with unit_conductance per contact; +inf if not spanning
 };
 /// Connectivity and resistance at strain eps0 (one Kirchhoff solve if spanning).
-StrainPoint evaluate(std::size_t n, const Contacts& c, std::span<const double> eps_break, double eps0, double unit_conductance,
+StrainPoint evaluate(std::size_t n, const Contacts& c, const Intervals& iv, double eps0, double unit_conductance,
                      std::span<const Index> high, std::span<const Index> low, LaplacianSolver& solver);
 
-/// The exact switching strain: the largest break strain eps* such that the contacts with
-/// eps_b > eps* no longer span (the network spans for eps0 < eps*, i.e. at eps0 <= eps* under
-/// the rule; fails just above). Computed by adding contacts in decreasing eps_b (union-find)
-/// until the electrodes connect. 0 if the initial network does not span; +inf if the network
-/// still spans with only never-opening contacts.
-double switching_strain(std::size_t n, const Contacts& c, std::span<const double> eps_break, std::span<const Index> high,
-                        std::span<const Index> low);
+/// The exact switching strain eps* >= 0: the network spans for every 0 <= eps0 <= eps* and fails
+/// just above it. Contacts only break (hi) and join (lo) at their interval ends, so spanning can
+/// fail only at a break strain: first the contacts that conduct from eps0 = 0 on are added in
+/// decreasing hi (union-find) until the electrodes connect (eps1: without closing contacts the
+/// answer); then each break strain above eps1 is checked in increasing order with the contacts
+/// that joined by then, until one no longer spans. 0 if the initial network does not span; +inf
+/// if it spans at every eps0 >= 0.
+double switching_strain(std::size_t n, const Contacts& c, const Intervals& iv, std::span<const Index> high, std::span<const Index> low);
 
 }  // namespace sparkdem::physics::ptc

@@ -7,6 +7,7 @@
 #include "engine/core/error.hpp"
 #include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
+#include "physics/electrical/ptc_gaps.hpp"
 #include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics {
@@ -18,10 +19,7 @@ ParamSpec<PtcSelfHeating::Params> PtcSelfHeating::spec() {
                  "(field ptc_displacement) by back-substitution with the factorised bonded-network matrix (self-heating PTC)");
   s.add("high", &P::high).doc("electrode set for the switching columns (\"\": not reported)");
   s.add("low", &P::low).doc("opposite electrode set for the switching columns");
-  s.add("touch_tolerance", &P::touch_tolerance).unit("m").nonnegative().doc("touching contacts: gap <= this (no eigenstrain in them)");
-  s.add("break_gap", &P::break_gap).unit("m").doc("a contact stops conducting when its gap exceeds max(break_gap, initial gap)");
-  s.add("cutoff_gap", &P::cutoff_gap).unit("m").nonnegative().doc("h_max: springs join fillers with gap <= this");
-  s.add("min_gap", &P::min_gap).unit("m").positive().doc("h_min: spring stiffness E_m A / max(h, h_min)");
+  ptc::add_relative_gaps(s);
   s.add("regularisation", &P::regularisation).nonnegative().doc("ground spring on every filler, x mean spring stiffness");
   s.add("expansion_coefficient", &P::expansion_coefficient)
       .unit("1/K")
@@ -45,9 +43,9 @@ PtcSelfHeating::PtcSelfHeating(const Params& p) : p_(p) {
       p_.melting_strain,        p_.melting_width};
   ptc::validate(law_);
   if (p_.high.empty() != p_.low.empty()) throw SetupError("ptc_self_heating: give both electrodes high and low, or neither");
-  mp_.min_gap = p_.min_gap;
-  mp_.cutoff_gap = p_.cutoff_gap;
-  mp_.touch_tolerance = p_.touch_tolerance;
+  mp_.min_gap_rel = p_.min_gap_rel;
+  mp_.cutoff_gap_rel = p_.cutoff_gap_rel;
+  mp_.touch_gap_rel = p_.touch_gap_rel;
   mp_.regularisation = p_.regularisation;
   held_.assign(columns().size(), kNaN);
 }
@@ -65,7 +63,7 @@ void PtcSelfHeating::build(const State& s) {
   solver_.factorize(P.size(), net_, mp_);
   contact_.clear();
   for (std::size_t e = 0; e < net_.size(); ++e)
-    if (net_.gap[e] <= p_.touch_tolerance) contact_.push_back(e);
+    if (net_.gap[e] <= p_.touch_gap_rel * net_.distance[e]) contact_.push_back(e);
   switching_strain_ = kNaN;
   if (!p_.high.empty()) {
     std::vector<Vec3> u;
@@ -77,8 +75,10 @@ void PtcSelfHeating::build(const State& s) {
       c.b.push_back(net_.b[e]);
       c.gap.push_back(net_.gap[e]);
       c.opening.push_back(open[e]);
+      c.distance.push_back(net_.distance[e]);
+      c.touching.push_back(1);
     }
-    switching_strain_ = ptc::switching_strain(P.size(), c, ptc::break_strains(c, p_.break_gap), set_members(s, p_.high, "ptc_self_heating"),
+    switching_strain_ = ptc::switching_strain(P.size(), c, ptc::conduction_intervals(c, p_.touch_gap_rel, p_.break_gap_rel), set_members(s, p_.high, "ptc_self_heating"),
                                               set_members(s, p_.low, "ptc_self_heating"));
   }
 }
@@ -109,7 +109,7 @@ void PtcSelfHeating::advance(State& s, const StepInfo& info) {
     for (int c = 0; c < 3; ++c) f[3 * i + c] = u[i][c];
   std::size_t conducting = 0;
   for (std::size_t e : contact_)
-    if (net_.gap[e] + open[e] <= std::max(p_.break_gap, net_.gap[e])) ++conducting;
+    if (net_.gap[e] + open[e] <= std::max(p_.break_gap_rel * net_.distance[e], net_.gap[e])) ++conducting;
   const double n = static_cast<double>(P.size());
   held_ = {static_cast<double>(contact_.size()),
            static_cast<double>(conducting),

@@ -7,7 +7,7 @@
 /// eps0 h*) and the eps0(T) law of ptc_temperature.hpp. For a self-heating current limiter:
 ///   ptc_self_heating (temperature -> filler displacements) -> electrical_network (model
 ///   touching, displacement_field = ptc_displacement: a contact conducts while its gap after the
-///   displacement is <= touch_tolerance; open_conductance for an opened contact) ->
+///   displacement is <= touch_gap_rel (R_i + R_j); open_conductance for an opened contact) ->
 ///   heat_conduction (joule_power -> temperature, losses to the ambient).
 ///
 /// Each call: eps0_e = eps0(T_e) per spring, T_e the mean temperature of its two fillers; one
@@ -17,8 +17,9 @@
 /// opening of every touching contact is n . (u_b - u_a) (as in ptc_strain). Columns (prefix
 /// ptc_self_heating_):
 ///   contacts                 touching contacts of the configuration
-///   conducting               contacts whose gap after the displacement is <= break_gap [-]
-///                            (the rule of ptc_matrix.hpp with break_gap = touch_tolerance)
+///   conducting               contacts whose gap after the displacement is <= break_gap_rel (R_i + R_j) [-]
+///                            (the rule of ptc_matrix.hpp; every gap threshold is relative, ptc_gaps.hpp;
+///                            the touching contacts only: no closing candidates here)
 ///   coordination             Z = 2 conducting / N [1]
 ///   eps0_mean, eps0_max      over the springs with polymer (h* > 0) [1]
 ///   switching_strain         exact uniform switching strain of the network (as ptc_strain) [1]
@@ -41,10 +42,10 @@ class PtcSelfHeating final : public Module {
   struct Params {
     std::string high;  ///< electrode set (switching columns only; "" = none)
     std::string low;
-    double touch_tolerance = 2e-3;            ///< [m]
-    double break_gap = 2e-3;                  ///< [m]
-    double cutoff_gap = 1.0;                  ///< [m] h_max
-    double min_gap = 1e-2;                    ///< [m] h_min
+    double touch_gap_rel = 1e-3;              ///< [1] of R_i + R_j
+    double break_gap_rel = 1e-3;              ///< [1] of R_i + R_j
+    double cutoff_gap_rel = 0.5;              ///< [1] of R_i + R_j: h_max
+    double min_gap_rel = 5e-3;                ///< [1] of R_i + R_j: h_min
     double regularisation = 1e-9;             ///< [1]
     double expansion_coefficient = 2e-4;      ///< alpha_s [1/K]
     double expansion_coefficient_melt = 0.0;  ///< alpha_l [1/K]; 0 = alpha_s

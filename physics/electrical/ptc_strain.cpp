@@ -10,6 +10,7 @@
 #include "engine/core/error.hpp"
 #include "engine/state/particle_set.hpp"
 #include "engine/state/state.hpp"
+#include "physics/electrical/ptc_gaps.hpp"
 #include "physics/electrical/ptc_matrix.hpp"
 #include "physics/electrical/rkpm_matrix.hpp"
 #include "engine/core/numbers.hpp"
@@ -17,7 +18,15 @@
 namespace sparkdem::physics {
 
 namespace {
-constexpr std::size_t kFixed = 8;  // columns before the per-eps0 block
+constexpr std::size_t kFixed = 9;  // columns before the per-eps0 block
+constexpr std::size_t kContactFields = 5;
+
+/// The per-contact output's layout (values filled by the caller).
+EdgeOutput contact_output(std::vector<std::int64_t> pairs) {
+  return EdgeOutput{"ptc_contacts",
+                    std::move(pairs),
+                    {{"gap", "m", {}}, {"unit_opening", "m", {}}, {"break_strain", "1", {}}, {"join_strain", "1", {}}, {"touching", "1", {}}}};
+}
 
 }  // namespace
 
@@ -93,15 +102,12 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
                  "eps0 h_ij (one linear solve for unit eps0); Z(eps0), rho(eps0), switching strain, contact openings");
   s.add("high", &P::high).doc("electrode particle set on one face");
   s.add("low", &P::low).doc("electrode particle set on the opposite face");
-  s.add("touch_tolerance", &P::touch_tolerance)
-      .unit("m")
+  ptc::add_relative_gaps(s);
+  s.add("closing_gap_rel", &P::closing_gap_rel)
+      .unit("1")
       .nonnegative()
-      .doc("touching contacts: gap <= this (paper 0.1 % of D = 2e-3 R); no eigenstrain in them");
-  s.add("break_gap", &P::break_gap)
-      .unit("m")
-      .doc("a contact stops conducting when its gap exceeds max(break_gap, initial gap); 0 = the gap becomes positive");
-  s.add("cutoff_gap", &P::cutoff_gap).unit("m").nonnegative().doc("h_max: springs join fillers with gap <= this");
-  s.add("min_gap", &P::min_gap).unit("m").positive().doc("h_min: spring stiffness E_m A / max(h, h_min)");
+      .doc("pairs with gap <= this x (R_i + R_j) that do not touch are followed: one joins when its gap closes to "
+           "touch_gap_rel (R_i + R_j) (0: contacts only break)");
   s.add("matrix_modulus", &P::matrix_modulus).unit("Pa").positive().doc("E_m (the openings do not depend on it)");
   s.add("bond_area", &P::bond_area).unit("m^2").positive().doc("A (the openings do not depend on it)");
   s.add("regularisation", &P::regularisation)
@@ -206,16 +212,16 @@ PtcStrain::UnitResult PtcStrain::unit_contacts(const State& s) const {
   ptc::MatrixParams mp;
   mp.matrix_modulus = p_.matrix_modulus;
   mp.bond_area = p_.bond_area;
-  mp.min_gap = p_.min_gap;
-  mp.cutoff_gap = p_.cutoff_gap;
-  mp.touch_tolerance = p_.touch_tolerance;
+  mp.min_gap_rel = p_.min_gap_rel;
+  mp.cutoff_gap_rel = p_.cutoff_gap_rel;
+  mp.touch_gap_rel = p_.touch_gap_rel;
   mp.regularisation = p_.regularisation;
   const std::size_t n = s.particles.size();
   UnitResult u;
   if (p_.matrix_model == "bonded") {
     const ptc::SpringNetwork net = ptc::build_network(s.particles.position, s.particles.radius, mp);
     const ptc::UnitSolution sol = ptc::solve_unit(n, net, mp);
-    u.contacts = ptc::touching_contacts(net, sol, p_.touch_tolerance);
+    u.contacts = ptc::candidate_contacts(net, sol, p_.touch_gap_rel, p_.closing_gap_rel);
     u.matrix_size = net.size();
     u.residual = sol.residual;
     return u;
@@ -252,15 +258,16 @@ PtcStrain::UnitResult PtcStrain::unit_contacts(const State& s) const {
   dom.lo = lo;
   dom.hi = lo + Vec3::Constant((hi - lo).maxCoeff());
   const rkpm::Result r = rkpm::solve_unit(s.particles.position, s.particles.radius, dom, rp);
-  // The touching pairs (springs of a network cut at the touch tolerance) with the RKPM openings.
+  // The touching pairs and closing candidates (springs of a network cut at the larger of the two
+  // gaps) with the RKPM openings.
   ptc::MatrixParams tp = mp;
-  tp.cutoff_gap = p_.touch_tolerance;
+  tp.cutoff_gap_rel = std::max(p_.touch_gap_rel, p_.closing_gap_rel);
   const ptc::SpringNetwork touching = ptc::build_network(s.particles.position, s.particles.radius, tp);
   ptc::UnitSolution sol;
   sol.displacement = r.sphere_displacement;
   for (std::size_t e = 0; e < touching.size(); ++e)
     sol.opening.push_back(touching.normal[e].dot(r.sphere_displacement[touching.b[e]] - r.sphere_displacement[touching.a[e]]));
-  u.contacts = ptc::touching_contacts(touching, sol, p_.touch_tolerance);
+  u.contacts = ptc::candidate_contacts(touching, sol, p_.touch_gap_rel, p_.closing_gap_rel);
   u.matrix_size = r.approximation.nodes();
   u.residual = r.residual;
   if (p_.strain_statistics) {  // per unit eps0 -> at opening_strain
@@ -282,16 +289,17 @@ void PtcStrain::advance(State& s, const StepInfo&) {
   const ptc::Contacts& c = unit.contacts;
   const std::size_t matrix_size = unit.matrix_size;
   const double residual = unit.residual;
-  const std::vector<double> eb = ptc::break_strains(c, p_.break_gap);
+  const ptc::Intervals iv = ptc::conduction_intervals(c, p_.touch_gap_rel, p_.break_gap_rel);
   const std::vector<Index> high = set_members(s, p_.high, "ptc_strain"), low = set_members(s, p_.low, "ptc_strain");
 
   std::vector<double> rel;
   std::size_t closing = 0;
-  for (std::size_t e = 0; e < c.size(); ++e) {
-    const double D = s.particles.radius[c.a[e]] + s.particles.radius[c.b[e]];
-    rel.push_back(p_.opening_strain * c.opening[e] / D);
+  for (std::size_t e = 0; e < c.size(); ++e) {  // the opening statistics: the touching contacts
+    if (!c.touching[e]) continue;
+    rel.push_back(p_.opening_strain * c.opening[e] / c.distance[e]);
     if (c.opening[e] < 0.0) ++closing;
   }
+  const std::size_t touching = rel.size();
   double mean = kNaN, median = kNaN;
   if (!rel.empty()) {
     mean = 0.0;
@@ -305,17 +313,18 @@ void PtcStrain::advance(State& s, const StepInfo&) {
   double listed = kInf;
   std::vector<double> per;
   for (double e0 : p_.eps0_values) {
-    const ptc::StrainPoint sp = ptc::evaluate(n, c, eb, e0, p_.unit_conductance, high, low, solver_);
+    const ptc::StrainPoint sp = ptc::evaluate(n, c, iv, e0, p_.unit_conductance, high, low, solver_);
     if (!sp.spanning) listed = std::min(listed, e0);
     per.insert(per.end(), {sp.spanning ? 1.0 : 0.0, sp.coordination, sp.resistance * length_});
   }
   held_ = {static_cast<double>(matrix_size),
-           static_cast<double>(c.size()),
-           ptc::switching_strain(n, c, eb, high, low),
+           static_cast<double>(touching),
+           static_cast<double>(c.size() - touching),
+           ptc::switching_strain(n, c, iv, high, low),
            listed,
            mean,
            median,
-           c.size() ? static_cast<double>(closing) / static_cast<double>(c.size()) : kNaN};
+           touching ? static_cast<double>(closing) / static_cast<double>(touching) : kNaN};
   held_.push_back(residual);
   held_.insert(held_.end(), per.begin(), per.end());
   const auto& he = p_.opening_histogram_edges;
@@ -334,33 +343,27 @@ void PtcStrain::advance(State& s, const StepInfo&) {
   }
   held_.insert(held_.end(), unit.strain.begin(), unit.strain.end());
   if (!tsuffix_.empty()) {
-    held_.push_back(std::isfinite(held_[2]) ? ptc::temperature_at_strain(law_, held_[2]) : kInf);
+    held_.push_back(std::isfinite(held_[3]) ? ptc::temperature_at_strain(law_, held_[3]) : kInf);
     for (double T : p_.temperatures) {
-      const double e0 = ptc::thermal_strain(law_, T);
-      // eps0 < 0 (below T_ref): the break strains are for eps0 > 0; apply the rule of ptc_matrix.hpp
-      // directly (a contact conducts while gap + eps0 delta <= max(break_gap, gap): on cooling the
-      // contacts with delta < 0 open).
-      std::vector<double> ebT = eb;
-      if (e0 < 0.0)
-        for (std::size_t e = 0; e < c.size(); ++e) ebT[e] = c.gap[e] + e0 * c.opening[e] <= std::max(p_.break_gap, c.gap[e]) ? kInf : -kInf;
-      const ptc::StrainPoint sp = ptc::evaluate(n, c, ebT, e0, p_.unit_conductance, high, low, solver_);
+      const double e0 = ptc::thermal_strain(law_, T);  // < 0 below T_ref: the intervals hold for either sign
+      const ptc::StrainPoint sp = ptc::evaluate(n, c, iv, e0, p_.unit_conductance, high, low, solver_);
       held_.insert(held_.end(), {e0, sp.spanning ? 1.0 : 0.0, sp.coordination, sp.resistance * length_});
     }
   }
-  // Per-contact results for the frames: ids, initial gap, unit opening, break strain.
-  contacts_ = EdgeOutput{"ptc_contacts", {}, {{"gap", "m", {}}, {"unit_opening", "m", {}}, {"break_strain", "1", {}}}};
+  // Per-contact results for the frames: ids, initial gap, unit opening, conduction interval, touching.
+  contacts_ = contact_output({});
   for (std::size_t e = 0; e < c.size(); ++e) {
     contacts_.pairs.push_back(s.particles.id[c.a[e]]);
     contacts_.pairs.push_back(s.particles.id[c.b[e]]);
-    contacts_.fields[0].values.push_back(c.gap[e]);
-    contacts_.fields[1].values.push_back(c.opening[e]);
-    contacts_.fields[2].values.push_back(eb[e]);
+    const double v[kContactFields] = {c.gap[e], c.opening[e], iv.hi[e], iv.lo[e], static_cast<double>(c.touching[e])};
+    for (std::size_t q = 0; q < kContactFields; ++q) contacts_.fields[q].values.push_back(v[q]);
   }
 }
 
 std::vector<std::string> PtcStrain::columns() const {
   std::vector<std::string> c = {
-      "ptc_strain_springs",      "ptc_strain_contacts",       "ptc_strain_switching_strain",          "ptc_strain_switching_strain_listed",
+      "ptc_strain_springs",      "ptc_strain_contacts",       "ptc_strain_closing_candidates",        "ptc_strain_switching_strain",
+      "ptc_strain_switching_strain_listed",
       "ptc_strain_opening_mean", "ptc_strain_opening_median", "ptc_strain_opening_negative_fraction", "ptc_strain_solve_residual"};
   for (const auto& sfx : suffix_)
     for (const char* q : {"spanning_", "coordination_", "resistivity_"}) c.push_back(std::string("ptc_strain_") + q + sfx);
@@ -415,15 +418,15 @@ void PtcStrain::visit(Archive& ar, const std::string& prefix) {
       for (const auto& f : contacts_.fields) vals.push_back(f.values[k]);
   if (!ar.reading() || ar.has(prefix + "/contact_pairs")) {
     ar.visit(prefix + "/contact_pairs", pairs, 2);
-    ar.visit(prefix + "/contact_values", vals, 3);
+    ar.visit(prefix + "/contact_values", vals, kContactFields);
   }
   if (ar.reading()) {
     contacts_ = EdgeOutput{};
     if (!pairs.empty()) {
-      if (vals.size() != 3 * (pairs.size() / 2)) throw SetupError("checkpoint ptc_strain contact data is inconsistent");
-      contacts_ = EdgeOutput{"ptc_contacts", pairs, {{"gap", "m", {}}, {"unit_opening", "m", {}}, {"break_strain", "1", {}}}};
+      if (vals.size() != kContactFields * (pairs.size() / 2)) throw SetupError("checkpoint ptc_strain contact data is inconsistent");
+      contacts_ = contact_output(pairs);
       for (std::size_t k = 0; k < pairs.size() / 2; ++k)
-        for (int q = 0; q < 3; ++q) contacts_.fields[q].values.push_back(vals[3 * k + q]);
+        for (std::size_t q = 0; q < kContactFields; ++q) contacts_.fields[q].values.push_back(vals[kContactFields * k + q]);
     }
   }
 }

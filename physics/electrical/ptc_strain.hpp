@@ -20,15 +20,22 @@
 /// (break rule, Z, rho, switching strain, opening statistics) is common.
 /// Use after a cpc_fillers stage (frozen mechanics: `"stop": {"steps": 0}`). On its event clock
 /// (the stage's initial state, then after a move of 0.05 R_min or a broken bond) the module
-///  1. builds the spring network (pairs with gap <= cutoff_gap) and solves ONCE for eps0 = 1;
-///  2. takes the touching contacts (gap <= touch_tolerance, the contact_percolation set) and
-///     their unit openings; break strains by the rule of ptc_matrix.hpp (break_gap);
+///  1. builds the spring network (pairs with gap <= cutoff_gap_rel D_ij) and solves ONCE for eps0 = 1;
+///  2. takes the touching contacts (gap <= touch_gap_rel D_ij, the contact_percolation set) and
+///     the closing candidates (gap <= closing_gap_rel D_ij) with their unit openings; their
+///     conduction intervals by the rule of ptc_matrix.hpp (break_gap_rel; a candidate joins when
+///     its gap closes to touch_gap_rel D_ij);
+/// Every threshold is relative to the pair's contact distance D_ij = R_i + R_j (the filler
+/// diameter for equal fillers): a scene scaled in size keeps its switching strain. The retired
+/// absolute keys (touch_tolerance, break_gap, cutoff_gap, min_gap [m]) are refused by name.
 ///  3. for every eps0 in eps0_values: spanning, Z and rho = R_eq L (unit conductances, one
 ///     Kirchhoff solve each, all spanning clusters in parallel);
 ///  4. the exact switching strain (largest eps0 at which the network still spans).
 /// Columns (prefix ptc_strain_):
 ///   springs, contacts             number of springs / of touching contacts
-///   switching_strain              exact switching strain [1] (0: no spanning at eps0 = 0)
+///   closing_candidates            pairs within closing_gap_rel D that do not touch at eps0 = 0
+///   switching_strain              exact switching strain [1]: the network spans on [0, it] and
+///                                 fails just above (0: no spanning at eps0 = 0)
 ///   switching_strain_listed       first listed eps0 without spanning [1] (+inf if all span)
 ///   opening_mean, opening_median  contact opening at eps0 = opening_strain, in units of the
 ///                                 pair's contact distance R_i + R_j (= D), [1]; with the
@@ -65,11 +72,12 @@
 ///                                 +inf if the network never switches
 ///   eps0_<T>, spanning_<T>, coordination_<T>, resistivity_<T>   per listed T (<T> = T in K with
 ///                                 2 decimals and 'p' for the point, e.g. T403p15K)
-/// Per-contact output (frames, /networks/ptc_contacts): every touching contact's ids, initial gap
-/// [m], unit opening delta [m per unit eps0] and break strain eps_b [1] (+inf: never opens).
-/// Parameter choices (configs/cpc_ptc_strain.json): h_max = 1 R (centre distance <= 3 R: about 6
-/// neighbours per filler at phi = 25 %, near the isostatic 6 of axial springs in 3-D: floppy
-/// modes exist and the regularisation handles them), h_min = 0.1 R. h_min sets the stiffness of the springs
+/// Per-contact output (frames, /networks/ptc_contacts): every touching contact and closing
+/// candidate: ids, initial gap [m], unit opening delta [m per unit eps0], the strains it conducts
+/// between (break_strain = hi, join_strain = lo [1], ptc_matrix.hpp), touching (1) or candidate (0).
+/// Parameter choices (configs/cpc_ptc_strain.json): h_max = 0.5 D = 1 R (centre distance <= 3 R:
+/// about 6 neighbours per filler at phi = 25 %, near the isostatic 6 of axial springs in 3-D:
+/// floppy modes exist and the regularisation handles them), h_min = 0.05 D = 0.1 R. h_min sets the stiffness of the springs
 /// of touching pairs relative to the expanding gaps, hence how far contacts open: it controls
 /// the switching strain (see the config description); E_m and A cancel.
 #include <cstdint>
@@ -88,10 +96,11 @@ class PtcStrain final : public Module {
   struct Params {
     std::string high = "x_lo";
     std::string low = "x_hi";
-    double touch_tolerance = 2e-3;  ///< [m]
-    double break_gap = 2e-3;        ///< [m] a contact opens when its gap exceeds this (default = touch_tolerance)
-    double cutoff_gap = 1.0;        ///< [m] h_max
-    double min_gap = 1e-2;          ///< [m] h_min
+    double touch_gap_rel = 1e-3;    ///< [1] of D_ij = R_i + R_j: touching when the gap is <= this x D_ij (paper 0.1 % of D)
+    double break_gap_rel = 1e-3;    ///< [1] of D_ij: a contact opens when its gap exceeds this x D_ij (default = touch_gap_rel)
+    double closing_gap_rel = 0.05;  ///< [1] of D_ij: pairs within this gap may close and join (0: none)
+    double cutoff_gap_rel = 0.5;    ///< [1] of D_ij: h_max (bonded)
+    double min_gap_rel = 5e-3;      ///< [1] of D_ij: h_min (bonded)
     double matrix_modulus = 1.0;    ///< [Pa] E_m (openings do not depend on it)
     double bond_area = 1.0;         ///< [m^2] A (openings do not depend on it)
     double regularisation = 1e-9;   ///< [1]

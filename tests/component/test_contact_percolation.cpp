@@ -61,7 +61,7 @@ std::map<std::string, double> evaluate(State& s, double L, bool clusters = true,
   ep.empty_electrode = "open";
   ElectricalNetwork net(ep);
   ContactPercolation::Params cp;
-  cp.touch_tolerance = tol;
+  cp.touch_gap_rel = tol / (2.0 * kR);  // equal spheres: the same set as the network's absolute tolerance
   cp.length = L;
   cp.cluster_resistances = clusters;
   ContactPercolation perc(cp);

@@ -253,6 +253,19 @@ TEST_CASE("each class of configuration error names its JSON path (exit 2, no out
   }
 }
 
+TEST_CASE("the retired absolute gap keys of the CPC modules are refused, naming their relative replacement", "[config_errors][scenario]") {
+  json j = sparkdem::test::load_data("cpc_small.json");
+  auto& m = j["stages"][0]["modules"];
+  m["contact_percolation"].erase("touch_gap_rel");
+  m["contact_percolation"]["touch_tolerance"] = 2e-3;
+  m["ptc_strain"]["break_gap"] = 2e-3;
+  m["ptc_strain"]["min_gap"] = 0.01;
+  // electrical_network keeps its absolute touch_tolerance (shared with other scenes): accepted.
+  expect_rejected(j, {{"/stages/0/modules/contact_percolation/touch_tolerance", "give touch_gap_rel instead of touch_tolerance"},
+                      {"/stages/0/modules/ptc_strain/break_gap", "give break_gap_rel instead of break_gap"},
+                      {"/stages/0/modules/ptc_strain/min_gap", "give min_gap_rel instead of min_gap"}});
+}
+
 TEST_CASE("unreadable and malformed scenario files exit with code 2", "[config_errors][scenario]") {
   ScratchDir dir;
   SECTION("unreadable file") {

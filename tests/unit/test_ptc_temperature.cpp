@@ -133,8 +133,8 @@ TEST_CASE("ptc_local_strain: per-spring eigenstrains with one factorisation", "[
         for (int k = 0; k < 3; ++k) x.emplace_back(2.3 * i + U(rng), 2.3 * j + U(rng), 2.3 * k + U(rng));
     const std::vector<double> r(x.size(), R);
     ptc::MatrixParams p;
-    p.min_gap = 0.1;
-    p.cutoff_gap = 1.0;
+    p.min_gap_rel = 0.05;  // h_min = 0.1 R
+    p.cutoff_gap_rel = 0.5;  // h_max = 1 R
     p.regularisation = 1e-9;
     const ptc::SpringNetwork net = ptc::build_network(x, r, p);
     REQUIRE(net.size() > x.size());
@@ -174,8 +174,8 @@ TEST_CASE("ptc_local_strain: per-spring eigenstrains with one factorisation", "[
     const double R = 1.0, h1 = 0.3, h3 = 0.5;
     const std::vector<Vec3> x = {Vec3(0, 0, 0), Vec3(2 * R + h1, 0, 0), Vec3(4 * R + h1, 0, 0), Vec3(6 * R + h1 + h3, 0, 0)};
     ptc::MatrixParams p;
-    p.min_gap = 0.01;
-    p.cutoff_gap = 1.0;
+    p.min_gap_rel = 0.005;  // h_min = 0.01 R
+    p.cutoff_gap_rel = 0.5;
     p.regularisation = 1e-12;
     const ptc::SpringNetwork net = ptc::build_network(x, std::vector<double>(4, R), p);
     REQUIRE(net.size() == 3);
