@@ -177,7 +177,11 @@ def cmd_openings(a):
                 gap = np.ravel(net["gap"][()])
                 op = np.ravel(net["unit_opening"][()])
                 eb = np.ravel(net["break_strain"][()])
+                # the touching contacts only (issue 60: the closing candidates are listed beside them)
+                touching = np.ravel(net["touching"][()]) if "touching" in net else np.ones(len(gap))
                 for k in range(len(gap)):
+                    if touching[k] < 0.5:
+                        continue
                     D = rid[int(pairs[k, 0])] + rid[int(pairs[k, 1])]
                     rows.append([frame, int(pairs[k, 0]), int(pairs[k, 1]), D, gap[k] / D, a.eps0 * op[k] / D, eb[k]])
     if not rows:
