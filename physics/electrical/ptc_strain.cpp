@@ -156,7 +156,7 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
   s.add("bond_penalty", &P::bond_penalty)
       .unit("Pa/m")
       .nonnegative()
-      .doc("rkpm: sphere-matrix penalty alpha (paper 100 E with lengths in its unit; R = 1 here)");
+      .doc("rkpm: sphere-matrix penalty alpha [Pa/m], absolute: alpha R / E is what sets the response (paper \"100 E\" in its unit of length; 10 = the SI test's unit at R = 1 m); scale it with 1 / R when the fillers change size");
   s.add("pin_penalty", &P::pin_penalty).positive().doc("rkpm: translation pin at the box centre, beta / (E h)");
   s.add("cg_tolerance", &P::cg_tolerance).positive().doc("rkpm: relative residual of the conjugate-gradient solve");
   s.add("cg_max_iterations", &P::cg_max_iterations).min(1).doc("rkpm: conjugate-gradient iteration limit");
