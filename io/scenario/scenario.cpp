@@ -376,7 +376,8 @@ StageDef build_sweep_stage(StageContext& ctx, const json& js, const std::string&
       const std::string what = "value " + sw->values[i].dump() + " for " + sw->parameter + ": ";
       for (const auto& d : per_item[i]) {
         const bool here = d.path == target || d.path.rfind(target + "/", 0) == 0;
-        if (here && absent && d.path == target && d.message.rfind("unknown key", 0) == 0) {
+        const bool no_key = d.message.rfind("unknown key", 0) == 0 || d.message.find("\" is no longer a key of") != std::string::npos;
+        if (here && absent && d.path == target && no_key) {
           if (reported.insert({path + "/sweep/parameter", d.message}).second)
             errors.push_back({path + "/sweep/parameter", "\"" + sw->parameter + "\" names no parameter of the stage: " + d.message});
         } else if (here) {

@@ -155,6 +155,12 @@ double affine_volumetric_strain(const std::vector<Vec3>& x, const std::vector<Ve
 }
 
 Intervals conduction_intervals(const Contacts& c, double touch_gap_rel, double break_gap_rel) {
+  const std::size_t n = c.size();
+  if (c.b.size() != n || c.gap.size() != n || c.opening.size() != n || c.distance.size() != n || c.touching.size() != n)
+    throw SetupError("ptc_matrix: a contact set needs a, b, gap, opening, distance and touching of one length each");
+  for (std::size_t e = 0; e < n; ++e)
+    if (!std::isfinite(c.gap[e]) || !std::isfinite(c.opening[e]) || !(c.distance[e] > 0.0))
+      throw SetupError("ptc_matrix: contact " + std::to_string(e) + " has a non-finite gap or opening, or a contact distance <= 0");
   Intervals iv;
   iv.lo.assign(c.size(), -kInf);
   iv.hi.assign(c.size(), kInf);
@@ -257,7 +263,9 @@ double switching_strain(std::size_t n, const Contacts& c, const Intervals& iv, s
     }
   if (eps1 < 0.0) return 0.0;
   if (std::isinf(eps1)) return eps1;
-  // 2. Closing contacts (lo > 0) may carry the network past eps1: check each later break strain.
+  // 2. Closing contacts (lo > 0) may carry the network past eps1: check each later break strain
+  //    (one union-find pass per break above eps1 until one fails: O(breaks x contacts) at worst,
+  //    in practice a few passes, as the network fails soon after eps1).
   const bool closing = std::any_of(iv.lo.begin(), iv.lo.end(), [](double v) { return v > 0.0 && std::isfinite(v); });
   if (!closing) return eps1;
   std::vector<double> breaks;

@@ -45,8 +45,9 @@
 ///
 /// LENGTHS ARE RELATIVE to the pair's contact distance D_ij = R_i + R_j (the filler diameter D
 /// for equal fillers): h_max = cutoff_gap_rel D_ij, h_min = min_gap_rel D_ij, and the touch and
-/// break thresholds below. The openings are then invariant under a scaling of every length (the
-/// paper states its rule as 0.1 % of D; absolute thresholds held only because R = 1 m).
+/// break thresholds below. The relative openings delta / D, hence every break and join strain, are
+/// then invariant under a scaling of every length (the paper states its rule as 0.1 % of D;
+/// absolute thresholds held only because R = 1 m).
 ///
 /// CONNECTION RULE (note §1.3, §4 "break criterion"; the paper does not state it). The initial
 /// contact set is the pairs with h_ij <= touch_gap_rel D_ij (the paper's 0.1 % of D; the same
@@ -60,7 +61,11 @@
 /// (the paper: "new connections might be realized ... (negative strain)": on cooling, or where
 /// the matrix squeezes two fillers together). Both are the half-line {eps0 : h + eps0 delta <= T}
 /// with T = max(break_gap_rel D, h) (touching) or touch_gap_rel D (candidate): the contact
-/// conducts for lo <= eps0 <= hi (conduction_intervals). Two readings of the break threshold:
+/// conducts for lo <= eps0 <= hi (conduction_intervals). A candidate joins at, and would leave at,
+/// the touch threshold: the break threshold applies to the initial contact set only (with
+/// break_gap_rel > touch_gap_rel a candidate already closer than break_gap_rel D still joins only at
+/// touch_gap_rel D). For a touching contact with delta < 0, lo < 0 is where it opens on cooling.
+/// Two readings of the break threshold:
 ///  - break_gap_rel = 0, the note's inference "the gap becomes positive" (the opening exceeds the
 ///    residual overlap). MEASURED on cpc_fillers at phi = 25 %, L = 70 R: about half of the
 ///    contact set (gap <= 0.1 % of D) ends the contact algorithm at a small POSITIVE gap, and

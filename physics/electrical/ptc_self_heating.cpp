@@ -78,7 +78,8 @@ void PtcSelfHeating::build(const State& s) {
       c.distance.push_back(net_.distance[e]);
       c.touching.push_back(1);
     }
-    switching_strain_ = ptc::switching_strain(P.size(), c, ptc::conduction_intervals(c, p_.touch_gap_rel, p_.break_gap_rel), set_members(s, p_.high, "ptc_self_heating"),
+    const ptc::Intervals iv = ptc::conduction_intervals(c, p_.touch_gap_rel, p_.break_gap_rel);
+    switching_strain_ = ptc::switching_strain(P.size(), c, iv, set_members(s, p_.high, "ptc_self_heating"),
                                               set_members(s, p_.low, "ptc_self_heating"));
   }
 }

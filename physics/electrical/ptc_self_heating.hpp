@@ -7,7 +7,9 @@
 /// eps0 h*) and the eps0(T) law of ptc_temperature.hpp. For a self-heating current limiter:
 ///   ptc_self_heating (temperature -> filler displacements) -> electrical_network (model
 ///   touching, displacement_field = ptc_displacement: a contact conducts while its gap after the
-///   displacement is <= touch_gap_rel (R_i + R_j); open_conductance for an opened contact) ->
+///   displacement is <= its own touch_tolerance [m] (or touch_tolerance_relative x the mean
+///   radius): give it 2 touch_gap_rel R for equal fillers of radius R, the set this module counts;
+///   open_conductance for an opened contact) ->
 ///   heat_conduction (joule_power -> temperature, losses to the ambient).
 ///
 /// Each call: eps0_e = eps0(T_e) per spring, T_e the mean temperature of its two fillers; one

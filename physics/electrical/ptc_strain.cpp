@@ -23,9 +23,15 @@ constexpr std::size_t kContactFields = 5;
 
 /// The per-contact output's layout (values filled by the caller).
 EdgeOutput contact_output(std::vector<std::int64_t> pairs) {
+  // break_strain = hi, join_strain = lo of the conduction interval (ptc_matrix.hpp; for a touching
+  // contact lo < 0 is where it opens on cooling).
   return EdgeOutput{"ptc_contacts",
                     std::move(pairs),
-                    {{"gap", "m", {}}, {"unit_opening", "m", {}}, {"break_strain", "1", {}}, {"join_strain", "1", {}}, {"touching", "1", {}}}};
+                    {{"gap", "m", {}},
+                     {"unit_opening", "m", {}},
+                     {"break_strain", "1", {}},
+                     {"join_strain", "1", {}},
+                     {"touching", "1", {}}}};
 }
 
 }  // namespace
@@ -64,6 +70,10 @@ PtcStrain::PtcStrain(const Params& p) : p_(p) {
   if (p_.matrix_model != "bonded" && p_.matrix_model != "rkpm")
     errors.push_back({"/matrix_model", "must be \"bonded\" or \"rkpm\", found \"" + p_.matrix_model + "\""});
   check_edges(p_.opening_histogram_edges, "/opening_histogram_edges", errors);
+  if (p_.matrix_model == "bonded" && p_.closing_gap_rel > p_.cutoff_gap_rel)
+    errors.push_back({"/closing_gap_rel", "the bonded matrix follows only its springs (gap <= cutoff_gap_rel (R_i + R_j) = " +
+                                              std::to_string(p_.cutoff_gap_rel) + "): closing_gap_rel must not exceed it, found " +
+                                              std::to_string(p_.closing_gap_rel)});
   if (p_.strain_statistics && p_.matrix_model != "rkpm")
     errors.push_back({"/strain_statistics", "needs matrix_model \"rkpm\" (the bonded network has no strain field)"});
   check_edges(p_.strain_histogram_edges, "/strain_histogram_edges", errors);
@@ -156,7 +166,8 @@ ParamSpec<PtcStrain::Params> PtcStrain::spec() {
   s.add("bond_penalty", &P::bond_penalty)
       .unit("Pa/m")
       .nonnegative()
-      .doc("rkpm: sphere-matrix penalty alpha [Pa/m], absolute: alpha R / E is what sets the response (paper \"100 E\" in its unit of length; 10 = the SI test's unit at R = 1 m); scale it with 1 / R when the fillers change size");
+      .doc("rkpm: sphere-matrix penalty alpha [Pa/m], absolute: alpha R / E is what sets the response (paper \"100 E\" "
+           "in its unit of length; 10 = the SI test's unit at R = 1 m); scale it with 1 / R when the fillers change size");
   s.add("pin_penalty", &P::pin_penalty).positive().doc("rkpm: translation pin at the box centre, beta / (E h)");
   s.add("cg_tolerance", &P::cg_tolerance).positive().doc("rkpm: relative residual of the conjugate-gradient solve");
   s.add("cg_max_iterations", &P::cg_max_iterations).min(1).doc("rkpm: conjugate-gradient iteration limit");

@@ -7,7 +7,7 @@
 /// eigen-elongation eps0 h_ij between fillers within a gap cut-off, free expansion).
 ///
 /// Two matrix models (`matrix_model`):
-///  - "bonded" (default): the bonded network of ptc_matrix.hpp (parameters cutoff_gap, min_gap,
+///  - "bonded" (default): the bonded network of ptc_matrix.hpp (parameters cutoff_gap_rel, min_gap_rel,
 ///    matrix_modulus, bond_area, regularisation);
 ///  - "rkpm": the paper's continuum (rkpm_matrix.hpp): meshless RKPM matrix over the smallest
 ///    cube holding the box [0, L]^3 (L = `length` or the cpc_fillers box edge) and every filler
@@ -16,7 +16,8 @@
 ///    for eps0 = 1 (parameters matrix_modulus, poisson_ratio, node_spacing, support_factor,
 ///    quadrature_order, cell_subdivision, surface_points, bond_penalty, pin_penalty,
 ///    cg_tolerance, cg_max_iterations, linear_solver). Column `springs` then holds the RKPM node count.
-/// Both give the unit opening delta_ij = n_ij . (U_j - U_i) of every touching contact; the rest
+/// Both give the unit opening delta_ij = n_ij . (U_j - U_i) of every touching contact and closing
+/// candidate; the rest
 /// (break rule, Z, rho, switching strain, opening statistics) is common.
 /// Use after a cpc_fillers stage (frozen mechanics: `"stop": {"steps": 0}`). On its event clock
 /// (the stage's initial state, then after a move of 0.05 R_min or a broken bond) the module
@@ -25,12 +26,13 @@
 ///     the closing candidates (gap <= closing_gap_rel D_ij) with their unit openings; their
 ///     conduction intervals by the rule of ptc_matrix.hpp (break_gap_rel; a candidate joins when
 ///     its gap closes to touch_gap_rel D_ij);
+///  3. for every eps0 in eps0_values: spanning, Z and rho = R_eq L (unit conductances, one
+///     Kirchhoff solve each, all spanning clusters in parallel);
+///  4. the exact switching strain: the end of the first spanning interval [0, eps*] (with closing
+///     contacts the network may span again later).
 /// Every threshold is relative to the pair's contact distance D_ij = R_i + R_j (the filler
 /// diameter for equal fillers): a scene scaled in size keeps its switching strain. The retired
 /// absolute keys (touch_tolerance, break_gap, cutoff_gap, min_gap [m]) are refused by name.
-///  3. for every eps0 in eps0_values: spanning, Z and rho = R_eq L (unit conductances, one
-///     Kirchhoff solve each, all spanning clusters in parallel);
-///  4. the exact switching strain (largest eps0 at which the network still spans).
 /// Columns (prefix ptc_strain_):
 ///   springs, contacts             number of springs / of touching contacts
 ///   closing_candidates            pairs within closing_gap_rel D that do not touch at eps0 = 0

@@ -264,6 +264,13 @@ TEST_CASE("the retired absolute gap keys of the CPC modules are refused, naming 
   expect_rejected(j, {{"/stages/0/modules/contact_percolation/touch_tolerance", "give touch_gap_rel instead of touch_tolerance"},
                       {"/stages/0/modules/ptc_strain/break_gap", "give break_gap_rel instead of break_gap"},
                       {"/stages/0/modules/ptc_strain/min_gap", "give min_gap_rel instead of min_gap"}});
+  // ptc_self_heating shares the keys; the bonded matrix cannot follow closing pairs beyond its springs.
+  json h = sparkdem::test::load_data("ptc_self_heating_small.json");
+  h["stages"][1]["modules"]["ptc_self_heating"]["cutoff_gap"] = 5e-6;
+  expect_rejected(h, {{"/stages/1/modules/ptc_self_heating/cutoff_gap", "give cutoff_gap_rel instead of cutoff_gap"}});
+  json b = sparkdem::test::load_data("cpc_small.json");
+  b["stages"][0]["modules"]["ptc_strain"]["closing_gap_rel"] = 0.6;
+  expect_rejected(b, {{"/stages/0/modules/ptc_strain/closing_gap_rel", "must not exceed it, found 0.6"}});
 }
 
 TEST_CASE("unreadable and malformed scenario files exit with code 2", "[config_errors][scenario]") {

@@ -205,6 +205,19 @@ TEST_CASE("ptc_matrix: a closing pair joins at (touch_gap_rel D - h) / delta and
     CHECK_FALSE(ptc::evaluate(3, c, iv, 0.03, 1.0, high, low, solver).spanning);
     CHECK(ptc::evaluate(3, c, iv, 0.04, 1.0, high, low, solver).spanning);
   }
+  SECTION("a candidate that neither opens nor closes never conducts; a malformed set is a typed error") {
+    c.opening = {0.0, 0.1, 0.0};
+    const ptc::Intervals iv = ptc::conduction_intervals(c, 1e-3, 1e-3);
+    CHECK(iv.lo[2] > iv.hi[2]);  // empty
+    CHECK(ptc::evaluate(3, c, iv, 0.0, 1.0, high, low, solver).conducting == 2);
+    CHECK(ptc::switching_strain(3, c, iv, high, low) == Approx(0.02).epsilon(1e-12));
+    ptc::Contacts bad = c;
+    bad.distance.pop_back();
+    CHECK_THROWS_AS(ptc::conduction_intervals(bad, 1e-3, 1e-3), sparkdem::SetupError);
+    bad = c;
+    bad.opening[0] = std::numeric_limits<double>::quiet_NaN();
+    CHECK_THROWS_AS(ptc::conduction_intervals(bad, 1e-3, 1e-3), sparkdem::SetupError);
+  }
   SECTION("negative strain: a pair that opens under expansion closes on cooling") {
     c.opening = {0.0, 0.1, 1.0};
     const ptc::Intervals iv = ptc::conduction_intervals(c, 1e-3, 1e-3);
