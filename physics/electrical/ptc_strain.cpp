@@ -273,12 +273,12 @@ PtcStrain::UnitResult PtcStrain::unit_contacts(const State& s) const {
   // gaps) with the RKPM openings.
   ptc::MatrixParams tp = mp;
   tp.cutoff_gap_rel = std::max(p_.touch_gap_rel, p_.closing_gap_rel);
-  const ptc::SpringNetwork touching = ptc::build_network(s.particles.position, s.particles.radius, tp);
+  const ptc::SpringNetwork near = ptc::build_network(s.particles.position, s.particles.radius, tp);
   ptc::UnitSolution sol;
   sol.displacement = r.sphere_displacement;
-  for (std::size_t e = 0; e < touching.size(); ++e)
-    sol.opening.push_back(touching.normal[e].dot(r.sphere_displacement[touching.b[e]] - r.sphere_displacement[touching.a[e]]));
-  u.contacts = ptc::candidate_contacts(touching, sol, p_.touch_gap_rel, p_.closing_gap_rel);
+  for (std::size_t e = 0; e < near.size(); ++e)
+    sol.opening.push_back(near.normal[e].dot(r.sphere_displacement[near.b[e]] - r.sphere_displacement[near.a[e]]));
+  u.contacts = ptc::candidate_contacts(near, sol, p_.touch_gap_rel, p_.closing_gap_rel);
   u.matrix_size = r.approximation.nodes();
   u.residual = r.residual;
   if (p_.strain_statistics) {  // per unit eps0 -> at opening_strain
