@@ -87,6 +87,9 @@ struct StageConfig {
   Step frame_every = 0;           ///< 0 = only the final frame
   Step timeseries_every = 100;
   Step checkpoint_every = 0;
+  /// Pair sets drawn as lines in the frames' XDMF: "auto", "none", "contacts", "bonds", "both"
+  /// (io/scenario/stage_facets.cpp documents them).
+  std::string network_output = "auto";
   Step log_every = 0;                         ///< progress callback cadence; 0 = auto
   std::map<std::string, WallMotion> motions;  ///< motions of named walls during this stage
   /// Particle sets (field "set/<name>") moved rigidly during the stage (PrescribedMotion; zero =

@@ -10,6 +10,8 @@
 #include <set>
 #include <sstream>
 #include <system_error>
+#include <unordered_map>
+#include <functional>
 #include <utility>
 
 #include "engine/core/error.hpp"
@@ -132,16 +134,41 @@ void ResultsWriter::fail(const std::string& what) const { throw SetupError("resu
 std::string ResultsWriter::write_frame(std::int64_t step, double time, const std::string& stage,
                                        const std::vector<FrameField>& particle_fields, const ContactFrame& contacts,
                                        const std::vector<std::pair<std::string, ContactFrame>>& networks) {
-  if (finalized_) fail("write_frame() called after finalize()");
-  const std::string name = "frame " + counter(frames());
+  return write_frame(FrameContent{step, time, stage, particle_fields, contacts, std::nullopt, networks, false, false});
+}
 
-  // Validate everything before writing anything, so a bad frame leaves no file.
+namespace {
+
+/// Rows of the two ends of every pair in the frame's particle arrays (FrameContent: a wall end,
+/// id < 0, takes the other end's row); `where` names the set in errors.
+std::vector<std::int64_t> node_rows(const std::vector<std::int64_t>& pairs, const std::unordered_map<std::int64_t, std::int64_t>& row_of,
+                                    const std::function<void(const std::string&)>& fail, const std::string& where) {
+  std::vector<std::int64_t> nodes(pairs.size());
+  const auto find = [&](std::int64_t id) -> std::int64_t {
+    if (id < 0) return -1;
+    const auto it = row_of.find(id);
+    if (it == row_of.end()) fail(where + ": particle id " + std::to_string(id) + " is not in the frame");
+    return it->second;
+  };
+  for (std::size_t e = 0; e + 1 < pairs.size(); e += 2) {
+    std::int64_t a = find(pairs[e]), b = find(pairs[e + 1]);
+    if (a < 0 && b < 0) fail(where + ": row " + std::to_string(e / 2) + " joins two walls");
+    nodes[e] = a < 0 ? b : a;
+    nodes[e + 1] = b < 0 ? a : b;
+  }
+  return nodes;
+}
+
+}  // namespace
+
+void ResultsWriter::check_frame(const FrameContent& frame, std::size_t& particles) const {
+  const std::string name = "frame " + counter(frames());
   const auto check_fields = [&](const std::vector<FrameField>& fields, const std::string& kind, std::size_t expected_rows) {
     std::set<std::string> seen;
     for (const FrameField& f : fields) {
       const std::string label = kind + " field '" + f.name + "' of " + name;
       if (!valid_name(f.name, false)) fail(label + ": the name is empty or contains '/'");
-      if (kind == "contact" && f.name == "pairs") fail(label + ": the name 'pairs' is reserved");
+      if (kind == "contact" && (f.name == "pairs" || f.name == "nodes")) fail(label + ": the names 'pairs' and 'nodes' are reserved");
       if (!seen.insert(f.name).second) fail(label + ": duplicate field name");
       if (f.components < 1) fail(label + ": components must be at least 1");
       const auto c = static_cast<std::size_t>(f.components);
@@ -151,9 +178,8 @@ std::string ResultsWriter::write_frame(std::int64_t step, double time, const std
         fail(label + ": " + std::to_string(f.data.size() / c) + " rows, expected " + std::to_string(expected_rows));
     }
   };
-  std::size_t particles = 0;
   bool has_position = false;
-  for (const FrameField& f : particle_fields) {
+  for (const FrameField& f : frame.particles) {
     if (f.name == "position") {
       if (f.components != 3) fail("field 'position' of " + name + " must have 3 components");
       has_position = true;
@@ -161,49 +187,75 @@ std::string ResultsWriter::write_frame(std::int64_t step, double time, const std
     }
   }
   if (!has_position) fail(name + " has no particle field 'position'");
-  check_fields(particle_fields, "particle", particles);
-  if (contacts.pairs.size() % 2 != 0) fail("contact pairs of " + name + " hold an odd number of ids");
-  check_fields(contacts.fields, "contact", contacts.pairs.size() / 2);
+  check_fields(frame.particles, "particle", particles);
+  const auto check_set = [&](const std::string& what, const ContactFrame& set) {
+    if (set.pairs.size() % 2 != 0) fail(what + " of " + name + ": pairs hold an odd number of ids");
+    check_fields(set.fields, "contact", set.pairs.size() / 2);
+  };
+  check_set("contacts", frame.contacts);
+  if (frame.bonds) check_set("bonds", *frame.bonds);
   std::set<std::string> network_names;
-  for (const auto& [nname, net] : networks) {
+  for (const auto& [nname, net] : frame.networks) {
     if (!valid_name(nname, false) || !network_names.insert(nname).second)
       fail("network '" + nname + "' of " + name + ": the name is empty, contains '/' or is repeated");
-    if (net.pairs.size() % 2 != 0) fail("network '" + nname + "' of " + name + ": pairs hold an odd number of ids");
-    check_fields(net.fields, "contact", net.pairs.size() / 2);
+    check_set("network '" + nname + "'", net);
+  }
+}
+
+std::string ResultsWriter::write_frame(const FrameContent& frame) {
+  if (finalized_) fail("write_frame() called after finalize()");
+  // Validate everything before writing anything, so a bad frame leaves no file.
+  std::size_t particles = 0;
+  check_frame(frame, particles);
+  struct Set {
+    std::string name, group;
+    const ContactFrame* edges;
+    bool lines;
+  };
+  std::vector<Set> sets{{"contacts", "/contacts", &frame.contacts, frame.contact_lines}};
+  if (frame.bonds) sets.push_back({"bonds", "/bonds", &*frame.bonds, frame.bond_lines});
+  for (const auto& [nname, net] : frame.networks) sets.push_back({nname, "/networks/" + nname, &net, frame.contact_lines});
+  std::unordered_map<std::int64_t, std::int64_t> row_of;
+  std::vector<std::vector<std::int64_t>> nodes(sets.size());
+  if (std::any_of(sets.begin(), sets.end(), [](const Set& x) { return x.lines && !x.edges->pairs.empty(); })) {
+    const auto id = std::find_if(frame.particles.begin(), frame.particles.end(), [](const FrameField& f) { return f.name == "id"; });
+    if (id == frame.particles.end() || id->components != 1) fail("frame " + counter(frames()) + " draws lines but has no particle field 'id'");
+    row_of.reserve(particles);
+    for (std::size_t r = 0; r < particles; ++r) row_of.emplace(static_cast<std::int64_t>(id->data[r]), static_cast<std::int64_t>(r));
+    for (std::size_t k = 0; k < sets.size(); ++k)
+      if (sets[k].lines)
+        nodes[k] = node_rows(sets[k].edges->pairs, row_of, [this](const std::string& w) { fail(w); },
+                             sets[k].name + " of frame " + counter(frames()));
   }
 
   const std::string relative = frame_file(frames());
   const fs::path final_path = outdir_ / relative;
   TmpGuard tmp{tmp_name(final_path)};
-  FrameInfo info{relative, time, step, stage, particles, {}};
+  FrameInfo info{relative, frame.time, frame.step, frame.stage, particles, {}, {}};
   {
     H5File file = H5File::create(tmp.file);
-    file.set_attribute("/", "step", step);
-    file.set_attribute("/", "time", time);
-    file.set_attribute("/", "stage", stage);
+    file.set_attribute("/", "step", frame.step);
+    file.set_attribute("/", "time", frame.time);
+    file.set_attribute("/", "stage", frame.stage);
     file.create_group("/particles");
-    for (const FrameField& f : particle_fields) {
+    for (const FrameField& f : frame.particles) {
       const std::string path = "/particles/" + f.name;
       file.write(path, f.data, f.components);
       file.set_attribute(path, "unit", f.unit);
       info.fields.emplace_back(f.name, f.components);
     }
-    file.create_group("/contacts");
-    file.write("/contacts/pairs", contacts.pairs, 2);
-    for (const FrameField& f : contacts.fields) {
-      const std::string path = "/contacts/" + f.name;
-      file.write(path, f.data, f.components);
-      file.set_attribute(path, "unit", f.unit);
-    }
-    if (!networks.empty()) file.create_group("/networks");
-    for (const auto& [nname, net] : networks) {
-      const std::string base = "/networks/" + nname;
-      file.create_group(base);
-      file.write(base + "/pairs", net.pairs, 2);
-      for (const FrameField& f : net.fields) {
-        file.write(base + "/" + f.name, f.data, f.components);
-        file.set_attribute(base + "/" + f.name, "unit", f.unit);
+    for (std::size_t k = 0; k < sets.size(); ++k) {
+      const Set& set = sets[k];
+      file.create_group(set.group);
+      file.write(set.group + "/pairs", set.edges->pairs, 2);
+      FrameInfo::LineSet line{set.name, set.group, set.edges->pairs.size() / 2, {}};
+      if (set.lines) file.write(set.group + "/nodes", nodes[k], 2);
+      for (const FrameField& f : set.edges->fields) {
+        file.write(set.group + "/" + f.name, f.data, f.components);
+        file.set_attribute(set.group + "/" + f.name, "unit", f.unit);
+        line.fields.emplace_back(f.name, f.components);
       }
+      if (set.lines) info.lines.push_back(std::move(line));
     }
     file.close();
   }
@@ -212,6 +264,27 @@ std::string ResultsWriter::write_frame(std::int64_t step, double time, const std
   frames_.push_back(std::move(info));
   index_current_ = false;
   return relative;
+}
+
+FrameInfo read_frame_info(const fs::path& dir, const std::string& file) {
+  try {
+    const H5File h5 = H5File::open_read(dir / file);
+    FrameInfo info{file, h5.attribute_double("/", "time"), h5.attribute_int64("/", "step"), h5.attribute_string("/", "stage"), 0, {}, {}};
+    const auto width = [](const std::vector<std::size_t>& shape) { return shape.size() > 1 ? static_cast<int>(shape[1]) : 1; };
+    info.particles = h5.shape("/particles/position").at(0);
+    for (const std::string& name : h5.children("/particles")) info.fields.emplace_back(name, width(h5.shape("/particles/" + name)));
+    std::vector<std::pair<std::string, std::string>> groups{{"contacts", "/contacts"}, {"bonds", "/bonds"}};
+    if (h5.exists("/networks"))
+      for (const std::string& name : h5.children("/networks")) groups.emplace_back(name, "/networks/" + name);
+    for (const auto& [name, group] : groups) {
+      if (!h5.exists(group + "/nodes")) continue;
+      FrameInfo::LineSet line{name, group, h5.shape(group + "/nodes").at(0), {}};
+      for (const std::string& f : h5.children(group))
+        if (f != "pairs" && f != "nodes") line.fields.emplace_back(f, width(h5.shape(group + "/" + f)));
+      info.lines.push_back(std::move(line));
+    }
+    return info;
+  } catch (const std::out_of_range&) { throw SetupError("frame file '" + (dir / file).string() + "': a dataset has no rows dimension"); }
 }
 
 void ResultsWriter::set_timeseries(const std::vector<std::string>& columns, const std::vector<std::vector<double>>& rows) {
@@ -281,42 +354,109 @@ std::vector<double> ResultsWriter::listed_times(const std::vector<double>& times
 }
 
 std::string ResultsWriter::xdmf_text() const {
-  std::ostringstream out;
-  const auto data_item = [&](const FrameInfo& frame, const std::string& field, int components) {
-    out << "          <DataItem Dimensions=\"" << frame.particles << ' ' << components
-        << "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" << xml_escaped(frame.file) << ":/particles/" << xml_escaped(field)
-        << "</DataItem>\n";
-  };
   std::vector<double> times;
   for (const FrameInfo& frame : frames_) times.push_back(frame.time);
-  const std::vector<double> listed = listed_times(times);
+  return xdmf_of_frames(frames_, listed_times(times));
+}
+
+namespace {
+
+/// One HDF DataItem of a frame file's dataset.
+void data_item(std::ostringstream& out, const std::string& indent, const std::string& file, const std::string& path, std::size_t rows,
+               int components, bool integer) {
+  out << indent << "<DataItem Dimensions=\"" << rows << ' ' << components << "\" NumberType=\"" << (integer ? "Int" : "Float")
+      << "\" Precision=\"8\" Format=\"HDF\">" << xml_escaped(file) << ':' << xml_escaped(path) << "</DataItem>\n";
+}
+
+/// The grid of a frame's particles (`name`: its Name attribute).
+void particle_grid(std::ostringstream& out, const std::string& indent, const FrameInfo& frame, const std::string& name,
+                   const std::string& header) {
+  out << indent << "<Grid Name=\"" << name << "\" GridType=\"Uniform\">\n"
+      << header << indent << "  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << frame.particles
+      << "\" NodesPerElement=\"1\"/>\n"
+      << indent << "  <Geometry GeometryType=\"XYZ\">\n";
+  data_item(out, indent + "    ", frame.file, "/particles/position", frame.particles, 3, false);
+  out << indent << "  </Geometry>\n";
+  for (const auto& [field, components] : frame.fields) {
+    if (field == "position") continue;
+    out << indent << "  <Attribute Name=\"" << xml_escaped(field) << "\" AttributeType=\"" << attribute_type(components)
+        << "\" Center=\"Node\">\n";
+    data_item(out, indent + "    ", frame.file, "/particles/" + field, frame.particles, components, false);
+    out << indent << "  </Attribute>\n";
+  }
+  out << indent << "</Grid>\n";
+}
+
+/// A line set's grid: 2-node Polyline cells over the particle positions, its fields as cell
+/// arrays; `line` null or without cells: an empty grid (no DataItem: the readers refuse an empty
+/// HDF DataItem but take a topology of no elements).
+void line_grid(std::ostringstream& out, const std::string& indent, const FrameInfo& frame, const FrameInfo::LineSet* line,
+               const std::string& name, const std::string& time) {
+  const std::size_t cells = line ? line->cells : 0;
+  out << indent << "<Grid Name=\"" << xml_escaped(name) << "\" GridType=\"Uniform\">\n"
+      << indent << "  <Time Value=\"" << time << "\"/>\n"
+      << indent << "  <Topology TopologyType=\"Polyline\" NumberOfElements=\"" << cells << "\" NodesPerElement=\"2\"";
+  if (cells == 0) {
+    out << "/>\n";
+  } else {
+    out << ">\n";
+    data_item(out, indent + "    ", frame.file, line->group + "/nodes", cells, 2, true);
+    out << indent << "  </Topology>\n";
+  }
+  out << indent << "  <Geometry GeometryType=\"XYZ\">\n";  // (a grid without one crashes the reader)
+  data_item(out, indent + "    ", frame.file, "/particles/position", frame.particles, 3, false);
+  out << indent << "  </Geometry>\n";
+  if (cells == 0) {
+    out << indent << "</Grid>\n";
+    return;
+  }
+  for (const auto& [field, components] : line->fields) {
+    out << indent << "  <Attribute Name=\"" << xml_escaped(field) << "\" AttributeType=\"" << attribute_type(components)
+        << "\" Center=\"Cell\">\n";
+    data_item(out, indent + "    ", frame.file, line->group + "/" + field, cells, components, false);
+    out << indent << "  </Attribute>\n";
+  }
+  out << indent << "</Grid>\n";
+}
+
+}  // namespace
+
+std::string xdmf_of_frames(const std::vector<FrameInfo>& frames, const std::vector<double>& listed) {
+  // One temporal collection per grid kind, each with one entry per frame at the same times:
+  // ParaView's XDMFReader then gives a multiblock whose blocks keep their names ("particles",
+  // "contacts", ...) at every time step (grids of one name in two entries would be renamed
+  // "particles[1]", ...). A frame without cells in a line set gets an empty grid there.
+  std::vector<std::string> line_names;
+  for (const FrameInfo& frame : frames)
+    for (const FrameInfo::LineSet& line : frame.lines)
+      if (std::find(line_names.begin(), line_names.end(), line.name) == line_names.end()) line_names.push_back(line.name);
+  std::ostringstream out;
   out << "<?xml version=\"1.0\" ?>\n"
       << "<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
       << "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\">\n"
       << "  <Domain>\n"
       << "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
-  for (std::size_t k = 0; k < frames_.size(); ++k) {
-    const FrameInfo& frame = frames_[k];
-    out << "      <Grid Name=\"frame_" << counter(static_cast<int>(k)) << "\" GridType=\"Uniform\">\n"
-        << "        <Time Value=\"" << number(listed[k]) << "\"/>\n"
-        << "        <Information Name=\"time\" Value=\"" << number(frame.time) << "\"/>\n"
-        << "        <Information Name=\"step\" Value=\"" << frame.step << "\"/>\n"
-        << "        <Information Name=\"stage\" Value=\"" << xml_escaped(frame.stage) << "\"/>\n"
-        << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << frame.particles << "\" NodesPerElement=\"1\"/>\n"
-        << "        <Geometry GeometryType=\"XYZ\">\n";
-    data_item(frame, "position", 3);
-    out << "        </Geometry>\n";
-    for (const auto& [name, components] : frame.fields) {
-      if (name == "position") continue;
-      out << "        <Attribute Name=\"" << xml_escaped(name) << "\" AttributeType=\"" << attribute_type(components)
-          << "\" Center=\"Node\">\n";
-      data_item(frame, name, components);
-      out << "        </Attribute>\n";
-    }
-    out << "      </Grid>\n";
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const FrameInfo& frame = frames[k];
+    std::ostringstream header;
+    header << "        <Time Value=\"" << number(listed.at(k)) << "\"/>\n"
+           << "        <Information Name=\"time\" Value=\"" << number(frame.time) << "\"/>\n"
+           << "        <Information Name=\"step\" Value=\"" << frame.step << "\"/>\n"
+           << "        <Information Name=\"stage\" Value=\"" << xml_escaped(frame.stage) << "\"/>\n";
+    particle_grid(out, "      ", frame, "frame_" + counter(static_cast<int>(k)), header.str());
   }
-  out << "    </Grid>\n"
-      << "  </Domain>\n"
+  out << "    </Grid>\n";
+  for (const std::string& name : line_names) {
+    out << "    <Grid Name=\"" << xml_escaped(name) << "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      const auto& lines = frames[k].lines;
+      const auto line = std::find_if(lines.begin(), lines.end(), [&](const FrameInfo::LineSet& l) { return l.name == name; });
+      line_grid(out, "      ", frames[k], line == lines.end() ? nullptr : &*line, name + "_" + counter(static_cast<int>(k)),
+                number(listed.at(k)));
+    }
+    out << "    </Grid>\n";
+  }
+  out << "  </Domain>\n"
       << "</Xdmf>\n";
   return out.str();
 }

@@ -8,11 +8,17 @@
 ///  - results.h5              the index: /frames/NNNNNN are HDF5 external links to the frame
 ///                            files (relative paths, resolved from the directory of results.h5,
 ///                            so move the output directory as a whole), plus /timeseries;
-///  - results.xdmf            XDMF description of the particle frames for ParaView, pointing
-///                            straight into the frame files: one temporal collection with one
-///                            grid per frame, at strictly increasing times (see listed_times());
-///                            each grid holds the frame's true time, step and stage as
-///                            Information elements (Name "time" [s], "step", "stage");
+///  - results.xdmf            XDMF description of the frames for ParaView, pointing straight
+///                            into the frame files: one temporal collection with one entry per
+///                            frame, at strictly increasing times (see listed_times()); each entry
+///                            holds the frame's true time, step and stage as Information elements
+///                            (Name "time" [s], "step", "stage"). Without line sets (below) an
+///                            entry is the particle grid itself (a Polyvertex grid, one point per
+///                            particle); when any frame of the run draws line sets, every entry is
+///                            a spatial collection: the grid "particles" and one Polyline grid per
+///                            line set of the frame with cells ("contacts", "bonds", a module's
+///                            network such as "electrical"), over the same points (the particle
+///                            positions), one 2-node cell per row, the row's fields as cell arrays;
 ///  - timeseries.csv          the time series as text.
 /// The three index files are rewritten together by write_index() (each atomically: tmp, fsync,
 /// rename) and by finalize(); the pipeline calls write_index() after every checkpoint and at
@@ -29,9 +35,15 @@
 ///   /particles/<name>   double, n x components, attribute unit (string)
 ///   /contacts/pairs     int64, m x 2 (particle ids of each contact)
 ///   /contacts/<name>    double, m x components, attribute unit (string)
+///   /bonds/...          as /contacts, one row per bond (intact or broken), when the frame has bonds
+///   /networks/<name>/.. as /contacts, a module's network edges (a wall end has id -1 - wall index)
+///   <group>/nodes       int64, m x 2, when the group is drawn as lines: the rows of the two ends in
+///                       /particles/* (frames are not in id order); a wall end takes the row of the
+///                       other end (a cell of zero length)
 /// results.h5 also holds /timeseries/<column>: double, 1-D, one value per row.
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -52,6 +64,48 @@ struct ContactFrame {
   std::vector<FrameField> fields;
 };
 
+/// One frame's content. Edge sets are written at their group: /contacts, /bonds (when `bonds`
+/// holds a value) and /networks/<name>. `contact_lines` draws the contacts and the networks as
+/// line grids in results.xdmf, `bond_lines` the bonds (output.network); a drawn set gets its
+/// /nodes dataset, which needs the particle field "id".
+struct FrameContent {
+  std::int64_t step = 0;
+  double time = 0.0;  ///< [s]
+  std::string stage;
+  std::vector<FrameField> particles;
+  ContactFrame contacts;
+  std::optional<ContactFrame> bonds;
+  std::vector<std::pair<std::string, ContactFrame>> networks;
+  bool contact_lines = false;
+  bool bond_lines = false;
+};
+
+/// What an index file needs to know about one frame file.
+struct FrameInfo {
+  /// One edge set drawn as lines.
+  struct LineSet {
+    std::string name;   ///< the grid's name ("contacts", "bonds", "electrical")
+    std::string group;  ///< its group in the frame file ("/contacts", "/networks/electrical")
+    std::size_t cells = 0;
+    std::vector<std::pair<std::string, int>> fields;  ///< cell field name, components
+  };
+  std::string file;  ///< relative to the directory of the index file
+  double time = 0.0;
+  std::int64_t step = 0;
+  std::string stage;
+  std::size_t particles = 0;
+  std::vector<std::pair<std::string, int>> fields;  ///< particle field name, components
+  std::vector<LineSet> lines;
+};
+
+/// Reads what the index needs from a written frame file (`file` as the index will name it,
+/// relative to `dir`). Throws SetupError on a file that is not a frame.
+FrameInfo read_frame_info(const std::filesystem::path& dir, const std::string& file);
+
+/// The XDMF text of these frames (results.xdmf's format) listed at `listed` times (one per frame,
+/// strictly increasing; see ResultsWriter::listed_times).
+std::string xdmf_of_frames(const std::vector<FrameInfo>& frames, const std::vector<double>& listed);
+
 class ResultsWriter {
  public:
   /// Creates `outdir` and `outdir/frames` if needed and removes an earlier run's results there.
@@ -69,6 +123,8 @@ class ResultsWriter {
   /// as /networks/<name>/pairs and /networks/<name>/<field>, with the same checks as contacts.
   std::string write_frame(std::int64_t step, double time, const std::string& stage, const std::vector<FrameField>& particle_fields,
                           const ContactFrame& contacts, const std::vector<std::pair<std::string, ContactFrame>>& networks = {});
+  /// The same for a frame with bonds and line sets (FrameContent).
+  std::string write_frame(const FrameContent& frame);
   /// Sets the time series (each row has one value per column) for the next write_index().
   /// (The index counts as out of date after this call, whatever the values.)
   void set_timeseries(const std::vector<std::string>& columns, const std::vector<std::vector<double>>& rows);
@@ -95,15 +151,8 @@ class ResultsWriter {
   static std::vector<double> listed_times(const std::vector<double>& times);
 
  private:
-  /// What the index files need to know about one frame.
-  struct FrameInfo {
-    std::string file;  ///< relative to the output directory
-    double time;
-    std::int64_t step;
-    std::string stage;
-    std::size_t particles;
-    std::vector<std::pair<std::string, int>> fields;  ///< particle field name, components
-  };
+  /// Throws (naming the frame) unless the frame is valid; sets `particles` to its particle count.
+  void check_frame(const FrameContent& frame, std::size_t& particles) const;
   void write_results_h5(const std::filesystem::path& file) const;
   std::string xdmf_text() const;
   std::string csv_text() const;

@@ -47,6 +47,73 @@ void note(RunLog& log, const std::string& text) noexcept {
   } catch (...) {}
 }
 
+/// A frame's particle fields: the kinematics, radius, id, material and every output field.
+std::vector<FrameField> frame_particles(const ParticleStore& p) {
+  std::vector<FrameField> f;
+  auto vec3 = [&](const char* name, const std::vector<Vec3>& v, const char* unit) {
+    FrameField x{name, 3, std::vector<double>(3 * v.size()), unit};
+    for (std::size_t i = 0; i < v.size(); ++i)
+      for (int d = 0; d < 3; ++d) x.data[3 * i + d] = v[i][d];
+    f.push_back(std::move(x));
+  };
+  vec3("position", p.position, "m");
+  vec3("velocity", p.velocity, "m/s");
+  vec3("omega", p.omega, "rad/s");
+  vec3("force", p.force, "N");
+  f.push_back({"radius", 1, p.radius, "m"});
+  f.push_back({"id", 1, std::vector<double>(p.id.begin(), p.id.end()), "1"});
+  f.push_back({"material", 1, std::vector<double>(p.material.begin(), p.material.end()), "1"});
+  for (const auto& name : p.fields.names()) {
+    const auto& info = p.fields.info(name);
+    // Field names may hold '/' (e.g. "set/top"); a frame dataset name may not.
+    std::string out = name;
+    std::replace(out.begin(), out.end(), '/', '_');
+    if (info.output) f.push_back({out, info.components, p.fields.data(name), info.unit});
+  }
+  return f;
+}
+
+/// A frame's contacts: the rows that touch or carry a force (a sintered neck in tension), with
+/// their overlap, force on i and, under a sintering law, neck radius.
+ContactFrame frame_contacts(const ContactTable& t) {
+  ContactFrame c;
+  FrameField ov{"overlap", 1, {}, "m"}, fn{"force", 3, {}, "N"}, neck{"neck_radius", 1, {}, "m"};
+  const int neck_column = t.column("neck_radius");
+  const auto force = [&](std::size_t r) { return r < t.force().size() ? t.force()[r] : Vec3::Zero(); };  // none before a force pass
+  for (std::size_t r = 0; r < t.size(); ++r) {
+    if (!(t.overlap()[r] > 0.0) && force(r) == Vec3::Zero()) continue;
+    c.pairs.push_back(t.id_i()[r]);
+    c.pairs.push_back(t.id_j()[r]);
+    ov.data.push_back(t.overlap()[r]);
+    for (int d = 0; d < 3; ++d) fn.data.push_back(force(r)[d]);
+    if (neck_column >= 0) neck.data.push_back(t.state(r)[neck_column]);
+  }
+  c.fields.push_back(std::move(ov));
+  c.fields.push_back(std::move(fn));
+  if (neck_column >= 0) c.fields.push_back(std::move(neck));
+  return c;
+}
+
+/// A frame's bonds, every row: broken (1) or intact (0), the step it broke at (-1: intact), the
+/// force on i (zero once broken).
+ContactFrame frame_bonds(const State& s) {
+  const BondTable& b = s.bonds;
+  ContactFrame c;
+  FrameField broken{"broken", 1, {}, "1"}, step{"broken_step", 1, {}, "1"}, fn{"force", 3, {}, "N"};
+  for (std::size_t r = 0; r < b.size(); ++r) {
+    c.pairs.push_back(b.id_i()[r]);
+    c.pairs.push_back(b.id_j()[r]);
+    broken.data.push_back(b.broken(r) ? 1.0 : 0.0);
+    step.data.push_back(b.broken(r) ? static_cast<double>(b.broken_step(r)) : -1.0);
+    const Vec3 f = b.broken(r) || r >= b.force().size() ? Vec3::Zero() : b.force()[r];
+    for (int d = 0; d < 3; ++d) fn.data.push_back(f[d]);
+  }
+  c.fields.push_back(std::move(broken));
+  c.fields.push_back(std::move(step));
+  c.fields.push_back(std::move(fn));
+  return c;
+}
+
 /// The I/O side of a run: frames, time series, checkpoints, progress, the run log.
 class OutputObserver final : public Observer {
  public:
@@ -74,54 +141,21 @@ class OutputObserver final : public Observer {
     // and the closing frame), and a stage of no steps its start twice: the same state, written once.
     if (last_frame_step_ == s.step) return;
     last_frame_step_ = s.step;
-    const auto& p = s.particles;
-    std::vector<FrameField> f;
-    auto vec3 = [&](const char* name, const std::vector<Vec3>& v, const char* unit) {
-      FrameField x{name, 3, std::vector<double>(3 * v.size()), unit};
-      for (std::size_t i = 0; i < v.size(); ++i)
-        for (int d = 0; d < 3; ++d) x.data[3 * i + d] = v[i][d];
-      f.push_back(std::move(x));
-    };
-    vec3("position", p.position, "m");
-    vec3("velocity", p.velocity, "m/s");
-    vec3("omega", p.omega, "rad/s");
-    vec3("force", p.force, "N");
-    f.push_back({"radius", 1, p.radius, "m"});
-    f.push_back({"id", 1, std::vector<double>(p.id.begin(), p.id.end()), "1"});
-    f.push_back({"material", 1, std::vector<double>(p.material.begin(), p.material.end()), "1"});
-    for (const auto& name : p.fields.names()) {
-      const auto& info = p.fields.info(name);
-      // Field names may hold '/' (e.g. "set/top"); a frame dataset name may not.
-      std::string out = name;
-      std::replace(out.begin(), out.end(), '/', '_');
-      if (info.output) f.push_back({out, info.components, p.fields.data(name), info.unit});
-    }
-    ContactFrame c;
-    const auto& t = s.contacts;
-    FrameField ov{"overlap", 1, {}, "m"}, fn{"force", 3, {}, "N"};
-    const auto touching = static_cast<std::size_t>(std::count_if(t.overlap().begin(), t.overlap().end(), [](double h) { return h > 0.0; }));
-    c.pairs.reserve(2 * touching);
-    ov.data.reserve(touching);
-    fn.data.reserve(3 * touching);
-    for (std::size_t r = 0; r < t.size(); ++r) {
-      if (t.overlap()[r] <= 0.0) continue;
-      c.pairs.push_back(t.id_i()[r]);
-      c.pairs.push_back(t.id_j()[r]);
-      ov.data.push_back(t.overlap()[r]);
-      for (int d = 0; d < 3; ++d) fn.data.push_back(t.force()[r][d]);
-    }
-    c.fields.push_back(std::move(ov));
-    c.fields.push_back(std::move(fn));
-    const int index = writer_.frames();
-    std::vector<std::pair<std::string, ContactFrame>> networks;
+    FrameContent fc{s.step, s.time, stage_, frame_particles(s.particles), frame_contacts(s.contacts), std::nullopt, {}, false, false};
+    if (s.bonds.size() > 0) fc.bonds = frame_bonds(s);
     for (const Module* m : modules_)
       for (EdgeOutput& eo : m->edge_outputs()) {  // a copy of the module's: moved, not copied again
         ContactFrame n;
         n.pairs = std::move(eo.pairs);
         for (EdgeField& ef : eo.fields) n.fields.push_back({ef.name, 1, std::move(ef.values), ef.unit});
-        networks.emplace_back(eo.name, std::move(n));
+        fc.networks.emplace_back(eo.name, std::move(n));
       }
-    const std::string file = writer_.write_frame(s.step, s.time, stage_, f, c, networks);
+    const std::string& mode = cfg_.network_output;
+    const bool automatic = mode == "auto" && (!fc.networks.empty() || fc.bonds);
+    fc.contact_lines = automatic || mode == "contacts" || mode == "both";
+    fc.bond_lines = automatic || mode == "bonds" || mode == "both";
+    const int index = writer_.frames();
+    const std::string file = writer_.write_frame(fc);
     dirty_ = true;
     // Only now, with the frame file complete on disk, is the frame reported.
     char counter[16];

@@ -45,6 +45,7 @@ struct StageParams {
     std::int64_t frame_every = 0;
     std::int64_t timeseries_every = 100;
     std::int64_t checkpoint_every = 0;
+    std::string network = "auto";
   } output;
   struct Watchdog {
     std::int64_t check_every = 10;
@@ -114,6 +115,11 @@ ParamSpec<StageParams::Output> output_spec() {
   s.add("frame_every", &P::frame_every).min(0).doc("steps between particle frames (0: final frame only)");
   s.add("timeseries_every", &P::timeseries_every).min(0).doc("steps between time-series rows");
   s.add("checkpoint_every", &P::checkpoint_every).min(0).doc("global steps between checkpoints (0: none)");
+  s.add("network", &P::network)
+      .choices({"auto", "none", "contacts", "bonds", "both"})
+      .doc("which pair sets results.xdmf draws as lines (frames' <group>/nodes): contacts (the contact rows and the modules' "
+           "networks, e.g. electrical branches), bonds, both or none; auto: both when a module writes a network or the state "
+           "has bonds, else none");
   return s;
 }
 ParamSpec<StageParams> stage_spec(const Registry& reg) {
@@ -252,6 +258,7 @@ StageDef stage_from_params(const StageParams& p, const std::string& path) {
   c.frame_every = p.output.frame_every;
   c.timeseries_every = p.output.timeseries_every;
   c.checkpoint_every = p.output.checkpoint_every;
+  c.network_output = p.output.network;
   return st;
 }
 

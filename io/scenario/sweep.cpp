@@ -9,6 +9,7 @@
 #include <set>
 
 #include "engine/core/error.hpp"
+#include "io/hdf5/results_writer.hpp"
 #include "io/restart/hdf5_archive.hpp"
 #include "io/mpi/ranks.hpp"
 #include "io/scenario/pipeline.hpp"
@@ -564,8 +565,33 @@ json rows_before(const std::map<std::size_t, json>& rows, std::size_t j) {
   return out;
 }
 
+/// sweep_<stage>/results.xdmf: the last frame of every completed item, in row order, one
+/// ParaView time step per item (listed at the row's place in the table, 0, 1, 2, ...; each
+/// grid's Information holds the frame's own time, step and stage), pointing into the items'
+/// frame files (<item>/frames/...).
+void write_sweep_xdmf(const SweepContext& ctx, const json& rows) {
+  std::vector<FrameInfo> frames;
+  std::vector<double> listed;
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const json& r = rows[k];
+    if (r.value("status", std::string()) != "completed" || !r.contains("directory")) continue;
+    const fs::path dir = r["directory"].get<std::string>();
+    std::error_code ec;
+    std::string last;
+    for (const auto& e : fs::directory_iterator(dir / "frames", ec)) {
+      const std::string name = e.path().filename().string();
+      if (name.size() > 3 && name.substr(name.size() - 3) == ".h5" && name > last) last = name;
+    }
+    if (last.empty()) continue;  // an item of a restart into another directory: its frames stayed behind
+    frames.push_back(read_frame_info(ctx.dir, (fs::relative(dir, ctx.dir) / "frames" / last).generic_string()));
+    listed.push_back(static_cast<double>(k));
+  }
+  write_text_atomic(ctx.dir / "results.xdmf", xdmf_of_frames(frames, listed));
+}
+
 void write_table(const SweepContext& ctx, const json& rows) {
   write_text_atomic(ctx.table, table_csv(*ctx.sw, shown_rows(rows, ctx.outdir), table_columns(*ctx.sw, rows)));
+  write_sweep_xdmf(ctx, rows);
 }
 
 }  // namespace sweep_detail

@@ -1,6 +1,7 @@
 #include "physics/electrical/electrical_network.hpp"
 
 #include <algorithm>
+#include <unordered_map>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -309,6 +310,7 @@ ElectricalNetwork::ElectricalNetwork(const Params& p) : p_(p) {
 void ElectricalNetwork::declare(Declarations& d) const {
   d.particle_fields.push_back({"electric_potential", 1, "V", 0.0, true, FieldCheck::NotInfinite});  // NaN: floating
   d.particle_fields.push_back({"joule_power", 1, "W", 0.0, true, FieldCheck::Finite});
+  d.particle_fields.push_back({kParticleCurrentField, 1, "A", 0.0, true, FieldCheck::None});
   // Geometry and temperature as they were at the end of the previous step (or as earlier modules
   // of this step left them): a feedback loop with heat_conduction, which reads this step's
   // joule_power and writes the temperature and the expanded radii, is not an ordering cycle.
@@ -316,7 +318,7 @@ void ElectricalNetwork::declare(Declarations& d) const {
   d.reads_previous = {"position", "radius"};
   if (p_.temperature_field) d.reads_previous.push_back("temperature");
   if (!p_.displacement_field.empty()) d.reads.push_back(p_.displacement_field);
-  d.writes = {"electric_potential", "joule_power", "signal/electrical_resistance"};
+  d.writes = {"electric_potential", "joule_power", kParticleCurrentField, "signal/electrical_resistance"};
   if (reference_eccentricity()) d.writes.push_back(kEccentricityField);
   if (!p_.voltage_signal.empty()) d.reads.push_back("signal/" + p_.voltage_signal);
 }
@@ -694,12 +696,37 @@ EdgeOutput branch_output(const State& s, const InteractionGraph& g, const NetSol
   return out;
 }
 
+/// The current through each particle [A]: half the sum of |I| over everything it exchanges
+/// current with, its branches of the particle-centred network (walls included) and, for a
+/// particle of an electrode set, the electrode (|sum of its signed branch currents|, which
+/// Kirchhoff's law makes round-off elsewhere); from the branch output's ids. NaN on the other
+/// topologies (no branch per particle pair).
+void particle_currents(const State& s, const EdgeOutput& edges, bool particle_centred, std::vector<double>& out) {
+  std::fill(out.begin(), out.end(), particle_centred ? 0.0 : kNaN);
+  if (!particle_centred || edges.pairs.empty()) return;
+  std::unordered_map<std::int64_t, std::size_t> local;
+  local.reserve(s.particles.size());
+  for (std::size_t i = 0; i < s.particles.size(); ++i) local.emplace(static_cast<std::int64_t>(s.particles.id[i]), i);
+  std::vector<double> net(out.size(), 0.0);  // current leaving each particle through its branches
+  const std::vector<double>& current = edges.fields.at(0).values;  // from the first end to the second
+  for (std::size_t k = 0; k < current.size(); ++k)
+    for (int end = 0; end < 2; ++end) {
+      const auto it = local.find(edges.pairs[2 * k + end]);
+      if (it == local.end()) continue;
+      out[it->second] += std::abs(current[k]);
+      net[it->second] += end == 0 ? current[k] : -current[k];
+    }
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = 0.5 * (out[i] + std::abs(net[i]));
+}
+
 /// Open-circuit results (no particle reaches an electrode, empty_electrode = "open").
 void open_circuit(State& s, const Params& p, Result& r, EdgeOutput& edges) {
   auto& u = s.particles.fields.data("electric_potential");
   auto& q = s.particles.fields.data("joule_power");
   std::fill(u.begin(), u.end(), kNaN);
   std::fill(q.begin(), q.end(), 0.0);
+  auto& through = s.particles.fields.data(ElectricalNetwork::kParticleCurrentField);
+  std::fill(through.begin(), through.end(), 0.0);
   edges = EdgeOutput{};
   const double solves = r.solves;
   const std::vector<double> necks = r.necks;  // the graph's, recorded before the electrodes were found empty
@@ -769,6 +796,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
     power = 0.0;
   }
   edges_ = branch_output(s, g, sol, spans, particle_centred);
+  particle_currents(s, edges_, particle_centred, s.particles.fields.data(kParticleCurrentField));
   if (driven && !spans)
     throw PhysicsError(info.step, {}, "electrical current",
                        "electrical_network: " + std::to_string(p_.current) + " A injected at '" + p_.high + "' has no path to '" + p_.low +

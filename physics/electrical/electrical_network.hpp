@@ -151,6 +151,9 @@ class ElectricalNetwork final : public Module {
   std::string name() const override { return "electrical_network"; }
   /// Particle field of the reference eccentricities (eccentricity = "reference"; -1: not yet set).
   static constexpr const char* kEccentricityField = "electrical_eccentricity_reference";
+  /// Particle field of the current through each particle [A]: half the sum of |I| over its
+  /// branches (particle-centred topology; NaN on the others), written with every solve.
+  static constexpr const char* kParticleCurrentField = "particle_current";
   Phase phase() const override { return Phase::Coupling; }
   void declare(Declarations& d) const override;
   void bind(State& s) override;

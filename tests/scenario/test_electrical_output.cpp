@@ -1,6 +1,7 @@
 /// The electrical network's per-branch output in the frames (/networks/electrical): through a
 /// scenario run in process. Invariants on a straight chain of spheres (branches in series):
-/// every branch carries the electrode current, and the branch powers add up to V I.
+/// every branch and every particle carries the electrode current, and the branch powers add up
+/// to V I.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -58,6 +59,10 @@ TEST_CASE("electrical_network writes branch currents, conductances and powers to
     P += power[e];
   }
   CHECK(std::abs(P - 0.5 * I) <= 1e-12 * P);  // sum I^2 R = V I
+  // The current through each particle (the end ones take it from their electrode): I in series.
+  const auto through = f.read_doubles("/particles/particle_current");
+  REQUIRE(through.size() == n);
+  for (double x : through) CHECK(std::abs(x - I) <= 1e-12 * I);
 }
 
 }  // namespace test_electrical_output
