@@ -96,6 +96,7 @@ ParamSpec<SetParams> set_spec() {
 struct SweepParams {
   std::string snapshots_of;
   std::string parameter;
+  bool keep_item_states = true;
 };
 ParamSpec<SweepParams> sweep_spec() {
   ParamSpec<SweepParams> s("sweep", "object",
@@ -105,6 +106,9 @@ ParamSpec<SweepParams> sweep_spec() {
   s.add("snapshots_of", &SweepParams::snapshots_of).doc("one item per snapshot of this earlier stage");
   s.add("parameter", &SweepParams::parameter)
       .doc("JSON pointer relative to the stage (e.g. /modules/gravity/acceleration/2) substituted by each of `values`");
+  s.add("keep_item_states", &SweepParams::keep_item_states)
+      .doc("keep each completed item's final_state.h5 (a full checkpoint); false removes it as the item completes: its "
+           "frames keep the fields (potentials, currents), and a restart needs only the table and the sweep's checkpoint");
   return s;
 }
 using Calibration = SweepDef::Calibration;
@@ -217,6 +221,7 @@ void parse_sweep(const json& js, const std::string& path, const std::vector<Earl
   json r;
   const SweepParams p = build(sweep_spec(), j, sp, errors, r, {"values", "seeds", "collect", "calibrate"});
   if (!j.is_object()) return;
+  sw.keep_item_states = p.keep_item_states;
   if (j.contains("calibrate")) {
     json rc;
     const Calibration c = build(calibrate_spec(), j["calibrate"], sp + "/calibrate", errors, rc, {});

@@ -84,6 +84,7 @@ struct SweepDef {
   std::vector<json> values;           ///< Parameter: one item per value
   std::vector<std::uint64_t> seeds;   ///< Seeds: one item per seed
   std::vector<std::string> collect;   ///< table columns; empty: every final value
+  bool keep_item_states = true;       ///< false: a completed item's final_state.h5 is removed
   /// Snapshots + `calibrate`: the items are first `scan` (the parameter's values on snapshot
   /// `snapshot`: the map), then a bracketed search on that snapshot (secant in (ln value,
   /// ln column), kept inside the middle 80 % of the bracket) until the final `column` is within

@@ -544,6 +544,7 @@ ItemResult run_item(Scenario& sc, const ItemJob& job, const State& input, RunOpt
       }
     }
     res.steps = summary.value("steps", Step{0});
+    if (!sw.keep_item_states) remove_if_present(fs::path(job.directory) / "final_state.h5");
     res.particle_steps = static_cast<double>(row["steps"].get<std::int64_t>()) * e.value("particles", 0.0);
   } catch (const PhysicsError& e) {
     row["status"] = "failed";

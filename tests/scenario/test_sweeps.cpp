@@ -450,6 +450,26 @@ TEST_CASE("a sweep of the gravity on a free fall: v = g t in every row", "[sweep
   // The sweep is a branch: the last stage starts from the lattice at rest.
   CHECK(sum["stages"][2]["final"]["step"] == 10);
   CHECK(sum["stages"][2]["final"]["kinetic_energy"] == 0.0);
+
+  // keep_item_states false: the same rows, no item final_state.h5; sweep_g/results.xdmf lists
+  // each item's last frame (one time step per item), whose velocities are g t.
+  scene["stages"][1]["sweep"]["keep_item_states"] = false;
+  const fs::path B = tmp.path / "B";
+  run(write_scene(tmp.path, "g_lean.json", scene), B, tmp.path);
+  CHECK(read_csv(B / "sweep_g.csv") == csv);
+  std::ifstream xdmf_in(B / "sweep_g" / "results.xdmf");
+  const std::string xdmf{std::istreambuf_iterator<char>(xdmf_in), {}};
+  for (std::size_t k = 0; k < 3; ++k) {
+    const fs::path item = B / "sweep_g" / std::to_string(k);
+    CHECK_FALSE(fs::exists(item / "final_state.h5"));
+    CHECK(fs::exists(A / "sweep_g" / std::to_string(k) / "final_state.h5"));
+    const std::string frame = std::to_string(k) + "/frames/frame_000000.h5";  // frame_every 0: the final frame only
+    CHECK(xdmf.find("<Time Value=\"" + std::to_string(k) + "\"/>") != std::string::npos);
+    REQUIRE(xdmf.find(frame + ":/particles/position") != std::string::npos);
+    const auto v = sparkdem::io::H5File::open_read(B / "sweep_g" / frame).read_doubles("/particles/velocity");
+    REQUIRE(!v.empty());
+    for (std::size_t i = 2; i < v.size(); i += 3) CHECK(close_rel(std::abs(v[i]), std::abs(g_values[k].get<double>()) * t, 1e-12));
+  }
 }
 
 TEST_CASE("sweep and snapshot configuration errors are all reported at once with their paths", "[sweeps][config_errors][scenario]") {
