@@ -129,6 +129,10 @@ std::vector<double> builtin_values(const State& s, const BondModel* bonds) {
 void Simulation::sample(std::vector<std::string>& cols, std::vector<double>& vals) const {
   cols = builtin_columns(s_);
   vals = builtin_values(s_, bond_law_);
+  if (adaptive_) {  // the step in use (fixed-step stages keep their columns as they were)
+    cols.push_back("dt");
+    vals.push_back(s_.stage_dt);
+  }
   const double t_stage = s_.time - s_.stage_t0;
   for (const auto& [name, m] : prescribed_) {
     const auto& f = s_.particles.fields.data("set/" + name);
@@ -238,6 +242,100 @@ double Simulation::resolve_dt(const StageConfig& cfg) const {
   if (!std::isfinite(stable))
     throw SetupError("stage '" + cfg.name + "': dt_fraction needs a finite stable step, but the contact law gives none; set dt");
   return cfg.dt_fraction * stable;
+}
+
+double Simulation::adaptive_step(const StageConfig& cfg, double previous) const {
+  const AdaptiveDt& a = cfg.adaptive;
+  double stable = cfg.mechanics && !inertia_free_ ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+  std::string limit = "the contact law";
+  for (const PlanItem& it : plan_.items) {  // a fixed-clock module's stable step, as a mechanical step
+    if (it.kind != PlanItem::Kind::Module || it.clock.kind == Clock::Kind::AdaptiveSubsteps || it.clock.kind == Clock::Kind::OnEvent)
+      continue;
+    const double scale = it.module->time_domain() == TimeDomain::Physical ? time_scale_ : 1.0;
+    const double m = it.module->stable_dt(s_) / (it.clock.dt(1.0) * scale);
+    if (m < stable) {
+      stable = m;
+      limit = "module '" + it.name + "'";
+    }
+  }
+  if (!std::isfinite(stable) && !std::isfinite(a.max))
+    throw SetupError("stage '" + cfg.name + "': an adaptive step needs a finite stable step or dt.max, and the state gives none");
+  if (a.fraction * stable < a.min)
+    throw PhysicsError(s_.step, {}, "time step",
+                       "the adaptive step " + fmt_g(a.fraction) + " x " + fmt_g(stable) + " s (the stable step of " + limit +
+                           ") fell below dt.min = " + fmt_g(a.min) + " s; lower dt.min");
+  return std::min({a.fraction * stable, a.max, previous * a.growth});
+}
+
+double Simulation::next_landing(const StageConfig& cfg, double elapsed) const {
+  // A target within a millionth of a step of `elapsed` counts as reached (round-off of the sums).
+  const double eps = 1e-6 * s_.stage_dt;
+  double next = cfg.duration;
+  if (cfg.frame_every_s > 0.0) {
+    const double n = std::floor((elapsed + eps) / cfg.frame_every_s) + 1.0;
+    next = std::min(next, n * cfg.frame_every_s);
+  }
+  for (const Wall& w : s_.walls) {
+    const double s = w.motion.physical_time ? time_scale_ : 1.0;  // table times in physical seconds
+    for (const auto* times : {&w.motion.table_time, &w.motion.pressure_time})
+      for (const double t : *times)
+        if (t / s > elapsed + eps) {
+          next = std::min(next, t / s);
+          break;
+        }
+  }
+  return next;
+}
+
+void Simulation::adapt_step(const StageConfig& cfg, Observer& obs, StageResult& res) {
+  const double old = s_.stage_dt;
+  const double stable_now = cfg.mechanics && !inertia_free_ ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+  if (old > stable_now) {
+    ++res.adaptive->overshoots;
+    obs.event("stage '" + cfg.name + "' step " + std::to_string(s_.step) + ": the step in use " + fmt_g(old) +
+             " s exceeded the stable step " + fmt_g(stable_now) + " s of the state (it stiffened between two checks)");
+  }
+  const double dt = adaptive_step(cfg, old);
+  if (dt == old) return;
+  ++res.adaptive->changes;
+  s_.dt_history.push_back(static_cast<double>(s_.step - s_.stage_step0));
+  s_.dt_history.push_back(dt);
+  s_.stage_dt = dt;
+  // Logged when it has moved by 10 % since the last line (a step creeping at every check would
+  // fill the log), and when it reaches dt.max.
+  if (!(logged_dt_ > 0.0) || std::abs(dt - logged_dt_) >= 0.1 * logged_dt_ || (dt == cfg.adaptive.max && old != dt)) {
+    obs.event("stage '" + cfg.name + "' step " + std::to_string(s_.step) + ": dt " + fmt_g(logged_dt_) + " -> " + fmt_g(dt) + " s since the last line (" +
+              (dt < old ? "the state stiffened" : "the state softened") + "; stable step of the contact law now " + fmt_g(stable_now) + " s)");
+    logged_dt_ = dt;
+  }
+}
+
+void Simulation::adaptive_stats(StageResult& res) const {
+  const auto& h = s_.dt_history;
+  const double steps = static_cast<double>(s_.step - s_.stage_step0);
+  std::vector<std::pair<double, double>> spans;  // (dt, steps taken at it)
+  for (std::size_t k = 0; k + 1 < h.size(); k += 2) {
+    const double end = k + 2 < h.size() ? h[k + 2] : steps;
+    spans.emplace_back(h[k + 1], end - h[k]);
+  }
+  StageResult::AdaptiveStats a = *res.adaptive;
+  a.changes = static_cast<Step>(h.size() / 2) - 1;  // from the history: a resumed stage counts them all
+  a.min = a.max = h.empty() ? s_.stage_dt : h[1];
+  for (const auto& [dt, n] : spans) {
+    a.min = std::min(a.min, dt);
+    a.max = std::max(a.max, dt);
+  }
+  std::sort(spans.begin(), spans.end());
+  double seen = 0.0;
+  a.median = spans.empty() ? s_.stage_dt : spans.back().first;
+  for (const auto& [dt, n] : spans) {
+    seen += n;
+    if (seen >= 0.5 * steps) {
+      a.median = dt;
+      break;
+    }
+  }
+  res.adaptive = a;
 }
 
 void Simulation::update_neighbors(double skin, Step sort_every) {
@@ -387,6 +485,13 @@ void Simulation::mark_event_run(const PlanItem& it, Step step) {
   if (!t.field.empty()) p.fields.data(base + "field0") = p.fields.data(t.field);
 }
 
+/// Adaptive stages: the domain time of a module's last call (the stage start's before its first;
+/// in State::marks, so that a restart continues it).
+double Simulation::last_call_time(const PlanItem& it, double t_start) const {
+  const auto m = s_.marks.find("clock/" + it.name + "/last_time");
+  return m == s_.marks.end() ? t_start : m->second;
+}
+
 void Simulation::run_module(const PlanItem& it, Step step, double t_stage, double dt_m) {
   const auto t_call = std::chrono::steady_clock::now();
   const Clock& c = it.clock;
@@ -403,7 +508,8 @@ void Simulation::run_module(const PlanItem& it, Step step, double t_stage, doubl
       break;
     case Clock::Kind::EveryNSteps:
       if (step % c.n == 0) {
-        it.module->advance(s_, StepInfo{step, t_end, static_cast<double>(c.n) * dt, 0});
+        it.module->advance(s_, StepInfo{step, t_end, adaptive_ ? t_end - last_call_time(it, t0) : static_cast<double>(c.n) * dt, 0});
+        if (adaptive_) s_.marks["clock/" + it.name + "/last_time"] = t_end;
         calls = 1;
       }
       break;
@@ -428,7 +534,9 @@ void Simulation::run_module(const PlanItem& it, Step step, double t_stage, doubl
       const std::string key = "trigger/" + it.name + "/last_step";
       const auto last = s_.marks.find(key);
       const Step since = last == s_.marks.end() ? 1 : step - static_cast<Step>(last->second);
-      it.module->advance(s_, StepInfo{step, t_end, static_cast<double>(since) * dt, 0});
+      // (adaptive: the time since its last call; one step before the first, as with a fixed step)
+      it.module->advance(s_, StepInfo{step, t_end, adaptive_ ? t_end - last_call_time(it, t_end - dt) : static_cast<double>(since) * dt, 0});
+      if (adaptive_) s_.marks["clock/" + it.name + "/last_time"] = t_end;
       mark_event_run(it, step);
       calls = 1;
       break;
@@ -524,7 +632,12 @@ void Simulation::choose_skin(const StageConfig& cfg, bool resume) {
 /// k dt, physical time = phys_t0 + scale k dt, bit for bit): a checkpoint that breaks them was
 /// not written by a run (and a wrong dt could make the stage run for ever).
 void Simulation::check_resumed_clocks(const StageConfig& cfg) const {
-  const double t_stage = static_cast<double>(s_.step - s_.stage_step0) * s_.stage_dt;
+  // (an adaptive stage's time is the sum of its steps, kept in the checkpoint)
+  const double t_stage = cfg.adaptive.on() ? s_.stage_elapsed : static_cast<double>(s_.step - s_.stage_step0) * s_.stage_dt;
+  if (cfg.adaptive.on() != !s_.dt_history.empty())
+    throw SetupError("stage '" + cfg.name + "': the checkpoint was written by a stage with " +
+                     (s_.dt_history.empty() ? "a fixed" : "an adaptive") + " step; the scenario gives it " +
+                     (cfg.adaptive.on() ? "an adaptive" : "a fixed") + " one");
   if (!(s_.stage_dt > 0.0) || s_.time != s_.stage_t0 + t_stage || s_.physical_time != s_.stage_phys_t0 + time_scale_ * t_stage)
     throw SetupError("stage '" + cfg.name + "': the checkpoint's clocks are inconsistent (step " + std::to_string(s_.step) +
                      ", stage start step " + std::to_string(s_.stage_step0) + ", dt " + fmt_g(s_.stage_dt) + " s, time " + fmt_g(s_.time) +
@@ -726,8 +839,20 @@ double Simulation::choose_step(const StageConfig& cfg, bool resume, StageResult&
   }
   const bool explicit_mechanics = cfg.mechanics && !cfg.quasi_static;
   inertia_free_ = cfg.mechanics && cfg.quasi_static;
-  const double dt_used = resume ? s_.stage_dt : resolve_dt(cfg);
+  adaptive_ = cfg.adaptive.on();
+  if (adaptive_ && inertia_free_) throw SetupError("stage '" + cfg.name + "': an adaptive step needs explicit mechanics (quasi_static sets its own substeps)");
+  if (adaptive_) res.adaptive = StageResult::AdaptiveStats{};
+  if (!resume)  // the module clocks of an earlier adaptive stage
+    for (auto m = s_.marks.begin(); m != s_.marks.end();) m = m->first.rfind("clock/", 0) == 0 ? s_.marks.erase(m) : std::next(m);
+  if (adaptive_ && !resume) {  // the first step from the stage's start state; the history starts with it
+    s_.stage_dt = adaptive_step(cfg, std::numeric_limits<double>::infinity());
+    s_.stage_elapsed = 0.0;
+    s_.dt_history = {0.0, s_.stage_dt};
+  }
+  if (!adaptive_) s_.dt_history.clear();
+  const double dt_used = resume || adaptive_ ? s_.stage_dt : resolve_dt(cfg);
   s_.stage_dt = dt_used;
+  logged_dt_ = dt_used;
   res.dt = dt_used;
   res.stable_dt_at_start = explicit_mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
   res.dt_fraction_used = dt_used / res.stable_dt_at_start;
@@ -796,7 +921,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     sample(cols, vals);
     obs.timeseries(cols, vals);
     obs.watch(s_, cols, vals);
-    if (cfg.frame_every > 0) obs.frame(s_);
+    if (cfg.frame_every > 0 || cfg.frame_every_s > 0.0) obs.frame(s_);
   }
   // The run watchdog: the state of the stage start must pass it (a scene it refuses stops before
   // step 0), and that state is the first healthy copy.
@@ -815,7 +940,10 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     throw PhysicsError(e.step(), e.ids(), e.quantity(),
                        "stage '" + cfg.name + "' refused before its first step: its initial state fails the " + e.reason(), e.detail());
   }
-  const auto stage_done = [&](Step k) { return k >= cfg.max_steps || static_cast<double>(k) * dt_used >= cfg.duration * (1.0 - 1e-12); };
+  const auto stage_done = [&](Step k) {
+    const double elapsed = adaptive_ ? s_.stage_elapsed : static_cast<double>(k) * dt_used;
+    return k >= cfg.max_steps || elapsed >= cfg.duration * (1.0 - 1e-12);
+  };
   // A stage with no step ahead (e.g. a sweep item's measurement, stop.steps = 0) keeps no copy:
   // it would hold the state the stage fails in, which restarting from would only redo the stage.
   if (wd.snapshot_every_checks > 0 && !stage_done(s_.step - s_.stage_step0)) obs.healthy(s_);
@@ -834,16 +962,31 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     }
 
     // ---- one step: execute the plan ----
-    const double t_new = static_cast<double>(k + 1) * dt_used;  // stage time at the end of the step
-    execute_plan(cfg, dt_used, t_new, t_area);
+    const double t_old = adaptive_ ? s_.stage_elapsed : static_cast<double>(k) * dt_used;
+    double dt_step = dt_used, t_new = static_cast<double>(k + 1) * dt_used;  // stage time at the end of the step
+    if (adaptive_) {  // the current step, shortened to land on the next target time
+      const double land = next_landing(cfg, t_old);
+      dt_step = s_.stage_dt;
+      t_new = t_old + dt_step;
+      if (t_new >= land - 1e-6 * dt_step) {
+        t_new = land;
+        dt_step = land - t_old;
+      }
+    }
+    execute_plan(cfg, dt_step, t_new, t_area);
     ++s_.step;
+    if (adaptive_) s_.stage_elapsed = t_new;
     s_.time = s_.stage_t0 + t_new;
     s_.physical_time = s_.stage_phys_t0 + time_scale_ * t_new;
     // ---- bookkeeping ----
     const Step kk = k + 1;
     const bool checked = kk % wd.check_every == 0;
     if (checked) watchdog_check(s_, wd, wctx, true);
-    if (cfg.stability_check_every > 0 && kk % cfg.stability_check_every == 0 && !cfg.allow_unstable_dt) {
+    if (adaptive_ && kk % cfg.adaptive.check_every == 0) {
+      adapt_step(cfg, obs, res);
+      wctx.dt = s_.stage_dt;
+    }
+    if (!adaptive_ && cfg.stability_check_every > 0 && kk % cfg.stability_check_every == 0 && !cfg.allow_unstable_dt) {
       const double st = cfg.mechanics && !inertia_free_ ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
       if (dt_used > st)
         throw PhysicsError(s_.step, {}, "time step",
@@ -857,10 +1000,12 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
       if (row) obs.timeseries(cols, vals);
       obs.watch(s_, cols, vals);
     }
-    if (cfg.frame_every > 0 && kk % cfg.frame_every == 0) obs.frame(s_);
+    const bool timed_frame = cfg.frame_every_s > 0.0 && std::floor(t_new / cfg.frame_every_s * (1.0 + 1e-12)) >
+                                                            std::floor(t_old / cfg.frame_every_s * (1.0 + 1e-12));
+    if ((cfg.frame_every > 0 && kk % cfg.frame_every == 0) || timed_frame) obs.frame(s_);
     if (cfg.checkpoint_every > 0 && s_.step % cfg.checkpoint_every == 0) obs.checkpoint(s_);
     if (checked && wd.snapshot_every_checks > 0 && (kk / wd.check_every) % wd.snapshot_every_checks == 0) obs.healthy(s_);
-    if (kk % log_every == 0) obs.progress(s_, kk, t_new, dt_used);
+    if (kk % log_every == 0) obs.progress(s_, kk, t_new, dt_step);
     if (interrupt_flag().load()) {
       obs.checkpoint(s_);
       throw Interrupted("interrupted at step " + std::to_string(s_.step) + "; checkpoint written");
@@ -871,6 +1016,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   obs.frame(s_);
   if (!reached && !cfg.until.empty()) reached = until_holds();
   res.until_reached = cfg.until.empty() || reached;
+  if (adaptive_) adaptive_stats(res);
   sample(cols, vals);
   obs.timeseries(cols, vals);
   obs.watch(s_, cols, vals);

@@ -4,6 +4,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -60,10 +61,25 @@ struct PrescribedMotion {
 /// Time-series columns of a prescribed set (count, force, torque about its centre, turned angle).
 std::vector<std::string> prescribed_set_columns(const std::string& name);
 
+/// An adaptive step (stage key "dt": {"adaptive": F, ...}): every check_every steps the step
+/// becomes F x the stable step of the current state (the contact law's and that of every
+/// fixed-clock module, as a mechanical step), bounded by [min, max], growing by at most `growth`
+/// per check and shrinking at once; a step before a stop time, a frame_every_s time or a wall
+/// table's breakpoint is shortened to land on it.
+struct AdaptiveDt {
+  double fraction = 0.0;  ///< F (0 < F <= 1); 0: a fixed step
+  double min = 0.0;       ///< [s] below this the run stops (the state needs a smaller step)
+  double max = std::numeric_limits<double>::infinity();  ///< [s]
+  Step check_every = 50;  ///< steps between estimates of the stable step
+  double growth = 1.1;    ///< largest factor of growth per check
+  bool on() const { return fraction > 0.0; }
+};
+
 struct StageConfig {
   std::string name = "stage";
   double dt = 0.0;           ///< [s] fixed step; 0 = dt_fraction * stable step at stage start
   double dt_fraction = 0.0;  ///< fraction of the stable step (used when dt == 0)
+  AdaptiveDt adaptive;       ///< on: the step follows the state (dt and dt_fraction unused)
   /// false: frozen stage, no mechanical step (scheduler.hpp); dt is then `dt`, or dt_fraction x
   /// the smallest stable step of the modules (in mechanical time).
   bool mechanics = true;
@@ -87,6 +103,7 @@ struct StageConfig {
   Step frame_every = 0;           ///< 0 = only the final frame
   Step timeseries_every = 100;
   Step checkpoint_every = 0;
+  double frame_every_s = 0.0;  ///< [s] of stage time between frames (0: off); adaptive steps land on them
   /// Pair sets drawn as lines in the frames' XDMF: "auto", "none", "contacts", "bonds", "both"
   /// (io/scenario/stage_facets.cpp documents them).
   std::string network_output = "auto";
@@ -134,6 +151,8 @@ class Observer {
     (void)stage_time;
     (void)dt;
   }
+  /// An event worth a line in the run log (e.g. an adaptive step's change and why).
+  virtual void event(const std::string& text) { (void)text; }
   /// At the stage start (also on resume): the mechanical step and each module's step.
   virtual void steps_planned(double dt_mechanical, double stable_mechanical, const std::vector<ModuleStep>& modules) {
     (void)dt_mechanical;
@@ -175,6 +194,14 @@ struct StageResult {
   double dt = 0.0;
   double stable_dt_at_start = 0.0;
   double dt_fraction_used = 0.0;
+  /// Adaptive stages: the step's smallest, median (over steps) and largest value [s], its
+  /// changes, and the checks that found the step in use above the state's stable step (the
+  /// state stiffened past it between two checks).
+  struct AdaptiveStats {
+    double min = 0.0, median = 0.0, max = 0.0;
+    Step changes = 0, overshoots = 0;
+  };
+  std::optional<AdaptiveStats> adaptive;
   bool until_reached = true;
   std::size_t particles = 0;
   double particle_steps_per_second = 0.0;
@@ -262,6 +289,18 @@ class Simulation {
   void evaluate_start(double dt_used, double t_area, StageResult& res);
   void check_module_steps(const StageConfig& cfg, double dt_used, bool at_start) const;
   double choose_step(const StageConfig& cfg, bool resume, StageResult& res);
+  /// Adaptive stages: F x the stable step of the current state (contact law, fixed-clock
+  /// modules), within [min, max] and at most growth x `previous` (+inf: no bound). A stable step
+  /// that needs less than min is a PhysicsError.
+  double adaptive_step(const StageConfig& cfg, double previous) const;
+  /// Adaptive stages: the first stage time [s] after `elapsed` a step must land on (the stop time,
+  /// the next frame_every_s time, the next breakpoint of a wall's table), +inf when none.
+  double next_landing(const StageConfig& cfg, double elapsed) const;
+  /// Adaptive stages, every check_every steps: the next step from the state; logs a change.
+  void adapt_step(const StageConfig& cfg, Observer& obs, StageResult& res);
+  /// Adaptive stages: the stage's step statistics from State::dt_history, into res.
+  void adaptive_stats(StageResult& res) const;
+  double last_call_time(const PlanItem& it, double t_start) const;
   void halt_walls(std::vector<std::string>& cols, std::vector<double>& vals);
   void end_stage(const std::vector<std::string>& cols, const std::vector<double>& vals, StageResult& res);
   State& s_;
@@ -274,6 +313,8 @@ class Simulation {
   double skin_ = 0.0;
   double time_scale_ = 1.0;
   bool inertia_free_ = false;  ///< the running stage is quasi-static
+  bool adaptive_ = false;      ///< the running stage has an adaptive step (AdaptiveDt)
+  double logged_dt_ = 0.0;     ///< adaptive: the step the run log last reported [s]
   std::function<bool(const double*)> alive_rule_;  ///< persistent pairs of the contact law
   std::map<std::string, PrescribedMotion> prescribed_;
   /// Turn the members of rotating prescribed sets by their step rotation (after the drift).

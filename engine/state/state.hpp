@@ -33,7 +33,12 @@ struct State {
   double time = 0.0;                                ///< [s] = stage_t0 + (step - stage_step0) * dt
   Step stage_step0 = 0;                             ///< step at the start of the current stage
   double stage_t0 = 0.0;                            ///< [s] time at the start of the current stage
-  double stage_dt = 0.0;                            ///< [s] mechanical step of the current stage
+  double stage_dt = 0.0;                            ///< [s] mechanical step of the current stage (adaptive: the current one)
+  /// Adaptive stages (StageConfig::adaptive): the stage time so far [s] (time = stage_t0 +
+  /// stage_elapsed) and the step's history, (stage step, dt) at the start and at each change.
+  /// Empty in a fixed-step stage, and then absent from checkpoints.
+  double stage_elapsed = 0.0;
+  std::vector<double> dt_history;
   double stage_skin = 0.0;                          ///< [m] Verlet skin of the current stage
   double physical_time = 0.0;                       ///< [s] = stage_phys_t0 + time_scale * (step - stage_step0) * dt
   double stage_phys_t0 = 0.0;                       ///< [s] physical time at the start of the current stage
@@ -96,6 +101,15 @@ struct State {
     ar.visit("state/stage_step0", stage_step0);
     ar.visit("state/stage_t0", stage_t0);
     ar.visit("state/stage_dt", stage_dt);
+    if (ar.reading() ? ar.has("state/adaptive/dt_history") : !dt_history.empty()) {
+      ar.visit("state/adaptive/stage_elapsed", stage_elapsed);
+      ar.visit("state/adaptive/dt_history", dt_history);
+      if (ar.reading() && (dt_history.empty() || dt_history.size() % 2 != 0))
+        throw SetupError("checkpoint adaptive step history holds " + std::to_string(dt_history.size()) + " values, expected (step, dt) pairs");
+    } else if (ar.reading()) {
+      stage_elapsed = 0.0;
+      dt_history.clear();
+    }
     ar.visit("state/stage_skin", stage_skin);
     ar.visit("state/stage_index", stage_index);
     if (!ar.reading() || ar.has("state/physical_time")) {

@@ -163,6 +163,7 @@ class OutputObserver final : public Observer {
     log_.line(std::string("frame ") + counter + " written: " + file + " (step " + std::to_string(s.step) + ", t = " + short_number(s.time) +
               " s, stage '" + stage_ + "')");
   }
+  void event(const std::string& text) override { log_.line(text); }
   void timeseries(const std::vector<std::string>& cols, const std::vector<double>& vals) override {
     std::map<std::string, double> row;
     for (std::size_t k = 0; k < cols.size(); ++k) {
@@ -633,6 +634,9 @@ void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool 
   js["dt_s"] = r.dt;
   js["stable_dt_at_start_s"] = finite_or_null(r.stable_dt_at_start);
   js["dt_fraction_of_stable"] = finite_or_null(r.dt_fraction_used);
+  if (r.adaptive)  // dt_s is then the first step
+    js["dt_adaptive"] = {{"fraction", st.cfg.adaptive.fraction}, {"min_s", r.adaptive->min},       {"median_s", r.adaptive->median},
+                         {"max_s", r.adaptive->max},              {"changes", r.adaptive->changes}, {"overshoots", r.adaptive->overshoots}};
   js["until_reached"] = r.until_reached;
   js["particles"] = r.particles;
   js["particle_steps_per_s"] = r.particle_steps_per_second;

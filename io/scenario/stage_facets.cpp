@@ -46,6 +46,7 @@ struct StageParams {
     std::int64_t timeseries_every = 100;
     std::int64_t checkpoint_every = 0;
     std::string network = "auto";
+    double frame_every_s = 0.0;
   } output;
   struct Watchdog {
     std::int64_t check_every = 10;
@@ -115,6 +116,10 @@ ParamSpec<StageParams::Output> output_spec() {
   s.add("frame_every", &P::frame_every).min(0).doc("steps between particle frames (0: final frame only)");
   s.add("timeseries_every", &P::timeseries_every).min(0).doc("steps between time-series rows");
   s.add("checkpoint_every", &P::checkpoint_every).min(0).doc("global steps between checkpoints (0: none)");
+  s.add("frame_every_s", &P::frame_every_s)
+      .unit("s")
+      .nonnegative()
+      .doc("stage time between frames (0: off; beside frame_every); an adaptive step lands on these times");
   s.add("network", &P::network)
       .choices({"auto", "none", "contacts", "bonds", "both"})
       .doc("which pair sets results.xdmf draws as lines (frames' <group>/nodes): contacts (the contact rows and the modules' "
@@ -122,6 +127,19 @@ ParamSpec<StageParams::Output> output_spec() {
            "has bonds, else none");
   return s;
 }
+ParamSpec<AdaptiveDt> adaptive_dt_spec() {
+  ParamSpec<AdaptiveDt> s("dt", "object",
+                          "an adaptive step: F x the stable step of the current state, re-estimated every check_every steps, "
+                          "growing by at most `growth` per check and shrinking at once; steps land on stop.time, "
+                          "output.frame_every_s times and wall table breakpoints (docs/scenarios.md, adaptive step)");
+  s.add("adaptive", &AdaptiveDt::fraction).unit("1").range(1e-6, 1.0).doc("F, the fraction of the stable step (0 < F <= 1)");
+  s.add("min", &AdaptiveDt::min).unit("s").nonnegative().doc("smallest step: a state that needs less stops the run (exit 3)");
+  s.add("max", &AdaptiveDt::max).unit("s").positive().doc("largest step (default: none)");
+  s.add("check_every", &AdaptiveDt::check_every).min(1).doc("steps between estimates of the stable step");
+  s.add("growth", &AdaptiveDt::growth).unit("1").range(1.0, 10.0).doc("largest growth factor of the step per check");
+  return s;
+}
+
 ParamSpec<StageParams> stage_spec(const Registry& reg) {
   ParamSpec<StageParams> s("stage", "stage",
                            "one stage: a generator (type = a registered generator, parameters in `generator`) or "
@@ -259,6 +277,7 @@ StageDef stage_from_params(const StageParams& p, const std::string& path) {
   c.timeseries_every = p.output.timeseries_every;
   c.checkpoint_every = p.output.checkpoint_every;
   c.network_output = p.output.network;
+  c.frame_every_s = p.output.frame_every_s;
   return st;
 }
 
@@ -295,9 +314,14 @@ void check_stop_and_dt(StageBuild& b) {
         {b.path + "/type", "this dynamics stage has no particles: no earlier stage generates them and it has no from_snapshot"});
   if (b.st.dynamics && std::isinf(c.duration) && c.max_steps == std::numeric_limits<std::int64_t>::max())
     b.errors.push_back({b.path + "/stop", "a stage needs a hard stop: stop.time [s] or stop.steps"});
-  if (b.st.dynamics && c.dt == 0.0 && c.dt_fraction == 0.0)
-    b.errors.push_back({b.path + "/dt", "set dt [s] or dt_fraction (fraction of the stable step)"});
+  if (b.st.dynamics && c.dt == 0.0 && c.dt_fraction == 0.0 && !c.adaptive.on())
+    b.errors.push_back({b.path + "/dt", "set dt [s], dt_fraction (fraction of the stable step) or dt: {\"adaptive\": F}"});
   if (c.dt > 0.0 && c.dt_fraction > 0.0) b.errors.push_back({b.path + "/dt_fraction", "give either dt or dt_fraction, not both"});
+  if (c.adaptive.on() && c.dt_fraction > 0.0)
+    b.errors.push_back({b.path + "/dt_fraction", "an adaptive dt sets its own fraction (dt.adaptive): remove dt_fraction"});
+  if (c.adaptive.on() && c.adaptive.min > c.adaptive.max)
+    b.errors.push_back({b.path + "/dt/min", "expected dt.min <= dt.max, found " + std::to_string(c.adaptive.min) + " > " +
+                                                std::to_string(c.adaptive.max)});
 }
 
 /// After the keys: the generator's settling (its motions, stop conditions and modules, after the
@@ -820,8 +844,18 @@ StageDef build_stage(StageContext& ctx, const json& js, const std::string& path,
   const std::vector<StageFacet> facets = stage_facets(*ctx.reg);
   std::set<std::string> keys = {"sweep"};  // left to the caller
   for (const auto& f : facets) keys.insert(f.key);
-  const StageParams p = build(stage_spec(*ctx.reg), js, path, errors, r, keys);
+  // "dt" is a number (a fixed step) or an object (an adaptive step, its own spec).
+  const bool adaptive = js.is_object() && js.contains("dt") && js["dt"].is_object();
+  json fixed = js;
+  if (adaptive) fixed.erase("dt");
+  const StageParams p = build(stage_spec(*ctx.reg), fixed, path, errors, r, keys);
   StageDef st = stage_from_params(p, path);
+  if (adaptive) {
+    json ra;
+    st.cfg.adaptive = build(adaptive_dt_spec(), js["dt"], path + "/dt", errors, ra, {});
+    if (!js["dt"].contains("adaptive")) errors.push_back({path + "/dt/adaptive", "required: the fraction F of the stable step (0 < F <= 1)"});
+    r["dt"] = ra;
+  }
   StageBuild b{ctx, st, js, path, errors, r};
   bind_from_snapshot(p.from_snapshot, b);
   for (const auto& f : facets) {

@@ -200,9 +200,18 @@ std::vector<Case> all_cases() {
   pin_trend["stages"][1]["modules"]["electrical_network"]["clock"]["max_interval"] = 20;
   pin_trend["stages"][1]["modules"]["torsion_test"]["resistance_trend_fit_twist"] = 2e-3;
   pin_trend["stages"][1]["modules"]["torsion_test"]["resistance_persistence"] = 1e-4;
+  // Adaptive steps (issue 62): the step, its history and the module clocks' last call times are
+  // in the checkpoint; the press lands on its pressure table's times.
+  json adaptive_contracts = load_data("restart_contracts.json");
+  adaptive_contracts["stages"][1].erase("dt_fraction");
+  adaptive_contracts["stages"][1]["dt"] = {{"adaptive", 0.7}, {"check_every", 23}};
+  json adaptive_press = load_data("hot_press_small.json");
+  adaptive_press["stages"][1]["dt"] = {{"adaptive", 0.5}, {"check_every", 29}};
   return {
       {"lattice + bonded pull with event, adaptive and every-N mock modules, electrical network, time scaling",
        load_data("restart_contracts.json"), 1, 180},
+      {"adaptive step: the bonded pull with event, every-N and substep mock modules", adaptive_contracts, 1, 61},
+      {"adaptive step: hot press with a pressure table in physical time", adaptive_press, 1, 1777},
       {"deposit generator (settling, die contraction)", with_steps(load_data("gen_deposit_small.json"), 0, 3000), 0, 1777},
       {"fill generator (radius growth)", with_steps(load_data("gen_fill_small.json"), 0, 3000), 0, 1777},
       {"relax generator then dynamics with substepping module", relax_then_fall, 1, 413},
@@ -240,7 +249,7 @@ std::vector<Case> all_cases() {
 /// are split over several test cases, each its own ctest entry, so that `ctest -j2` spreads them
 /// and none runs long; "generic restart: every case is in one group" keeps them complete.
 const std::vector<std::vector<std::string_view>> kGroups = {
-    {"lattice", "deposit", "fill", "relax", "dynamics taking snapshots"},
+    {"lattice", "deposit", "fill", "relax", "dynamics taking snapshots", "adaptive step"},
     {"hot press:", "hot press with mass scaling", "hot press with the sphere-element", "coupled Joule press", "explicit heat_conduction",
      "hot press, quasi-static"},
     {"cohesive-beam pin", "bonded tension", "cpc_fillers configuration", "self-heating PTC"},

@@ -1,0 +1,174 @@
+/// The adaptive step (issue 62, StageConfig::adaptive, stage key "dt": {"adaptive": F}): two steel
+/// spheres between two plane walls, the top wall pressed in at 0.5 m/s, so that Hertz contacts
+/// stiffen (k ~ delta^1/2: the network's stable step falls as delta^-1/4). At a fixed
+/// dt_fraction 0.9 the stability check stops the run (exit 3); with an adaptive 0.9 the run
+/// follows the state to its end, lands on its stop time and frame times, is independent of the
+/// thread count and agrees with a fixed-step run at a quarter of its smallest step.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string>
+
+#include "engine/core/error.hpp"
+#include "io/hdf5/h5file.hpp"
+#include "io/scenario/pipeline.hpp"
+#include "io/scenario/scenario.hpp"
+#include "support/h5compare.hpp"
+#include "support/scratch.hpp"
+
+namespace test_adaptive_dt {
+
+namespace {
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace sparkdem;
+
+json run(const json& scene, const fs::path& out, int threads = 1, const std::optional<fs::path>& restart = {}) {
+  io::Scenario sc = io::load_scenario(scene, test::registry(), out.parent_path());
+  io::RunOptions opt;
+  opt.outdir = out;
+  opt.restart = restart;
+  opt.quiet = true;
+  opt.threads = threads;
+  return io::run_scenario(sc, opt);
+}
+
+/// Two spheres (R = 1 mm, steel, Hertz-Mindlin without friction) stacked between planes at z = 1
+/// and 5 mm, touching both; the top plane moves in at 0.5 m/s for 1.9 ms (to an overlap of
+/// about 0.37 R). `dt`: the press stage's dt key.
+json two_spheres(const json& dt) {
+  json j = json::parse(R"({
+    "name": "two_spheres_hertz", "seed": 1,
+    "materials": [{"name": "steel", "density": 7800}],
+    "contact": {"law": "hertz_mindlin", "params": {"youngs_modulus": 2e11, "poisson_ratio": 0.3, "restitution": 0.9, "friction": 0.0}},
+    "walls": [{"name": "bottom", "type": "plane", "point": [0, 0, 0.001], "normal": [0, 0, 1]},
+              {"name": "top", "type": "plane", "point": [0, 0, 0.005], "normal": [0, 0, -1]}],
+    "stages": [
+      {"name": "create", "type": "lattice", "generator": {"lo": [0, 0, 0.0015], "hi": [0.0001, 0.0001, 0.0045], "spacing": 0.002, "diameter": 0.002}},
+      {"name": "press", "type": "dynamics", "stability_check_every": 50,
+       "walls": {"top": {"type": "velocity", "speed": 0.5}},
+       "stop": {"time": 0.0019}, "output": {"timeseries_every": 50}}
+    ]})");
+  j["stages"][1]["dt"] = dt;
+  return j;
+}
+
+json summary_of(const fs::path& dir) {
+  std::ifstream in(dir / "summary.json");
+  return json::parse(in);
+}
+
+}  // namespace
+
+TEST_CASE("adaptive dt: stiffening Hertz contacts stop a fixed 0.9 and are followed by an adaptive 0.9", "[adaptive][scenario]") {
+  test::ScratchDir tmp("sparkdem_adaptive");
+  // Fixed: the stable step of the stiffened state falls below the step chosen at the start.
+  json fixed = two_spheres(json());
+  fixed["stages"][1].erase("dt");
+  fixed["stages"][1]["dt_fraction"] = 0.9;
+  bool stopped = false;
+  try {
+    run(fixed, tmp.path / "fixed");
+  } catch (const PhysicsError& e) {
+    stopped = true;
+    CHECK(e.quantity() == "time step");
+  }
+  CHECK(stopped);
+
+  // Adaptive: runs to the stop time, the step shrinking with the stable step.
+  const json a = run(two_spheres({{"adaptive", 0.9}, {"check_every", 50}}), tmp.path / "adaptive");
+  REQUIRE(a["status"] == "completed");
+  const json& st = a["stages"][1];
+  const json& ad = st["dt_adaptive"];
+  INFO(ad.dump());
+  CHECK(st["simulated_time_s"].get<double>() == 0.0019);  // the last step lands on stop.time
+  CHECK(ad["overshoots"] == 0);                            // never above the state's stable step at a check
+  const double first = st["dt_s"].get<double>(), smallest = ad["min_s"].get<double>();
+  CHECK(ad["max_s"].get<double>() == first);
+  CHECK(smallest < 0.65 * first);  // the Hertz network stiffened: overlap 0.37 R at the end
+  CHECK(st["final"]["max_overlap_ratio"].get<double>() > 0.3);
+  // The dt column follows the step: non-increasing here (the press only stiffens), first value the first step.
+  std::ifstream ts(tmp.path / "adaptive" / "timeseries.csv");
+  std::string header, line;
+  std::getline(ts, header);
+  CHECK(header.find(",dt") != std::string::npos);
+
+  // The same run at a quarter of the smallest adaptive step, fixed: the wall force at the end
+  // agrees to the integration error (second order in the step).
+  json fine = two_spheres(0.25 * smallest);
+  const json f = run(fine, tmp.path / "fine");
+  const double F_a = st["final"]["wall_top_normal_force"].get<double>(), F_f = f["stages"][1]["final"]["wall_top_normal_force"].get<double>();
+  INFO("top wall force: adaptive " << F_a << " N, fixed at dt_min / 4 " << F_f << " N");
+  CHECK(std::abs(F_a - F_f) <= 1e-3 * std::abs(F_f));
+}
+
+TEST_CASE("adaptive dt: frames land on frame_every_s, results do not depend on the thread count, a restart continues bit for bit",
+          "[adaptive][restart][scenario]") {
+  test::ScratchDir tmp("sparkdem_adaptive_frames");
+  json scene = two_spheres({{"adaptive", 0.9}, {"check_every", 37}, {"growth", 1.05}});
+  scene["stages"][1]["output"]["frame_every_s"] = 0.0004;
+  const json one = run(scene, tmp.path / "one", 1);
+  REQUIRE(one["status"] == "completed");
+  // Frames at the stage start, at 0.4, 0.8, 1.2, 1.6 ms (exactly: steps shortened to land) and the end.
+  std::vector<double> times;
+  for (const auto& e : fs::directory_iterator(tmp.path / "one" / "frames"))
+    times.push_back(io::H5File::open_read(e.path()).attribute_double("/", "time"));
+  std::sort(times.begin(), times.end());
+  REQUIRE(times.size() == 7);  // the lattice frame, the press start, 4 timed frames, the end
+  for (int n = 1; n <= 4; ++n) CHECK(times[static_cast<std::size_t>(n) + 1] == n * 0.0004);
+  CHECK(times.back() == 0.0019);
+
+  const json two = run(scene, tmp.path / "two", 2);
+  test::require_identical_state(tmp.path / "one" / "final_state.h5", tmp.path / "two" / "final_state.h5", {"pipeline/record"});
+
+  json split = scene;
+  split["stages"][1]["output"]["checkpoint_every"] = 1111;  // inside the press, between two checks
+  run(split, tmp.path / "split");
+  const json again = run(scene, tmp.path / "restarted", 1, tmp.path / "split" / "checkpoint.h5");
+  REQUIRE(again["status"] == "completed");
+  test::require_identical_state(tmp.path / "one" / "final_state.h5", tmp.path / "restarted" / "final_state.h5", {"pipeline/record"});
+  // The resumed stage's statistics cover its whole history (the checkpoint carries it).
+  const json& press = again["stages"].back();
+  REQUIRE(press["name"] == "press");
+  CHECK(press["dt_adaptive"]["min_s"] == one["stages"][1]["dt_adaptive"]["min_s"]);
+  CHECK(press["dt_adaptive"]["median_s"] == one["stages"][1]["dt_adaptive"]["median_s"]);
+}
+
+TEST_CASE("adaptive dt: bad keys are errors at their paths", "[adaptive][config_errors]") {
+  const auto rejects = [](const json& dt, const std::string& path, const std::string& fragment, bool with_fraction = false) {
+    json scene = two_spheres(dt);
+    if (with_fraction) scene["stages"][1]["dt_fraction"] = 0.5;
+    try {
+      (void)io::load_scenario(scene, test::registry(), fs::temp_directory_path());
+      FAIL("accepted " << dt.dump());
+    } catch (const ConfigError& e) {
+      INFO(e.what());
+      bool found = false;
+      for (const auto& d : e.diagnostics()) found = found || (d.path == path && d.message.find(fragment) != std::string::npos);
+      CHECK(found);
+    }
+  };
+  rejects(json::object({{"check_every", 10}}), "/stages/1/dt/adaptive", "required");
+  rejects({{"adaptive", 1.5}}, "/stages/1/dt/adaptive", "");
+  rejects({{"adaptive", 0.9}, {"min", 1e-6}, {"max", 1e-7}}, "/stages/1/dt/min", "dt.min <= dt.max");
+  rejects({{"adaptive", 0.9}}, "/stages/1/dt_fraction", "adaptive", true);
+  rejects({{"adaptive", 0.9}, {"grow", 2}}, "/stages/1/dt/grow", "");
+}
+
+TEST_CASE("adaptive dt: a state that needs less than dt.min stops the run with the quantity", "[adaptive][scenario]") {
+  test::ScratchDir tmp("sparkdem_adaptive_min");
+  bool stopped = false;
+  try {
+    run(two_spheres({{"adaptive", 0.9}, {"min", 8e-7}}), tmp.path / "out");
+  } catch (const PhysicsError& e) {
+    stopped = true;
+    CHECK(e.quantity() == "time step");
+    CHECK(std::string(e.what()).find("dt.min") != std::string::npos);
+  }
+  CHECK(stopped);
+}
+
+}  // namespace test_adaptive_dt
