@@ -6,11 +6,13 @@
 /// thread count and agrees with a fixed-step run at a quarter of its smallest step.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "engine/core/error.hpp"
 #include "io/hdf5/h5file.hpp"
@@ -103,6 +105,65 @@ TEST_CASE("adaptive dt: stiffening Hertz contacts stop a fixed 0.9 and are follo
   const double F_a = st["final"]["wall_top_normal_force"].get<double>(), F_f = f["stages"][1]["final"]["wall_top_normal_force"].get<double>();
   INFO("top wall force: adaptive " << F_a << " N, fixed at dt_min / 4 " << F_f << " N");
   CHECK(std::abs(F_a - F_f) <= 1e-3 * std::abs(F_f));
+}
+
+TEST_CASE("adaptive dt: a softening state grows the step by at most `growth` per check, up to F x the stable step", "[adaptive][scenario]") {
+  // The pressed pair, then released: the top wall backs off at 1 m/s, the overlaps relax and the
+  // stable step grows back to the a-priori (Rayleigh) step of the free spheres.
+  test::ScratchDir tmp("sparkdem_adaptive_release");
+  const double growth = 1.02;
+  json scene = two_spheres({{"adaptive", 0.9}, {"check_every", 25}});
+  json release = scene["stages"][1];
+  release["name"] = "release";
+  release["dt"] = {{"adaptive", 0.9}, {"check_every", 25}, {"growth", growth}};
+  release["walls"]["top"]["speed"] = -1.0;
+  release["stop"] = {{"time", 0.0012}};
+  release["output"]["timeseries_every"] = 25;  // a row after every check: the step it chose
+  scene["stages"].push_back(release);
+  const json sum = run(scene, tmp.path / "out");
+  REQUIRE(sum["status"] == "completed");
+  const json& st = sum["stages"][2];
+  const double press_end = sum["stages"][1]["dt_adaptive"]["min_s"].get<double>();
+  // The release starts at F x the stable step of the compressed state (the press's last step, or
+  // within one check of it) and ends at F x the a-priori step of the free spheres (the press's first).
+  const double first = st["dt_s"].get<double>(), free = sum["stages"][1]["dt_s"].get<double>();
+  CHECK(first < 0.7 * free);
+  CHECK(first <= press_end * 1.1);
+  CHECK(st["dt_adaptive"]["max_s"].get<double>() == free);
+  // Row by row (one check each): the step grows by at most `growth`, and by exactly `growth`
+  // while F x the stable step is further than that.
+  std::ifstream in(tmp.path / "out" / "timeseries.csv");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> cols;
+  for (std::size_t a = 0, b; a <= line.size(); a = b + 1) {
+    b = line.find(',', a);
+    if (b == std::string::npos) b = line.size();
+    cols.push_back(line.substr(a, b - a));
+  }
+  const auto col = [&](const std::string& c) { return static_cast<std::size_t>(std::find(cols.begin(), cols.end(), c) - cols.begin()); };
+  const std::size_t c_dt = col("dt"), c_stage = col("stage");
+  REQUIRE(c_dt < cols.size());
+  std::vector<double> dts;
+  while (std::getline(in, line)) {
+    std::vector<std::string> v;
+    for (std::size_t a = 0, b; a <= line.size(); a = b + 1) {
+      b = line.find(',', a);
+      if (b == std::string::npos) b = line.size();
+      v.push_back(line.substr(a, b - a));
+    }
+    if (std::stod(v[c_stage]) == 2.0) dts.push_back(std::stod(v[c_dt]));
+  }
+  REQUIRE(dts.size() > 20);
+  std::size_t grown_at_bound = 0;
+  for (std::size_t k = 1; k < dts.size(); ++k) {
+    INFO("row " << k << ": " << dts[k - 1] << " -> " << dts[k]);
+    CHECK(dts[k] <= dts[k - 1] * growth * (1.0 + 1e-15));
+    grown_at_bound += dts[k] == dts[k - 1] * growth;
+  }
+  INFO("rows grown at the bound: " << grown_at_bound << " of " << dts.size() - 1);
+  CHECK(grown_at_bound >= 5);  // the growth bound, not the state, set the pace for a while
+  CHECK(dts.back() == free);
 }
 
 TEST_CASE("adaptive dt: frames land on frame_every_s, results do not depend on the thread count, a restart continues bit for bit",
