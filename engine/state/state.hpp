@@ -30,7 +30,7 @@ struct State {
   VerletTracker verlet;
   std::vector<std::vector<Index>> wall_candidates;  ///< per wall: particles within r + skin at the last rebuild
   Step step = 0;                                    ///< global step counter (all stages)
-  double time = 0.0;                                ///< [s] = stage_t0 + (step - stage_step0) * dt
+  double time = 0.0;                                ///< [s] = stage_t0 + (step - stage_step0) * dt (adaptive stages: stage_t0 + stage_elapsed)
   Step stage_step0 = 0;                             ///< step at the start of the current stage
   double stage_t0 = 0.0;                            ///< [s] time at the start of the current stage
   double stage_dt = 0.0;                            ///< [s] mechanical step of the current stage (adaptive: the current one)
