@@ -1003,7 +1003,8 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     const bool timed_frame = cfg.frame_every_s > 0.0 && std::floor(t_new / cfg.frame_every_s * (1.0 + 1e-12)) >
                                                             std::floor(t_old / cfg.frame_every_s * (1.0 + 1e-12));
     if ((cfg.frame_every > 0 && kk % cfg.frame_every == 0) || timed_frame) obs.frame(s_);
-    if (cfg.checkpoint_every > 0 && s_.step % cfg.checkpoint_every == 0) obs.checkpoint(s_);
+    if ((cfg.checkpoint_every > 0 && s_.step % cfg.checkpoint_every == 0) || (cfg.checkpoint_every_s > 0.0 && obs.checkpoint_due()))
+      obs.checkpoint(s_);
     if (checked && wd.snapshot_every_checks > 0 && (kk / wd.check_every) % wd.snapshot_every_checks == 0) obs.healthy(s_);
     if (kk % log_every == 0) obs.progress(s_, kk, t_new, dt_step);
     if (interrupt_flag().load()) {

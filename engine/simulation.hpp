@@ -104,6 +104,7 @@ struct StageConfig {
   Step timeseries_every = 100;
   Step checkpoint_every = 0;
   double frame_every_s = 0.0;  ///< [s] of stage time between frames (0: off); adaptive steps land on them
+  double checkpoint_every_s = 0.0;  ///< wall-clock seconds between checkpoints (0: none; the I/O layer keeps the clock)
   /// Pair sets drawn as lines in the frames' XDMF: "auto", "none", "contacts", "bonds", "both"
   /// (io/scenario/stage_facets.cpp documents them).
   std::string network_output = "auto";
@@ -146,6 +147,9 @@ class Observer {
     (void)vals;
   }
   virtual void checkpoint(State&) {}
+  /// Polled after every step whose state a checkpoint may hold: true when a wall-clock
+  /// checkpoint is due (StageConfig::checkpoint_every_s).
+  virtual bool checkpoint_due() { return false; }
   virtual void progress(const State&, Step stage_steps, double stage_time, double dt) {
     (void)stage_steps;
     (void)stage_time;

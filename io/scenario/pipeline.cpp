@@ -176,7 +176,11 @@ class OutputObserver final : public Observer {
     rows_.push_back(std::move(row));
     dirty_ = true;
   }
+  bool checkpoint_due() override {
+    return cfg_.checkpoint_every_s > 0.0 && std::chrono::duration<double>(steady::now() - last_checkpoint_).count() >= cfg_.checkpoint_every_s;
+  }
   void checkpoint(State& s) override {
+    last_checkpoint_ = steady::now();  // the wall-clock interval counts from the last checkpoint of any kind
     const std::filesystem::path file = checkpoint_file_.empty() ? outdir_ / "checkpoint.h5" : checkpoint_file_;
     write_checkpoint(file, s, true);
     log_.line("checkpoint written: " + (checkpoint_file_.empty() ? std::string("checkpoint.h5") : file.string()) + " (step " +
@@ -369,6 +373,7 @@ class OutputObserver final : public Observer {
   std::vector<std::map<std::string, double>> rows_;
   bool dirty_ = true;  ///< frames or time-series rows not yet in the index files
   steady::time_point stage_start_, last_print_;
+  steady::time_point last_checkpoint_ = steady::now();  ///< the run's start, then its last checkpoint (checkpoint_every_s)
   Step k0_ = 0;
   std::filesystem::path checkpoint_file_;
   std::function<json()> record_;

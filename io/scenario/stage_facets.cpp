@@ -45,6 +45,7 @@ struct StageParams {
     std::int64_t frame_every = 0;
     std::int64_t timeseries_every = 100;
     std::int64_t checkpoint_every = 0;
+    double checkpoint_every_s = 600.0;
     std::string network = "auto";
     double frame_every_s = 0.0;
   } output;
@@ -116,6 +117,10 @@ ParamSpec<StageParams::Output> output_spec() {
   s.add("frame_every", &P::frame_every).min(0).doc("steps between particle frames (0: final frame only)");
   s.add("timeseries_every", &P::timeseries_every).min(0).doc("steps between time-series rows");
   s.add("checkpoint_every", &P::checkpoint_every).min(0).doc("global steps between checkpoints (0: none)");
+  s.add("checkpoint_every_s", &P::checkpoint_every_s)
+      .unit("s")
+      .nonnegative()
+      .doc("wall-clock seconds between checkpoints (0: none): a killed run loses at most this much work");
   s.add("frame_every_s", &P::frame_every_s)
       .unit("s")
       .nonnegative()
@@ -276,6 +281,7 @@ StageDef stage_from_params(const StageParams& p, const std::string& path) {
   c.frame_every = p.output.frame_every;
   c.timeseries_every = p.output.timeseries_every;
   c.checkpoint_every = p.output.checkpoint_every;
+  c.checkpoint_every_s = p.output.checkpoint_every_s;
   c.network_output = p.output.network;
   c.frame_every_s = p.output.frame_every_s;
   return st;
