@@ -244,9 +244,13 @@ double Simulation::resolve_dt(const StageConfig& cfg) const {
   return cfg.dt_fraction * stable;
 }
 
-double Simulation::adaptive_step(const StageConfig& cfg, double previous) const {
+double Simulation::contact_stable_dt(const StageConfig& cfg) const {
+  return cfg.mechanics && !inertia_free_ ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+}
+
+double Simulation::adaptive_step(const StageConfig& cfg, double previous, double contact_stable) const {
   const AdaptiveDt& a = cfg.adaptive;
-  double stable = cfg.mechanics && !inertia_free_ ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+  double stable = contact_stable;
   std::string limit = "the contact law";
   for (const PlanItem& it : plan_.items) {  // a fixed-clock module's stable step, as a mechanical step
     if (it.kind != PlanItem::Kind::Module || it.clock.kind == Clock::Kind::AdaptiveSubsteps || it.clock.kind == Clock::Kind::OnEvent)
@@ -264,7 +268,10 @@ double Simulation::adaptive_step(const StageConfig& cfg, double previous) const 
     throw PhysicsError(s_.step, {}, "time step",
                        "the adaptive step " + fmt_g(a.fraction) + " x " + fmt_g(stable) + " s (the stable step of " + limit +
                            ") fell below dt.min = " + fmt_g(a.min) + " s; lower dt.min");
-  return std::min({a.fraction * stable, a.max, previous * a.growth});
+  const double dt = std::min({a.fraction * stable, a.max, previous * a.growth});
+  if (!(dt > 0.0) || !std::isfinite(dt))
+    throw PhysicsError(s_.step, {}, "time step", "the adaptive step is " + fmt_g(dt) + " s (the stable step of " + limit + " is " + fmt_g(stable) + " s)");
+  return dt;
 }
 
 double Simulation::next_landing(const StageConfig& cfg, double elapsed) const {
@@ -272,7 +279,8 @@ double Simulation::next_landing(const StageConfig& cfg, double elapsed) const {
   const double eps = 1e-6 * s_.stage_dt;
   double next = cfg.duration;
   if (cfg.frame_every_s > 0.0) {
-    const double n = std::floor((elapsed + eps) / cfg.frame_every_s) + 1.0;
+    double n = std::floor((elapsed + eps) / cfg.frame_every_s) + 1.0;
+    while (n * cfg.frame_every_s <= elapsed + eps) n += 1.0;  // (the division may round down)
     next = std::min(next, n * cfg.frame_every_s);
   }
   for (const Wall& w : s_.walls) {
@@ -287,19 +295,25 @@ double Simulation::next_landing(const StageConfig& cfg, double elapsed) const {
   return next;
 }
 
-void Simulation::adapt_step(const StageConfig& cfg, Observer& obs, StageResult& res) {
+void Simulation::adapt_step(const StageConfig& cfg, Observer& obs) {
   const double old = s_.stage_dt;
-  const double stable_now = cfg.mechanics && !inertia_free_ ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
+  const double stable_now = contact_stable_dt(cfg);
   if (old > stable_now) {
-    ++res.adaptive->overshoots;
+    s_.marks["adaptive/overshoots"] += 1.0;
     obs.event("stage '" + cfg.name + "' step " + std::to_string(s_.step) + ": the step in use " + fmt_g(old) +
              " s exceeded the stable step " + fmt_g(stable_now) + " s of the state (it stiffened between two checks)");
   }
-  const double dt = adaptive_step(cfg, old);
+  const double dt = adaptive_step(cfg, old, stable_now);
   if (dt == old) return;
-  ++res.adaptive->changes;
-  s_.dt_history.push_back(static_cast<double>(s_.step - s_.stage_step0));
-  s_.dt_history.push_back(dt);
+  s_.marks["adaptive/changes"] += 1.0;
+  s_.marks["adaptive/min"] = std::min(s_.marks["adaptive/min"], dt);
+  s_.marks["adaptive/max"] = std::max(s_.marks["adaptive/max"], dt);
+  // The history (for the median) records a move of 1 % from its last value: bounded however
+  // long the stage, at a cost of 1 % in the median.
+  if (std::abs(dt - s_.dt_history.back()) >= 0.01 * s_.dt_history.back()) {
+    s_.dt_history.push_back(static_cast<double>(s_.step - s_.stage_step0));
+    s_.dt_history.push_back(dt);
+  }
   s_.stage_dt = dt;
   // Logged when it has moved by 10 % since the last line (a step creeping at every check would
   // fill the log), and when it reaches dt.max.
@@ -318,13 +332,15 @@ void Simulation::adaptive_stats(StageResult& res) const {
     const double end = k + 2 < h.size() ? h[k + 2] : steps;
     spans.emplace_back(h[k + 1], end - h[k]);
   }
-  StageResult::AdaptiveStats a = *res.adaptive;
-  a.changes = static_cast<Step>(h.size() / 2) - 1;  // from the history: a resumed stage counts them all
-  a.min = a.max = h.empty() ? s_.stage_dt : h[1];
-  for (const auto& [dt, n] : spans) {
-    a.min = std::min(a.min, dt);
-    a.max = std::max(a.max, dt);
-  }
+  StageResult::AdaptiveStats a;  // from the state (State::marks): a resumed stage reports its whole run
+  const auto mark = [&](const char* k, double fallback) {
+    const auto it = s_.marks.find(k);
+    return it == s_.marks.end() ? fallback : it->second;
+  };
+  a.min = mark("adaptive/min", s_.stage_dt);
+  a.max = mark("adaptive/max", s_.stage_dt);
+  a.changes = static_cast<Step>(mark("adaptive/changes", 0.0));
+  a.overshoots = static_cast<Step>(mark("adaptive/overshoots", 0.0));
   std::sort(spans.begin(), spans.end());
   double seen = 0.0;
   a.median = spans.empty() ? s_.stage_dt : spans.back().first;
@@ -534,8 +550,8 @@ void Simulation::run_module(const PlanItem& it, Step step, double t_stage, doubl
       const std::string key = "trigger/" + it.name + "/last_step";
       const auto last = s_.marks.find(key);
       const Step since = last == s_.marks.end() ? 1 : step - static_cast<Step>(last->second);
-      // (adaptive: the time since its last call; one step before the first, as with a fixed step)
-      it.module->advance(s_, StepInfo{step, t_end, adaptive_ ? t_end - last_call_time(it, t_end - dt) : static_cast<double>(since) * dt, 0});
+      // (adaptive: the time since its last call, or since the stage start, where it ran before step 0)
+      it.module->advance(s_, StepInfo{step, t_end, adaptive_ ? t_end - last_call_time(it, t0) : static_cast<double>(since) * dt, 0});
       if (adaptive_) s_.marks["clock/" + it.name + "/last_time"] = t_end;
       mark_event_run(it, step);
       calls = 1;
@@ -842,12 +858,15 @@ double Simulation::choose_step(const StageConfig& cfg, bool resume, StageResult&
   adaptive_ = cfg.adaptive.on();
   if (adaptive_ && inertia_free_) throw SetupError("stage '" + cfg.name + "': an adaptive step needs explicit mechanics (quasi_static sets its own substeps)");
   if (adaptive_) res.adaptive = StageResult::AdaptiveStats{};
-  if (!resume)  // the module clocks of an earlier adaptive stage
-    for (auto m = s_.marks.begin(); m != s_.marks.end();) m = m->first.rfind("clock/", 0) == 0 ? s_.marks.erase(m) : std::next(m);
+  if (!resume)  // the module clocks and step statistics of an earlier adaptive stage
+    for (auto m = s_.marks.begin(); m != s_.marks.end();)
+      m = m->first.rfind("clock/", 0) == 0 || m->first.rfind("adaptive/", 0) == 0 ? s_.marks.erase(m) : std::next(m);
   if (adaptive_ && !resume) {  // the first step from the stage's start state; the history starts with it
-    s_.stage_dt = adaptive_step(cfg, std::numeric_limits<double>::infinity());
+    s_.stage_dt = adaptive_step(cfg, std::numeric_limits<double>::infinity(), contact_stable_dt(cfg));
     s_.stage_elapsed = 0.0;
     s_.dt_history = {0.0, s_.stage_dt};
+    s_.marks["adaptive/min"] = s_.marks["adaptive/max"] = s_.stage_dt;
+    s_.marks["adaptive/changes"] = s_.marks["adaptive/overshoots"] = 0.0;
   }
   if (!adaptive_) s_.dt_history.clear();
   const double dt_used = resume || adaptive_ ? s_.stage_dt : resolve_dt(cfg);
@@ -856,12 +875,14 @@ double Simulation::choose_step(const StageConfig& cfg, bool resume, StageResult&
   res.dt = dt_used;
   res.stable_dt_at_start = explicit_mechanics ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
   res.dt_fraction_used = dt_used / res.stable_dt_at_start;
-  if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt)
+  // (An adaptive stage chose its step from the state; resumed, the state may have stiffened past it
+  // since its last check: the loop's next check shrinks it, as in the uninterrupted run.)
+  if (dt_used > res.stable_dt_at_start && !cfg.allow_unstable_dt && !adaptive_)
     throw SetupError("stage '" + cfg.name + "': dt = " + fmt_g(dt_used) + " s is " + fmt_g(res.dt_fraction_used) + " of the stable step " +
                      fmt_g(res.stable_dt_at_start) + " s of the contact law; lower dt or set allow_unstable_dt");
   // Fixed-clock modules: their step against their own stable step (in their time domain).
   // Adaptive clocks choose their substeps from it; event clocks run quasi-static solves.
-  check_module_steps(cfg, dt_used, true);
+  if (!adaptive_) check_module_steps(cfg, dt_used, true);  // (adaptive: adaptive_step bounds the step by them)
   res.module_steps = module_steps(dt_used);
   return dt_used;
 }
@@ -972,6 +993,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
         t_new = land;
         dt_step = land - t_old;
       }
+      if (!(dt_step > 0.0)) throw PhysicsError(s_.step, {}, "time step", "an adaptive step of " + fmt_g(dt_step) + " s to land on t = " + fmt_g(land) + " s");
     }
     execute_plan(cfg, dt_step, t_new, t_area);
     ++s_.step;
@@ -983,7 +1005,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     const bool checked = kk % wd.check_every == 0;
     if (checked) watchdog_check(s_, wd, wctx, true);
     if (adaptive_ && kk % cfg.adaptive.check_every == 0) {
-      adapt_step(cfg, obs, res);
+      adapt_step(cfg, obs);
       wctx.dt = s_.stage_dt;
     }
     if (!adaptive_ && cfg.stability_check_every > 0 && kk % cfg.stability_check_every == 0 && !cfg.allow_unstable_dt) {

@@ -293,15 +293,17 @@ class Simulation {
   void evaluate_start(double dt_used, double t_area, StageResult& res);
   void check_module_steps(const StageConfig& cfg, double dt_used, bool at_start) const;
   double choose_step(const StageConfig& cfg, bool resume, StageResult& res);
-  /// Adaptive stages: F x the stable step of the current state (contact law, fixed-clock
-  /// modules), within [min, max] and at most growth x `previous` (+inf: no bound). A stable step
+  /// Adaptive stages: F x the stable step of the current state (`contact_stable`, the contact
+  /// law's, and the fixed-clock modules'), within [min, max] and at most growth x `previous` (+inf: no bound). A stable step
   /// that needs less than min is a PhysicsError.
-  double adaptive_step(const StageConfig& cfg, double previous) const;
+  double adaptive_step(const StageConfig& cfg, double previous, double contact_stable) const;
+  /// The contact law's stable step of the state (+inf without explicit mechanics).
+  double contact_stable_dt(const StageConfig& cfg) const;
   /// Adaptive stages: the first stage time [s] after `elapsed` a step must land on (the stop time,
   /// the next frame_every_s time, the next breakpoint of a wall's table), +inf when none.
   double next_landing(const StageConfig& cfg, double elapsed) const;
   /// Adaptive stages, every check_every steps: the next step from the state; logs a change.
-  void adapt_step(const StageConfig& cfg, Observer& obs, StageResult& res);
+  void adapt_step(const StageConfig& cfg, Observer& obs);
   /// Adaptive stages: the stage's step statistics from State::dt_history, into res.
   void adaptive_stats(StageResult& res) const;
   double last_call_time(const PlanItem& it, double t_start) const;

@@ -9,16 +9,16 @@
 ///                            files (relative paths, resolved from the directory of results.h5,
 ///                            so move the output directory as a whole), plus /timeseries;
 ///  - results.xdmf            XDMF description of the frames for ParaView, pointing straight
-///                            into the frame files: one temporal collection with one entry per
-///                            frame, at strictly increasing times (see listed_times()); each entry
-///                            holds the frame's true time, step and stage as Information elements
-///                            (Name "time" [s], "step", "stage"). Without line sets (below) an
-///                            entry is the particle grid itself (a Polyvertex grid, one point per
-///                            particle); when any frame of the run draws line sets, every entry is
-///                            a spatial collection: the grid "particles" and one Polyline grid per
-///                            line set of the frame with cells ("contacts", "bonds", a module's
-///                            network such as "electrical"), over the same points (the particle
-///                            positions), one 2-node cell per row, the row's fields as cell arrays;
+///                            into the frame files: a temporal collection "particles" with one
+///                            grid per frame (a Polyvertex grid, one point per particle), at
+///                            strictly increasing times (see listed_times()), each holding the
+///                            frame's true time, step and stage as Information elements (Name
+///                            "time" [s], "step", "stage"); and per line set drawn in any frame
+///                            ("contacts", "bonds", a module's network such as "electrical") a
+///                            temporal collection of that name with one Polyline grid per frame
+///                            at the same times, over the same points, one 2-node cell per row and
+///                            the rows' fields as cell arrays (an empty grid where the frame has
+///                            none): ParaView's XDMF Reader shows one block per collection;
 ///  - timeseries.csv          the time series as text.
 /// The three index files are rewritten together by write_index() (each atomically: tmp, fsync,
 /// rename) and by finalize(); the pipeline calls write_index() after every checkpoint and at

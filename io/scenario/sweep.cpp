@@ -592,7 +592,12 @@ void write_sweep_xdmf(const SweepContext& ctx, const json& rows) {
 
 void write_table(const SweepContext& ctx, const json& rows) {
   write_text_atomic(ctx.table, table_csv(*ctx.sw, shown_rows(rows, ctx.outdir), table_columns(*ctx.sw, rows)));
-  write_sweep_xdmf(ctx, rows);
+  // The XDMF is a viewer's index over the items' frames, rewritten with every table (also on the
+  // way out of a failed or interrupted sweep): an item frame it cannot read must not replace that
+  // error, nor stop a sweep whose rows are safe; the next table write tries again.
+  try {
+    write_sweep_xdmf(ctx, rows);
+  } catch (const std::exception&) {}
 }
 
 }  // namespace sweep_detail
