@@ -332,7 +332,7 @@ void Simulation::adaptive_stats(StageResult& res) const {
     const double end = k + 2 < h.size() ? h[k + 2] : steps;
     spans.emplace_back(h[k + 1], end - h[k]);
   }
-  StageResult::AdaptiveStats a;  // from the state (State::marks): a resumed stage reports its whole run
+  StageResult::AdaptiveStats a = *res.adaptive;  // the statistics from the state (State::marks): a resumed stage reports its whole run
   const auto mark = [&](const char* k, double fallback) {
     const auto it = s_.marks.find(k);
     return it == s_.marks.end() ? fallback : it->second;
@@ -1005,7 +1005,10 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     const bool checked = kk % wd.check_every == 0;
     if (checked) watchdog_check(s_, wd, wctx, true);
     if (adaptive_ && kk % cfg.adaptive.check_every == 0) {
+      const auto t_check = clock::now();
       adapt_step(cfg, obs);
+      res.adaptive->check_seconds += std::chrono::duration<double>(clock::now() - t_check).count();
+      ++res.adaptive->checks;
       wctx.dt = s_.stage_dt;
     }
     if (!adaptive_ && cfg.stability_check_every > 0 && kk % cfg.stability_check_every == 0 && !cfg.allow_unstable_dt) {

@@ -204,6 +204,8 @@ struct StageResult {
   struct AdaptiveStats {
     double min = 0.0, median = 0.0, max = 0.0;
     Step changes = 0, overshoots = 0;
+    double check_seconds = 0.0;  ///< wall time of this run's checks (the stable-step estimates) [s]
+    Step checks = 0;             ///< checks made by this run
   };
   std::optional<AdaptiveStats> adaptive;
   bool until_reached = true;

@@ -641,7 +641,8 @@ void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool 
   js["dt_fraction_of_stable"] = finite_or_null(r.dt_fraction_used);
   if (r.adaptive)  // dt_s is then the first step
     js["dt_adaptive"] = {{"fraction", st.cfg.adaptive.fraction}, {"min_s", r.adaptive->min},       {"median_s", r.adaptive->median},
-                         {"max_s", r.adaptive->max},              {"changes", r.adaptive->changes}, {"overshoots", r.adaptive->overshoots}};
+                         {"max_s", r.adaptive->max},              {"changes", r.adaptive->changes}, {"overshoots", r.adaptive->overshoots},
+                         {"checks", r.adaptive->checks},          {"check_wall_time_s", r.adaptive->check_seconds}};
   js["until_reached"] = r.until_reached;
   js["particles"] = r.particles;
   js["particle_steps_per_s"] = r.particle_steps_per_second;
