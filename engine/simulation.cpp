@@ -887,6 +887,39 @@ double Simulation::choose_step(const StageConfig& cfg, bool resume, StageResult&
   return dt_used;
 }
 
+Simulation::StepSpan Simulation::step_span(const StageConfig& cfg, Step k, double dt_used) const {
+  if (!adaptive_)  // time = steps x dt, never accumulated
+    return {static_cast<double>(k) * dt_used, dt_used, static_cast<double>(k + 1) * dt_used};
+  // The current step, shortened to land on the next target time.
+  const double t_old = s_.stage_elapsed, land = next_landing(cfg, t_old);
+  StepSpan span{t_old, s_.stage_dt, t_old + s_.stage_dt};
+  if (span.t_new >= land - 1e-6 * span.dt) {
+    span.t_new = land;
+    span.dt = land - t_old;
+  }
+  if (!(span.dt > 0.0))
+    throw PhysicsError(s_.step, {}, "time step", "an adaptive step of " + fmt_g(span.dt) + " s to land on t = " + fmt_g(land) + " s");
+  return span;
+}
+
+void Simulation::check_step(const StageConfig& cfg, Step kk, double dt_used, Observer& obs, StageResult& res) {
+  if (adaptive_) {
+    if (kk % cfg.adaptive.check_every != 0) return;
+    const auto t_check = std::chrono::steady_clock::now();
+    adapt_step(cfg, obs);
+    res.adaptive->check_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t_check).count();
+    ++res.adaptive->checks;
+    return;
+  }
+  if (cfg.stability_check_every <= 0 || kk % cfg.stability_check_every != 0 || cfg.allow_unstable_dt) return;
+  const double st = contact_stable_dt(cfg);
+  if (dt_used > st)
+    throw PhysicsError(s_.step, {}, "time step",
+                       "dt = " + fmt_g(dt_used) + " s now exceeds the stable step " + fmt_g(st) +
+                           " s of the current state (contacts stiffened); lower dt_fraction or dt");
+  check_module_steps(cfg, dt_used, false);
+}
+
 StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool resume) {
   using clock = std::chrono::steady_clock;
   const auto t_start = clock::now();
@@ -983,18 +1016,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     }
 
     // ---- one step: execute the plan ----
-    const double t_old = adaptive_ ? s_.stage_elapsed : static_cast<double>(k) * dt_used;
-    double dt_step = dt_used, t_new = static_cast<double>(k + 1) * dt_used;  // stage time at the end of the step
-    if (adaptive_) {  // the current step, shortened to land on the next target time
-      const double land = next_landing(cfg, t_old);
-      dt_step = s_.stage_dt;
-      t_new = t_old + dt_step;
-      if (t_new >= land - 1e-6 * dt_step) {
-        t_new = land;
-        dt_step = land - t_old;
-      }
-      if (!(dt_step > 0.0)) throw PhysicsError(s_.step, {}, "time step", "an adaptive step of " + fmt_g(dt_step) + " s to land on t = " + fmt_g(land) + " s");
-    }
+    const auto [t_old, dt_step, t_new] = step_span(cfg, k, dt_used);
     execute_plan(cfg, dt_step, t_new, t_area);
     ++s_.step;
     if (adaptive_) s_.stage_elapsed = t_new;
@@ -1004,21 +1026,8 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     const Step kk = k + 1;
     const bool checked = kk % wd.check_every == 0;
     if (checked) watchdog_check(s_, wd, wctx, true);
-    if (adaptive_ && kk % cfg.adaptive.check_every == 0) {
-      const auto t_check = clock::now();
-      adapt_step(cfg, obs);
-      res.adaptive->check_seconds += std::chrono::duration<double>(clock::now() - t_check).count();
-      ++res.adaptive->checks;
-      wctx.dt = s_.stage_dt;
-    }
-    if (!adaptive_ && cfg.stability_check_every > 0 && kk % cfg.stability_check_every == 0 && !cfg.allow_unstable_dt) {
-      const double st = cfg.mechanics && !inertia_free_ ? mechanical_stable_dt() : std::numeric_limits<double>::infinity();
-      if (dt_used > st)
-        throw PhysicsError(s_.step, {}, "time step",
-                           "dt = " + fmt_g(dt_used) + " s now exceeds the stable step " + fmt_g(st) +
-                               " s of the current state (contacts stiffened); lower dt_fraction or dt");
-      check_module_steps(cfg, dt_used, false);
-    }
+    check_step(cfg, kk, dt_used, obs, res);
+    if (adaptive_) wctx.dt = s_.stage_dt;
     const bool row = cfg.timeseries_every > 0 && kk % cfg.timeseries_every == 0;
     if (row || (watch_every > 0 && kk % watch_every == 0)) {
       sample(cols, vals);

@@ -306,6 +306,15 @@ class Simulation {
   double next_landing(const StageConfig& cfg, double elapsed) const;
   /// Adaptive stages, every check_every steps: the next step from the state; logs a change.
   void adapt_step(const StageConfig& cfg, Observer& obs);
+  /// One step of the stage loop: the stage time before it, its length and the stage time after it
+  /// [s] (fixed: k dt and (k + 1) dt; adaptive: the current step, shortened to land on next_landing).
+  struct StepSpan {
+    double t_old, dt, t_new;
+  };
+  StepSpan step_span(const StageConfig& cfg, Step k, double dt_used) const;
+  /// After stage step kk: the adaptive check (every dt.check_every steps, timed into res), or the
+  /// fixed step against the state's stable steps (every stability_check_every, a PhysicsError above them).
+  void check_step(const StageConfig& cfg, Step kk, double dt_used, Observer& obs, StageResult& res);
   /// Adaptive stages: the stage's step statistics from State::dt_history, into res.
   void adaptive_stats(StageResult& res) const;
   double last_call_time(const PlanItem& it, double t_start) const;

@@ -29,13 +29,7 @@ using nlohmann::json;
 using namespace sparkdem;
 
 json run(const json& scene, const fs::path& out, int threads = 1, const std::optional<fs::path>& restart = {}) {
-  io::Scenario sc = io::load_scenario(scene, test::registry(), out.parent_path());
-  io::RunOptions opt;
-  opt.outdir = out;
-  opt.restart = restart;
-  opt.quiet = true;
-  opt.threads = threads;
-  return io::run_scenario(sc, opt);
+  return test::run_scene(scene, out.parent_path(), out, restart, threads);
 }
 
 /// Two spheres (R = 1 mm, steel, Hertz-Mindlin without friction, restitution `e`) stacked between
@@ -57,6 +51,17 @@ json two_spheres(const json& dt, double e = 0.9) {
   j["stages"][1]["dt"] = dt;
   j["contact"]["params"]["restitution"] = e;
   return j;
+}
+
+/// The comma-separated fields of a CSV line (no quoting: timeseries.csv has none).
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> out;
+  for (std::size_t a = 0, b; a <= line.size(); a = b + 1) {
+    b = line.find(',', a);
+    if (b == std::string::npos) b = line.size();
+    out.push_back(line.substr(a, b - a));
+  }
+  return out;
 }
 
 /// The energy balance of a two_spheres run at its end: (W - KE - U) / W, W the walls' work, KE the
@@ -161,23 +166,13 @@ TEST_CASE("adaptive dt: a softening state grows the step by at most `growth` per
   std::ifstream in(tmp.path / "out" / "timeseries.csv");
   std::string line;
   std::getline(in, line);
-  std::vector<std::string> cols;
-  for (std::size_t a = 0, b; a <= line.size(); a = b + 1) {
-    b = line.find(',', a);
-    if (b == std::string::npos) b = line.size();
-    cols.push_back(line.substr(a, b - a));
-  }
+  const std::vector<std::string> cols = split_csv(line);
   const auto col = [&](const std::string& c) { return static_cast<std::size_t>(std::find(cols.begin(), cols.end(), c) - cols.begin()); };
   const std::size_t c_dt = col("dt"), c_stage = col("stage");
   REQUIRE(c_dt < cols.size());
   std::vector<double> dts;
   while (std::getline(in, line)) {
-    std::vector<std::string> v;
-    for (std::size_t a = 0, b; a <= line.size(); a = b + 1) {
-      b = line.find(',', a);
-      if (b == std::string::npos) b = line.size();
-      v.push_back(line.substr(a, b - a));
-    }
+    const std::vector<std::string> v = split_csv(line);
     if (std::stod(v[c_stage]) == 2.0) dts.push_back(std::stod(v[c_dt]));
   }
   REQUIRE(dts.size() > 20);

@@ -22,13 +22,7 @@ using nlohmann::json;
 using namespace sparkdem;
 
 json run(const json& scene, const fs::path& out, const std::optional<fs::path>& restart = {}) {
-  io::Scenario sc = io::load_scenario(scene, test::registry(), fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data");
-  io::RunOptions opt;
-  opt.outdir = out;
-  opt.restart = restart;
-  opt.quiet = true;
-  opt.threads = 1;
-  return io::run_scenario(sc, opt);
+  return test::run_scene(scene, fs::path(SPARKDEM_SOURCE_DIR) / "tests/scenario/data", out, restart);
 }
 
 std::size_t lines_with(const fs::path& file, const std::string& what) {

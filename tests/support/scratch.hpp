@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <unistd.h>
 
@@ -54,14 +55,16 @@ inline const Registry& registry() {
   return reg;
 }
 
-/// Load `scene` (relative paths against `base`) and run it quietly on one thread into `outdir`;
-/// the run's summary.
-inline nlohmann::json run_scene(const nlohmann::json& scene, const std::filesystem::path& base, const std::filesystem::path& outdir) {
+/// Load `scene` (relative paths against `base`) and run it quietly on `threads` threads into
+/// `outdir`, from the checkpoint `restart` if given; the run's summary.
+inline nlohmann::json run_scene(const nlohmann::json& scene, const std::filesystem::path& base, const std::filesystem::path& outdir,
+                                const std::optional<std::filesystem::path>& restart = {}, int threads = 1) {
   io::Scenario sc = io::load_scenario(scene, registry(), base);
   io::RunOptions opt;
   opt.outdir = outdir;
+  opt.restart = restart;
   opt.quiet = true;
-  opt.threads = 1;
+  opt.threads = threads;
   return io::run_scenario(sc, opt);
 }
 
