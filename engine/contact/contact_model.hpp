@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "engine/contact/geometry.hpp"
+#include "engine/contact/lanes.hpp"
 #include "engine/state/contact_table.hpp"
 #include "engine/state/particle_store.hpp"
 #include "engine/walls/wall.hpp"
@@ -230,14 +231,24 @@ class ContactModelT final : public ContactModel {
     const std::int64_t rows = static_cast<std::int64_t>(t.size());
     PassInputs in = pass_inputs(p, t, time_scale);
     in.inertia_free = inertia_free;
-    auto& F = t.force();
     auto& Ti = t.torque_i();
     auto& Tj = t.torque_j();
-    par::for_each(rows, par::kHeavy, [&](std::int64_t r) {
-      if (!row_forces(p, t, r, dt, in, F[r], Ti[r], Tj[r])) {
+    struct Sink {
+      std::vector<Vec3>& Ti;
+      std::vector<Vec3>& Tj;
+      void dead(std::int64_t r) {
         Ti[r].setZero();
         Tj[r].setZero();
       }
+      void live(std::int64_t r, Index, Index, const Vec3&, const Vec3& ti, const Vec3& tj) {
+        Ti[r] = ti;
+        Tj[r] = tj;
+      }
+    };
+    const std::int64_t chunks = (rows + kPassChunk - 1) / kPassChunk;
+    par::loop(par::worth(rows, par::kHeavy), chunks, [&](std::int64_t c) {
+      Sink sink{Ti, Tj};
+      row_range(p, t, c * kPassChunk, std::min(rows, (c + 1) * kPassChunk), dt, in, sink);
     });
   }
 
@@ -255,29 +266,31 @@ class ContactModelT final : public ContactModel {
     // torque rows are not (only the gather reads them).
     PassInputs in = pass_inputs(p, t, time_scale);
     in.inertia_free = inertia_free;
-    auto& F = t.force();
-    Index cur = -1;
-    Vec3 fi = Vec3::Zero(), ti = Vec3::Zero(), tri, trj;
-    for (std::int64_t r = 0; r < rows; ++r) {
-      if (!row_forces(p, t, r, dt, in, F[r], tri, trj)) continue;
-      const Index i = t.i(r), j = t.j(r);
-      if (i != cur) {
-        if (cur >= 0) {
-          p.force[cur] = fi;
-          p.torque[cur] = ti;
+    struct Sink {
+      ParticleStore& p;
+      Index cur = -1;
+      Vec3 fi = Vec3::Zero(), ti = Vec3::Zero();
+      void dead(std::int64_t) {}
+      void live(std::int64_t, Index i, Index j, const Vec3& f, const Vec3& tri, const Vec3& trj) {
+        if (i != cur) {
+          if (cur >= 0) {
+            p.force[cur] = fi;
+            p.torque[cur] = ti;
+          }
+          cur = i;
+          fi = p.force[i];
+          ti = p.torque[i];
         }
-        cur = i;
-        fi = p.force[i];
-        ti = p.torque[i];
+        fi += f;
+        ti += tri;
+        p.force[j] -= f;
+        p.torque[j] += trj;
       }
-      fi += F[r];
-      ti += tri;
-      p.force[j] -= F[r];
-      p.torque[j] += trj;
-    }
-    if (cur >= 0) {
-      p.force[cur] = fi;
-      p.torque[cur] = ti;
+    } sink{p};
+    row_range(p, t, 0, rows, dt, in, sink);
+    if (sink.cur >= 0) {
+      p.force[sink.cur] = sink.fi;
+      p.torque[sink.cur] = sink.ti;
     }
   }
 
@@ -300,34 +313,38 @@ class ContactModelT final : public ContactModel {
     });
     PassInputs in = pass_inputs(p, t, time_scale);
     in.inertia_free = inertia_free;
-    auto& F = t.force();
     auto& Ti = t.torque_i();
     auto& Tj = t.torque_j();
     const std::int32_t* owner = split.owner.data();
-#pragma omp parallel
-    for (int range = par::thread_num(); range < ranges; range += par::team_size()) {
-      const std::int64_t lo = split.row_begin[range], hi = split.row_begin[range + 1];
-      Vec3 tri, trj;
-      for (std::int64_t r = lo; r < hi; ++r) {
-        if (!row_forces(p, t, r, dt, in, F[r], tri, trj)) {
-          Ti[r].setZero();
-          Tj[r].setZero();
-          continue;
-        }
-        const Index i = t.i(r), j = t.j(r);
+    struct Sink {
+      ParticleStore& p;
+      std::vector<Vec3>& Ti;
+      std::vector<Vec3>& Tj;
+      const std::int32_t* owner;
+      int range;
+      void dead(std::int64_t r) {
+        Ti[r].setZero();
+        Tj[r].setZero();
+      }
+      void live(std::int64_t r, Index i, Index j, const Vec3& f, const Vec3& tri, const Vec3& trj) {
         if (owner[i] == range) {
-          p.force[i] += F[r];
+          p.force[i] += f;
           p.torque[i] += tri;
         } else {
           Ti[r] = tri;
         }
         if (owner[j] == range) {
-          p.force[j] -= F[r];
+          p.force[j] -= f;
           p.torque[j] += trj;
         } else {
           Tj[r] = trj;
         }
       }
+    };
+#pragma omp parallel
+    for (int range = par::thread_num(); range < ranges; range += par::team_size()) {
+      Sink sink{p, Ti, Tj, owner, range};
+      row_range(p, t, split.row_begin[range], split.row_begin[range + 1], dt, in, sink);
     }
     t.gather_particles(split.boundary, p.force, p.torque);
   }
@@ -625,6 +642,126 @@ class ContactModelT final : public ContactModel {
       (void)temp, (void)time_scale;
     }
     return g;
+  }
+
+  /// Rows per task of pair_pass's parallel loop (a multiple of every lane width).
+  static constexpr std::int64_t kPassChunk = 256;
+  /// True when the law evaluates blocks of rows over SIMD lanes (Law::lanes, engine/contact/lanes.hpp):
+  /// laws of three history columns without temperature or persistent pairs.
+  static constexpr bool kLanes = requires(const Law& l, PairLanes<8>& b) { l.template lanes<8>(b, 0.0); } &&
+                                 !is_thermal<Law>() && !is_persistent<Law>();
+
+  /// The law on rows [lo, hi) in row order: each row's overlap, force, state written as row_forces
+  /// does, then sink.dead(r) for a row out of contact or sink.live(r, i, j, F, T_i, T_j) for a live
+  /// one. Over SIMD lanes when the law has them and lane_isa() allows (the same bits either way).
+  template <class Sink>
+  void row_range(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt, const PassInputs& in,
+                 Sink& sink) const {
+    if constexpr (kLanes) {
+      if (in.width == 3) switch (lane_isa()) {
+        case LaneIsa::avx512: return rows_avx512(p, t, lo, hi, dt, in.inertia_free, sink);
+        case LaneIsa::avx2: return rows_avx2(p, t, lo, hi, dt, in.inertia_free, sink);
+        case LaneIsa::scalar: break;
+      }
+    }
+    auto& F = t.force();
+    Vec3 tri, trj;
+    for (std::int64_t r = lo; r < hi; ++r) {
+      if (!row_forces(p, t, r, dt, in, F[r], tri, trj))
+        sink.dead(r);
+      else
+        sink.live(r, t.i(r), t.j(r), F[r], tri, trj);
+    }
+  }
+  // One instantiation per instruction set, chosen at run time (row_range): the build stays on the
+  // x86-64 baseline and each function's loops are vectorised for its own target.
+  template <class Sink>
+  [[gnu::target("avx512f,avx512dq,avx512vl,prefer-vector-width=512")]] void rows_avx512(const ParticleStore& p, ContactTable& t, std::int64_t lo,
+                                                                                       std::int64_t hi, double dt, bool inertia_free,
+                                                                                       Sink& sink) const {
+    lane_rows<8>(p, t, lo, hi, dt, inertia_free, sink);
+  }
+  template <class Sink>
+  [[gnu::target("avx2")]] void rows_avx2(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt,
+                                         bool inertia_free, Sink& sink) const {
+    lane_rows<4>(p, t, lo, hi, dt, inertia_free, sink);
+  }
+
+  /// Rows [lo, hi) in blocks of W lanes: gather the rows' inputs, the geometry, the law and the
+  /// torques over the lanes, then write back and call the sink in row order.
+  template <int W, class Sink>
+  [[gnu::always_inline]] void lane_rows(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt,
+                                        bool inertia_free, Sink& sink) const {
+    PairLanes<W> b;
+    double* overlap = t.overlap().data();
+    Vec3* force = t.force().data();
+    for (std::int64_t r0 = lo; r0 < hi; r0 += W) {
+      const int n = static_cast<int>(std::min<std::int64_t>(W, hi - r0));
+      gather_lanes(p, t, r0, n, b);
+      pair_geometry_lanes(b, inertia_free);
+      law_.template lanes<W>(b, dt);
+      pair_torque_lanes(b);
+      for (int l = 0; l < n; ++l) {
+        const std::int64_t r = r0 + l;
+        overlap[r] = b.delta[l];
+        double* st = t.state(r);
+        if (b.live[l] == 0.0) {
+          st[0] = st[1] = st[2] = 0.0;
+          force[r].setZero();
+          sink.dead(r);
+          continue;
+        }
+        st[0] = b.sx[l];
+        st[1] = b.sy[l];
+        st[2] = b.sz[l];
+        force[r] = Vec3(b.fx[l], b.fy[l], b.fz[l]);
+        sink.live(r, t.i(r), t.j(r), force[r], Vec3(b.tix[l], b.tiy[l], b.tiz[l]), Vec3(b.tjx[l], b.tjy[l], b.tjz[l]));
+      }
+    }
+  }
+  /// The inputs of rows r0 .. r0 + n - 1 into lanes 0 .. n - 1 (lanes n .. W - 1 repeat the last row), as
+  /// loops over the lanes that the vectoriser turns into gathers.
+  template <int W>
+  [[gnu::always_inline]] static void gather_lanes(const ParticleStore& p, const ContactTable& t, std::int64_t r0, int n, PairLanes<W>& b) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(double), "the particles' vectors are read as arrays of doubles");
+    alignas(64) std::int64_t I[W], J[W], S[W];
+    const Index* ii = t.i_list().data();
+    const Index* jj = t.j_list().data();
+    for (int l = 0; l < W; ++l) {
+      const std::int64_t r = r0 + std::min(l, n - 1);
+      I[l] = ii[r];
+      J[l] = jj[r];
+      S[l] = 3 * r;
+    }
+    const double* x = p.position.data()->data();
+    const double* v = p.velocity.data()->data();
+    const double* w = p.omega.data()->data();
+    const double* rad = p.radius.data();
+    const double* m = p.mass.data();
+    const double* st = t.state(0);
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      const std::int64_t i = 3 * I[l], j = 3 * J[l];
+      b.dx[l] = x[i] - x[j];
+      b.dy[l] = x[i + 1] - x[j + 1];
+      b.dz[l] = x[i + 2] - x[j + 2];
+      b.dvx[l] = v[i] - v[j];
+      b.dvy[l] = v[i + 1] - v[j + 1];
+      b.dvz[l] = v[i + 2] - v[j + 2];
+      b.wix[l] = w[i];
+      b.wiy[l] = w[i + 1];
+      b.wiz[l] = w[i + 2];
+      b.wjx[l] = w[j];
+      b.wjy[l] = w[j + 1];
+      b.wjz[l] = w[j + 2];
+      b.ri[l] = rad[I[l]];
+      b.rj[l] = rad[J[l]];
+      b.mi[l] = m[I[l]];
+      b.mj[l] = m[J[l]];
+      b.sx[l] = st[S[l]];
+      b.sy[l] = st[S[l] + 1];
+      b.sz[l] = st[S[l] + 2];
+    }
   }
 
   /// The law on row r: writes its overlap, and, for a live pair, the force on i and the torques

@@ -6,6 +6,7 @@
 #include <mutex>
 
 #include "engine/contact/geometry.hpp"
+#include "engine/contact/lanes.hpp"
 #include "engine/core/numbers.hpp"
 
 namespace sparkdem::physics::kernel {
@@ -140,6 +141,65 @@ inline double linear_damping_for_restitution(double e, double m_eff, double k) {
   xi[1] = s[1];
   xi[2] = s[2];
   return ft;
+}
+
+/// tangential_history on every lane of a block (engine/contact/lanes.hpp): the same operations in
+/// the same order, each branch a select, so every lane gives the scalar function's bits.
+/// Reads b.n, b.vt, b.s; writes b.ft and the new history b.s. k_t, gamma_t, |F_n| per lane.
+template <int W>
+[[gnu::always_inline]] inline void tangential_history_lanes(PairLanes<W>& b, const double* k_t, const double* gamma_t, double mu,
+                                                            const double* fn_abs, double dt, double frame_epsilon = 0.0) {
+#pragma omp simd
+  for (int l = 0; l < W; ++l) {
+    const double nx = b.nx[l], ny = b.ny[l], nz = b.nz[l];
+    const double kt = k_t[l], gt = gamma_t[l];
+    double sx = b.sx[l], sy = b.sy[l], sz = b.sz[l];
+    const double fcrit = mu * fn_abs[l];
+    const double rsht = (sx * nx + sy * ny) + sz * nz;
+    // frame update into the tangent plane, keeping the length
+    const bool rotate = (frame_epsilon <= 0.0) | (std::abs(rsht) * kt > frame_epsilon * fcrit);  // | and &: no branch in the loop
+    const double mag = std::sqrt((sx * sx + sy * sy) + sz * sz);
+    double px = sx - rsht * nx, py = sy - rsht * ny, pz = sz - rsht * nz;
+    const double proj = std::sqrt((px * px + py * py) + pz * pz);
+    const double k = mag / proj;
+    px = proj > 0.0 ? px * k : px;
+    py = proj > 0.0 ? py * k : py;
+    pz = proj > 0.0 ? pz * k : pz;
+    sx = rotate ? px : sx;
+    sy = rotate ? py : sy;
+    sz = rotate ? pz : sz;
+    const double vx = b.vtx[l], vy = b.vty[l], vz = b.vtz[l];
+    sx = sx + vx * dt;
+    sy = sy + vy * dt;
+    sz = sz + vz * dt;
+    double fx = -kt * sx - gt * vx, fy = -kt * sy - gt * vy, fz = -kt * sz - gt * vz;
+    // Coulomb cap: scale to the cone and reset the history to the capped force
+    const double f2 = (fx * fx + fy * fy) + fz * fz;
+    const bool slide = f2 > fcrit * fcrit;
+    const double fmag = std::sqrt(f2);
+    const bool scalable = (kt > 0.0) & (fmag > 0.0);
+    const double scale = fcrit / fmag;
+    const double cx = scalable ? fx * scale : 0.0, cy = scalable ? fy * scale : 0.0, cz = scalable ? fz * scale : 0.0;
+    const bool reset = slide & scalable;
+    b.sx[l] = reset ? -(cx + gt * vx) / kt : sx;
+    b.sy[l] = reset ? -(cy + gt * vy) / kt : sy;
+    b.sz[l] = reset ? -(cz + gt * vz) / kt : sz;
+    b.ftx[l] = slide ? cx : fx;
+    b.fty[l] = slide ? cy : fy;
+    b.ftz[l] = slide ? cz : fz;
+  }
+}
+
+/// The force on i of every lane, F = F_n n + F_t, from the normal force the law left in b.fx.
+template <int W>
+[[gnu::always_inline]] inline void assemble_force_lanes(PairLanes<W>& b) {
+#pragma omp simd
+  for (int l = 0; l < W; ++l) {
+    const double fn = b.fx[l];
+    b.fx[l] = fn * b.nx[l] + b.ftx[l];
+    b.fy[l] = fn * b.ny[l] + b.fty[l];
+    b.fz[l] = fn * b.nz[l] + b.ftz[l];
+  }
 }
 
 /// Rayleigh critical step of a sphere [s] (Li et al. 2005; Thornton):

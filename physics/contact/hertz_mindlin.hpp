@@ -66,6 +66,24 @@ struct HertzMindlin {
     f.force = fn * g.n + f.tangential;
     return f;
   }
+  /// operator() for the pairs of a block of rows (engine/contact/lanes.hpp), lane by lane in its order.
+  template <int W>
+  [[gnu::always_inline]] void lanes(PairLanes<W>& b, double dt) const {
+    alignas(64) double kt[W], gt[W], fn_abs[W];
+    const double knc = 4.0 / 3.0 * e_star_, ktc = 8.0 * g_star_;
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      const double a = std::sqrt(b.r_eff[l] * b.delta[l]);
+      const double knfac = knc * a;
+      const double fn = knfac * b.delta[l] - alpha_ * std::sqrt(b.m_eff[l] * knfac) * b.vn[l];
+      b.fx[l] = fn;  // the normal force, until the force is assembled below
+      fn_abs[l] = std::abs(fn);
+      kt[l] = ktc * a;
+      gt[l] = alpha_ * std::sqrt(b.m_eff[l] * kt[l]);
+    }
+    kernel::tangential_history_lanes(b, kt, gt, p_.friction, fn_abs, dt);
+    kernel::assemble_force_lanes(b);
+  }
   double normal_stiffness(const ContactGeometry& g) const { return kernel::hertz_stiffness(e_star_, g.r_eff, g.overlap); }
   double tangential_stiffness(const ContactGeometry& g) const { return 8.0 * g_star_ * std::sqrt(g.r_eff * g.overlap); }
   /// True at mu = 0: the Coulomb cap then zeroes the whole tangential force (stable step).

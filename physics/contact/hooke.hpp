@@ -56,6 +56,27 @@ struct LinearSpringDashpot {
     f.force = fn * g.n + f.tangential;
     return f;
   }
+  /// operator() for the pairs of a block of rows (engine/contact/lanes.hpp), lane by lane in its order
+  /// (kernel::linear_damping_for_restitution's operations with its per-law constants hoisted).
+  template <int W>
+  [[gnu::always_inline]] void lanes(PairLanes<W>& b, double dt) const {
+    alignas(64) double kt[W], gt[W], fn_abs[W];
+    const double kn = p_.normal_stiffness, ktc = p_.kt_ratio * p_.normal_stiffness;
+    const bool elastic = p_.restitution >= 1.0;
+    const double l_e = elastic ? 0.0 : std::log(p_.restitution);
+    const double root = std::sqrt(kPi * kPi + l_e * l_e);
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      const double gn = elastic ? 0.0 : 2.0 * std::sqrt(b.m_eff[l] * kn) * (-l_e) / root;
+      const double fn = kn * b.delta[l] - gn * b.vn[l];
+      b.fx[l] = fn;  // the normal force, until the force is assembled below
+      fn_abs[l] = std::abs(fn);
+      kt[l] = ktc;
+      gt[l] = p_.gammat_ratio * gn;
+    }
+    kernel::tangential_history_lanes(b, kt, gt, p_.friction, fn_abs, dt);
+    kernel::assemble_force_lanes(b);
+  }
   double normal_stiffness(const ContactGeometry&) const { return p_.normal_stiffness; }
   double tangential_stiffness(const ContactGeometry&) const { return p_.kt_ratio * p_.normal_stiffness; }
   /// True at mu = 0: the Coulomb cap then zeroes the whole tangential force (stable step).

@@ -65,6 +65,24 @@ struct LammpsHertzTsuji {
     f.force = fn * g.n + f.tangential;
     return f;
   }
+  /// operator() for the pairs of a block of rows (engine/contact/lanes.hpp), lane by lane in its order.
+  template <int W>
+  [[gnu::always_inline]] void lanes(PairLanes<W>& b, double dt) const {
+    alignas(64) double kt[W], gt[W], fn_abs[W];
+    const double knc = 4.0 / 3.0 * e_star_;
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      const double knfac = knc * std::sqrt(b.r_eff[l] * b.delta[l]);
+      const double damp = alpha_ * std::sqrt(b.m_eff[l] * knfac);
+      const double fn = knfac * b.delta[l] - damp * b.vn[l];
+      b.fx[l] = fn;  // the normal force, until the force is assembled below
+      fn_abs[l] = std::abs(fn);
+      kt[l] = p_.tangential_stiffness;
+      gt[l] = p_.x_gammat * damp;
+    }
+    kernel::tangential_history_lanes(b, kt, gt, p_.friction, fn_abs, dt, kLammpsFrameEpsilon);
+    kernel::assemble_force_lanes(b);
+  }
   double normal_stiffness(const ContactGeometry& g) const {
     return kernel::hertz_stiffness(g.wall ? e_star_wall_ : e_star_, g.r_eff, g.overlap);
   }

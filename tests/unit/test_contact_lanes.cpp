@@ -1,0 +1,170 @@
+// The contact laws over SIMD lanes (engine/contact/lanes.hpp, issue 63) against their scalar path:
+// every lane path must give the scalar path's bits, on random rows that take every branch of the
+// laws (touching and apart, sticking and sliding, the history rotated or not, a tail block shorter
+// than the lanes), for the serial force pass, the pass that stores rows, the inertia-free pass and
+// the two-thread split.
+#include <omp.h>
+
+#include <catch2/catch.hpp>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "engine/contact/contact_model.hpp"
+#include "physics/contact/hertz_mindlin.hpp"
+#include "physics/contact/hooke.hpp"
+#include "physics/contact/lammps_granular.hpp"
+
+namespace test_contact_lanes {
+
+using namespace sparkdem;
+using namespace sparkdem::physics;
+
+namespace {
+
+/// A cluster of spheres (radii 0.7-1.3 mm in a 4.5 mm cube: most neighbours overlap, some do not,
+/// one pair coincides) with random velocities and spins, every pair within reach as a row with a
+/// random history, some of it along the normal.
+struct Cluster {
+  ParticleStore p;
+  ContactTable t;
+  explicit Cluster(std::uint64_t seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const int n = 70;
+    for (int k = 0; k < n; ++k) {
+      const double r = 0.7e-3 + 0.6e-3 * u(rng);
+      p.add(Vec3(u(rng), u(rng), u(rng)) * 4.5e-3, r, 7800.0 * 4.0 / 3.0 * 3.14159 * r * r * r);
+      p.velocity[k] = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5);
+      p.omega[k] = Vec3(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5) * 200.0;
+    }
+    p.position[n - 1] = p.position[n - 2];  // a pair at distance 0: never touching
+    std::vector<std::array<Index, 2>> pairs;
+    for (Index i = 0; i < n; ++i)
+      for (Index j = i + 1; j < n; ++j)
+        if ((p.position[i] - p.position[j]).norm() < p.radius[i] + p.radius[j] + 0.4e-3) pairs.push_back({i, j});
+    if (pairs.size() % 8 == 0) pairs.pop_back();  // a tail block shorter than the widest lanes
+    t.set_state_columns({"shear_x", "shear_y", "shear_z"});
+    t.rebuild(pairs, p.id, p.size());
+    for (std::size_t r = 0; r < t.size(); ++r) {
+      if (r % 5 == 0) continue;  // a fresh row: no history
+      const double scale = (r % 3 == 0 ? 1e-4 : 1e-7);
+      for (int c = 0; c < 3; ++c) t.state(r)[c] = (u(rng) - 0.5) * scale;
+    }
+  }
+};
+
+bool same_bits(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Vec3)) == 0;
+}
+bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+std::vector<double> states(const ContactTable& t) {
+  std::vector<double> s;
+  for (std::size_t r = 0; r < t.size(); ++r) s.insert(s.end(), t.state(r), t.state(r) + 3);
+  return s;
+}
+
+/// Three steps of one pass kind under the given lane path; the cluster's state after them.
+struct Outcome {
+  std::vector<Vec3> force, torque, rows;
+  std::vector<double> overlap, state;
+};
+template <class Law>
+Outcome run(const ContactModelT<Law>& model, LaneIsa isa, int kind, std::uint64_t seed) {
+  set_lane_isa(isa);
+  Cluster c(seed);
+  for (int step = 0; step < 3; ++step) {
+    for (auto& f : c.p.force) f.setZero();
+    for (auto& q : c.p.torque) q.setZero();
+    if (kind == 0) {
+      model.pair_forces(c.p, c.t, 1e-6);
+    } else {
+      model.pair_pass(c.p, c.t, 1e-6, 1.0, kind == 2);
+      c.t.gather(c.p.force, c.p.torque);
+    }
+  }
+  set_lane_isa(detected_lane_isa());
+  return {c.p.force, c.p.torque, c.t.force(), c.t.overlap(), states(c.t)};
+}
+
+template <class Law>
+void check_lanes(const typename Law::Params& params) {
+  const ContactModelT<Law> model(params);
+  const int threads_before = omp_get_max_threads();
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    // The scalar reference takes every branch the lanes must reproduce.
+    set_lane_isa(LaneIsa::scalar);
+    Cluster c(seed);
+    model.pair_forces(c.p, c.t, 1e-6);
+    int live = 0, apart = 0, sliding = 0, sticking = 0;
+    for (std::size_t r = 0; r < c.t.size(); ++r) {
+      if (c.t.overlap()[r] <= 0.0) {
+        ++apart;
+        continue;
+      }
+      ++live;
+      const Vec3 n = (c.p.position[c.t.i(r)] - c.p.position[c.t.j(r)]).normalized();
+      const Vec3 f = c.t.force()[r];
+      const double fn = f.dot(n), ft = (f - fn * n).norm();
+      if (ft >= 0.999999 * params.friction * std::abs(fn))
+        ++sliding;
+      else
+        ++sticking;
+    }
+    INFO("seed " << seed << ": rows " << c.t.size() << ", live " << live << ", apart " << apart << ", sliding " << sliding);
+    REQUIRE(c.t.size() % 8 != 0);
+    REQUIRE(apart > 0);
+    if (params.friction > 0.0) {
+      REQUIRE(sticking > 0);
+      REQUIRE(sliding > 0);
+    }
+    for (int kind = 0; kind < 3; ++kind)
+      for (int threads : {1, 2}) {
+        omp_set_num_threads(threads);
+        const Outcome ref = run(model, LaneIsa::scalar, kind, seed);
+        for (LaneIsa isa : {LaneIsa::avx2, LaneIsa::avx512}) {
+          if (static_cast<int>(isa) > static_cast<int>(detected_lane_isa())) continue;
+          const Outcome got = run(model, isa, kind, seed);
+          INFO("lanes " << lane_isa_name(isa) << ", pass kind " << kind << ", threads " << threads);
+          CHECK(same_bits(got.force, ref.force));
+          CHECK(same_bits(got.torque, ref.torque));
+          CHECK(same_bits(got.rows, ref.rows));
+          CHECK(same_bits(got.overlap, ref.overlap));
+          CHECK(same_bits(got.state, ref.state));
+        }
+      }
+  }
+  omp_set_num_threads(threads_before);
+}
+
+}  // namespace
+
+TEST_CASE("Lane paths of the contact laws give the scalar path's bits", "[contact_laws][lanes]") {
+  INFO("this processor's widest lane path: " << lane_isa_name(detected_lane_isa()));
+  SECTION("hertz_mindlin") {
+    HertzMindlin::Params hm;
+    hm.youngs_modulus = 2e8;
+    hm.friction = 0.4;
+    check_lanes<HertzMindlin>(hm);
+    hm.friction = 0.0;  // the Coulomb cap zeroes every tangential force
+    hm.restitution = 1.0;
+    check_lanes<HertzMindlin>(hm);
+  }
+  SECTION("lammps_hertz_tsuji") {
+    LammpsHertzTsuji::Params lp;
+    lp.tangential_stiffness = 2e3;
+    lp.friction = 0.5;
+    check_lanes<LammpsHertzTsuji>(lp);
+  }
+  SECTION("linear_spring_dashpot") {
+    LinearSpringDashpot::Params hp;
+    hp.normal_stiffness = 2e5;
+    check_lanes<LinearSpringDashpot>(hp);
+    hp.restitution = 1.0;  // no dashpot
+    check_lanes<LinearSpringDashpot>(hp);
+  }
+}
+
+}  // namespace test_contact_lanes
