@@ -676,13 +676,13 @@ class ContactModelT final : public ContactModel {
   // One instantiation per instruction set, chosen at run time (row_range): the build stays on the
   // x86-64 baseline and each function's loops are vectorised for its own target.
   template <class Sink>
-  [[gnu::target("avx512f,avx512dq,avx512vl,prefer-vector-width=512")]] void rows_avx512(const ParticleStore& p, ContactTable& t, std::int64_t lo,
+  [[SPARKDEM_TARGET_AVX512]] void rows_avx512(const ParticleStore& p, ContactTable& t, std::int64_t lo,
                                                                                        std::int64_t hi, double dt, bool inertia_free,
                                                                                        Sink& sink) const {
     lane_rows<8>(p, t, lo, hi, dt, inertia_free, sink);
   }
   template <class Sink>
-  [[gnu::target("avx2")]] void rows_avx2(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt,
+  [[SPARKDEM_TARGET_AVX2]] void rows_avx2(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt,
                                          bool inertia_free, Sink& sink) const {
     lane_rows<4>(p, t, lo, hi, dt, inertia_free, sink);
   }

@@ -18,6 +18,20 @@
 #include <cstdint>
 #include <string>
 
+/// The instruction sets of the lane paths, as function attributes (`[[SPARKDEM_TARGET_AVX512]]`);
+/// empty off x86-64, where lane_isa() is always scalar. GCC is also told to use the full 512-bit
+/// registers (clang has no such target option and uses them for AVX-512 code by default).
+#if defined(__x86_64__) && defined(__clang__)
+#define SPARKDEM_TARGET_AVX512 gnu::target("avx512f,avx512dq,avx512vl")
+#define SPARKDEM_TARGET_AVX2 gnu::target("avx2")
+#elif defined(__x86_64__) && defined(__GNUC__)
+#define SPARKDEM_TARGET_AVX512 gnu::target("avx512f,avx512dq,avx512vl,prefer-vector-width=512")
+#define SPARKDEM_TARGET_AVX2 gnu::target("avx2")
+#else
+#define SPARKDEM_TARGET_AVX512
+#define SPARKDEM_TARGET_AVX2
+#endif
+
 namespace sparkdem {
 
 /// The widest lane path the processor runs: chosen once per process from the CPU's features, or
