@@ -135,14 +135,17 @@ def guard(new, old, limit=SLOWDOWN_LIMIT):
     last committed ones) measured on the same machine, as (id, old value, new value, relative change,
     old commit). not_compared: (id, why) for the records that have an old record of the same id and
     unit but were not compared because either names no machine (UNKNOWN_MACHINE) or the machines
-    differ: a record made on another machine is no baseline. Only values in LOWER_IS_BETTER units
-    with a positive old value are compared."""
+    differ: a record made on another machine is no baseline. A record of the same measurement as
+    its old one (`measured_at`: a scene kept by `run --scenes`) is neither. Only values in
+    LOWER_IS_BETTER units with a positive old value are compared."""
     last = {r["id"]: r for r in old}
     slower, not_compared = [], []
     for r in new:
         o = last.get(r["id"])
         if o is None or r.get("unit") not in LOWER_IS_BETTER or o.get("unit") != r.get("unit"):
             continue
+        if r.get("measured_at") and r.get("measured_at") == o.get("measured_at"):
+            continue  # the same measurement: a scene kept from the committed run by `run --scenes`
         m0, m1 = o.get("machine"), r.get("machine")
         if not m0 or not m1:
             which = "its record" if not m0 else "this run"
@@ -183,8 +186,11 @@ def run_case(case, a):
     harness.write_json_atomic(ctx.result + ".meta.json", meta)
     recs = records_of(case, ctx.result)
     for r in recs:
+        share = r.get("thread_speedup_share")
         print(f"  {r['id']}: {rules.fmt_number(r.get('value'))} {r.get('unit', '')}  "
-              f"ratio {rules.fmt_number(r.get('ratio'), 3)} ({r.get('ratio_of', '')})")
+              f"ratio {rules.fmt_number(r.get('ratio'), 3)} ({r.get('ratio_of', '')})"
+              + (f"; 2-thread speed-up {rules.fmt_number(share, 3)} of min(2, stream {r['stream_speedup']:.3f})"
+                 if share is not None else ""))
     print(f"{case.id}: {len(recs)} records; load {load0[0]:.2f} -> {load1[0]:.2f} (max {meta['load_max']:.2f}); "
           f"wrote {ctx.result}", flush=True)
     if meta["load_max"] > (os.cpu_count() or 1):

@@ -158,7 +158,7 @@ def stream_speedups(ctx, sizes, name):
         if cols[0].startswith("stream") and len(cols) == 5:
             out[int(cols[1])] = float(cols[4])
         elif cols[0].startswith("sqrt"):
-            ctx.log(f"  stream_scaling: square roots {cols[4]}x on 2 threads")
+            ctx.log(f"  stream_scaling: square roots {cols[-1]}x on 2 threads")
     missing = [n for n in sizes if n not in out]
     if missing:
         raise RuntimeError(f"{exe} printed no streaming figure for {missing} particles (see {ctx.path(name + '.log')})")

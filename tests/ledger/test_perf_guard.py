@@ -62,6 +62,13 @@ class ByMachine(unittest.TestCase):
         self.assertIn(perf.UNKNOWN_MACHINE, why["d"])
         self.assertEqual(perf.slowdowns(new, old), slower)
 
+    def test_kept_scenes_are_not_compared_with_themselves(self):
+        # `run --scenes`: the other scenes' records come from the committed run (same measured_at)
+        kept = dict(rec("k", 10.0, machine=None), measured_at="2026-11-29 03:12:29 UTC")
+        fresh = dict(rec("f", 10.0, machine=None), measured_at="2026-12-02 14:30:00 UTC")
+        old = [kept, dict(fresh, measured_at="2026-11-29 03:12:29 UTC")]
+        self.assertEqual(perf.guard([kept, fresh], old), ([], [("f", "its record names no machine (unknown machine)")]))
+
     def test_ids_without_a_record_are_neither_compared_nor_listed(self):
         self.assertEqual(perf.guard([rec("new", 5.0)], [rec("old", 1.0, machine=None)]), ([], []))
 
