@@ -153,7 +153,9 @@ def stream_speedups(ctx, sizes, name):
     exe = ctx.tool(STREAM_SCALING)
     ctx.launch([exe] + [str(n) for n in sizes], name, 2, None)
     out = {}
-    for line in open(ctx.path(name + ".log")).read().splitlines():
+    with open(ctx.path(name + ".log")) as f:
+        lines = f.read().splitlines()
+    for line in lines:
         cols = line.split(",")
         if cols[0].startswith("stream") and len(cols) == 5:
             out[int(cols[1])] = float(cols[4])
@@ -234,6 +236,8 @@ def run_mechanics(ctx):
     """Every scene of MECH_SCENES, or those of --scenes with the other scenes' rows kept from the
     committed result (each row names the commit it was measured on)."""
     load, v = os.getloadavg()[0], ctx.versions(["lammps"])
+    if 2 in ctx.threads:
+        ctx.tool(STREAM_SCALING)  # stop before the first scene, not after its rounds, when it is not built
     names = ctx.scenes or list(MECH_SCENES)
     unknown = [n for n in names if n not in MECH_SCENES]
     if unknown:
@@ -317,6 +321,8 @@ def run_threads(ctx):
     sizes = [2, 1000] if ctx.quick else sorted(THREAD_SHAPES)
     variants = [(p, t, f) for p in ("default", "PASSIVE") for t, f in THREAD_VARIANTS]
     rows, stream = [], {}
+    if any(n >= STREAM_MIN_PARTICLES for n in sizes):
+        ctx.tool(STREAM_SCALING)  # stop before the first scene when it is not built
     for family in ("contacts", "bonds"):
         for n in sizes:
             if family == "contacts" and n >= STREAM_MIN_PARTICLES:  # the machine's bound at this size, this run
