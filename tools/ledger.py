@@ -253,22 +253,44 @@ def _load_text(r):
     return fmt_number(r.get("load_average"), 3)
 
 
+UNKNOWN_MACHINE_NOTE = ("unknown (records made before the harness stored the CPU model, or imported: "
+                        "the perf guard compares no figure with them)")
+
+
+def perf_by_machine(recs):
+    """[(label, records)] of perf records grouped by their `machine` ("CPU model, N cores"; issue 63
+    item 4), machines in first-seen order, the records that name none last (UNKNOWN_MACHINE_NOTE)."""
+    groups = {}
+    for r in recs:
+        groups.setdefault(r.get("machine") or "", []).append(r)
+    out = [(m, g) for m, g in groups.items() if m]
+    return out + ([(UNKNOWN_MACHINE_NOTE, groups[""])] if "" in groups else [])
+
+
 def perf_table(ledger, full=True, case=None):
-    """The perf records (tools/perf.py) as one markdown table, all or those of one case; without
+    """The perf records (tools/perf.py), all or those of one case, as one markdown table per machine
+    (each under a line naming it: a figure compares only with figures of the same machine); without
     `full` (the docs), the thread records of scenes under 1e4 particles are left to ledger.md (unless
     the table is the threads case's own) and the origin column is left out."""
     cols = ["record", "particles / nodes", "threads", "value", "min / max", "ratio", "ratio of", "load", "commit"]
     cols += ["origin"] if full else []
-    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    header = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    recs = []
     for r in ledger.get("perf", []):
         if case and r.get("case") != case:
             continue
         if not full and not case and r["id"].startswith("perf/threads/") and (r.get("particles") or 0) < 10000:
             continue
-        spread = f"{fmt_number(r['min'])} / {fmt_number(r['max'])}" if r.get("min") is not None else ""
-        value = f"{fmt_number(r.get('value'))} {r.get('unit', '')}"
-        cells = [r["id"], fmt_number(r.get("particles")), fmt_number(r.get("threads")), value,
-                 spread, fmt_number(r.get("ratio"), 3), r.get("ratio_of", ""), _load_text(r), r.get("commit", "")]
-        cells += [r.get("origin", "")] if full else []
-        lines.append("| " + " | ".join(str(c) for c in cells) + " |")
-    return "\n".join(lines)
+        recs.append(r)
+    blocks = []
+    for label, group in perf_by_machine(recs):
+        lines = [f"Machine: {label}", ""] + header
+        for r in group:
+            spread = f"{fmt_number(r['min'])} / {fmt_number(r['max'])}" if r.get("min") is not None else ""
+            value = f"{fmt_number(r.get('value'))} {r.get('unit', '')}"
+            cells = [r["id"], fmt_number(r.get("particles")), fmt_number(r.get("threads")), value,
+                     spread, fmt_number(r.get("ratio"), 3), r.get("ratio_of", ""), _load_text(r), r.get("commit", "")]
+            cells += [r.get("origin", "")] if full else []
+            lines.append("| " + " | ".join(str(c) for c in cells) + " |")
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks) if blocks else "\n".join(header)

@@ -26,7 +26,11 @@ record on an idle machine and read the load column.
 
 `run` also compares each figure with the case's committed record of the same id (times and memory:
 lower is better) and prints SLOWER for one more than 10 % worse (issue 40 item 6; the load column
-says whether the machine or the code changed).
+says whether the machine's load or the code changed). Every record names its machine (the CPU model
+and core count of the sidecar, issue 63 item 4) and a figure is compared only with a record of the
+same machine: a record of another machine, or one made before the harness stored the CPU model
+(an unknown machine), is not compared, and a NOT COMPARED line says so. `report` groups the
+records by machine.
 
 Exit codes: 0 done; 1 a case failed; 2 bad arguments or set-up errors; 3 done, but a figure is more
 than 10 % worse than its last record.
@@ -73,7 +77,7 @@ def cmd_list(a):
     return 0
 
 
-RUN_KEYS = ("versions", "load_before", "load_after", "load_max", "finished", "repeats")
+RUN_KEYS = ("versions", "load_before", "load_after", "load_max", "finished", "repeats", "machine")
 
 
 def scene_run(meta, scene):
@@ -90,11 +94,13 @@ def kept_runs(case, scenes):
         return {}
     old = json.load(open(committed))
     names = {r.get("scene") for r in case.records(os.path.join(REPO, case.result))} - set(scenes) - {None}
-    return {n: {k: scene_run(old, n)[k] for k in RUN_KEYS} for n in sorted(names)}
+    return {n: {k: scene_run(old, n)[k] for k in RUN_KEYS if k in scene_run(old, n)} for n in sorted(names)}
 
 
 def records_of(case, path):
-    """The case's perf records of a result file, with their origin, load and versions (sidecar)."""
+    """The case's perf records of a result file, with their origin, load, versions and machine
+    (sidecar). A record gets a `machine` ("CPU model, N cores") only from a sidecar that names the CPU
+    model (harness.machine_label): older records and imported ones have none (an unknown machine)."""
     meta_path = path + ".meta.json"
     meta = json.load(open(meta_path)) if os.path.exists(meta_path) else None
     recs = case.records(path)
@@ -107,6 +113,9 @@ def records_of(case, path):
                       "load_before": run["load_before"][0], "load_after": run["load_after"][0],
                       "load_max": run["load_max"], "versions": run["versions"], "measured_at": run["finished"]})
             r.setdefault("repeats", run["repeats"])
+            label = harness.machine_label(run.get("machine"))
+            if label:
+                r["machine"] = label
         else:
             r["origin"] = f"imported (written by {WRITTEN_BEFORE_BY.get(case.id, 'an earlier script')})"
     return recs
@@ -117,23 +126,46 @@ LOWER_IS_BETTER = {"s", "s/step", "B/particle"}
 SLOWDOWN_LIMIT = 0.10  # issue 40 item 6: flag a figure more than 10 % worse than its last record
 
 
-def slowdowns(new, old, limit=SLOWDOWN_LIMIT):
-    """Records of `new` more than `limit` worse than the record of the same id in `old` (the last
-    committed ones): a list of (id, old value, new value, relative change, old commit). Only values
-    in LOWER_IS_BETTER units with a positive old value are compared."""
+UNKNOWN_MACHINE = "unknown machine"
+
+
+def guard(new, old, limit=SLOWDOWN_LIMIT):
+    """The perf guard (issue 40 item 6; by machine since issue 63 item 4): (slower, not_compared).
+    slower: the records of `new` more than `limit` worse than the record of the same id in `old` (the
+    last committed ones) measured on the same machine, as (id, old value, new value, relative change,
+    old commit). not_compared: (id, why) for the records that have an old record of the same id and
+    unit but were not compared because either names no machine (UNKNOWN_MACHINE) or the machines
+    differ: a record made on another machine is no baseline. A record of the same measurement as
+    its old one (`measured_at`: a scene kept by `run --scenes`) is neither. Only values in
+    LOWER_IS_BETTER units with a positive old value are compared."""
     last = {r["id"]: r for r in old}
-    out = []
+    slower, not_compared = [], []
     for r in new:
         o = last.get(r["id"])
         if o is None or r.get("unit") not in LOWER_IS_BETTER or o.get("unit") != r.get("unit"):
+            continue
+        if r.get("measured_at") and r.get("measured_at") == o.get("measured_at"):
+            continue  # the same measurement: a scene kept from the committed run by `run --scenes`
+        m0, m1 = o.get("machine"), r.get("machine")
+        if not m0 or not m1:
+            which = "its record" if not m0 else "this run"
+            not_compared.append((r["id"], f"{which} names no machine ({UNKNOWN_MACHINE})"))
+            continue
+        if m0 != m1:
+            not_compared.append((r["id"], f"recorded on another machine ({m0}; this run: {m1})"))
             continue
         v0, v1 = o.get("value"), r.get("value")
         if not isinstance(v0, (int, float)) or not isinstance(v1, (int, float)) or not v0 > 0:
             continue
         change = v1 / v0 - 1.0
         if change > limit:
-            out.append((r["id"], v0, v1, change, o.get("commit", "")))
-    return out
+            slower.append((r["id"], v0, v1, change, o.get("commit", "")))
+    return slower, not_compared
+
+
+def slowdowns(new, old, limit=SLOWDOWN_LIMIT):
+    """The `slower` list of guard(new, old, limit)."""
+    return guard(new, old, limit)[0]
 
 
 def run_case(case, a):
@@ -154,15 +186,20 @@ def run_case(case, a):
     harness.write_json_atomic(ctx.result + ".meta.json", meta)
     recs = records_of(case, ctx.result)
     for r in recs:
+        share = r.get("thread_speedup_share")
         print(f"  {r['id']}: {rules.fmt_number(r.get('value'))} {r.get('unit', '')}  "
-              f"ratio {rules.fmt_number(r.get('ratio'), 3)} ({r.get('ratio_of', '')})")
+              f"ratio {rules.fmt_number(r.get('ratio'), 3)} ({r.get('ratio_of', '')})"
+              + (f"; 2-thread speed-up {rules.fmt_number(share, 3)} of min(2, stream {r['stream_speedup']:.3f})"
+                 if share is not None else ""))
     print(f"{case.id}: {len(recs)} records; load {load0[0]:.2f} -> {load1[0]:.2f} (max {meta['load_max']:.2f}); "
           f"wrote {ctx.result}", flush=True)
     if meta["load_max"] > (os.cpu_count() or 1):
         print(f"{case.id}: warning: the load average exceeded the core count: these timings are contaminated",
               file=sys.stderr)
     committed = os.path.join(REPO, case.result)
-    slower = slowdowns(recs, records_of(case, committed)) if os.path.exists(committed) else []
+    slower, skipped = guard(recs, records_of(case, committed)) if os.path.exists(committed) else ([], [])
+    for rid, why in skipped:
+        print(f"  NOT COMPARED {rid}: {why}", file=sys.stderr)
     for rid, v0, v1, change, commit in slower:
         print(f"  SLOWER {rid}: {rules.fmt_number(v1)} against {rules.fmt_number(v0)} recorded at {commit} "
               f"({100 * change:+.1f} %, limit {100 * SLOWDOWN_LIMIT:.0f} %)", file=sys.stderr)
@@ -235,6 +272,8 @@ def cmd_report(a):
         rules.write_json_atomic(a.ledger, ledger)
     validate.write_reports(ledger, os.path.dirname(os.path.abspath(a.ledger)))
     print(f"perf: {len(recs)} records")
+    for label, group in rules.perf_by_machine(recs):
+        print(f"  {label}: {len(group)} records")
     return validate.cmd_update_docs(argparse.Namespace(ledger=a.ledger, files=a.files or DOCS))
 
 

@@ -67,6 +67,20 @@ MECH_SCENES = {
     "poly_cylinder_bed": {"config": "benchmarks/mechanics/poly_cylinder_bed.json",
                           "lammps": "benchmarks/mechanics/lammps_poly_cylinder_bed.in", "peer": None, "steps": 10000,
                           "quick_steps": 500, "packed": True},
+    # Beds the project never tuned on (issue 63 item 5; benchmarks/mechanics/random_beds.py): packed beds
+    # whose law, size spread, friction and Verlet skin were drawn once by random.Random(seed); the seeds
+    # were fixed before the draw was seen. The run checks that `draw` is its seed's draw and that the
+    # scene and LAMMPS input are what random_beds.py makes of it.
+    "random_bed_6301": {"config": "benchmarks/mechanics/random_bed_6301.json",
+                        "lammps": "benchmarks/mechanics/lammps_random_bed_6301.in", "peer": None, "steps": 10000,
+                        "quick_steps": 500, "packed": True,
+                        "draw": {"seed": 6301, "law": "hooke", "spread": 0.302, "friction": 0.258,
+                                 "skin_over_radius": 0.305}},
+    "random_bed_6302": {"config": "benchmarks/mechanics/random_bed_6302.json",
+                        "lammps": "benchmarks/mechanics/lammps_random_bed_6302.in", "peer": None, "steps": 10000,
+                        "quick_steps": 500, "packed": True,
+                        "draw": {"seed": 6302, "law": "hertz_mindlin", "spread": 0.083, "friction": 0.613,
+                                 "skin_over_radius": 0.114}},
 }
 # (variant, threads, OMP_WAIT_POLICY; None = the runtime's default), in the order of a round
 MECH_VARIANTS = [("sparkdem_t1", 1, None), ("lammps_serial", 1, None), ("sparkdem_t2", 2, None),
@@ -88,10 +102,12 @@ def check_peer_input(spec):
 
 
 def mechanics_scene(ctx, name):
+    from benchmarks.mechanics import random_beds
     from benchmarks.pour import analyze_pour as ap
     spec = MECH_SCENES[name]
     steps = spec["quick_steps"] if ctx.quick else spec["steps"]
-    ctx.log(f"{name}: LAMMPS input {check_peer_input(spec)}; {steps} steps")
+    origin = random_beds.check(spec, REPO) if "draw" in spec else f"LAMMPS input {check_peer_input(spec)}"
+    ctx.log(f"{name}: {origin}; {steps} steps")
     lmp = ctx.need("lmp", "lammps")
     if spec.get("packed"):
         scene = ctx.write_scene(packed_bed_scene(ctx, name, spec, steps), name)
@@ -115,7 +131,53 @@ def mechanics_scene(ctx, name):
 
     variants = [v[0] for v in MECH_VARIANTS if v[0] == "lammps_serial" or v[1] in ctx.threads]
     runs = harness.interleave(variants, ctx.repeats, one, ctx.log)
-    return mechanics_rows(name, runs, ap)
+    rows = mechanics_rows(name, runs, ap)
+    if 2 in ctx.threads:  # the machine's own bound at this scene's size, measured right after its rounds
+        n = int(rows[0]["particles"])
+        stream = stream_speedups(ctx, [n], f"{name}_stream_scaling")[n]
+        for r in rows:
+            add_stream_share(r, stream, num(r["thread_speedup"]))
+    return rows
+
+
+# ---------------------------------------------------------------- the machine's own bound (issue 63 item 2)
+
+STREAM_SCALING = "benchmarks/threads/stream_scaling"
+
+
+def stream_speedups(ctx, sizes, name):
+    """{particles: speed-up from 1 to 2 threads} of stream_scaling's streaming loop (a loop shaped like
+    the Verlet half, benchmarks/threads/stream_scaling.cpp; best of three on each thread count), run
+    with the OpenMP runtime's default wait policy (the machine's bound, not a wake-up's cost). Its
+    output, with the square-root loop's line, stays in the work directory (NAME.log)."""
+    exe = ctx.tool(STREAM_SCALING)
+    ctx.launch([exe] + [str(n) for n in sizes], name, 2, None)
+    out = {}
+    with open(ctx.path(name + ".log")) as f:
+        lines = f.read().splitlines()
+    for line in lines:
+        cols = line.split(",")
+        if cols[0].startswith("stream") and len(cols) == 5:
+            out[int(cols[1])] = float(cols[4])
+        elif cols[0].startswith("sqrt"):
+            ctx.log(f"  stream_scaling: square roots {cols[-1]}x on 2 threads")
+    missing = [n for n in sizes if n not in out]
+    if missing:
+        raise RuntimeError(f"{exe} printed no streaming figure for {missing} particles (see {ctx.path(name + '.log')})")
+    ctx.log(f"  stream_scaling: streaming loop " + ", ".join(f"{out[n]:.3f}x at {n}" for n in sizes))
+    return out
+
+
+def stream_share(speedup, stream):
+    """A 2-thread speed-up as a share of what the machine allows at that size: speedup / min(2, stream)
+    (the streaming loop can pass 2 where the data fit the two cores' caches)."""
+    return speedup / min(2.0, stream)
+
+
+def add_stream_share(row, stream, speedup):
+    """Adds the columns stream_speedup (every row) and thread_speedup_share (rows with a speed-up)."""
+    row["stream_speedup"] = f"{stream:.3f}"
+    row["thread_speedup_share"] = f"{stream_share(speedup, stream):.3f}" if speedup else ""
 
 
 def packed_bed_scene(ctx, name, spec, steps):
@@ -166,7 +228,7 @@ def mechanics_rows(name, runs, ap):
 
 MECH_FIELDS = ["scene", "variant", "particles", "steps", "repeats", "loop_s_median", "loop_s_min", "loop_s_max",
                "process_s_median", "particle_steps_per_s", "speedup_vs_lammps_serial", "thread_speedup",
-               "max_ke_difference_vs_lammps_pct", "ke_difference_over_peak_pct", "mean_coordination", "commit",
+               "stream_speedup", "thread_speedup_share", "max_ke_difference_vs_lammps_pct", "ke_difference_over_peak_pct", "mean_coordination", "commit",
                "lammps", "load_average_at_start"]
 
 
@@ -174,6 +236,8 @@ def run_mechanics(ctx):
     """Every scene of MECH_SCENES, or those of --scenes with the other scenes' rows kept from the
     committed result (each row names the commit it was measured on)."""
     load, v = os.getloadavg()[0], ctx.versions(["lammps"])
+    if 2 in ctx.threads:
+        ctx.tool(STREAM_SCALING)  # stop before the first scene, not after its rounds, when it is not built
     names = ctx.scenes or list(MECH_SCENES)
     unknown = [n for n in names if n not in MECH_SCENES]
     if unknown:
@@ -191,6 +255,13 @@ def run_mechanics(ctx):
     write_csv_atomic(ctx.result, rows, MECH_FIELDS)
 
 
+def stream_fields(row):
+    """A record's stream_speedup and thread_speedup_share (issue 63 item 2) where its row has them
+    (rows written before have not)."""
+    out = {"stream_speedup": num(row.get("stream_speedup")), "thread_speedup_share": num(row.get("thread_speedup_share"))}
+    return {k: v for k, v in out.items() if v is not None}
+
+
 def records_mechanics(path):
     recs = []
     for r in rows_of(path):
@@ -201,6 +272,7 @@ def records_mechanics(path):
                      "min": num(r.get("loop_s_min")), "max": num(r.get("loop_s_max")),
                      "ratio": num(r["speedup_vs_lammps_serial"]), "ratio_of": "LAMMPS serial time / this time",
                      "thread_speedup": num(r.get("thread_speedup")),
+                     **stream_fields(r),
                      "physics": f"KE vs LAMMPS: largest difference {r['max_ke_difference_vs_lammps_pct']} % per sample, "
                                 f"{r['ke_difference_over_peak_pct']} % of the peak; coordination {r['mean_coordination']}",
                      "commit": r["commit"], "peer": r["lammps"], "load_average": num(r["load_average_at_start"])})
@@ -242,12 +314,19 @@ def lattice_scene(family, n, steps):
     return c
 
 
+STREAM_MIN_PARTICLES = 1000  # below, stream_scaling's loop times a fork and join (and runs 1e6-1e7 steps)
+
+
 def run_threads(ctx):
     sizes = [2, 1000] if ctx.quick else sorted(THREAD_SHAPES)
     variants = [(p, t, f) for p in ("default", "PASSIVE") for t, f in THREAD_VARIANTS]
-    rows = []
+    rows, stream = [], {}
+    if any(n >= STREAM_MIN_PARTICLES for n in sizes):
+        ctx.tool(STREAM_SCALING)  # stop before the first scene when it is not built
     for family in ("contacts", "bonds"):
         for n in sizes:
+            if family == "contacts" and n >= STREAM_MIN_PARTICLES:  # the machine's bound at this size, this run
+                stream.update(stream_speedups(ctx, [n], f"stream_scaling_{n}"))
             steps = max(200, min(20000, int((2e6 if ctx.quick else 2e7) / n)))
             scene = ctx.write_scene(lattice_scene(family, THREAD_SHAPES[n], steps), f"{family}_{n}")
 
@@ -267,8 +346,15 @@ def run_threads(ctx):
                              "s_per_step_2_threads": f"{t2:.4g}", "time_2_over_1": f"{t2 / t1:.3f}",
                              "s_per_step_2_threads_all_parallel": f"{tf:.4g}",
                              "time_2_all_parallel_over_1": f"{tf / t1:.3f}", "repeats": ctx.repeats})
+                if n in stream:
+                    add_stream_share(rows[-1], stream[n], t1 / t2)
                 ctx.log(f"threads {family} {n} {policy}: 2/1 threads {rows[-1]['time_2_over_1']}")
-    write_csv_atomic(ctx.result, rows)
+    write_csv_atomic(ctx.result, rows, THREAD_FIELDS)
+
+
+THREAD_FIELDS = ["family", "particles", "steps", "wait_policy", "s_per_step_1_thread", "s_per_step_2_threads",
+                 "time_2_over_1", "s_per_step_2_threads_all_parallel", "time_2_all_parallel_over_1", "repeats",
+                 "stream_speedup", "thread_speedup_share"]
 
 
 def records_threads(path):
@@ -278,7 +364,8 @@ def records_threads(path):
                      "variant": f"2 threads, {r['wait_policy']} wait policy", "threads": 2,
                      "particles": int(r["particles"]), "steps": int(r["steps"]), "repeats": int(r["repeats"]),
                      "figure": "wall time per step on 2 threads", "value": num(r["s_per_step_2_threads"]), "unit": "s/step",
-                     "ratio": num(r["time_2_over_1"]), "ratio_of": "2-thread time / 1-thread time", "commit": commit})
+                     "ratio": num(r["time_2_over_1"]), "ratio_of": "2-thread time / 1-thread time", **stream_fields(r),
+                     "commit": commit})
     return recs
 
 
@@ -589,14 +676,20 @@ def records_stable_step(path):
 
 CASES = [
     Case("mechanics", "configs/pour.json (23,976 spheres, 30,000 steps), benchmarks/mechanics/dense_bed.json "
-         "(27,000 spheres, 10,000 steps) and the packed beds poly_box_bed.json (20,000) and poly_cylinder_bed.json "
-         "(16,000; 10,000 steps each)", ["lammps"], [1, 2], [1], 5,
+         "(27,000 spheres, 10,000 steps), the packed beds poly_box_bed.json (20,000) and poly_cylinder_bed.json "
+         "(16,000) and the beds drawn at random random_bed_6301.json and random_bed_6302.json (20,000; "
+         "benchmarks/mechanics/random_beds.py; 10,000 steps each); stream_scaling at each scene's size",
+         ["lammps"], [1, 2], [1], 5,
          {"perf/mechanics/<scene>/<variant>": "run-loop wall time, median of interleaved repeats with min/max; "
-          "ratio LAMMPS serial time / this time; 2-thread speed-up; KE and coordination against LAMMPS"},
-         "benchmarks/mechanics/results.csv", run_mechanics, records_mechanics, needs=["lmp (lammps)"]),
-    Case("threads", "lattices of 2 to 1e5 spheres, with contacts or with bonds (made by the case)", [], [1, 2], [1], 3,
-         {"perf/threads/<family>/<particles>/<policy>": "wall time per step on 2 threads; ratio 2-thread / 1-thread time"},
-         "benchmarks/threads/results.csv", run_threads, records_threads),
+          "ratio LAMMPS serial time / this time; 2-thread speed-up and its share of min(2, stream_scaling's "
+          "streaming speed-up at the scene's size); KE and coordination against LAMMPS"},
+         "benchmarks/mechanics/results.csv", run_mechanics, records_mechanics,
+         needs=["lmp (lammps)", "stream_scaling_exe"]),
+    Case("threads", "lattices of 2 to 1e5 spheres, with contacts or with bonds (made by the case); stream_scaling "
+         "at each size from 1000", [], [1, 2], [1], 3,
+         {"perf/threads/<family>/<particles>/<policy>": "wall time per step on 2 threads; ratio 2-thread / 1-thread "
+          "time; from 1000 particles the speed-up's share of min(2, stream_scaling's streaming speed-up)"},
+         "benchmarks/threads/results.csv", run_threads, records_threads, needs=["stream_scaling_exe"]),
     Case("memory", "configs/pour.json and configs/sps_nial.json", [], [1], [1], 1,
          {"perf/memory/<scene>": "peak RSS net of the executable per particle; ratio to the 2 KB goal"},
          "benchmarks/memory/results.csv", run_memory, records_memory),

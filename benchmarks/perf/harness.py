@@ -20,7 +20,7 @@ from tools.ledger import binary_build, write_json_atomic
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 __all__ = ["REPO", "Context", "study_parser", "print_means", "run_study_scene", "write_csv_atomic", "write_json_atomic", "stats", "interleave", "load_config",
-           "lammps_version", "git", "git_head", "git_history_unavailable"]
+           "lammps_version", "git", "git_head", "git_history_unavailable", "cpu_model", "machine", "machine_label"]
 
 
 # ---------------------------------------------------------------- files and numbers
@@ -151,10 +151,33 @@ def lammps_version(lmp="lmp"):
     return f"{version} {compiler}".strip()
 
 
+def cpu_model(cpuinfo="/proc/cpuinfo"):
+    """The CPU's "model name" from /proc/cpuinfo (its first processor), or "unknown CPU" where the
+    file has none (another OS, some ARM kernels)."""
+    try:
+        with open(cpuinfo) as f:
+            for line in f:
+                key, _, value = line.partition(":")
+                if key.strip() == "model name" and value.strip():
+                    return " ".join(value.split())
+    except OSError:
+        pass
+    return "unknown CPU"
+
+
 def machine():
-    """What a reader needs to judge a timing: cores, load averages, kernel, Python."""
-    return {"cores": os.cpu_count(), "load_average": list(os.getloadavg()), "uname": " ".join(os.uname()[2:5]),
-            "python": ".".join(map(str, sys.version_info[:3]))}
+    """What a reader needs to judge a timing: the CPU model and cores (together the machine a record
+    is compared within: machine_label), load averages, kernel, Python."""
+    return {"cpu_model": cpu_model(), "cores": os.cpu_count(), "load_average": list(os.getloadavg()),
+            "uname": " ".join(os.uname()[2:5]), "python": ".".join(map(str, sys.version_info[:3]))}
+
+
+def machine_label(m):
+    """"CPU model, N cores" of a sidecar's machine dict; None for a sidecar written before the harness
+    stored the CPU model (an unknown machine: the perf guard compares nothing with its records)."""
+    if not m or not m.get("cpu_model"):
+        return None
+    return f"{m['cpu_model']}, {m.get('cores', '?')} cores"
 
 
 # ---------------------------------------------------------------- running
