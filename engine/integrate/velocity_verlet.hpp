@@ -3,8 +3,10 @@
 ///   v(n+1/2) = v(n) + dt/2 F(n)/m,  x(n+1) = x(n) + dt v(n+1/2),  v(n+1) = v(n+1/2) + dt/2 F(n+1)/m
 ///   w likewise with T/I; the orientation is advanced by the exact rotation of angle |w| dt
 ///   about w: q(n+1) = exp(dt w(n+1/2) / 2) q(n), renormalised (rotation_quaternion).
+#include <algorithm>
 #include <cmath>
 
+#include "engine/core/simd.hpp"
 #include "engine/state/particle_store.hpp"
 #include "engine/core/parallel.hpp"
 
@@ -40,39 +42,155 @@ inline Quat renormalised(const Quat& q) {
   return r;
 }
 
+/// The arrays of the first half step, read through local pointers: stores through the
+/// ParticleStore's vectors would otherwise make the compiler reload every array's base on each
+/// particle.
+struct FirstHalfArrays {
+  Vec3* __restrict x;
+  Vec3* __restrict v;
+  Vec3* __restrict w;
+  Vec3* __restrict f;
+  Vec3* __restrict t;
+  Quat* __restrict q;
+  const double* __restrict m;
+  const double* __restrict inertia;
+  const std::int32_t* __restrict fixed;
+};
+
+/// One particle's half kick and drift, its forces and torques cleared: the scalar path, and the
+/// reference of the lanes (first_half_lanes).
+[[gnu::always_inline]] inline void first_half_one(const FirstHalfArrays& a, std::int64_t i, double h) {
+  if (a.fixed[i]) {                                  // prescribed velocity (zero = frozen): moved, not integrated
+    if (a.fixed[i] == 1) a.x[i] += h * a.v[i];       // 2: a rotating set, moved by the simulation
+  } else {
+    a.v[i] += 0.5 * h / a.m[i] * a.f[i];
+    a.x[i] += h * a.v[i];
+    a.w[i] += 0.5 * h / a.inertia[i] * a.t[i];
+    const double w2 = a.w[i].squaredNorm();
+    if (w2 > 0.0 && h > 0.0)  // most spheres of a settling bed do not spin
+      a.q[i] = renormalised(rotation_quaternion(a.w[i], w2, h) * a.q[i]);
+  }
+  a.f[i].setZero();
+  a.t[i].setZero();
+}
+
+/// first_half_one on particles [lo, hi) over W lanes (engine/core/simd.hpp), with its bits: the same
+/// operations in the same order, Eigen's quaternion product and squared norm as its SSE2 code
+/// computes them ((x^2 + z^2) + (y^2 + w^2)). A block with a prescribed particle runs particle by
+/// particle; a lane spinning too fast for the Taylor series (h >= 0.01) gets its rotation from
+/// rotation_quaternion after the block.
+template <int W>
+[[gnu::always_inline]] inline void first_half_lanes(const FirstHalfArrays& a, std::int64_t lo, std::int64_t hi, double h) {
+  std::int64_t i0 = lo;
+  for (; i0 + W <= hi; i0 += W) {
+    bool all_free = true;
+    for (int l = 0; l < W; ++l) all_free &= a.fixed[i0 + l] == 0;
+    if (!all_free) {
+      for (int l = 0; l < W; ++l) first_half_one(a, i0 + l, h);
+      continue;
+    }
+    double* X = a.x[i0].data();
+    double* V = a.v[i0].data();
+    double* Om = a.w[i0].data();
+    const double* F = a.f[i0].data();
+    const double* T = a.t[i0].data();
+    double* Q = a.q[i0].coeffs().data();  // x, y, z, w per particle
+    // the block as structure of arrays (lane c * W + l: component c of particle l)
+    alignas(64) double x[3 * W], v[3 * W], w[3 * W], f[3 * W], t[3 * W], q[4 * W], m[W], in[W], slow[W];
+    for (int l = 0; l < W; ++l) {
+      for (int c = 0; c < 3; ++c) {
+        x[c * W + l] = X[3 * l + c];
+        v[c * W + l] = V[3 * l + c];
+        w[c * W + l] = Om[3 * l + c];
+        f[c * W + l] = F[3 * l + c];
+        t[c * W + l] = T[3 * l + c];
+      }
+      for (int c = 0; c < 4; ++c) q[c * W + l] = Q[4 * l + c];
+      m[l] = a.m[i0 + l];
+      in[l] = a.inertia[i0 + l];
+    }
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      const double kv = 0.5 * h / m[l], kw = 0.5 * h / in[l];
+      const double vx = v[l] + kv * f[l], vy = v[W + l] + kv * f[W + l], vz = v[2 * W + l] + kv * f[2 * W + l];
+      v[l] = vx;
+      v[W + l] = vy;
+      v[2 * W + l] = vz;
+      x[l] = x[l] + h * vx;
+      x[W + l] = x[W + l] + h * vy;
+      x[2 * W + l] = x[2 * W + l] + h * vz;
+      const double wx = w[l] + kw * t[l], wy = w[W + l] + kw * t[W + l], wz = w[2 * W + l] + kw * t[2 * W + l];
+      w[l] = wx;
+      w[W + l] = wy;
+      w[2 * W + l] = wz;
+      // rotation_quaternion's Taylor branch, the product with q and renormalised
+      const double w2 = (wx * wx + wy * wy) + wz * wz;
+      const double h2 = 0.25 * w2 * h * h;
+      const double sw = 0.5 * h * (1.0 - h2 * (1.0 / 6.0) * (1.0 - h2 * (1.0 / 20.0) * (1.0 - h2 * (1.0 / 42.0) * (1.0 - h2 * (1.0 / 72.0)))));
+      const double c = 1.0 - h2 * 0.5 * (1.0 - h2 * (1.0 / 12.0) * (1.0 - h2 * (1.0 / 30.0) * (1.0 - h2 * (1.0 / 56.0))));
+      const double ax = sw * wx, ay = sw * wy, az = sw * wz, aw = c;
+      const double bx = q[l], by = q[W + l], bz = q[2 * W + l], bw = q[3 * W + l];
+      const double px = (aw * bx + ay * bz) - (az * by - ax * bw);
+      const double py = (aw * by + ay * bw) + (az * bx - ax * bz);
+      const double pz = (aw * bz - ay * bx) + (az * bw + ax * by);
+      const double pw = (aw * bw - ay * by) - (az * bz + ax * bx);
+      const double k = 0.5 * (3.0 - ((px * px + pz * pz) + (py * py + pw * pw)));
+      const bool turn = (w2 > 0.0) & (h > 0.0);
+      const bool taylor = turn & (h2 < 1e-4);
+      q[l] = taylor ? px * k : bx;
+      q[W + l] = taylor ? py * k : by;
+      q[2 * W + l] = taylor ? pz * k : bz;
+      q[3 * W + l] = taylor ? pw * k : bw;
+      slow[l] = (turn & !taylor) ? 0.0 : 1.0;
+    }
+    for (int l = 0; l < W; ++l) {
+      for (int c = 0; c < 3; ++c) {
+        X[3 * l + c] = x[c * W + l];
+        V[3 * l + c] = v[c * W + l];
+        Om[3 * l + c] = w[c * W + l];
+      }
+      for (int c = 0; c < 4; ++c) Q[4 * l + c] = q[c * W + l];
+      a.f[i0 + l].setZero();
+      a.t[i0 + l].setZero();
+    }
+    for (int l = 0; l < W; ++l)
+      if (slow[l] == 0.0) {
+        const Vec3& wl = a.w[i0 + l];
+        a.q[i0 + l] = renormalised(rotation_quaternion(wl, wl.squaredNorm(), h) * a.q[i0 + l]);
+      }
+  }
+  for (; i0 < hi; ++i0) first_half_one(a, i0, h);
+}
+
+[[SPARKDEM_TARGET_AVX512]] inline void first_half_avx512(const FirstHalfArrays& a, std::int64_t lo, std::int64_t hi, double h) {
+  first_half_lanes<8>(a, lo, hi, h);
+}
+[[SPARKDEM_TARGET_AVX2]] inline void first_half_avx2(const FirstHalfArrays& a, std::int64_t lo, std::int64_t hi, double h) {
+  first_half_lanes<4>(a, lo, hi, h);
+}
+
 /// Half kick and drift, then the forces and torques cleared for the step's force passes (the
 /// last read of the old ones is this kick; the plan's items between it and the pair pass, walls
 /// and neighbours, read none: engine/schedule/scheduler.hpp). One pass over the particle arrays
-/// instead of two. The arrays are read through local pointers: stores through the ParticleStore's
-/// vectors would otherwise make the compiler reload every array's base on each particle (declared in the
-/// region's body: captured by the lambda, they would be read through its closure).
+/// instead of two, over SIMD lanes where the processor has them (the same bits either way).
 inline void verlet_first_half(ParticleStore& p, double dt) {
   const std::int64_t n = static_cast<std::int64_t>(p.size());
+  constexpr std::int64_t kChunk = 512;  // particles per task: a multiple of every lane width
+  const std::int64_t chunks = (n + kChunk - 1) / kChunk;
+  const LaneIsa isa = lane_isa();
   par::region(par::worth(n, par::kLight), [&] {
-    Vec3* __restrict x = p.position.data();
-    Vec3* __restrict v = p.velocity.data();
-    Vec3* __restrict w = p.omega.data();
-    Vec3* __restrict f = p.force.data();
-    Vec3* __restrict t = p.torque.data();
-    Quat* __restrict q = p.orientation.data();
-    const double* __restrict m = p.mass.data();
-    const double* __restrict inertia = p.inertia.data();
-    const std::int32_t* __restrict fixed = p.fixed.data();
+    const FirstHalfArrays a{p.position.data(), p.velocity.data(), p.omega.data(), p.force.data(), p.torque.data(),
+                            p.orientation.data(), p.mass.data(), p.inertia.data(), p.fixed.data()};
     const double h = dt;
 #pragma omp for schedule(static) nowait
-    for (std::int64_t i = 0; i < n; ++i) {
-      if (fixed[i]) {                                // prescribed velocity (zero = frozen): moved, not integrated
-        if (fixed[i] == 1) x[i] += h * v[i];         // 2: a rotating set, moved by the simulation
-      } else {
-        v[i] += 0.5 * h / m[i] * f[i];
-        x[i] += h * v[i];
-        w[i] += 0.5 * h / inertia[i] * t[i];
-        const double w2 = w[i].squaredNorm();
-        if (w2 > 0.0 && h > 0.0)  // most spheres of a settling bed do not spin
-          q[i] = renormalised(rotation_quaternion(w[i], w2, h) * q[i]);
-      }
-      f[i].setZero();
-      t[i].setZero();
+    for (std::int64_t c = 0; c < chunks; ++c) {
+      const std::int64_t lo = c * kChunk, hi = std::min(n, lo + kChunk);
+      if (isa == LaneIsa::avx512)
+        first_half_avx512(a, lo, hi, h);
+      else if (isa == LaneIsa::avx2)
+        first_half_avx2(a, lo, hi, h);
+      else
+        for (std::int64_t i = lo; i < hi; ++i) first_half_one(a, i, h);
     }
   });
 }

@@ -1,4 +1,4 @@
-#include "engine/contact/lanes.hpp"
+#include "engine/core/simd.hpp"
 
 #include <atomic>
 #include <cstdlib>
