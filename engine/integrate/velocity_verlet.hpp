@@ -74,13 +74,67 @@ struct FirstHalfArrays {
   a.t[i].setZero();
 }
 
-/// first_half_one on particles [lo, hi) over W lanes (engine/core/simd.hpp), with its bits: the same
-/// operations in the same order, Eigen's quaternion product and squared norm as its SSE2 code
-/// computes them ((x^2 + z^2) + (y^2 + w^2)). A block with a prescribed particle runs particle by
-/// particle; a lane spinning too fast for the Taylor series (h >= 0.01) gets its rotation from
-/// rotation_quaternion after the block.
+/// A block of W particles as structure of arrays (entry c * W + l: component c of particle l).
+template <int W>
+struct FirstHalfBlock {
+  alignas(64) double x[3 * W], v[3 * W], w[3 * W], f[3 * W], t[3 * W], m[W], in[W], w2[W];
+  alignas(64) double q[4 * W];  ///< x, y, z, w
+  alignas(64) double slow[W];   ///< 0: a lane whose rotation is left to rotation_quaternion (h >= 0.01)
+};
+
+/// The half kick and drift of every lane, as first_half_one computes them; w2 = |w|^2 after the kick.
+template <int W>
+[[gnu::always_inline]] inline void kick_drift_lanes(FirstHalfBlock<W>& b, double h) {
+#pragma omp simd
+  for (int l = 0; l < W; ++l) {
+    const double kv = 0.5 * h / b.m[l], kw = 0.5 * h / b.in[l];
+    for (int c = 0; c < 3; ++c) {
+      const double v = b.v[c * W + l] + kv * b.f[c * W + l];
+      b.v[c * W + l] = v;
+      b.x[c * W + l] = b.x[c * W + l] + h * v;
+      b.w[c * W + l] = b.w[c * W + l] + kw * b.t[c * W + l];
+    }
+    const double wx = b.w[l], wy = b.w[W + l], wz = b.w[2 * W + l];
+    b.w2[l] = (wx * wx + wy * wy) + wz * wz;
+  }
+}
+
+/// The rotation of every lane that turns (w2 > 0, h > 0): rotation_quaternion's Taylor branch, Eigen's
+/// SSE2 quaternion product with q and renormalised, their operations in their order (the squared
+/// norm of the four coefficients is (x^2 + z^2) + (y^2 + w^2) there). Lanes past the Taylor branch are
+/// marked slow and keep q.
+template <int W>
+[[gnu::always_inline]] inline void rotate_lanes(FirstHalfBlock<W>& b, double h) {
+#pragma omp simd
+  for (int l = 0; l < W; ++l) {
+    const double wx = b.w[l], wy = b.w[W + l], wz = b.w[2 * W + l], w2 = b.w2[l];
+    const double h2 = 0.25 * w2 * h * h;
+    const double sw = 0.5 * h * (1.0 - h2 * (1.0 / 6.0) * (1.0 - h2 * (1.0 / 20.0) * (1.0 - h2 * (1.0 / 42.0) * (1.0 - h2 * (1.0 / 72.0)))));
+    const double c = 1.0 - h2 * 0.5 * (1.0 - h2 * (1.0 / 12.0) * (1.0 - h2 * (1.0 / 30.0) * (1.0 - h2 * (1.0 / 56.0))));
+    const double ax = sw * wx, ay = sw * wy, az = sw * wz, aw = c;
+    const double bx = b.q[l], by = b.q[W + l], bz = b.q[2 * W + l], bw = b.q[3 * W + l];
+    const double px = (aw * bx + ay * bz) - (az * by - ax * bw);
+    const double py = (aw * by + ay * bw) + (az * bx - ax * bz);
+    const double pz = (aw * bz - ay * bx) + (az * bw + ax * by);
+    const double pw = (aw * bw - ay * by) - (az * bz + ax * bx);
+    const double k = 0.5 * (3.0 - ((px * px + pz * pz) + (py * py + pw * pw)));
+    const bool turn = (w2 > 0.0) & (h > 0.0);
+    const bool taylor = turn & (h2 < 1e-4);
+    b.q[l] = taylor ? px * k : bx;
+    b.q[W + l] = taylor ? py * k : by;
+    b.q[2 * W + l] = taylor ? pz * k : bz;
+    b.q[3 * W + l] = taylor ? pw * k : bw;
+    b.slow[l] = (turn & !taylor) ? 0.0 : 1.0;
+  }
+}
+
+/// first_half_one on particles [lo, hi) over W lanes (engine/core/simd.hpp), with its bits. A block
+/// with a prescribed particle runs particle by particle; a block none of whose particles spins
+/// leaves the orientations unread (as first_half_one does: a settling bed's spheres mostly do not
+/// spin); a lane spinning too fast for the Taylor series gets its rotation after the block.
 template <int W>
 [[gnu::always_inline]] inline void first_half_lanes(const FirstHalfArrays& a, std::int64_t lo, std::int64_t hi, double h) {
+  FirstHalfBlock<W> b;
   std::int64_t i0 = lo;
   for (; i0 + W <= hi; i0 += W) {
     bool all_free = true;
@@ -92,71 +146,40 @@ template <int W>
     double* X = a.x[i0].data();
     double* V = a.v[i0].data();
     double* Om = a.w[i0].data();
-    const double* F = a.f[i0].data();
-    const double* T = a.t[i0].data();
-    double* Q = a.q[i0].coeffs().data();  // x, y, z, w per particle
-    // the block as structure of arrays (lane c * W + l: component c of particle l)
-    alignas(64) double x[3 * W], v[3 * W], w[3 * W], f[3 * W], t[3 * W], q[4 * W], m[W], in[W], slow[W];
     for (int l = 0; l < W; ++l) {
       for (int c = 0; c < 3; ++c) {
-        x[c * W + l] = X[3 * l + c];
-        v[c * W + l] = V[3 * l + c];
-        w[c * W + l] = Om[3 * l + c];
-        f[c * W + l] = F[3 * l + c];
-        t[c * W + l] = T[3 * l + c];
+        b.x[c * W + l] = X[3 * l + c];
+        b.v[c * W + l] = V[3 * l + c];
+        b.w[c * W + l] = Om[3 * l + c];
+        b.f[c * W + l] = a.f[i0 + l][c];
+        b.t[c * W + l] = a.t[i0 + l][c];
       }
-      for (int c = 0; c < 4; ++c) q[c * W + l] = Q[4 * l + c];
-      m[l] = a.m[i0 + l];
-      in[l] = a.inertia[i0 + l];
+      b.m[l] = a.m[i0 + l];
+      b.in[l] = a.inertia[i0 + l];
     }
-#pragma omp simd
-    for (int l = 0; l < W; ++l) {
-      const double kv = 0.5 * h / m[l], kw = 0.5 * h / in[l];
-      const double vx = v[l] + kv * f[l], vy = v[W + l] + kv * f[W + l], vz = v[2 * W + l] + kv * f[2 * W + l];
-      v[l] = vx;
-      v[W + l] = vy;
-      v[2 * W + l] = vz;
-      x[l] = x[l] + h * vx;
-      x[W + l] = x[W + l] + h * vy;
-      x[2 * W + l] = x[2 * W + l] + h * vz;
-      const double wx = w[l] + kw * t[l], wy = w[W + l] + kw * t[W + l], wz = w[2 * W + l] + kw * t[2 * W + l];
-      w[l] = wx;
-      w[W + l] = wy;
-      w[2 * W + l] = wz;
-      // rotation_quaternion's Taylor branch, the product with q and renormalised
-      const double w2 = (wx * wx + wy * wy) + wz * wz;
-      const double h2 = 0.25 * w2 * h * h;
-      const double sw = 0.5 * h * (1.0 - h2 * (1.0 / 6.0) * (1.0 - h2 * (1.0 / 20.0) * (1.0 - h2 * (1.0 / 42.0) * (1.0 - h2 * (1.0 / 72.0)))));
-      const double c = 1.0 - h2 * 0.5 * (1.0 - h2 * (1.0 / 12.0) * (1.0 - h2 * (1.0 / 30.0) * (1.0 - h2 * (1.0 / 56.0))));
-      const double ax = sw * wx, ay = sw * wy, az = sw * wz, aw = c;
-      const double bx = q[l], by = q[W + l], bz = q[2 * W + l], bw = q[3 * W + l];
-      const double px = (aw * bx + ay * bz) - (az * by - ax * bw);
-      const double py = (aw * by + ay * bw) + (az * bx - ax * bz);
-      const double pz = (aw * bz - ay * bx) + (az * bw + ax * by);
-      const double pw = (aw * bw - ay * by) - (az * bz + ax * bx);
-      const double k = 0.5 * (3.0 - ((px * px + pz * pz) + (py * py + pw * pw)));
-      const bool turn = (w2 > 0.0) & (h > 0.0);
-      const bool taylor = turn & (h2 < 1e-4);
-      q[l] = taylor ? px * k : bx;
-      q[W + l] = taylor ? py * k : by;
-      q[2 * W + l] = taylor ? pz * k : bz;
-      q[3 * W + l] = taylor ? pw * k : bw;
-      slow[l] = (turn & !taylor) ? 0.0 : 1.0;
-    }
+    kick_drift_lanes(b, h);
+    bool turns = false;
+    for (int l = 0; l < W; ++l) turns |= b.w2[l] > 0.0;
     for (int l = 0; l < W; ++l) {
       for (int c = 0; c < 3; ++c) {
-        X[3 * l + c] = x[c * W + l];
-        V[3 * l + c] = v[c * W + l];
-        Om[3 * l + c] = w[c * W + l];
+        X[3 * l + c] = b.x[c * W + l];
+        V[3 * l + c] = b.v[c * W + l];
+        Om[3 * l + c] = b.w[c * W + l];
       }
-      for (int c = 0; c < 4; ++c) Q[4 * l + c] = q[c * W + l];
       a.f[i0 + l].setZero();
       a.t[i0 + l].setZero();
     }
+    if (!turns || !(h > 0.0)) continue;
+    double* Q = a.q[i0].coeffs().data();
     for (int l = 0; l < W; ++l)
-      if (slow[l] == 0.0) {
+      for (int c = 0; c < 4; ++c) b.q[c * W + l] = Q[4 * l + c];
+    rotate_lanes(b, h);
+    for (int l = 0; l < W; ++l)
+      for (int c = 0; c < 4; ++c) Q[4 * l + c] = b.q[c * W + l];
+    for (int l = 0; l < W; ++l)
+      if (b.slow[l] == 0.0) {
         const Vec3& wl = a.w[i0 + l];
-        a.q[i0 + l] = renormalised(rotation_quaternion(wl, wl.squaredNorm(), h) * a.q[i0 + l]);
+        a.q[i0 + l] = renormalised(rotation_quaternion(wl, b.w2[l], h) * a.q[i0 + l]);
       }
   }
   for (; i0 < hi; ++i0) first_half_one(a, i0, h);
