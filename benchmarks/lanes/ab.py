@@ -2,8 +2,8 @@
 
     /usr/bin/python3 -m benchmarks.lanes.ab --sparkdem BUILD/sparkdem --workdir DIR [--repeats 3] [--cpu 0]
 
-For each scene (the dense bed and the pour, with their benchmark LAMMPS inputs, shortened to
---steps steps), every round runs LAMMPS and sparkdem under SPARKDEM_LANES=scalar, avx2 and avx512
+For each scene (the dense bed and the pour at their benchmark lengths, 10,000 and 30,000 steps, with
+their benchmark LAMMPS inputs; --steps shortens both), every round runs LAMMPS and sparkdem under SPARKDEM_LANES=scalar, avx2 and avx512
 (a path the processor lacks falls back to the widest it has), one after the other (interleaved, so the machine's drift hits every
 variant alike), pinned to one CPU with one OpenMP thread; the wall time of the whole process is
 timed. Each sparkdem run's final state must equal the scalar run's in every dataset (the lane paths
@@ -31,24 +31,26 @@ SCENES = {
 OUT = os.path.join(harness.REPO, "benchmarks", "lanes", "results.csv")
 
 
-def scenes(workdir, steps):
-    """Each scene's sparkdem JSON (last stage at `steps` steps, no frames) and LAMMPS input (`run steps`, no dump)."""
+def scenes(workdir, steps=None):
+    """Each scene's sparkdem JSON (no frames; its last stage at `steps` steps when given) and LAMMPS
+    input (`run` of the same steps, no dump); returns {name: (json, input, steps)}."""
     out = {}
     for name, (config, lammps) in SCENES.items():
         c = harness.load_config(config)
-        c["stages"][-1]["stop"] = {"steps": steps}
+        steps_of = steps or c["stages"][-1]["stop"]["steps"]
+        c["stages"][-1]["stop"] = {"steps": steps_of}
         c["stages"][-1]["output"] = {"frame_every": 0, "timeseries_every": 500, "checkpoint_every": 0}
         path = os.path.join(workdir, name + ".json")
         with open(path, "w") as f:
             json.dump(c, f)
         with open(os.path.join(harness.REPO, lammps)) as f:
             text = f.read()
-        text = re.sub(r"^run\s+\d+", f"run             {steps}", text, flags=re.M)
+        text = re.sub(r"^run\s+\d+", f"run             {steps_of}", text, flags=re.M)
         text = "\n".join(l for l in text.splitlines() if not l.startswith("write_dump"))
         lpath = os.path.join(workdir, name + ".in")
         with open(lpath, "w") as f:
             f.write(text + "\n")
-        out[name] = (path, lpath)
+        out[name] = (path, lpath, steps_of)
     return out
 
 
@@ -75,7 +77,7 @@ def main(argv=None):
     ap.add_argument("--sparkdem", required=True)
     ap.add_argument("--workdir", required=True)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--steps", type=int, default=3000)
+    ap.add_argument("--steps", type=int, default=None)
     ap.add_argument("--cpu", type=int, default=0)
     ap.add_argument("--lmp", default=shutil.which("lmp"))
     a = ap.parse_args(argv)
@@ -85,7 +87,7 @@ def main(argv=None):
     variants = ["scalar", "avx2", "avx512"]
     load0 = os.getloadavg()
     rows = []
-    for name, (scene, lammps) in scenes(a.workdir, a.steps).items():
+    for name, (scene, lammps, steps) in scenes(a.workdir, a.steps).items():
         base = dict(os.environ, OMP_NUM_THREADS="1")
 
         def run(v, rep):
@@ -103,7 +105,7 @@ def main(argv=None):
         lmp = harness.stats(got["lammps"])["median"] if a.lmp else None
         for v, times in got.items():
             s = harness.stats(times)
-            rows.append({"scene": name, "steps": a.steps, "variant": v, "wall_s_median": round(s["median"], 3),
+            rows.append({"scene": name, "steps": steps, "variant": v, "wall_s_median": round(s["median"], 3),
                          "wall_s_min": round(s["min"], 3), "wall_s_max": round(s["max"], 3), "repeats": s["n"],
                          "speedup_vs_scalar": "" if v == "lammps" else round(scalar / s["median"], 3),
                          "lammps_over_sparkdem": "" if v == "lammps" or lmp is None else round(lmp / s["median"], 3)})
