@@ -8,6 +8,7 @@
 
 #include "engine/core/error.hpp"
 #include "engine/core/interrupt.hpp"
+#include "engine/core/memory.hpp"
 #include "engine/integrate/velocity_verlet.hpp"
 #include "engine/state/pair_transfer.hpp"
 #include "engine/core/parallel.hpp"
@@ -389,6 +390,10 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
   s_.contacts.rebuild(find_pairs(p.position, p.radius, skin), p.id, p.size(), rules);
   s_.wall_candidates = wall_candidates(s_.walls, p.position, p.radius, skin);
   s_.verlet.mark_built(p.position, p.radius, wall_u);
+  // The rebuild freed the old columns, the candidate pairs and its look-up: their pages go back
+  // to the system now (the heap is never trimmed otherwise, engine/core/memory.hpp), so a run's
+  // resident set follows the rows it holds rather than the most fragmented heap it has seen.
+  release_free_memory();
 }
 
 void Simulation::rotate_prescribed(double dt, double t_stage_new) {

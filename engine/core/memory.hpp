@@ -8,7 +8,10 @@
 /// mapped on their own, returned on free) gave that memory back but made the hot press of
 /// configs/sps_nial.json 35-40 % slower on the reference machine: each neighbour rebuild's new
 /// arrays were then fresh pages, faulted in again every ~30 steps. So the heap stays as the
-/// libraries leave it, and the pipeline calls release_free_memory() between stages instead.
+/// libraries leave it, and release_free_memory() is called between stages and after every
+/// contact-table rebuild (Simulation::update_neighbors: the old columns, the candidate pairs and
+/// the look-up are freed there), which is what keeps the hot press's resident set near its heap
+/// in use (issue 63).
 #ifdef __GLIBC__
 #include <malloc.h>
 #endif

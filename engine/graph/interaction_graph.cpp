@@ -57,6 +57,17 @@ struct Builder {
     g.particle_nodes = st.particles.size();
     g.wall_nodes = o.walls ? st.walls.size() : 0;
   }
+  /// Room for `edges` edges: at most one per table row is the common case, and columns grown by
+  /// doubling would hold up to twice their edges (and both buffers while the last growth copies).
+  void reserve(std::size_t edges) {
+    g.a.reserve(edges);
+    g.b.reserve(edges);
+    g.kind.reserve(edges);
+    g.distance.reserve(edges);
+    g.overlap.reserve(edges);
+    g.radius.reserve(edges);
+    g.source_row.reserve(edges);
+  }
   void push(Index a, Index b, EdgeKind k, double d, double ov, double rad, std::int64_t row) {
     g.a.push_back(a);
     g.b.push_back(b);
@@ -110,6 +121,7 @@ InteractionGraph build_interaction_graph(const State& s, const GraphOptions& o) 
   const auto& p = s.particles;
   const std::size_t n = p.size();
   Builder bld(s, o);
+  bld.reserve((o.contacts ? s.contacts.size() : 0) + (o.bonds ? s.bonds.size() : 0));
   // Pairs already connected (lookups only, never iterated: the order does not depend on it).
   // Needed only to keep near pairs from duplicating contact and bond edges.
   const bool need_keys = o.near_gap > 0.0 && n > 1;

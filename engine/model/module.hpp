@@ -138,6 +138,9 @@ class Module {
   }
   /// Per-edge outputs for the frames (held between calls like the columns; checkpointed by visit()).
   virtual std::vector<EdgeOutput> edge_outputs() const { return {}; }
+  /// The module's one held edge output itself, when edge_outputs() is a copy of it (nullptr
+  /// otherwise): a frame borrows its arrays instead of copying them and hands them back.
+  virtual EdgeOutput* held_edges() { return nullptr; }
   /// Every piece of state the module keeps between calls goes through here.
   virtual void visit(Archive& ar, const std::string& prefix) {
     (void)ar;

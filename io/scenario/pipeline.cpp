@@ -80,8 +80,17 @@ ContactFrame frame_contacts(const ContactTable& t) {
   FrameField ov{"overlap", 1, {}, "m"}, fn{"force", 3, {}, "N"}, neck{"neck_radius", 1, {}, "m"};
   const int neck_column = t.column("neck_radius");
   const auto force = [&](std::size_t r) { return r < t.force().size() ? t.force()[r] : Vec3::Zero(); };  // none before a force pass
+  const auto shown = [&](std::size_t r) { return t.overlap()[r] > 0.0 || force(r) != Vec3::Zero(); };
+  // Sized exactly (the rows counted first): grown by doubling, the columns held up to twice their
+  // rows, and their last growth the old and the new buffer at once.
+  std::size_t rows = 0;
+  for (std::size_t r = 0; r < t.size(); ++r) rows += shown(r) ? 1 : 0;
+  c.pairs.reserve(2 * rows);
+  ov.data.reserve(rows);
+  fn.data.reserve(3 * rows);
+  if (neck_column >= 0) neck.data.reserve(rows);
   for (std::size_t r = 0; r < t.size(); ++r) {
-    if (!(t.overlap()[r] > 0.0) && force(r) == Vec3::Zero()) continue;
+    if (!shown(r)) continue;
     c.pairs.push_back(t.id_i()[r]);
     c.pairs.push_back(t.id_j()[r]);
     ov.data.push_back(t.overlap()[r]);
@@ -114,6 +123,34 @@ ContactFrame frame_bonds(const State& s) {
   return c;
 }
 
+std::vector<EdgeOutput*> pointers_to(std::vector<EdgeOutput>& v) {
+  std::vector<EdgeOutput*> p;
+  for (EdgeOutput& e : v) p.push_back(&e);
+  return p;
+}
+
+/// Modules' held edge outputs whose arrays a frame's networks hold: handed back (moved) when it
+/// goes out of scope, whether the frame was written or not.
+class LentEdges {
+ public:
+  explicit LentEdges(std::vector<std::pair<std::string, ContactFrame>>& networks) : networks_(networks) {}
+  LentEdges(const LentEdges&) = delete;
+  LentEdges& operator=(const LentEdges&) = delete;
+  /// `to` lent its arrays to network `index` (whose fields are in the order of to->fields).
+  void add(EdgeOutput* to, std::size_t index) { lent_.push_back({to, index}); }
+  ~LentEdges() {
+    for (auto& [to, index] : lent_) {
+      ContactFrame& frame = networks_[index].second;
+      to->pairs = std::move(frame.pairs);
+      for (std::size_t k = 0; k < to->fields.size() && k < frame.fields.size(); ++k) to->fields[k].values = std::move(frame.fields[k].data);
+    }
+  }
+
+ private:
+  std::vector<std::pair<std::string, ContactFrame>>& networks_;
+  std::vector<std::pair<EdgeOutput*, std::size_t>> lent_;
+};
+
 /// The I/O side of a run: frames, time series, checkpoints, progress, the run log.
 class OutputObserver final : public Observer {
  public:
@@ -143,13 +180,22 @@ class OutputObserver final : public Observer {
     last_frame_step_ = s.step;
     FrameContent fc{s.step, s.time, stage_, frame_particles(s.particles), frame_contacts(s.contacts), std::nullopt, {}, false, false};
     if (s.bonds.size() > 0) fc.bonds = frame_bonds(s);
-    for (const Module* m : modules_)
-      for (EdgeOutput& eo : m->edge_outputs()) {  // a copy of the module's: moved, not copied again
+    // A module's held edge output is lent to the frame (its arrays moved in, and moved back by
+    // `lent` once the frame is written, or fails), not copied; other modules' are copies.
+    LentEdges lent(fc.networks);
+    for (Module* m : modules_) {
+      EdgeOutput* held = m->held_edges();
+      if (held && held->name.empty()) continue;  // nothing held yet: edge_outputs() is empty too
+      std::vector<EdgeOutput> copies;
+      if (!held) copies = m->edge_outputs();
+      for (EdgeOutput* eo : held ? std::vector<EdgeOutput*>{held} : pointers_to(copies)) {
         ContactFrame n;
-        n.pairs = std::move(eo.pairs);
-        for (EdgeField& ef : eo.fields) n.fields.push_back({ef.name, 1, std::move(ef.values), ef.unit});
-        fc.networks.emplace_back(eo.name, std::move(n));
+        n.pairs = std::move(eo->pairs);
+        for (EdgeField& ef : eo->fields) n.fields.push_back({ef.name, 1, std::move(ef.values), ef.unit});
+        fc.networks.emplace_back(eo->name, std::move(n));
+        if (held) lent.add(held, fc.networks.size() - 1);
       }
+    }
     const std::string& mode = cfg_.network_output;
     const bool automatic = mode == "auto" && (!fc.networks.empty() || fc.bonds);
     fc.contact_lines = automatic || mode == "contacts" || mode == "both";

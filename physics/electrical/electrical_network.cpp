@@ -63,6 +63,16 @@ struct ResistorNet {
   std::vector<double> g;
   std::vector<double> share;  ///< share of the resistor's dissipation that heats heat_a (the rest heats heat_b)
   std::vector<Index> high, low;
+  /// Room for `n` resistors (columns grown by doubling hold up to twice their rows, and both
+  /// buffers while the last growth copies).
+  void reserve(std::size_t n) {
+    a.reserve(n);
+    b.reserve(n);
+    g.reserve(n);
+    heat_a.reserve(n);
+    heat_b.reserve(n);
+    share.reserve(n);
+  }
   void add(Index x, Index y, double gxy, Index ha, Index hb, double share_a = 0.5) {
     a.push_back(x);
     b.push_back(y);
@@ -412,6 +422,7 @@ BuiltNet particle_centred_net(const InteractionGraph& g, const std::vector<doubl
   BuiltNet b;
   b.centre.assign(g.nodes(), -1);
   b.net.nodes = g.nodes();
+  b.net.reserve(g.size());
   for (std::size_t e = 0; e < g.size(); ++e)
     b.net.add(g.a[e], g.b[e], G[e], particle_of(g, g.a[e]), particle_of(g, g.b[e]), std::isfinite(share[e]) ? share[e] : 0.5);
   b.net.high = high;
@@ -749,7 +760,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   go.walls = is_wall_electrode(p_.high) || is_wall_electrode(p_.low);
   go.near_gap = branch_model_near_gap(branch_);
   go.contacts = p_.branches != "bonds";
-  const InteractionGraph g = build_interaction_graph(s, go);
+  InteractionGraph g = build_interaction_graph(s, go);
   std::vector<double> G, share;
   try {  // the sphere-element topology builds its own conductances from the neck radii
     if (branch_.model == "sintered_neck") record_network_necks(s, g);
@@ -780,6 +791,10 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
                              p_.element_cap == "rim" ? el::CapRule::Rim : el::CapRule::EqualArea, r_.negative_share);
     } catch (const ConfigError& e) { throw PhysicsError(info.step, {}, "sphere element", e.what()); }
   }
+  // The conductances are the net's now; the graph's geometry is not read past this point.
+  std::vector<double>().swap(G);
+  std::vector<double>().swap(share);
+  g.drop_geometry();
   const ResistorNet& net = b.net;
   const bool driven = p_.current > 0.0;
   const double applied = applied_voltage(s, p_, info.step);
@@ -888,6 +903,7 @@ void ElectricalNetwork::visit(Archive& ar, const std::string& prefix) {
   // The held per-branch results (written with every frame until the next solve).
   std::vector<std::int64_t> pairs = edges_.pairs;
   std::vector<double> branch;
+  if (!ar.reading()) branch.reserve(edges_.fields.size() * (pairs.size() / 2));
   if (!ar.reading())
     for (std::size_t k = 0; k < pairs.size() / 2; ++k)
       for (const auto& f : edges_.fields) branch.push_back(f.values[k]);

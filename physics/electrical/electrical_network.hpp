@@ -168,6 +168,7 @@ class ElectricalNetwork final : public Module {
   std::vector<EdgeOutput> edge_outputs() const override {
     return held_edge_output(edges_);
   }
+  EdgeOutput* held_edges() override { return &edges_; }
 
   /// Results of the last solve (held between solves).
   struct Result {

@@ -155,6 +155,7 @@ class PtcStrain final : public Module {
   std::vector<EdgeOutput> edge_outputs() const override {
     return held_edge_output(contacts_);
   }
+  EdgeOutput* held_edges() override { return &contacts_; }
 
  private:
   Params p_;

@@ -63,6 +63,17 @@ TEST_CASE("electrical_network writes branch currents, conductances and powers to
   const auto through = f.read_doubles("/particles/particle_current");
   REQUIRE(through.size() == n);
   for (double x : through) CHECK(std::abs(x - I) <= 1e-12 * I);
+  // The frame borrows the module's held branch output and hands it back: the stage's final state,
+  // written after the frame, checkpoints the same branches, bit for bit.
+  const auto ck = sparkdem::io::H5File::open_read(opt.outdir / "final_state.h5");
+  CHECK(ck.read_int64s("/modules/electrical_network/branch_pairs") == pairs);
+  const auto held = ck.read_doubles("/modules/electrical_network/branch_values");
+  REQUIRE(held.size() == 3 * current.size());
+  for (std::size_t e = 0; e < current.size(); ++e) {
+    CHECK(held[3 * e] == current[e]);
+    CHECK(held[3 * e + 1] == g[e]);
+    CHECK(held[3 * e + 2] == power[e]);
+  }
 }
 
 }  // namespace test_electrical_output
