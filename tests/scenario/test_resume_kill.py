@@ -5,7 +5,7 @@ A small SPS pipeline (configs/sps_nial_small.json cut down: pack, heat, hot pres
 the grain-boundary calibration sweep over the snapshots, a conductivity sweep; fewer particles
 and shorter stops; wall-clock checkpoints every 0.1 s) is run once uninterrupted (A). The same
 scene is then run into B and killed with SIGKILL at moments drawn from a seeded generator (each a
-wall delay after the start of an attempt), each attempt after the first continuing with
+wall delay once the folder holds a restart point), each attempt after the first continuing with
 `--resume`, then resumed to its end (a second --resume must say the run has completed and exit 0;
 --resume into a missing folder and --resume with --restart must exit 2). B must equal A file by
 file:
@@ -88,10 +88,15 @@ def env():
     return e
 
 
-def attempt(cmd, delay, log):
-    """Starts `cmd`, kills it with SIGKILL after `delay` s; the exit code, or None when killed."""
+def attempt(cmd, delay, log, folder):
+    """Starts `cmd`, kills it with SIGKILL `delay` s after `folder` holds a restart point (at once
+    for a resumed attempt; a fresh one first writes its first, so that every kill leaves something
+    to resume, however slow the machine); the exit code, or None when killed."""
     with open(log + ".out", "w") as out, open(log + ".err", "w") as err:
         p = subprocess.Popen(cmd, stdout=out, stderr=err, env=env())
+        points = [os.path.join(folder, f) for f in ("final_state.h5", "checkpoint.h5")]
+        while p.poll() is None and not any(os.path.exists(f) for f in points):
+            time.sleep(0.005)
         try:
             return p.wait(timeout=delay)
         except subprocess.TimeoutExpired:
@@ -244,7 +249,7 @@ def kill_series(sparkdem, scene_file, B, wall, rng, kills_wanted, failures):
         delay = rng.uniform(0.05, 0.2) * wall
         cmd = [sparkdem, "run", scene_file, "-o", B, "--quiet"] + (["--resume"] if started else [])
         log = f"{B}_{kills}"
-        rc = attempt(cmd, delay, log)
+        rc = attempt(cmd, delay, log, B)
         with open(log + ".err") as f:
             err = f.read()
         if rc is None:
@@ -260,7 +265,7 @@ def kill_series(sparkdem, scene_file, B, wall, rng, kills_wanted, failures):
         else:
             failures.append(f"{name}: an attempt exited {rc}: {err.strip()[-500:]}")
             return kills
-    rc = run([sparkdem, "run", scene_file, "-o", B, "--resume"], B + "_last")
+    rc = run([sparkdem, "run", scene_file, "-o", B] + (["--resume"] if started else []), B + "_last")
     with open(B + "_last.err") as f:
         last = f.read()
     print(f"{name}: last resume: exit {rc}; {last.strip()[:200]}")
