@@ -961,6 +961,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   obs.steps_planned(dt_used, res.stable_dt_at_start, res.module_steps);
   const double t_area = die_area(s_.walls);
   if (!resume) evaluate_start(dt_used, t_area, res);
+  obs.stage_started(res);
 
   std::vector<std::string> cols;
   std::vector<double> vals;

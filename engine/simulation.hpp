@@ -137,6 +137,8 @@ struct ModuleStep {
   std::string clock;
 };
 
+struct StageResult;
+
 /// Callbacks to the I/O layer (the engine never writes files itself).
 class Observer {
  public:
@@ -163,6 +165,10 @@ class Observer {
     (void)stable_mechanical;
     (void)modules;
   }
+  /// At the stage start, after steps_planned (also on resume): the result so far, whose start
+  /// figures (initial overlaps, stable step at the start, module steps) a resumed stage cannot
+  /// measure again, so the I/O layer keeps them with its restart points.
+  virtual void stage_started(const StageResult& so_far) { (void)so_far; }
   /// The state passed the run watchdog (engine/watchdog.hpp): at the stage start (before step 0,
   /// also on resume) and every watchdog.snapshot_every_checks checks, at the point of the step
   /// where checkpoints are taken. The I/O layer keeps a copy, written as a checkpoint if the run

@@ -27,6 +27,7 @@
 #include "io/scenario/calibrate_beams.hpp"
 #include "io/scenario/json_binder.hpp"
 #include "io/scenario/pipeline.hpp"
+#include "io/scenario/resume.hpp"
 #include "io/scenario/sweep.hpp"
 #include "io/scenario/scenario.hpp"
 #include "physics/register_all.hpp"
@@ -76,8 +77,8 @@ void print_continue_hint(std::ostream& out, const sparkdem::io::RunProgress& p, 
       << (p.until_unmet ? "ended at its hard stop with its required 'until' conditions unmet" : "was the last stage to complete")
       << "; its end state is " << p.final_state.string() << ". To continue the run from it with stage '" << p.next_stage << "' ("
       << p.stage_number + 1 << " of " << p.stages << ")" << (p.until_unmet ? ", accepting that state," : " once the cause is fixed")
-      << ":\n  " << line << "\n(a new output directory keeps this run's frames and index files in " << outdir.string()
-      << "; restarting into it replaces them";
+      << ":\n  " << line << "\n(a new output directory leaves this run's folder " << outdir.string()
+      << " as it is; `--restart " << p.final_state.string() << "` into it instead continues it in place, keeping its frames, rows and stages";
   if (sparkdem::io::ranks::size() > 1)
     out << "; this run had " << sparkdem::io::ranks::size() << " MPI ranks: start it under the same launcher, e.g. mpirun -np "
         << sparkdem::io::ranks::size();
@@ -108,7 +109,7 @@ int threads_per_rank(int requested) {
 struct CliArgs {
   std::string scene, outdir = "out", restart;
   int threads = 0;
-  bool quiet = false, report_only = false;
+  bool quiet = false, report_only = false, resume = false;
 };
 
 /// `sparkdem calibrate`: fit cohesive-beam parameters on the tension test of calibration file `file`.
@@ -147,6 +148,9 @@ int run_scene(sparkdem::io::Scenario& sc, CliArgs a, sparkdem::io::RunProgress& 
   }
   serving = io::ranks::size() > 1;
   set_amg_spread_ranks(io::ranks::size());  // large network solves outside sweeps use every rank
+  // Only an existing directory is searched for --resume (resolve_output_directory creates one).
+  if (a.resume && !std::filesystem::is_directory(a.outdir))
+    throw io::NothingToResume("nothing to resume: the output directory '" + a.outdir + "' does not exist");
   io::RunOptions opt;
   // Resolved once: every file goes to the physical path ("LINK/../out" as the OS takes it);
   // messages show the path as given, and the physical one where it differs.
@@ -155,6 +159,17 @@ int run_scene(sparkdem::io::Scenario& sc, CliArgs a, sparkdem::io::RunProgress& 
   opt.threads = a.threads;
   opt.progress = &progress;
   if (!a.restart.empty()) opt.restart = a.restart;
+  if (a.resume) {
+    const io::ResumeChoice c = io::find_resume_point(sc, opt.outdir);
+    if (!a.quiet)
+      for (const auto& p : c.passed_over) err() << "--resume: passed over " << p << "\n";
+    if (c.finished) {
+      err() << c.description << "\n";
+      return 0;
+    }
+    err() << c.description << "\n";
+    opt.restart = c.file;
+  }
   physical_outdir = opt.outdir;
   const io::json summary = io::run_scenario(sc, opt);
   if (!a.quiet)
@@ -180,7 +195,12 @@ int run_command(int argc, char** argv, bool& serving) {
   run->add_option("scene", a.scene, "scenario JSON file")->required();
   run->add_option("-o,--output", a.outdir, "output directory");
   run->add_option("--threads", a.threads, "OpenMP threads (0 = default)");
-  run->add_option("--restart", a.restart, "continue from this checkpoint");
+  auto* restart = run->add_option("--restart", a.restart,
+                                  "continue from this checkpoint (one in OUTDIR or OUTDIR/snapshots continues the folder in place)");
+  run->add_flag("--resume", a.resume,
+                "continue the run in OUTDIR in place from its newest valid restart point (checkpoint, snapshot, end of a stage); "
+                "exit 2 when there is none, 0 when the run has completed")
+      ->excludes(restart);
   run->add_flag("--quiet", a.quiet, "no progress output");
   run->add_flag("--report-only", a.report_only,
                 "checks with a tolerance band only report (summary.json, run.log, stderr): exit 0 when one fails");
@@ -231,6 +251,9 @@ int run_command(int argc, char** argv, bool& serving) {
   } catch (const ConfigError& e) {
     err() << "error: " << e.what() << "\n";
     hint();
+    return 2;
+  } catch (const io::NothingToResume& e) {
+    err() << "error: " << e.what() << "\n";
     return 2;
   } catch (const Interrupted& e) {
     err() << "\n" << e.what() << "\n";

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <limits>
 #include <regex>
 #include <set>
@@ -106,6 +108,20 @@ void take_over(const fs::path& outdir) {
   if (ec) throw SetupError("results directory '" + (outdir / kFrames).string() + "': cannot list it: " + ec.message());
 }
 
+/// The order a frame's index entry lists its fields and line sets in, whoever made it (the writer
+/// or read_frame_info from the file): fields by name, then contacts, bonds and the networks by
+/// name. A frame's XDMF entry is then the same whether the run wrote the frame or a continuation
+/// in place read it back.
+void canonical_order(FrameInfo& info) {
+  const auto by_name = [](const auto& a, const auto& b) { return a.first < b.first; };
+  std::sort(info.fields.begin(), info.fields.end(), by_name);
+  for (FrameInfo::LineSet& line : info.lines) std::sort(line.fields.begin(), line.fields.end(), by_name);
+  const auto rank = [](const FrameInfo::LineSet& l) { return l.group == "/contacts" ? 0 : l.group == "/bonds" ? 1 : 2; };
+  std::stable_sort(info.lines.begin(), info.lines.end(), [&](const FrameInfo::LineSet& a, const FrameInfo::LineSet& b) {
+    return rank(a) != rank(b) ? rank(a) < rank(b) : a.name < b.name;
+  });
+}
+
 /// Removes a tmp file when a write fails half way (unless dismissed after the commit).
 struct TmpGuard {
   fs::path file;
@@ -119,7 +135,78 @@ struct TmpGuard {
 
 }  // namespace
 
-ResultsWriter::ResultsWriter(fs::path outdir) : outdir_(std::move(outdir)) { take_over(outdir_); }
+ResultsWriter::ResultsWriter(fs::path outdir, const std::optional<Kept>& keep) : outdir_(std::move(outdir)) {
+  if (keep)
+    continue_in(*keep);
+  else
+    take_over(outdir_);
+}
+
+namespace {
+
+/// The comma-separated fields of one CSV line (the time series has no quoted fields).
+std::vector<std::string> csv_fields(const std::string& line) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t comma = line.find(',', start);
+    out.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) return out;
+    start = comma + 1;
+  }
+}
+
+}  // namespace
+
+void ResultsWriter::read_timeseries(std::size_t columns, std::size_t rows) {
+  columns_.clear();
+  rows_.clear();
+  if (columns == 0) return;
+  std::ifstream in(outdir_ / kCsv);
+  if (!in) fail(std::string(kCsv) + " is missing, but the restart point recorded " + std::to_string(rows) + " time-series rows");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header = csv_fields(line);
+  if (header.size() < columns)
+    fail(std::string(kCsv) + " has " + std::to_string(header.size()) + " columns, the restart point recorded " + std::to_string(columns));
+  header.resize(columns);
+  columns_ = header;
+  for (std::size_t r = 0; r < rows; ++r) {
+    if (!std::getline(in, line))
+      fail(std::string(kCsv) + " has " + std::to_string(r) + " rows, the restart point recorded " + std::to_string(rows));
+    const std::vector<std::string> fields = csv_fields(line);
+    if (fields.size() < columns) fail(std::string(kCsv) + " row " + std::to_string(r) + " has too few values");
+    std::vector<double> row(columns);
+    for (std::size_t c = 0; c < columns; ++c) {
+      char* end = nullptr;
+      row[c] = std::strtod(fields[c].c_str(), &end);
+      if (end == fields[c].c_str() || *end != '\0') fail(std::string(kCsv) + " row " + std::to_string(r) + ": '" + fields[c] + "' is not a number");
+    }
+    rows_.push_back(std::move(row));
+  }
+}
+
+void ResultsWriter::continue_in(const Kept& keep) {
+  std::error_code ec;
+  fs::create_directories(outdir_ / kFrames, ec);
+  if (ec) throw SetupError("results directory '" + outdir_.string() + "': cannot create it: " + ec.message());
+  // Everything kept is read before anything is removed.
+  read_timeseries(keep.columns, keep.rows);
+  for (int k = 0; k < keep.frames; ++k) {
+    if (!fs::exists(outdir_ / frame_file(k), ec))
+      fail(frame_file(k) + " is missing, but the restart point recorded " + std::to_string(keep.frames) + " frames");
+    frames_.push_back(read_frame_info(outdir_, frame_file(k)));
+  }
+  write_index();  // the index first: it must not refer to the frames removed next
+  static const std::regex frame_name(R"(frame_([0-9]{6,})\.h5(\.tmp)?)");
+  std::smatch m;
+  for (const auto& entry : fs::directory_iterator(outdir_ / kFrames, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (std::regex_match(name, m, frame_name) && (m[2].matched || std::stoll(m[1].str()) >= keep.frames)) remove_if_present(entry.path());
+  }
+  if (ec) fail("cannot list '" + (outdir_ / kFrames).string() + "': " + ec.message());
+  sync_directory(outdir_ / kFrames);
+}
 
 ResultsWriter::~ResultsWriter() {
   std::error_code ec;
@@ -261,6 +348,7 @@ std::string ResultsWriter::write_frame(const FrameContent& frame) {
   }
   commit_file(tmp.file, final_path);
   tmp.armed = false;
+  canonical_order(info);
   frames_.push_back(std::move(info));
   index_current_ = false;
   return relative;
@@ -283,6 +371,7 @@ FrameInfo read_frame_info(const fs::path& dir, const std::string& file) {
         if (f != "pairs" && f != "nodes") line.fields.emplace_back(f, width(h5.shape(group + "/" + f)));
       info.lines.push_back(std::move(line));
     }
+    canonical_order(info);
     return info;
   } catch (const std::out_of_range&) { throw SetupError("frame file '" + (dir / file).string() + "': a dataset has no rows dimension"); }
 }

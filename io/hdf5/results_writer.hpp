@@ -21,14 +21,19 @@
 ///                            none): ParaView's XDMF Reader shows one block per collection;
 ///  - timeseries.csv          the time series as text.
 /// The three index files are rewritten together by write_index() (each atomically: tmp, fsync,
-/// rename) and by finalize(); the pipeline calls write_index() after every checkpoint and at
-/// the end of every stage, so after a crash they describe the run up to its last checkpoint (the
-/// state a restart continues from), while frames/ holds every frame written up to the crash.
+/// rename) and by finalize(); the pipeline calls write_index() just before every checkpoint,
+/// snapshot and stage-end state file is committed, so after a crash they describe the run up to
+/// its last restart point at least (a continuation in place keeps what that point records), while
+/// frames/ holds every frame written up to the crash.
 ///
 /// A new writer takes over the directory: it removes the results of an earlier run there (the
 /// frame files frames/frame_*.h5, results.h5, results.xdmf, timeseries.csv and tmp files of
-/// them); checkpoints and other files are not touched. A writer destroyed without finalize()
-/// removes only its tmp files: the frames written so far stay.
+/// them); checkpoints and other files are not touched. A writer that continues a run in place
+/// (ResultsWriter::Kept: what the folder held at the restart point) keeps the first `frames`
+/// frame files and the first `rows` time-series rows of the first `columns` columns (read back
+/// from timeseries.csv, whose numbers round-trip exactly), rewrites the index files with just
+/// those, then removes every later frame file: the next frame written is frame `frames`. A writer
+/// destroyed without finalize() removes only its tmp files: the frames written so far stay.
 ///
 /// Frame file layout (frames/frame_NNNNNN.h5; in results.h5 the same below /frames/NNNNNN):
 ///   /                   attributes step (int64), time (double), stage (string)
@@ -108,8 +113,16 @@ std::string xdmf_of_frames(const std::vector<FrameInfo>& frames, const std::vect
 
 class ResultsWriter {
  public:
-  /// Creates `outdir` and `outdir/frames` if needed and removes an earlier run's results there.
-  explicit ResultsWriter(std::filesystem::path outdir);
+  /// What a folder held at a restart point (see the header comment).
+  struct Kept {
+    int frames = 0;
+    std::size_t columns = 0;
+    std::size_t rows = 0;
+  };
+  /// Creates `outdir` and `outdir/frames` if needed and removes an earlier run's results there;
+  /// with `keep`, keeps those of them (throws SetupError naming what is missing when the folder
+  /// holds less than `keep` says).
+  explicit ResultsWriter(std::filesystem::path outdir, const std::optional<Kept>& keep = std::nullopt);
   ResultsWriter(const ResultsWriter&) = delete;
   ResultsWriter& operator=(const ResultsWriter&) = delete;
   /// Removes the tmp files; written frames stay.
@@ -137,6 +150,9 @@ class ResultsWriter {
   bool finalize();
   /// Number of frames written so far.
   int frames() const { return static_cast<int>(frames_.size()); }
+  /// The time series as set last (after a continuation: the rows kept).
+  const std::vector<std::string>& columns() const { return columns_; }
+  const std::vector<std::vector<double>>& rows() const { return rows_; }
   /// Frame file of frame `index`, relative to the output directory ("frames/frame_000003.h5").
   static std::string frame_file(int index);
   /// Least gap between two times of results.xdmf [s]: ParaView's XDMF reader (XDMFReader)
@@ -156,6 +172,10 @@ class ResultsWriter {
   void write_results_h5(const std::filesystem::path& file) const;
   std::string xdmf_text() const;
   std::string csv_text() const;
+  /// The continuation of a run in place (constructor with `keep`).
+  void continue_in(const Kept& keep);
+  /// The first `rows` rows of the first `columns` columns of timeseries.csv into columns_, rows_.
+  void read_timeseries(std::size_t columns, std::size_t rows);
   /// Throws a SetupError about `what` in this writer's output directory.
   [[noreturn]] void fail(const std::string& what) const;
 

@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "engine/core/error.hpp"
+#include "io/files/durable_file.hpp"
 
 namespace sparkdem::io {
 
@@ -150,6 +151,31 @@ void seal_checkpoint(const fs::path& file) {
   const int fd = f.fd;
   f.fd = -1;
   if (::close(fd) != 0) fail_errno(file, "cannot close it", errno);
+}
+
+fs::path previous_checkpoint_name(const fs::path& file) {
+  fs::path p = file;
+  p.replace_filename(file.stem().string() + ".previous" + file.extension().string());
+  return p;
+}
+
+void keep_previous_checkpoint(const fs::path& file) {
+  std::error_code ec;
+  if (!fs::exists(file, ec)) return;
+  // A second name for the current checkpoint (a hard link, renamed over the previous one), so
+  // that `file` itself stays until the new checkpoint is renamed over it: a kill at any moment
+  // leaves `file`. Where the file system has no hard links, the current one is renamed instead.
+  const fs::path previous = previous_checkpoint_name(file);
+  const fs::path link = tmp_name(previous);
+  fs::remove(link, ec);
+  if (::link(file.c_str(), link.c_str()) == 0) {
+    rename_durably(link, previous);
+    // rename() of two names of one file does nothing (POSIX): when `previous` already is `file`
+    // (a run killed after this link, before its new checkpoint, then resumed), the link stays.
+    fs::remove(link, ec);
+  } else {
+    rename_durably(file, previous);
+  }
 }
 
 namespace {

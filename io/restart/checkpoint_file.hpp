@@ -56,6 +56,16 @@ std::string checkpoint_header(std::uint64_t payload_bytes, std::uint64_t checksu
 /// header into the user block and fsyncs the file. Throws SetupError.
 void seal_checkpoint(const std::filesystem::path& file);
 
+/// The name the previous checkpoint keeps when a new one is written over `file`:
+/// "checkpoint.h5" -> "checkpoint.previous.h5" (see keep_previous_checkpoint).
+std::filesystem::path previous_checkpoint_name(const std::filesystem::path& file);
+
+/// Before a new checkpoint is written to `file`: the one there (if any) becomes
+/// previous_checkpoint_name(file) too (a hard link renamed over the older one), so that the newest
+/// two are kept and `file` is never missing: the new checkpoint is renamed over it when complete.
+/// Throws SetupError.
+void keep_previous_checkpoint(const std::filesystem::path& file);
+
 /// Reads a sealed checkpoint and verifies its header, length and checksum, without any HDF5
 /// call. Returns the whole file (header included). Throws SetupError naming the file and what is
 /// wrong: does not exist, empty, truncated (shorter than the header or than the header says),

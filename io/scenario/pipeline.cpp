@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <iostream>
 #include <map>
+#include <set>
 
 #include "engine/core/error.hpp"
 #include "engine/core/memory.hpp"
@@ -151,14 +152,51 @@ class LentEdges {
   std::vector<std::pair<EdgeOutput*, std::size_t>> lent_;
 };
 
+json start_entries(const StageResult& r);
+
 /// The I/O side of a run: frames, time series, checkpoints, progress, the run log.
 class OutputObserver final : public Observer {
  public:
-  OutputObserver(const std::filesystem::path& outdir, bool quiet, RunLog& log)
-      : outdir_(outdir), log_(log), writer_(outdir), quiet_(quiet) {
+  /// `kept`: a continuation in place, what the folder held at the restart point (the
+  /// "outputs" of its pipeline record, see outputs()); null: a fresh start of the folder's results.
+  OutputObserver(const std::filesystem::path& outdir, bool quiet, RunLog& log, const json& kept = json())
+      : outdir_(outdir), log_(log), writer_(outdir, kept_results(kept)), quiet_(quiet) {
     tty_ = isatty(fileno(stderr));
     remove_healthy_files();  // a killed run's scratch copy (and its tmp file) is nobody's state any more
+    // A kill between keep_previous_checkpoint's link and its rename leaves the link's tmp name.
+    std::error_code ec;
+    std::filesystem::remove(tmp_name(previous_checkpoint_name(outdir_ / "checkpoint.h5")), ec);
+    columns_ = writer_.columns();
+    for (std::size_t c = 0; c < columns_.size(); ++c) col_index_[columns_[c]] = c;
+    for (const auto& row : writer_.rows()) {
+      std::map<std::string, double> r;
+      for (std::size_t c = 0; c < columns_.size(); ++c) r[columns_[c]] = row[c];
+      rows_.push_back(std::move(r));
+    }
   }
+  /// What the folder's results hold now, for the pipeline record of every state file ("outputs"):
+  /// frames, time-series columns and rows, the summary's stage entries so far (`stages`) and the
+  /// opening part of the running stage's entry. A continuation in place keeps exactly these.
+  json outputs() const {
+    json o = {{"frames", writer_.frames()}, {"columns", columns_.size()}, {"rows", rows_.size()}};
+    o["stages"] = stages_ ? *stages_ : json::array();
+    if (!stage_entry_.is_null()) o["stage_entry"] = stage_entry_;
+    if (!start_entries_.is_null()) o["stage_start"] = start_entries_;
+    return o;
+  }
+  /// The summary's stage entries (outputs()); the running stage's opening entry (null: none).
+  void set_summary_stages(const json* stages) { stages_ = stages; }
+  void set_stage_entry(json entry) {
+    stage_entry_ = std::move(entry);
+    start_entries_ = json();
+  }
+  /// The running stage's start entries (start_entries): measured by its start, or on a resume
+  /// those the restart point kept (set_stage_start), which the resumed start does not replace.
+  void stage_started(const StageResult& r) override {
+    if (start_entries_.is_null()) start_entries_ = start_entries(r);
+  }
+  void set_stage_start(json start) { start_entries_ = std::move(start); }
+  const json& stage_start() const { return start_entries_; }
   ~OutputObserver() override { drop_healthy_file(); }
   OutputObserver(const OutputObserver&) = delete;
   OutputObserver& operator=(const OutputObserver&) = delete;
@@ -226,12 +264,15 @@ class OutputObserver final : public Observer {
     return cfg_.checkpoint_every_s > 0.0 && std::chrono::duration<double>(steady::now() - last_checkpoint_).count() >= cfg_.checkpoint_every_s;
   }
   void checkpoint(State& s) override {
-    last_checkpoint_ = steady::now();  // the wall-clock interval counts from the last checkpoint of any kind
     const std::filesystem::path file = checkpoint_file_.empty() ? outdir_ / "checkpoint.h5" : checkpoint_file_;
+    publish();  // first: the index then holds at least what the checkpoint records (outputs())
+    keep_previous_checkpoint(file);  // the newest two are kept
     write_checkpoint(file, s, true);
     log_.line("checkpoint written: " + (checkpoint_file_.empty() ? std::string("checkpoint.h5") : file.string()) + " (step " +
               std::to_string(s.step) + ", stage '" + stage_ + "')");
-    publish();
+    // The wall-clock interval counts from the end of the last checkpoint of any kind: a run
+    // computes for at least checkpoint_every_s between two, however long writing one takes.
+    last_checkpoint_ = steady::now();
   }
   /// The watchdog passed: keep a copy of what a checkpoint of this state would hold, in memory
   /// when a checkpoint would store it in at most watchdog.snapshot_memory_max_bytes, else as the
@@ -293,10 +334,10 @@ class OutputObserver final : public Observer {
   void final_state(State& s, const std::function<void(const std::filesystem::path&)>& committed = {}) {
     healthy_.clear();  // a later failure is not this stage's
     drop_healthy_file();
+    publish();  // first: the index then holds at least what the state file records (outputs())
     write_checkpoint(outdir_ / "final_state.h5", s, false);
     if (committed) committed(outdir_ / "final_state.h5");
     log_.line("final state written: final_state.h5 (step " + std::to_string(s.step) + ", after stage '" + stage_ + "')");
-    publish();
   }
   void write_checkpoint(const std::filesystem::path& file, State& s, bool in_stage) {
     Hdf5Archive ar = Hdf5Archive::for_writing(file);
@@ -328,7 +369,9 @@ class OutputObserver final : public Observer {
     ar.visit("pipeline/in_stage", flag);
     for (Module* m : modules_) m->visit(ar, "modules/" + m->name());
     if (record_) {
-      std::string r = record_().dump();
+      json rec = record_();
+      rec["outputs"] = outputs();
+      std::string r = rec.dump();
       ar.visit("pipeline/record", r);
     }
   }
@@ -434,6 +477,15 @@ class OutputObserver final : public Observer {
     remove_healthy_files();
     healthy_in_file_ = false;
   }
+  /// The writer's continuation from the "outputs" of a restart point's record (none: null).
+  static std::optional<ResultsWriter::Kept> kept_results(const json& kept) {
+    if (!kept.is_object()) return std::nullopt;
+    try {
+      return ResultsWriter::Kept{kept.at("frames").get<int>(), kept.at("columns").get<std::size_t>(), kept.at("rows").get<std::size_t>()};
+    } catch (const json::exception& e) { throw SetupError(std::string("the restart point's record of the folder's outputs is malformed: ") + e.what()); }
+  }
+  const json* stages_ = nullptr;
+  json stage_entry_, start_entries_;
   MemoryArchive healthy_;          ///< the last state that passed the watchdog (see healthy()), when small
   bool healthy_in_file_ = false;   ///< the last healthy state is healthy_file() instead
   Step healthy_step_ = -1;
@@ -579,6 +631,9 @@ struct RestartPoint {
   std::size_t first = 0;
   bool resume = false;
   std::unique_ptr<Hdf5Archive> archive;
+  /// A continuation in place (RunOptions::in_place): what the folder held at the restart point
+  /// (OutputObserver::outputs()); null otherwise, or when the file records none.
+  json outputs;
 };
 
 /// The restart checkpoint of `opt` read into `s` and `record` (one verified read: the state and
@@ -594,11 +649,21 @@ RestartPoint read_restart(const Scenario& sc, const RunOptions& opt, State& s, R
                      std::to_string(sc.stages.size()) + " stages");
   rp.first = static_cast<std::size_t>(in_stage ? k : k + 1);
   rp.resume = in_stage;
-  if (!opt.record && rp.archive->has("pipeline/record")) {
+  if (rp.archive->has("pipeline/record")) {
     std::string r;
     rp.archive->visit("pipeline/record", r);
-    record = RunRecord::from_json(json::parse(r, nullptr, false));
+    const json j = json::parse(r, nullptr, false);
+    if (!opt.record) record = RunRecord::from_json(j);
+    // The folder's outputs at the restart point: a run's own (a checkpoint written inside a
+    // sweep item records the item's folder as "outputs" and the run's as "sweep_outputs").
+    if (opt.in_place && j.is_object()) {
+      const json* own = !opt.record && j.contains("sweep_outputs") && !j["sweep_outputs"].is_null() ? &j["sweep_outputs"]
+                                                                                                       : (j.contains("outputs") ? &j["outputs"] : nullptr);
+      if (own) rp.outputs = *own;
+    }
   }
+  if (opt.in_place && rp.outputs.is_null())
+    log.line("restart: checkpoint '" + opt.restart->string() + "' records no outputs of the folder: its results are started afresh");
   log.line("restart: checkpoint '" + opt.restart->string() + "' verified, step " + std::to_string(s.step) + ", stage " +
            std::to_string(kc) + (in_stage ? " (inside it)" : " (after it)"));
   return rp;
@@ -663,8 +728,37 @@ StagePrep prepare_stage(State& s, StageDef& st, const Scenario& sc, bool resumin
   return p;
 }
 
+/// The summary entries a stage measures at its start (before step 0): the stable step then, the
+/// step and its fraction of it, the module steps and the initial overlaps. A resumed stage cannot
+/// measure them again: the restart point keeps them (OutputObserver::stage_started).
+json start_entries(const StageResult& r) {
+  json js;
+  js["dt_s"] = r.dt;
+  js["stable_dt_at_start_s"] = finite_or_null(r.stable_dt_at_start);
+  js["dt_fraction_of_stable"] = finite_or_null(r.dt_fraction_used);
+  const auto& o = r.initial_overlap;
+  js["initial_overlap"] = {{"policy", o.policy},
+                           {"limit", o.limit},
+                           {"max_ratio", o.max_ratio},
+                           {"pairs_over_limit", o.pairs_over_limit},
+                           {"walls_over_limit", o.walls_over_limit},
+                           {"worst_ids", {o.worst_i, o.worst_j}},
+                           {"worst_wall", o.worst_wall},
+                           {"relax_sweeps", o.sweeps},
+                           {"max_ratio_after", o.max_ratio_after},
+                           {"particles_moved", o.moved},
+                           {"max_displacement_m", o.max_displacement}};
+  js["module_steps"] = json::object();
+  for (const auto& m : r.module_steps)
+    js["module_steps"][m.name] = {
+        {"stable_dt_s", finite_or_null(m.stable_dt)}, {"dt_s", m.dt}, {"calls_per_step", m.calls_per_step}, {"clock", m.clock}};
+  if (r.module_steps.empty()) js.erase("module_steps");
+  return js;
+}
+
 /// The summary entries of a stepping stage's result (steps, times, timers, step plan, final values).
-void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool resuming) {
+/// `start`: on a resume, the start entries the restart point kept (null: those of `r`).
+void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool resuming, const json& start = json()) {
   js["steps"] = r.steps;
   js["simulated_time_s"] = r.simulated_time;
   js["mechanical_time_s"] = r.simulated_time;
@@ -682,9 +776,11 @@ void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool 
   for (const auto& [m, n] : r.max_substeps)
     if (n > 1) js["max_substeps"][m] = n;
   js["wall_time_s"] = r.wall_seconds;
-  js["dt_s"] = r.dt;
-  js["stable_dt_at_start_s"] = finite_or_null(r.stable_dt_at_start);
-  js["dt_fraction_of_stable"] = finite_or_null(r.dt_fraction_used);
+  // dt_s (the first step of an adaptive stage), the stable step, the initial overlaps and the
+  // module steps, as measured at the stage start.
+  json first = start.is_object() ? start : start_entries(r);
+  if (resuming && !start.is_object()) first.erase("initial_overlap");  // not measured on resume
+  for (const char* k : {"dt_s", "stable_dt_at_start_s", "dt_fraction_of_stable"}) js[k] = first[k];
   if (r.adaptive)  // dt_s is then the first step
     js["dt_adaptive"] = {{"fraction", st.cfg.adaptive.fraction}, {"min_s", r.adaptive->min},       {"median_s", r.adaptive->median},
                          {"max_s", r.adaptive->max},              {"changes", r.adaptive->changes}, {"overshoots", r.adaptive->overshoots},
@@ -710,25 +806,10 @@ void describe_dynamics(json& js, const StageResult& r, const StageDef& st, bool 
                           {"last_force_residual", q.last_residual},
                           {"solve_wall_time_s", q.solve_seconds}};
   }
-  if (!resuming) {
-    const auto& o = r.initial_overlap;
-    js["initial_overlap"] = {{"policy", o.policy},
-                             {"limit", o.limit},
-                             {"max_ratio", o.max_ratio},
-                             {"pairs_over_limit", o.pairs_over_limit},
-                             {"walls_over_limit", o.walls_over_limit},
-                             {"worst_ids", {o.worst_i, o.worst_j}},
-                             {"worst_wall", o.worst_wall},
-                             {"relax_sweeps", o.sweeps},
-                             {"max_ratio_after", o.max_ratio_after},
-                             {"particles_moved", o.moved},
-                             {"max_displacement_m", o.max_displacement}};
-  }
+  if (first.contains("initial_overlap")) js["initial_overlap"] = first["initial_overlap"];
   js["step_plan"] = r.plan;
   js["mechanics"] = st.cfg.mechanics ? "on" : "frozen";
-  for (const auto& m : r.module_steps)
-    js["module_steps"][m.name] = {
-        {"stable_dt_s", finite_or_null(m.stable_dt)}, {"dt_s", m.dt}, {"calls_per_step", m.calls_per_step}, {"clock", m.clock}};
+  if (first.contains("module_steps")) js["module_steps"] = first["module_steps"];
   for (const auto& [c, v] : r.final_values) js["final"][c] = finite_or_null(v);
 }
 
@@ -807,16 +888,24 @@ void run_plain_stage(Scenario& sc, std::size_t k, State& s, OutputObserver& obs,
     js["bonds_created"] = prep.bonds_made;
     js["bonds_created_gap_m"] = prep.bond_gap;
   }
+  // A stage continued in place reports what its start reported (set counts, bonds made): kept in
+  // every state file of the stage (OutputObserver::outputs()).
+  if (resuming && rp.outputs.is_object() && rp.outputs.contains("stage_entry")) js = rp.outputs["stage_entry"];
+  obs.set_stage_entry(js);
+  if (resuming && rp.outputs.is_object() && rp.outputs.contains("stage_start")) obs.set_stage_start(rp.outputs["stage_start"]);
   if (st.dynamics) {
     std::optional<SnapshotObserver> snap;
     if (st.snapshots) {
       if (!resuming) record.forget_stage(stage_index);
       snap.emplace(obs, *st.snapshots, stage_index, st.cfg.name, opt.outdir, record,
-                   [&obs](const std::filesystem::path& f, State& x) { obs.write_checkpoint(f, x, true); });
+                   [&obs](const std::filesystem::path& f, State& x) {
+                     obs.publish();  // first: the index then holds at least what the snapshot records
+                     obs.write_checkpoint(f, x, true);
+                   });
     }
     const StageResult r = sim.run_stage(st.cfg, snap ? static_cast<Observer&>(*snap) : obs, resuming);
     obs.end_stage_line();
-    describe_dynamics(js, r, st, resuming);
+    describe_dynamics(js, r, st, resuming, obs.stage_start());
     if (sc.bond_law) {
       js["bonds"] = {{"intact", s.bonds.intact_count()}, {"broken", s.bonds.broken_count()}};
       if (s.bonds.broken_count() > 0) js["bonds"]["broken_by_mode"] = write_broken_bonds(s, *sc.bond_law, opt.outdir);
@@ -908,6 +997,24 @@ json dry_run(Scenario& sc) {
 
 namespace {
 
+/// A fresh start's take-over of `outdir` (the frames and index files are the ResultsWriter's):
+/// summary.json and the restart points an earlier run left (checkpoints, final_state.h5, the
+/// checkpoint before a failure, snapshots/*.h5), which --resume would otherwise take for this
+/// run's; a file a stage reads ("from_snapshot") stays.
+void remove_earlier_run(const Scenario& sc, const std::filesystem::path& outdir) {
+  std::set<std::filesystem::path> inputs;
+  std::error_code ec;
+  for (const StageDef& st : sc.stages)
+    if (!st.from_snapshot.empty()) inputs.insert(std::filesystem::weakly_canonical(st.from_snapshot, ec));
+  std::vector<std::filesystem::path> files;
+  for (const char* name : {"summary.json", "checkpoint.h5", "checkpoint.previous.h5", "checkpoint_before_failure.h5", "final_state.h5"})
+    files.push_back(outdir / name);
+  for (const auto& e : std::filesystem::directory_iterator(outdir / "snapshots", ec))
+    if (e.path().extension() == ".h5") files.push_back(e.path());
+  for (const auto& f : files)
+    if (!inputs.count(std::filesystem::weakly_canonical(f, ec))) remove_if_present(f);
+}
+
 /// The stages of the scenario from the restart point (or the first) to the last; summary.json
 /// and the run's status whatever happens (a failure or interrupt is rethrown after writing them).
 json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_point t0) {
@@ -919,8 +1026,11 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   if (opt.start) s = std::move(*opt.start);  // the item's own start state: no second copy
   RunRecord record;  // snapshots taken and sweep progress (see sweep.hpp)
   RestartPoint rp = read_restart(sc, opt, s, record, log);
+  // A fresh start (or a restart into another folder) leaves no summary or restart point of an
+  // earlier run here (--resume takes them for this run's); a continuation keeps them.
+  if (!opt.in_place && !opt.record) remove_earlier_run(sc, opt.outdir);
 
-  OutputObserver obs(opt.outdir, opt.quiet, log);
+  OutputObserver obs(opt.outdir, opt.quiet, log, rp.outputs);
   if (!opt.checkpoint_file.empty()) obs.set_checkpoint_file(opt.checkpoint_file);
   obs.set_record(opt.record ? opt.record : std::function<json()>([&record] { return record.to_json(); }));
   json summary;
@@ -929,8 +1039,13 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   summary["build"] = {{"commit", build_info().commit}, {"clean", build_info().clean}};
   summary["threads"] = omp_get_max_threads();
   summary["stages"] = json::array();
-  if (opt.restart) summary["restarted_from"] = opt.restart->string();
   RunTotals totals;
+  if (opt.restart && !rp.outputs.is_object()) summary["restarted_from"] = opt.restart->string();
+  if (rp.outputs.is_object()) {  // in place: the stages completed before the restart point, as reported then
+    summary["stages"] = rp.outputs.value("stages", json::array());
+    for (const json& e : summary["stages"]) totals.steps += e.value("steps", Step{0});
+  }
+  obs.set_summary_stages(&summary["stages"]);
   std::string status = "completed";
   std::string error;
   std::optional<PhysicsError> failure;
@@ -950,7 +1065,13 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
   try {
     for (std::size_t k = rp.first; k < sc.stages.size(); ++k) {
       if (sc.stages[k].sweep) {
+        // The sweep's own name in the log; no modules: its final state (the state before the
+        // sweep) carries no module state of an earlier stage.
+        obs.set_stage(sc.stages[k].cfg.name, {}, sc.stages[k].cfg);
+        obs.set_stage_entry(json());
+        record.sweep_outputs = obs.outputs();  // the folder's outputs while the sweep runs (its items record their own)
         const SweepOutcome r = run_sweep(sc, k, s, record, rp.resume && k == rp.first, opt);
+        record.sweep_outputs = json();
         summary["stages"].push_back(r.entry);
         totals.steps += r.steps;
         totals.particle_steps += r.particle_steps;
@@ -992,6 +1113,14 @@ json run_logged(Scenario& sc, const RunOptions& opt, RunLog& log, steady::time_p
 }
 }  // namespace
 
+bool restart_in_place(const std::filesystem::path& file, const std::filesystem::path& outdir) {
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::canonical(file, ec).parent_path();
+  if (ec) return false;  // reading the file reports what is wrong with it
+  const std::filesystem::path out = std::filesystem::canonical(outdir, ec);
+  return !ec && (dir == out || dir == out / "snapshots");
+}
+
 std::filesystem::path resolve_output_directory(const std::filesystem::path& outdir) {
   std::error_code ec;
   std::filesystem::create_directories(outdir, ec);
@@ -1009,6 +1138,9 @@ json run_scenario(Scenario& sc, const RunOptions& given) {
   // One physical output path for everything below (files, snapshots, sweep items, checkpoints).
   RunOptions opt = given;
   opt.outdir = resolve_output_directory(given.outdir);
+  // A run's restart file in its own output directory (or its snapshots/) continues the folder in
+  // place; a sweep item inherits the enclosing run's choice.
+  if (opt.restart && !opt.record) opt.in_place = restart_in_place(*opt.restart, opt.outdir);
   RunLog log(opt.outdir / "run.log");
   log.line("run started: scenario '" + sc.name + "', sparkdem " + SPARKDEM_VERSION + ", pid " + std::to_string(::getpid()) + ", " +
            std::to_string(omp_get_max_threads()) + " thread(s)" +

@@ -19,7 +19,8 @@
 /// last step was a frame_every step); the next stage's first frame may share the step and time of
 /// the previous stage's last one (results.xdmf lists it 1e-15 s later, see results_writer.hpp).
 /// A frame the log reports is readable; the index files (results.h5, results.xdmf,
-/// timeseries.csv) are rewritten after every checkpoint and final state and at the end (see
+/// timeseries.csv) are rewritten just before every checkpoint, snapshot and final state and at the
+/// end, so they hold at least what each restart point records for a continuation in place (see
 /// io/hdf5/results_writer.hpp); checkpoint.h5 and final_state.h5 are sealed checkpoints
 /// (io/restart/checkpoint_file.hpp), verified before they are read.
 #include <cstdint>
@@ -58,7 +59,15 @@ struct RunOptions {
   std::filesystem::path checkpoint_file;  ///< where checkpoints go; empty: outdir/checkpoint.h5
   std::function<json()> record;           ///< pipeline record stored in checkpoints; empty: the run's own
   RunProgress* progress = nullptr;        ///< when set, filled in as stages complete (sweep items leave it)
+  /// Set by run_scenario (restart_in_place; a sweep item inherits it): the restart continues the
+  /// folder in place, which keeps the frames, time-series rows, summary stages, snapshots and
+  /// sweep rows the restart point records and replaces whatever came after it.
+  bool in_place = false;
 };
+
+/// Whether a restart from `file` continues `outdir` in place: the file lies in `outdir` or in
+/// `outdir`/snapshots (symbolic links followed).
+bool restart_in_place(const std::filesystem::path& file, const std::filesystem::path& outdir);
 
 /// The output directory as a run uses it: `outdir` created with its parents, then resolved to its
 /// absolute physical path (std::filesystem::canonical: symbolic links followed and ".." taken

@@ -10,6 +10,7 @@
 
 #include "engine/core/error.hpp"
 #include "io/hdf5/results_writer.hpp"
+#include "io/restart/checkpoint_file.hpp"
 #include "io/restart/hdf5_archive.hpp"
 #include "io/mpi/ranks.hpp"
 #include "io/scenario/pipeline.hpp"
@@ -57,6 +58,7 @@ void write_state(const fs::path& file, State& s) {
 /// A checkpoint inside a sweep stage at its input state, recording the sweep's progress in the
 /// pipeline record (the format of the pipeline's checkpoints, without module data).
 void write_progress_checkpoint(const fs::path& file, State& s, const json& record) {
+  keep_previous_checkpoint(file);  // the newest two are kept
   Hdf5Archive ar = Hdf5Archive::for_writing(file);
   s.visit(ar);
   std::int64_t in_stage = 1;
@@ -233,6 +235,7 @@ json RunRecord::to_json() const {
   j["first_values"] = json::object();
   for (const auto& [k, v] : first_values) j["first_values"][std::to_string(k)] = number_or_null(v);
   j["sweep"] = sweep;
+  if (!sweep_outputs.is_null()) j["sweep_outputs"] = sweep_outputs;
   return j;
 }
 
@@ -257,6 +260,7 @@ RunRecord RunRecord::from_json(const json& j) {
     for (auto it = j.at("first_values").begin(); it != j.at("first_values").end(); ++it)
       r.first_values[std::stoll(it.key())] = number_of(it.value());
     r.sweep = j.at("sweep");
+    if (j.contains("sweep_outputs")) r.sweep_outputs = j.at("sweep_outputs");
   } catch (const std::exception& e) { throw SetupError(std::string("the checkpoint's pipeline record is malformed: ") + e.what()); }
   return r;
 }
@@ -663,12 +667,30 @@ SweepContext sweep_context(Scenario& sc, std::size_t k, State& s, const RunRecor
   return ctx;
 }
 
+/// One rank: a checkpoint at the stage's input state recording the finished rows (as on several
+/// ranks), so that a kill between items loses no finished item. A snapshot sweep's input state
+/// waits in its file (run_sweep), from which it is read for this.
+void write_rows_checkpoint(const SweepContext& ctx, RunRecord& record, const std::map<std::size_t, json>& rows) {
+  State input;
+  if (ctx.sw->kind == SweepDef::Kind::Snapshots)
+    read_checkpoint(ctx.input_file, input);
+  else
+    input = ctx.input;
+  input.stage_index = ctx.stage_index;
+  record.sweep = {{"stage", ctx.stage_index}, {"item", nullptr}, {"rows", rows_in_order(rows)}, {"input_state", ctx.input_file}};
+  write_progress_checkpoint(ctx.checkpoint, input, record.to_json());
+}
+
 /// One rank: the items in order, each a nested run whose checkpoints go to the main checkpoint
 /// file with the sweep's progress in the pipeline record (a restart resumes inside the item).
-/// Rows finished before a restart are kept, not rerun.
+/// Rows finished before a restart are kept, not rerun. After an item, when the stage's
+/// output.checkpoint_every_s passed since the sweep started or its last such checkpoint, a
+/// checkpoint records the finished rows (write_rows_checkpoint).
 std::map<std::size_t, ItemResult> run_items_in_order(Scenario& sc, const SweepContext& ctx, RunRecord& record, const RunOptions& opt) {
   std::map<std::size_t, ItemResult> ran;
   std::map<std::size_t, json> rows = ctx.done;
+  const double every = sc.stages[ctx.stage].cfg.checkpoint_every_s;
+  auto last = std::chrono::steady_clock::now();
   for (std::size_t j = 0;; ++j) {
     std::optional<Item> item;
     try {
@@ -681,7 +703,10 @@ std::map<std::size_t, ItemResult> run_items_in_order(Scenario& sc, const SweepCo
     if (rows.count(j)) continue;  // finished before the restart
     RunOptions o;
     o.checkpoint_file = ctx.checkpoint;
-    if (ctx.resume_item == j) o.restart = opt.restart;
+    if (ctx.resume_item == j) {
+      o.restart = opt.restart;
+      o.in_place = opt.in_place;
+    }
     record.sweep = {{"stage", ctx.stage_index}, {"item", j}, {"rows", rows_in_order(rows)}, {"input_state", ctx.input_file}};
     o.record = [&record] { return record.to_json(); };
     try {
@@ -693,6 +718,10 @@ std::map<std::size_t, ItemResult> run_items_in_order(Scenario& sc, const SweepCo
       throw;
     }
     write_table(ctx, rows_in_order(rows));
+    if (every > 0.0 && std::chrono::duration<double>(std::chrono::steady_clock::now() - last).count() >= every) {
+      write_rows_checkpoint(ctx, record, rows);
+      last = std::chrono::steady_clock::now();
+    }
   }
   return ran;
 }

@@ -52,6 +52,9 @@ struct RunRecord {
   std::vector<SnapshotRecord> snapshots;
   std::map<std::int64_t, double> first_values;  ///< stage index -> first finite sample of its snapshot column
   json sweep;                                   ///< sweep in progress {"stage", "item", "rows", "input_state"}, or null
+  /// While a sweep runs: the run's own outputs (OutputObserver::outputs(); a checkpoint inside an
+  /// item records the item's folder as "outputs"), or null. Stored as "sweep_outputs" when set.
+  json sweep_outputs;
 
   json to_json() const;
   static RunRecord from_json(const json& j);
@@ -86,6 +89,9 @@ class SnapshotObserver final : public Observer {
   void healthy(State& s) override { inner_.healthy(s); }
   void progress(const State& s, Step k, double t, double dt) override { inner_.progress(s, k, t, dt); }
   void steps_planned(double dt, double stable, const std::vector<ModuleStep>& m) override { inner_.steps_planned(dt, stable, m); }
+  void stage_started(const StageResult& r) override { inner_.stage_started(r); }
+  bool checkpoint_due() override { return inner_.checkpoint_due(); }
+  void event(const std::string& text) override { inner_.event(text); }
   Step watch_every() const override;
   void watch(State& s, const std::vector<std::string>& cols, const std::vector<double>& vals) override;
 

@@ -12,8 +12,9 @@ CASE:
   bad_input  a scene with two errors under mpirun: exit code 2 from every rank, each error
              printed once (by rank 0), no hang (60 s limit).
   restart    a seed ensemble on 2 ranks killed (SIGKILL, every rank) after its second row,
-             restarted with --restart on 1 rank; and a one-rank run killed inside an item,
-             restarted on 2 ranks: both tables equal the uninterrupted run's.
+             restarted with --restart on 1 rank; a one-rank run killed inside an item,
+             restarted on 2 ranks; and 2 ranks killed, continued with --resume on 2 ranks:
+             every table equals the uninterrupted run's.
   spread_solve  the spread network solve (tests/mpi/mpi_spread_solve.cpp) under mpirun -np 2:
              Amg over 2 ranks and on rank 0 alone against the direct solve, to 1e-7; and through
              sparkdem: a 1000-sphere lattice's electrical_network (solver amg, spread threshold
@@ -222,6 +223,17 @@ def case_restart(a, tmp):
     r = run(a, scene, out, ranks=2, extra=("--restart", str(out / "checkpoint.h5")))
     check(r.returncode == 0, f"2-rank restart exits 0 {r.stderr[-300:]}")
     check(table(out / "sweep_cook.csv", out) == table(ref / "sweep_cook.csv", ref), "1 rank killed, 2-rank restart: table equals the uninterrupted run's")
+    # 2 ranks killed after two rows, continued in place with --resume on 2 ranks (issue 64): the
+    # newest restart point (the checkpoint with the finished rows) is found, and the folder ends as
+    # the uninterrupted run's (tables, summary sweep entries, item final states).
+    out = tmp / "ens_c"
+    killed = kill_when(run(a, scene, out, ranks=2, wait=False), out, 2)
+    check(killed, f"2-rank run killed with {rows_of(out)} of 6 rows")
+    r = run(a, scene, out, ranks=2, extra=("--resume",))
+    check(r.returncode == 0 and "resuming from checkpoint" in r.stderr, f"2-rank --resume exits 0 from a checkpoint: {r.stderr[-300:]}")
+    compare_runs(ref, out, "2 ranks killed, --resume on 2 ranks")
+    r = run(a, scene, out, ranks=2, extra=("--resume",))
+    check(r.returncode == 0 and "has completed" in r.stderr, f"a second --resume does not rerun the completed run: {r.stderr[-200:]}")
 
 
 def case_spread_solve(a, tmp):

@@ -71,7 +71,9 @@ double stored(const fs::path& file, const std::string& name) {
   return x;
 }
 
-/// /pipeline/record of a state file with every string that is a path reduced to its file name.
+/// /pipeline/record of a state file with every string that is a path reduced to its file name,
+/// without the output folder's bookkeeping ("outputs", "sweep_outputs": frame and row counts, the
+/// summary's stage entries with their wall times), which describes a folder, not the state.
 json record_without_paths(const fs::path& file) {
   io::Hdf5Archive ar = io::Hdf5Archive::for_reading(file);
   if (!ar.has("pipeline/record")) return nullptr;
@@ -85,6 +87,10 @@ json record_without_paths(const fs::path& file) {
       for (auto& y : x) strip(y);
   };
   strip(j);
+  if (j.is_object()) {
+    j.erase("outputs");
+    j.erase("sweep_outputs");
+  }
   return j;
 }
 
