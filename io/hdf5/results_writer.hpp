@@ -150,6 +150,8 @@ class ResultsWriter {
   bool finalize();
   /// Number of frames written so far.
   int frames() const { return static_cast<int>(frames_.size()); }
+  /// The last frame written or kept (none: nullptr).
+  const FrameInfo* last_frame() const { return frames_.empty() ? nullptr : &frames_.back(); }
   /// The time series as set last (after a continuation: the rows kept).
   const std::vector<std::string>& columns() const { return columns_; }
   const std::vector<std::vector<double>>& rows() const { return rows_; }

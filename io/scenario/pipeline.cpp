@@ -211,6 +211,13 @@ class OutputObserver final : public Observer {
     last_print_ = stage_start_;
     last_frame_step_.reset();
   }
+  /// A stage resumed in place at `step`: a kept frame of this stage at that step is not written
+  /// again (a checkpoint taken at the stage's last step follows that step's periodic frame, and
+  /// the stage's closing frame would repeat it).
+  void resumed_at(Step step) {
+    const FrameInfo* last = writer_.last_frame();
+    if (last && last->stage == stage_ && last->step == step) last_frame_step_ = step;
+  }
   void frame(const State& s) override {
     // A stage reports its last step twice when it is also a frame_every step (the periodic frame
     // and the closing frame), and a stage of no steps its start twice: the same state, written once.
@@ -876,6 +883,7 @@ void run_plain_stage(Scenario& sc, std::size_t k, State& s, OutputObserver& obs,
     rp.archive.reset();  // everything is restored: close the checkpoint
   }
   obs.set_stage(st.cfg.name, mods, st.cfg);
+  if (resuming) obs.resumed_at(s.step);
   log.line("stage '" + st.cfg.name + "' (" + std::to_string(k + 1) + " of " + std::to_string(sc.stages.size()) + ") " +
            (resuming ? "resumed" : "started") + " at step " + std::to_string(s.step));
   obs.set_k0(resuming ? s.step - s.stage_step0 : 0);

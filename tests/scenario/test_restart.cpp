@@ -214,4 +214,29 @@ TEST_CASE("restart from a checkpoint at a stage's last step writes the uninterru
   sparkdem::test::require_identical_state(A / "final_state.h5", C / "final_state.h5");
 }
 
+
+TEST_CASE("restart in place from a checkpoint at a stage's last step keeps that step's frame once", "[restart][scenario]") {
+  ScratchDir tmp;
+  // The last step is also a frame step: the periodic frame is written, then the checkpoint
+  // (which keeps it). Continued in place from that checkpoint, the stage takes no step, and its
+  // closing frame must not repeat the kept one (found by the SIGKILL tests: 13 frames for 12).
+  json scene = load_data("crash_pour.json");
+  scene["stages"][1]["stop"] = {{"steps", 400}};
+  scene["stages"][1]["output"] = {{"frame_every", 200}, {"timeseries_every", 100}, {"checkpoint_every", 400}};
+  const fs::path f = write_scene(tmp.path, "scene.json", scene);
+  const fs::path A = tmp.path / "A";
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(f) + " -o " + sparkdem::test::shell_quoted(A) + " --quiet", 1, tmp.path) == 0);
+  CHECK(stored_int(A / "checkpoint.h5", "/state/step") == 400);
+  const auto frames_before = sparkdem::io::H5File::open_read(A / "results.h5").children("/frames");
+  // the lattice frame, then the pour's steps 0, 200 and 400 (its closing frame is step 400's)
+  REQUIRE(frames_before.size() == 4);
+  REQUIRE(run_cli("run " + sparkdem::test::shell_quoted(f) + " --restart " + sparkdem::test::shell_quoted(A / "checkpoint.h5") + " -o " +
+                      sparkdem::test::shell_quoted(A) + " --quiet",
+                  1, tmp.path) == 0);
+  const auto a = sparkdem::io::H5File::open_read(A / "results.h5");
+  CHECK(a.children("/frames") == frames_before);
+  CHECK(a.attribute_int64("/frames/000003", "step") == 400);
+  CHECK_FALSE(fs::exists(A / "frames" / "frame_000004.h5"));
+}
+
 }  // namespace test_restart
