@@ -45,10 +45,11 @@ struct LinearSpringDashpot {
     return s;
   }
   static std::vector<std::string> state_columns() { return {"shear_x", "shear_y", "shear_z"}; }
-  explicit LinearSpringDashpot(const Params& p) : p_(p) {}
+  explicit LinearSpringDashpot(const Params& p)
+      : p_(p), elastic_(p.restitution >= 1.0), l_e_(elastic_ ? 0.0 : std::log(p.restitution)), root_(std::sqrt(kPi * kPi + l_e_ * l_e_)) {}
 
   ContactForces operator()(const ContactGeometry& g, const RelativeMotion& m, double dt, double* xi) const {
-    const double gn = kernel::linear_damping_for_restitution(p_.restitution, g.m_eff, p_.normal_stiffness);
+    const double gn = damping(g.m_eff);
     const double fn = p_.normal_stiffness * g.overlap - gn * m.vn;
     ContactForces f;
     f.tangential = kernel::tangential_history(g.n, m.vt, p_.kt_ratio * p_.normal_stiffness, p_.gammat_ratio * gn, p_.friction, std::abs(fn),
@@ -56,15 +57,17 @@ struct LinearSpringDashpot {
     f.force = fn * g.n + f.tangential;
     return f;
   }
+  /// kernel::linear_damping_for_restitution(e, m_eff, k_n) with its per-law constants (ln e and
+  /// sqrt(pi^2 + ln^2 e)) computed once, in the same operations [N s/m].
+  double damping(double m_eff) const { return elastic_ ? 0.0 : 2.0 * std::sqrt(m_eff * p_.normal_stiffness) * (-l_e_) / root_; }
   /// operator() for the pairs of a block of rows (engine/contact/lanes.hpp), lane by lane in its order
-  /// (kernel::linear_damping_for_restitution's operations with its per-law constants hoisted).
+  /// (damping()'s operations).
   template <int W>
   [[gnu::always_inline]] void lanes(PairLanes<W>& b, double dt) const {
     alignas(64) double kt[W], gt[W], fn_abs[W];
     const double kn = p_.normal_stiffness, ktc = p_.kt_ratio * p_.normal_stiffness;
-    const bool elastic = p_.restitution >= 1.0;
-    const double l_e = elastic ? 0.0 : std::log(p_.restitution);
-    const double root = std::sqrt(kPi * kPi + l_e * l_e);
+    const bool elastic = elastic_;
+    const double l_e = l_e_, root = root_;
 #pragma omp simd
     for (int l = 0; l < W; ++l) {
       const double gn = elastic ? 0.0 : 2.0 * std::sqrt(b.m_eff[l] * kn) * (-l_e) / root;
@@ -88,6 +91,8 @@ struct LinearSpringDashpot {
 
  private:
   Params p_;
+  bool elastic_;      ///< e >= 1: no dashpot
+  double l_e_, root_;  ///< ln e and sqrt(pi^2 + ln^2 e)
 };
 
 }  // namespace sparkdem::physics
