@@ -310,7 +310,7 @@ class ContactModelT final : public ContactModel {
       bool live = (p.position[i] - p.position[j]).squaredNorm() < reach * reach;
       if constexpr (is_persistent<Law>()) live = live || (t.state_width() > 0 && law_.alive(t.state(r)));
       return live;
-    });
+    }, lanes_run(t) ? PairRows::kLaneLiveRowCost : PairRows::kHeavyRowCost);
     PassInputs in = pass_inputs(p, t, time_scale);
     in.inertia_free = inertia_free;
     auto& Ti = t.torque_i();
@@ -705,6 +705,9 @@ class ContactModelT final : public ContactModel {
   /// laws of three history columns without temperature or persistent pairs.
   static constexpr bool kLanes = requires(const Law& l, PairLanes<8>& b) { l.template lanes<8>(b, 0.0); } &&
                                  !is_thermal<Law>() && !is_persistent<Law>();
+
+  /// True when row_range runs table t's rows over SIMD lanes.
+  static bool lanes_run(const ContactTable& t) { return kLanes && t.state_width() == 3 && lane_isa() != LaneIsa::scalar; }
 
   /// The law on rows [lo, hi) in row order: each row's overlap, force, state written as row_forces
   /// does, then sink.dead(r) for a row out of contact or sink.live(r, i, j, F, T_i, T_j) for a live

@@ -110,14 +110,14 @@ void PairRows::gather_particles(const std::vector<Index>& which, std::vector<Vec
   par::for_each(n, par::kLight, [&](std::int64_t k) { gather_one(which[k], force, torque); });
 }
 
-const PairRows::RowSplit& PairRows::row_split(int threads, const std::function<bool(std::int64_t)>& heavy) const {
-  if (split_.threads == threads) return split_;
+const PairRows::RowSplit& PairRows::row_split(int threads, const std::function<bool(std::int64_t)>& heavy, double heavy_cost) const {
+  if (split_.threads == threads && split_.heavy_cost == heavy_cost) return split_;
   const std::int64_t rows = static_cast<std::int64_t>(size()), n = static_cast<std::int64_t>(inc_start_.size()) - 1;
   split_.row_begin.resize(threads + 1);
   for (int t = 0; t <= threads; ++t) split_.row_begin[t] = rows * t / threads;
   if (heavy && threads > 1) {
     std::vector<double> cost(rows + 1, 0.0);  // cost[r] = summed cost of the rows before r
-    for (std::int64_t r = 0; r < rows; ++r) cost[r + 1] = cost[r] + (heavy(r) ? kHeavyRowCost : 1.0);
+    for (std::int64_t r = 0; r < rows; ++r) cost[r + 1] = cost[r] + (heavy(r) ? heavy_cost : 1.0);
     for (int t = 1; t < threads; ++t)
       split_.row_begin[t] = std::lower_bound(cost.begin(), cost.end(), cost[rows] * t / threads) - cost.begin();
   }
@@ -139,6 +139,7 @@ const PairRows::RowSplit& PairRows::row_split(int threads, const std::function<b
       split_.boundary.push_back(static_cast<Index>(p));
   }
   split_.threads = threads;
+  split_.heavy_cost = heavy_cost;
   return split_;
 }
 
