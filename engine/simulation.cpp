@@ -1054,6 +1054,8 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   }
   watchdog_check(s_, wd, wctx, false);
   watchdog_reset(s_);  // the energy samples live only inside the stage (final states carry none)
+  for (const PlanItem& it : plan_.items)
+    if (it.kind == PlanItem::Kind::Module) it.module->release_caches();
   obs.frame(s_);
   if (!reached && !cfg.until.empty()) reached = until_holds();
   res.until_reached = cfg.until.empty() || reached;

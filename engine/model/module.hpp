@@ -141,6 +141,11 @@ class Module {
   /// The module's one held edge output itself, when edge_outputs() is a copy of it (nullptr
   /// otherwise): a frame borrows its arrays instead of copying them and hands them back.
   virtual EdgeOutput* held_edges() { return nullptr; }
+  /// Called once the stage's steps are over, before its closing frame and state are written: drop
+  /// what only makes later calls faster (a solver's analysis and factorisation). Nothing that
+  /// visit() stores or that a result depends on may change. (Issue 63 item 3: a sweep item's
+  /// frame was the main scenario's memory peak with the network's solver structure still held.)
+  virtual void release_caches() {}
   /// Every piece of state the module keeps between calls goes through here.
   virtual void visit(Archive& ar, const std::string& prefix) {
     (void)ar;

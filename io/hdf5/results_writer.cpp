@@ -259,10 +259,9 @@ void ResultsWriter::check_frame(const FrameContent& frame, std::size_t& particle
       if (!seen.insert(f.name).second) fail(label + ": duplicate field name");
       if (f.components < 1) fail(label + ": components must be at least 1");
       const auto c = static_cast<std::size_t>(f.components);
-      if (f.data.size() % c != 0)
-        fail(label + ": " + std::to_string(f.data.size()) + " values are not a multiple of " + std::to_string(c) + " components");
-      if (f.data.size() / c != expected_rows)
-        fail(label + ": " + std::to_string(f.data.size() / c) + " rows, expected " + std::to_string(expected_rows));
+      const std::size_t size = f.values().size();
+      if (size % c != 0) fail(label + ": " + std::to_string(size) + " values are not a multiple of " + std::to_string(c) + " components");
+      if (size / c != expected_rows) fail(label + ": " + std::to_string(size / c) + " rows, expected " + std::to_string(expected_rows));
     }
   };
   bool has_position = false;
@@ -270,7 +269,7 @@ void ResultsWriter::check_frame(const FrameContent& frame, std::size_t& particle
     if (f.name == "position") {
       if (f.components != 3) fail("field 'position' of " + name + " must have 3 components");
       has_position = true;
-      particles = f.data.size() / 3;
+      particles = f.values().size() / 3;
     }
   }
   if (!has_position) fail(name + " has no particle field 'position'");
@@ -308,7 +307,8 @@ std::string ResultsWriter::write_frame(const FrameContent& frame) {
     const auto id = std::find_if(frame.particles.begin(), frame.particles.end(), [](const FrameField& f) { return f.name == "id"; });
     if (id == frame.particles.end() || id->components != 1) fail("frame " + counter(frames()) + " draws lines but has no particle field 'id'");
     row_of.reserve(particles);
-    for (std::size_t r = 0; r < particles; ++r) row_of.emplace(static_cast<std::int64_t>(id->data[r]), static_cast<std::int64_t>(r));
+    const std::span<const double> ids = id->values();
+    for (std::size_t r = 0; r < particles; ++r) row_of.emplace(static_cast<std::int64_t>(ids[r]), static_cast<std::int64_t>(r));
     for (std::size_t k = 0; k < sets.size(); ++k)
       if (sets[k].lines)
         nodes[k] = node_rows(sets[k].edges->pairs, row_of, [this](const std::string& w) { fail(w); },
@@ -327,7 +327,7 @@ std::string ResultsWriter::write_frame(const FrameContent& frame) {
     file.create_group("/particles");
     for (const FrameField& f : frame.particles) {
       const std::string path = "/particles/" + f.name;
-      file.write(path, f.data, f.components);
+      file.write(path, f.values(), f.components);
       file.set_attribute(path, "unit", f.unit);
       info.fields.emplace_back(f.name, f.components);
     }
@@ -338,7 +338,7 @@ std::string ResultsWriter::write_frame(const FrameContent& frame) {
       FrameInfo::LineSet line{set.name, set.group, set.edges->pairs.size() / 2, {}};
       if (set.lines) file.write(set.group + "/nodes", nodes[k], 2);
       for (const FrameField& f : set.edges->fields) {
-        file.write(set.group + "/" + f.name, f.data, f.components);
+        file.write(set.group + "/" + f.name, f.values(), f.components);
         file.set_attribute(set.group + "/" + f.name, "unit", f.unit);
         line.fields.emplace_back(f.name, f.components);
       }

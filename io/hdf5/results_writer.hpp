@@ -49,18 +49,23 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
 namespace sparkdem::io {
 
-/// One named per-item quantity: data holds n * components values, row-major.
+/// One named per-item quantity: n * components values, row-major, held in `data` or, for arrays
+/// that outlive the frame's writing (the particles' own columns), viewed through `view` (set:
+/// `data` is not read), so a frame does not copy them.
 struct FrameField {
   std::string name;
   int components = 1;
   std::vector<double> data;
   std::string unit;
+  std::span<const double> view = {};
+  std::span<const double> values() const { return view.data() ? view : std::span<const double>(data); }
 };
 
 /// Contacts of one frame: pairs holds 2 particle ids per contact; fields have one row per contact.

@@ -48,20 +48,25 @@ void note(RunLog& log, const std::string& text) noexcept {
   } catch (...) {}
 }
 
-/// A frame's particle fields: the kinematics, radius, id, material and every output field.
+/// A frame's particle fields: the kinematics, radius, id, material and every output field. The
+/// particles' double columns are viewed, not copied (FrameField::view; the frame is written
+/// before the state changes): 3.15 MB less at the main scenario's frames (issue 63 item 3).
 std::vector<FrameField> frame_particles(const ParticleStore& p) {
+  static_assert(sizeof(Vec3) == 3 * sizeof(double), "a Vec3 column is viewed as 3 doubles per particle");
   std::vector<FrameField> f;
-  auto vec3 = [&](const char* name, const std::vector<Vec3>& v, const char* unit) {
-    FrameField x{name, 3, std::vector<double>(3 * v.size()), unit};
-    for (std::size_t i = 0; i < v.size(); ++i)
-      for (int d = 0; d < 3; ++d) x.data[3 * i + d] = v[i][d];
+  auto view = [&](const char* name, int components, std::span<const double> v, const char* unit) {
+    FrameField x{name, components, {}, unit};
+    x.view = v;
     f.push_back(std::move(x));
+  };
+  auto vec3 = [&](const char* name, const std::vector<Vec3>& v, const char* unit) {
+    view(name, 3, std::span<const double>(v.empty() ? nullptr : v.front().data(), 3 * v.size()), unit);
   };
   vec3("position", p.position, "m");
   vec3("velocity", p.velocity, "m/s");
   vec3("omega", p.omega, "rad/s");
   vec3("force", p.force, "N");
-  f.push_back({"radius", 1, p.radius, "m"});
+  view("radius", 1, p.radius, "m");
   f.push_back({"id", 1, std::vector<double>(p.id.begin(), p.id.end()), "1"});
   f.push_back({"material", 1, std::vector<double>(p.material.begin(), p.material.end()), "1"});
   for (const auto& name : p.fields.names()) {
@@ -69,7 +74,7 @@ std::vector<FrameField> frame_particles(const ParticleStore& p) {
     // Field names may hold '/' (e.g. "set/top"); a frame dataset name may not.
     std::string out = name;
     std::replace(out.begin(), out.end(), '/', '_');
-    if (info.output) f.push_back({out, info.components, p.fields.data(name), info.unit});
+    if (info.output) view(out.c_str(), info.components, p.fields.data(name), info.unit.c_str());
   }
   return f;
 }

@@ -162,6 +162,8 @@ class ElectricalNetwork final : public Module {
   std::vector<std::string> columns() const override;
   std::vector<double> column_values(const State& s) const override;
   void visit(Archive& ar, const std::string& prefix) override;
+  /// The solver's analysis and factorisation (its warm start, which visit() stores, stays).
+  void release_caches() override { solver_.invalidate(); }
   /// Per conducting branch of the particle-centred network (frames: /networks/electrical): the
   /// ids of its ends (a wall is -1 - wall index), the current from the first to the second [A],
   /// its conductance [S] and dissipated power [W]. Empty before the first solve.

@@ -152,6 +152,8 @@ class PtcStrain final : public Module {
   std::vector<std::string> columns() const override;
   std::vector<double> column_values(const State& s) const override;
   void visit(Archive& ar, const std::string& prefix) override;
+  /// The solver's analysis and factorisation (its warm start, which visit() stores, stays).
+  void release_caches() override { solver_.invalidate(); }
   std::vector<EdgeOutput> edge_outputs() const override {
     return held_edge_output(contacts_);
   }

@@ -126,6 +126,8 @@ class HeatConduction final : public Module {
   std::vector<std::string> columns() const override;
   std::vector<double> column_values(const State& s) const override;
   void visit(Archive& ar, const std::string& prefix) override;
+  /// The solver's analysis and factorisation (its warm start, which visit() stores, stays).
+  void release_caches() override { solver_.invalidate(); }
 
   /// Accumulated energies since the stage start [J].
   struct Energy {
