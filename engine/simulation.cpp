@@ -393,7 +393,7 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
   // The rebuild freed the old columns, the candidate pairs and its look-up: their pages go back
   // to the system now (the heap is never trimmed otherwise, engine/core/memory.hpp), so a run's
   // resident set follows the rows it holds rather than the most fragmented heap it has seen.
-  release_free_memory();
+  release_free_memory_every(0.25);
 }
 
 void Simulation::rotate_prescribed(double dt, double t_stage_new) {
