@@ -367,28 +367,10 @@ class ContactModelT final : public ContactModel {
     }
     const WallPassInputs in{walls, cand, hist, w, temp, dt, time_scale, inertia_free};
     if (par::threads() > 1 && par::worth(rows, par::kHeavy)) return wall_pass_team(p, in);
-    WallLoads loads;
-    loads.force.assign(walls.size(), Vec3::Zero());
-    loads.normal.assign(walls.size(), 0.0);
-    for (std::size_t k = 0; k < walls.size(); ++k) {
-      const std::vector<Index>& list = cand[k];
-      for (std::size_t lo = 0; lo < list.size(); lo += detail::kBlock) {
-        Vec3 load = Vec3::Zero();
-        double load_n = 0.0;
-        for (std::size_t q = lo; q < std::min(list.size(), lo + detail::kBlock); ++q) {
-          const Index i = list[q];
-          WallRow row;
-          if (!wall_row(p, walls[k], i, wall_state(hist[k], i, w), w, temp, dt, time_scale, inertia_free, row)) continue;
-          p.force[i] += row.force;
-          p.torque[i] += row.torque;
-          load -= row.force;
-          load_n += row.normal;
-        }
-        loads.force[k] += load;
-        loads.normal[k] += load_n;
-      }
-    }
-    return loads;
+    std::vector<WallLoadFold> fold(walls.size());
+    for (std::size_t k = 0; k < walls.size(); ++k)
+      wall_rows(p, in, k, 0, cand[k].size(), [&](std::size_t r, const WallLoadRow& row) { fold[k].add(r, row); });
+    return wall_loads(fold, cand);
   }
 
   double stable_dt(const ParticleStore& p, const ContactTable& t, const std::vector<Wall>& walls,
@@ -467,20 +449,7 @@ class ContactModelT final : public ContactModel {
   /// Particle i's history row in a wall's state columns (w per particle), or none for a law without state.
   static double* wall_state(double* columns, Index i, int w) { return w > 0 ? columns + static_cast<std::size_t>(i) * w : nullptr; }
 
-  /// The wall pass on a team of threads. Thread t of T takes the particles of its static share of
-  /// the index range (the share the Verlet halves and the other `schedule(static)` particle loops
-  /// give it, so the particles' lines stay in that core's cache) and, wall by wall, the candidate
-  /// rows of those particles (a contiguous run of each ascending list): it adds each row to its
-  /// particle, in wall order as the one-thread pass does, and keeps the row's load in its own
-  /// buffer. The wall loads are then folded thread after thread, each continuing the previous
-  /// one's running sums over its own rows (WallLoadFold: the one-thread pass's blocks and order),
-  /// so a thread reads only its own rows: bit-identical to one thread.
-  /// Measured on the dense bed (27,000 spheres, 5,400 wall rows, 2 threads; issue 63): tasks of
-  /// 128 rows handed out dynamically with every row added after the join on the calling thread,
-  /// 0.39-0.42 s of 3,000 steps against 0.32 s on one thread, and the Verlet halves 1.6x slower
-  /// from the particles' lines moving between the cores; rows by particle share but loads summed
-  /// by the calling thread from every row, 0.45 s (the other thread's rows cost ~50 ns a cache
-  /// line); this fold, see benchmarks/README.md.
+  /// One wall row's share of its wall's load.
   struct WallLoadRow {
     Vec3 force;  ///< the row's force on its particle
     double normal;
@@ -505,6 +474,57 @@ class ContactModelT final : public ContactModel {
       block_n = 0.0;
     }
   };
+  /// The wall loads of each wall's closed fold (a wall without candidates: zero).
+  static WallLoads wall_loads(std::vector<WallLoadFold>& fold, const std::vector<std::vector<Index>>& cand) {
+    WallLoads loads;
+    loads.force.assign(fold.size(), Vec3::Zero());
+    loads.normal.assign(fold.size(), 0.0);
+    for (std::size_t k = 0; k < fold.size(); ++k) {
+      if (cand[k].empty()) continue;
+      fold[k].close();
+      loads.force[k] = fold[k].total;
+      loads.normal[k] = fold[k].total_n;
+    }
+    return loads;
+  }
+  /// Rows [first, last) of wall k's candidates in order: each touching row is added to its
+  /// particle, and every row goes to sink(r, row).
+  template <class Sink>
+  void wall_rows(ParticleStore& p, const WallPassInputs& in, std::size_t k, std::size_t first, std::size_t last, Sink&& sink) const {
+    const std::vector<Index>& list = in.cand[k];
+    for (std::size_t r = first; r < last; ++r) {
+      const Index i = list[r];
+      WallRow row;
+      WallLoadRow o{Vec3::Zero(), 0.0, false};
+      o.touching = wall_row(p, in.walls[k], i, wall_state(in.hist[k], i, in.w), in.w, in.temp, in.dt, in.time_scale, in.inertia_free, row);
+      if (o.touching) {
+        p.force[i] += row.force;
+        p.torque[i] += row.torque;
+        o.force = row.force;
+        o.normal = row.normal;
+      }
+      sink(r, o);
+    }
+  }
+  /// A thread's run of one wall's candidate rows: its first row and the rows' loads.
+  struct WallRun {
+    std::size_t first = 0;
+    std::vector<WallLoadRow> rows;
+  };
+  /// The wall pass on a team of threads. Thread t of T takes the particles of its static share of
+  /// the index range (the share the Verlet halves and the other `schedule(static)` particle loops
+  /// give it, so the particles' lines stay in that core's cache) and, wall by wall, the candidate
+  /// rows of those particles (a contiguous run of each ascending list): it adds each row to its
+  /// particle, in wall order as the one-thread pass does, and keeps the row's load in its own
+  /// buffer. The wall loads are then folded thread after thread, each continuing the previous
+  /// one's running sums over its own rows (WallLoadFold: the one-thread pass's blocks and order),
+  /// so a thread reads only its own rows: bit-identical to one thread.
+  /// Measured on the dense bed (27,000 spheres, 5,400 wall rows, 2 threads; issue 63): tasks of
+  /// 128 rows handed out dynamically with every row added after the join on the calling thread,
+  /// 0.39-0.42 s of 3,000 steps against 0.32 s on one thread, and the Verlet halves 1.6x slower
+  /// from the particles' lines moving between the cores; rows by particle share but loads summed
+  /// by the calling thread from every row, 0.45 s (the other thread's rows cost ~50 ns a cache
+  /// line); this fold, see benchmarks/README.md.
   WallLoads wall_pass_team(ParticleStore& p, const WallPassInputs& in) const {
     const std::size_t nw = in.walls.size();
     std::vector<WallLoadFold> fold(nw);
@@ -514,45 +534,25 @@ class ContactModelT final : public ContactModel {
       // libgomp's schedule(static) share: the first n % T threads take one particle more
       const std::int64_t q = n / T, rem = n % T;
       const Index lo = static_cast<Index>(t * q + std::min(t, rem)), hi = static_cast<Index>((t + 1) * q + std::min(t + 1, rem));
-      // This thread's rows, kept (never shrunk) between steps: no reallocation once grown.
-      thread_local std::vector<std::vector<WallLoadRow>> mine;
+      // This thread's runs, kept (never shrunk) between steps: no reallocation once grown.
+      thread_local std::vector<WallRun> mine;
       mine.resize(nw);
-      std::vector<std::size_t> first(nw);
       for (std::size_t k = 0; k < nw; ++k) {
         const std::vector<Index>& list = in.cand[k];
-        first[k] = static_cast<std::size_t>(std::lower_bound(list.begin(), list.end(), lo) - list.begin());
+        WallRun& run = mine[k];
+        run.first = static_cast<std::size_t>(std::lower_bound(list.begin(), list.end(), lo) - list.begin());
         const auto last = static_cast<std::size_t>(std::lower_bound(list.begin(), list.end(), hi) - list.begin());
-        mine[k].resize(last - first[k]);
-        for (std::size_t r = first[k]; r < last; ++r) {
-          const Index i = list[r];
-          WallRow row;
-          WallLoadRow& o = mine[k][r - first[k]];
-          o.touching = wall_row(p, in.walls[k], i, wall_state(in.hist[k], i, in.w), in.w, in.temp, in.dt, in.time_scale,
-                                in.inertia_free, row);
-          if (!o.touching) continue;
-          p.force[i] += row.force;
-          p.torque[i] += row.torque;
-          o.force = row.force;
-          o.normal = row.normal;
-        }
+        run.rows.resize(last - run.first);
+        wall_rows(p, in, k, run.first, last, [&](std::size_t r, const WallLoadRow& row) { run.rows[r - run.first] = row; });
       }
       for (std::int64_t s = 0; s < T; ++s) {  // the folds, thread after thread in particle order
         if (s == t)
           for (std::size_t k = 0; k < nw; ++k)
-            for (std::size_t r = 0; r < mine[k].size(); ++r) fold[k].add(first[k] + r, mine[k][r]);
+            for (std::size_t r = 0; r < mine[k].rows.size(); ++r) fold[k].add(mine[k].first + r, mine[k].rows[r]);
 #pragma omp barrier
       }
     });
-    WallLoads loads;
-    loads.force.assign(nw, Vec3::Zero());
-    loads.normal.assign(nw, 0.0);
-    for (std::size_t k = 0; k < nw; ++k) {
-      if (in.cand[k].empty()) continue;
-      fold[k].close();
-      loads.force[k] = fold[k].total;
-      loads.normal[k] = fold[k].total_n;
-    }
-    return loads;
+    return wall_loads(fold, in.cand);
   }
 
   /// Per-particle Gershgorin rows of the mass-weighted stiffness [1/s^2] and damping [1/s]
