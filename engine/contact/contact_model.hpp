@@ -701,13 +701,26 @@ class ContactModelT final : public ContactModel {
 
   /// Rows per task of pair_pass's parallel loop (a multiple of every lane width).
   static constexpr std::int64_t kPassChunk = 256;
-  /// True when the law evaluates blocks of rows over SIMD lanes (Law::lanes, engine/contact/lanes.hpp):
-  /// laws of three history columns without temperature or persistent pairs.
-  static constexpr bool kLanes = requires(const Law& l, PairLanes<8>& b) { l.template lanes<8>(b, 0.0); } &&
-                                 !is_thermal<Law>() && !is_persistent<Law>();
-
+  /// The state columns of the law's lane path: Law::kLaneState, or 3 (a contact law's tangential history).
+  static constexpr int lane_state() {
+    if constexpr (requires { Law::kLaneState; })
+      return Law::kLaneState;
+    else
+      return 3;
+  }
+  /// True when the law evaluates blocks of rows over SIMD lanes (Law::lanes, engine/contact/lanes.hpp).
+  static constexpr bool kLanes = requires(const Law& l, PairLanes<8, lane_state()>& b) { l.template lanes<8>(b, 0.0); };
+  /// True when the law's parameters allow its lane path (Law::lanes_enabled(); a law without it: always).
+  bool law_lanes_enabled() const {
+    if constexpr (requires(const Law& l) { l.lanes_enabled(); })
+      return law_.lanes_enabled();
+    else
+      return true;
+  }
   /// True when row_range runs table t's rows over SIMD lanes.
-  static bool lanes_run(const ContactTable& t) { return kLanes && t.state_width() == 3 && lane_isa() != LaneIsa::scalar; }
+  bool lanes_run(const ContactTable& t) const {
+    return kLanes && t.state_width() == lane_state() && lane_isa() != LaneIsa::scalar && law_lanes_enabled();
+  }
 
   /// The law on rows [lo, hi) in row order: each row's overlap, force, state written as row_forces
   /// does, then sink.dead(r) for a row out of contact or sink.live(r, i, j, F, T_i, T_j) for a live
@@ -716,9 +729,9 @@ class ContactModelT final : public ContactModel {
   void row_range(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt, const PassInputs& in,
                  Sink& sink) const {
     if constexpr (kLanes) {
-      if (in.width == 3) switch (lane_isa()) {
-        case LaneIsa::avx512: return rows_avx512(p, t, lo, hi, dt, in.inertia_free, sink);
-        case LaneIsa::avx2: return rows_avx2(p, t, lo, hi, dt, in.inertia_free, sink);
+      if (in.width == lane_state() && law_lanes_enabled()) switch (lane_isa()) {
+        case LaneIsa::avx512: return rows_avx512(p, t, lo, hi, dt, in, sink);
+        case LaneIsa::avx2: return rows_avx2(p, t, lo, hi, dt, in, sink);
         case LaneIsa::scalar: break;
       }
     }
@@ -734,62 +747,67 @@ class ContactModelT final : public ContactModel {
   // One instantiation per instruction set, chosen at run time (row_range): the build stays on the
   // x86-64 baseline and each function's loops are vectorised for its own target.
   template <class Sink>
-  [[SPARKDEM_TARGET_AVX512]] void rows_avx512(const ParticleStore& p, ContactTable& t, std::int64_t lo,
-                                                                                       std::int64_t hi, double dt, bool inertia_free,
-                                                                                       Sink& sink) const {
-    lane_rows<8>(p, t, lo, hi, dt, inertia_free, sink);
+  [[SPARKDEM_TARGET_AVX512]] void rows_avx512(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt,
+                                              const PassInputs& in, Sink& sink) const {
+    lane_rows<8>(p, t, lo, hi, dt, in, sink);
   }
   template <class Sink>
   [[SPARKDEM_TARGET_AVX2]] void rows_avx2(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt,
-                                         bool inertia_free, Sink& sink) const {
-    lane_rows<4>(p, t, lo, hi, dt, inertia_free, sink);
+                                         const PassInputs& in, Sink& sink) const {
+    lane_rows<4>(p, t, lo, hi, dt, in, sink);
   }
 
   /// Rows [lo, hi) in blocks of W lanes: gather the rows' inputs, the geometry, the law and the
-  /// torques over the lanes, then write back and call the sink in row order.
+  /// torques over the lanes, then write back and call the sink in row order. A row is live as in
+  /// row_forces: touching (or, for a persistent law, kept alive by its state before the step) at a
+  /// distance above zero.
   template <int W, class Sink>
   [[gnu::always_inline]] void lane_rows(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt,
-                                        bool inertia_free, Sink& sink) const {
-    PairLanes<W> b;
+                                        const PassInputs& in, Sink& sink) const {
+    constexpr int S = lane_state();
+    PairLanes<W, S> b;
+    b.time_scale = in.time_scale;
     double* overlap = t.overlap().data();
     Vec3* force = t.force().data();
     for (std::int64_t r0 = lo; r0 < hi; r0 += W) {
       const int n = static_cast<int>(std::min<std::int64_t>(W, hi - r0));
-      gather_lanes(p, t, r0, n, b);
-      pair_geometry_lanes(b, inertia_free);
+      gather_lanes(p, t, r0, n, in, b);
+      pair_geometry_lanes(b, in.inertia_free);
       law_.template lanes<W>(b, dt);
       pair_torque_lanes(b);
       for (int l = 0; l < n; ++l) {
         const std::int64_t r = r0 + l;
         overlap[r] = b.delta[l];
         double* st = t.state(r);
-        if (b.live[l] == 0.0) {
-          st[0] = st[1] = st[2] = 0.0;
+        bool live = b.live[l] != 0.0;
+        if constexpr (is_persistent<Law>()) live = (b.delta[l] > 0.0 || law_.alive(st)) && !(b.dist[l] <= 0.0);
+        if (!live) {
+          for (int c = 0; c < S; ++c) st[c] = 0.0;
           force[r].setZero();
           sink.dead(r);
           continue;
         }
-        st[0] = b.sx[l];
-        st[1] = b.sy[l];
-        st[2] = b.sz[l];
+        for (int c = 0; c < S; ++c) st[c] = b.s[c][l];
         force[r] = Vec3(b.fx[l], b.fy[l], b.fz[l]);
         sink.live(r, t.i(r), t.j(r), force[r], Vec3(b.tix[l], b.tiy[l], b.tiz[l]), Vec3(b.tjx[l], b.tjy[l], b.tjz[l]));
       }
     }
   }
   /// The inputs of rows r0 .. r0 + n - 1 into lanes 0 .. n - 1 (lanes n .. W - 1 repeat the last row), as
-  /// loops over the lanes that the vectoriser turns into gathers.
-  template <int W>
-  [[gnu::always_inline]] static void gather_lanes(const ParticleStore& p, const ContactTable& t, std::int64_t r0, int n, PairLanes<W>& b) {
+  /// loops over the lanes that the vectoriser turns into gathers; a thermal law's temperature and
+  /// grain-boundary fraction as pair_geometry forms them.
+  template <int W, int S>
+  [[gnu::always_inline]] static void gather_lanes(const ParticleStore& p, const ContactTable& t, std::int64_t r0, int n,
+                                                  const PassInputs& in, PairLanes<W, S>& b) {
     static_assert(sizeof(Vec3) == 3 * sizeof(double), "the particles' vectors are read as arrays of doubles");
-    alignas(64) std::int64_t I[W], J[W], S[W];
+    alignas(64) std::int64_t I[W], J[W], SI[W];
     const Index* ii = t.i_list().data();
     const Index* jj = t.j_list().data();
     for (int l = 0; l < W; ++l) {
       const std::int64_t r = r0 + std::min(l, n - 1);
       I[l] = ii[r];
       J[l] = jj[r];
-      S[l] = 3 * r;
+      SI[l] = S * r;
     }
     const double* x = p.position.data()->data();
     const double* v = p.velocity.data()->data();
@@ -816,9 +834,17 @@ class ContactModelT final : public ContactModel {
       b.rj[l] = rad[J[l]];
       b.mi[l] = m[I[l]];
       b.mj[l] = m[J[l]];
-      b.sx[l] = st[S[l]];
-      b.sy[l] = st[S[l] + 1];
-      b.sz[l] = st[S[l] + 2];
+      for (int c = 0; c < S; ++c) b.s[c][l] = st[SI[l] + c];
+    }
+    if constexpr (is_thermal<Law>()) {
+      const double* temp = in.temp;
+      const double* gbf = in.gbf.empty() ? nullptr : in.gbf.data();
+      for (int l = 0; l < W; ++l) {
+        b.temp[l] = temp ? 0.5 * (temp[I[l]] + temp[J[l]]) : std::numeric_limits<double>::quiet_NaN();
+        b.gbf[l] = gbf ? std::max(gbf[I[l]], gbf[J[l]]) : 0.0;
+      }
+    } else {
+      (void)in;
     }
   }
 

@@ -10,10 +10,11 @@
 /// Lanes beyond the end of a block carry a copy of its last row and are never written back.
 ///
 /// A law with a lane path provides
-///   template <int W> void lanes(PairLanes<W>& b, double dt) const;
-/// reading the geometry and motion fields of b (n, delta, r_eff, m_eff, vn, vt) and its history
-/// (s), and writing the force on i (f), its tangential part (ft) and the new history (s); the pair
-/// loop (ContactModelT) gathers, calls it and scatters in row order.
+///   template <int W> void lanes(PairLanes<W, S>& b, double dt) const;
+/// (S = Law::kLaneState, its state columns; 3 when it declares none) reading the geometry and motion
+/// fields of b (n, delta, r_eff, m_eff, vn, vt; a thermal law also temp, gbf and time_scale) and its
+/// history (s), and writing the force on i (f), its tangential part (ft) and the new history (s);
+/// the pair loop (ContactModelT) gathers, calls it and scatters in row order.
 #include <cmath>
 #include <cstdint>
 
@@ -21,16 +22,22 @@
 
 namespace sparkdem {
 
-/// A block of W contact rows (lane l = row r0 + l), every field an aligned array over the lanes.
-template <int W>
+/// A block of W contact rows (lane l = row r0 + l) with S state columns, every field an aligned
+/// array over the lanes.
+template <int W, int S = 3>
 struct alignas(64) PairLanes {
+  static constexpr int kState = S;
   // gathered inputs
   alignas(64) double dx[W], dy[W], dz[W];     ///< x_i - x_j [m]
   alignas(64) double ri[W], rj[W], mi[W], mj[W];
   alignas(64) double dvx[W], dvy[W], dvz[W];  ///< v_i - v_j [m/s]
   alignas(64) double wix[W], wiy[W], wiz[W], wjx[W], wjy[W], wjz[W];
-  alignas(64) double sx[W], sy[W], sz[W];     ///< history in, new history out (law's state columns 0..2)
+  alignas(64) double s[S][W];                 ///< history in, new history out (the law's state columns)
+  alignas(64) double temp[W];                 ///< thermal laws: the pair's mean temperature [K] (NaN without the field)
+  alignas(64) double gbf[W];                  ///< thermal laws: the larger grain-boundary fraction of the pair (0 without)
+  double time_scale = 1.0;                    ///< thermal laws: physical seconds per mechanical second
   // geometry and relative motion (pair_geometry_lanes)
+  alignas(64) double dist[W];                 ///< centre distance [m]
   alignas(64) double delta[W];                ///< overlap [m]
   alignas(64) double live[W];                 ///< 1 when the pair touches (delta > 0 and dist > 0), else 0
   alignas(64) double nx[W], ny[W], nz[W];
@@ -49,13 +56,14 @@ struct alignas(64) PairLanes {
 ///   R* = r_i r_j / (r_i + r_j), m* = m_i m_j / (m_i + m_j) (0 when inertia-free),
 ///   arm_i = r_i - delta/2, arm_j = r_j - delta/2,
 ///   v = (v_i - v_j) - (arm_i w_i + arm_j w_j) x n, v_n = v . n, v_t = v - v_n n.
-template <int W>
-[[gnu::always_inline]] inline void pair_geometry_lanes(PairLanes<W>& b, bool inertia_free) {
+template <int W, int S>
+[[gnu::always_inline]] inline void pair_geometry_lanes(PairLanes<W, S>& b, bool inertia_free) {
   const double inertia = inertia_free ? 0.0 : 1.0;  // m* x 1 is m* exactly: a product, not a branch, in the loop
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     const double dist = std::sqrt((b.dx[l] * b.dx[l] + b.dy[l] * b.dy[l]) + b.dz[l] * b.dz[l]);
     const double delta = (b.ri[l] + b.rj[l]) - dist;
+    b.dist[l] = dist;
     b.delta[l] = delta;
     b.live[l] = ((delta > 0.0) & (dist > 0.0)) ? 1.0 : 0.0;  // & not &&: no branch in the loop
     const double nx = b.dx[l] / dist, ny = b.dy[l] / dist, nz = b.dz[l] / dist;
@@ -82,8 +90,8 @@ template <int W>
 }
 
 /// Torques of every lane from its tangential force: t_i = -arm_i (n x F_t), t_j = -arm_j (n x F_t).
-template <int W>
-[[gnu::always_inline]] inline void pair_torque_lanes(PairLanes<W>& b) {
+template <int W, int S>
+[[gnu::always_inline]] inline void pair_torque_lanes(PairLanes<W, S>& b) {
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     const double cx = b.ny[l] * b.ftz[l] - b.nz[l] * b.fty[l];

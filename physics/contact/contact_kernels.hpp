@@ -146,14 +146,14 @@ inline double linear_damping_for_restitution(double e, double m_eff, double k) {
 /// tangential_history on every lane of a block (engine/contact/lanes.hpp): the same operations in
 /// the same order, each branch a select, so every lane gives the scalar function's bits.
 /// Reads b.n, b.vt, b.s; writes b.ft and the new history b.s. k_t, gamma_t, |F_n| per lane.
-template <int W>
-[[gnu::always_inline]] inline void tangential_history_lanes(PairLanes<W>& b, const double* k_t, const double* gamma_t, double mu,
+template <int W, int S>
+[[gnu::always_inline]] inline void tangential_history_lanes(PairLanes<W, S>& b, const double* k_t, const double* gamma_t, double mu,
                                                             const double* fn_abs, double dt, double frame_epsilon = 0.0) {
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     const double nx = b.nx[l], ny = b.ny[l], nz = b.nz[l];
     const double kt = k_t[l], gt = gamma_t[l];
-    double sx = b.sx[l], sy = b.sy[l], sz = b.sz[l];
+    double sx = b.s[0][l], sy = b.s[1][l], sz = b.s[2][l];
     const double fcrit = mu * fn_abs[l];
     const double rsht = (sx * nx + sy * ny) + sz * nz;
     // frame update into the tangent plane, keeping the length
@@ -181,9 +181,9 @@ template <int W>
     const double scale = fcrit / fmag;
     const double cx = scalable ? fx * scale : 0.0, cy = scalable ? fy * scale : 0.0, cz = scalable ? fz * scale : 0.0;
     const bool reset = slide & scalable;
-    b.sx[l] = reset ? -(cx + gt * vx) / kt : sx;
-    b.sy[l] = reset ? -(cy + gt * vy) / kt : sy;
-    b.sz[l] = reset ? -(cz + gt * vz) / kt : sz;
+    b.s[0][l] = reset ? -(cx + gt * vx) / kt : sx;
+    b.s[1][l] = reset ? -(cy + gt * vy) / kt : sy;
+    b.s[2][l] = reset ? -(cz + gt * vz) / kt : sz;
     b.ftx[l] = slide ? cx : fx;
     b.fty[l] = slide ? cy : fy;
     b.ftz[l] = slide ? cz : fz;
@@ -191,8 +191,8 @@ template <int W>
 }
 
 /// The force on i of every lane, F = F_n n + F_t, from the normal force the law left in b.fx.
-template <int W>
-[[gnu::always_inline]] inline void assemble_force_lanes(PairLanes<W>& b) {
+template <int W, int S>
+[[gnu::always_inline]] inline void assemble_force_lanes(PairLanes<W, S>& b) {
 #pragma omp simd
   for (int l = 0; l < W; ++l) {
     const double fn = b.fx[l];

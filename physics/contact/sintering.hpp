@@ -70,6 +70,8 @@
 /// stays bonded (carries tension, `cold_necks: bonded`) or becomes a plain frictional contact
 /// (`cold_necks: contact`: compression only, the neck radius is kept for the conductance).
 /// Walls (punches, die): Hertz + damping + Coulomb friction (wall_friction), no sintering.
+/// Over SIMD lanes (`lanes`, issue 63): the same operations on blocks of rows, bit for bit, except
+/// with power-law creep or the constant-volume neck (row by row: `lanes_enabled`).
 ///
 /// Choices the sources leave open (parameters): R in F_s for unequal spheres (`sintering_radius`:
 /// r_min as in Kratos, R* or 2R*), the tangential factor (1 = eta_t = eta_n), cooling below the
@@ -109,7 +111,9 @@
 #include <vector>
 
 #include "engine/contact/geometry.hpp"
+#include "engine/contact/lanes.hpp"
 #include "engine/core/error.hpp"
+#include "engine/core/lane_math.hpp"
 #include "engine/model/param_spec.hpp"
 #include "physics/contact/contact_kernels.hpp"
 #include "physics/electrical/conductance_kernels.hpp"
@@ -172,11 +176,14 @@ struct MaxwellFactors {
   double decay;  ///< e^-x
   double phi;    ///< (1 - e^-x)/x
 };
-inline MaxwellFactors maxwell_factors(double k, double eta, double dt) {
+/// e^-x and expm1 come from lanemath (engine/core/lane_math.hpp): the same bits row by row and over
+/// the SIMD lanes of Sintering::lanes.
+[[gnu::always_inline]] inline MaxwellFactors maxwell_factors(double k, double eta, double dt) {
   if (!(eta < std::numeric_limits<double>::infinity())) return {1.0, 1.0};
   if (!(eta > 0.0)) return {0.0, 0.0};  // x = +inf (k > 0) or an instantly relaxing element
   const double x = k * dt / eta;
-  return {std::exp(-x), x > 1e-8 ? -std::expm1(-x) / x : 1.0 - 0.5 * x};
+  const lanemath::ExpAndExpm1 e = lanemath::exp_and_expm1(-x);
+  return {e.exp, x > 1e-8 ? -e.expm1 / x : 1.0 - 0.5 * x};
 }
 /// Power-law creep of a contact between two spheres [m/s] (the approach rate in physical time):
 /// Storakers, Biwa & Larsson, Int. J. Solids Struct. 34 (1997) 3061, self-similar indentation of a
@@ -350,6 +357,8 @@ struct Sintering {
     return {"neck_radius", "elastic_force", "viscous_approach", "tangential_fx", "tangential_fy", "tangential_fz", "radius_sum"};
   }
   enum Column { kNeck = 0, kElastic = 1, kViscous = 2, kTangential = 3, kRadiusSum = 6 };
+  enum class NeckKind { Kratos, Coble, ConstantVolume, Intersection };
+  enum class RadiusKind { Rmin, Reff, TwoReff };
 
   explicit Sintering(const Params& p)
       : p_(p),
@@ -630,6 +639,244 @@ struct Sintering {
     return f;
   }
 
+  // ---- the law over SIMD lanes (issue 63; engine/contact/lanes.hpp) ----
+  static constexpr int kLaneState = 7;  ///< the lane path carries all seven state columns
+  /// The lane path covers every parameter but power-law creep (its pow per row) and the
+  /// constant-volume neck (a Newton solve per row): with those, rows run through operator().
+  bool lanes_enabled() const { return !(p_.powerlaw_creep_rate > 0.0) && neck_kind_ != NeckKind::ConstantVolume; }
+  /// operator() for the pairs of a block of rows, lane by lane in its order: every branch of the
+  /// scalar law (normal_element, maxwell_step, maxwell_factors, the tangential element, the
+  /// Coulomb cap of a neckless pair, the neck's break) becomes a select between results computed
+  /// as the scalar code computes them, so every lane gives operator()'s bits (the exponentials are
+  /// lanemath's in both). Lanes of a row that is not live compute garbage that is never written.
+  template <int W>
+  [[gnu::always_inline]] void lanes(PairLanes<W, kLaneState>& b, double dt) const {
+    alignas(64) double T[W], d_eff[W];
+    temperatures_lanes(b, T, d_eff);
+    switch (neck_kind_) {
+      case NeckKind::Coble: return lanes_for<W, NeckKind::Coble>(b, dt, T, d_eff);
+      case NeckKind::Intersection: return lanes_for<W, NeckKind::Intersection>(b, dt, T, d_eff);
+      default: return lanes_for<W, NeckKind::Kratos>(b, dt, T, d_eff);
+    }
+  }
+
+ private:
+  /// The pair temperature of every lane (normal_element: the parameter when the field is absent)
+  /// and D_eff(T) from effective_diffusivity (std::exp and its per-thread cache: one call when the
+  /// block shares one temperature, as under a prescribed one).
+  template <int W>
+  [[gnu::always_inline]] void temperatures_lanes(const PairLanes<W, kLaneState>& b, double* T, double* d_eff) const {
+    bool uniform = true;
+    for (int l = 0; l < W; ++l) {
+      T[l] = std::isnan(b.temp[l]) ? p_.temperature : b.temp[l];
+      uniform = uniform && T[l] == T[0];
+    }
+    if (uniform) {
+      const double d = effective_diffusivity(T[0]);
+      for (int l = 0; l < W; ++l) d_eff[l] = d;
+    } else {
+      for (int l = 0; l < W; ++l) d_eff[l] = effective_diffusivity(T[l]);
+    }
+  }
+  /// geometric_neck of one lane for the neck kind K (the kernels' operations, their h <= 0 branch a select).
+  template <NeckKind K>
+  [[gnu::always_inline]] static double geometric_neck_lane(double ri, double rj, double r_min, double h) {
+    double a;
+    if constexpr (K == NeckKind::Coble) {
+      const double r_star = 2.0 / (1.0 / ri + 1.0 / rj);
+      a = std::sqrt(2.0 * r_star * h);
+    } else if constexpr (K == NeckKind::Intersection) {
+      const double d = ri + rj - h;
+      const double x = (d * d + ri * ri - rj * rj) / (2.0 * d);
+      const double y = ri * ri - x * x;
+      const double c = std::sqrt(0.0 < y ? y : 0.0);
+      a = d > std::abs(ri - rj) ? (c < r_min ? c : r_min) : r_min;
+    } else {
+      const double hc = 2.0 * r_min < h ? 2.0 * r_min : h;
+      const double x = r_min - 0.5 * hc;
+      const double y = r_min * r_min - x * x;
+      a = 1.43 * std::sqrt(0.0 < y ? y : 0.0);
+    }
+    return h > 0.0 ? a : 0.0;
+  }
+  /// maxwell_factors on one lane: {e^-x, phi(x)}.
+  [[gnu::always_inline]] static kernel::MaxwellFactors maxwell_factors_lane(double k, double eta, double dt) {
+    const double x = k * dt / eta;
+    const lanemath::ExpAndExpm1 e = lanemath::exp_and_expm1(-x);
+    const double phi = x > 1e-8 ? -e.expm1 / x : 1.0 - 0.5 * x;
+    const bool elastic = !(eta < std::numeric_limits<double>::infinity()), instant = !(eta > 0.0);
+    return {elastic ? 1.0 : (instant ? 0.0 : e.exp), elastic ? 1.0 : (instant ? 0.0 : phi)};
+  }
+  /// What the three stages of the lane path pass on, per lane. Flags are 0/1 numbers in memory: a
+  /// flag kept in a register across one big loop was folded by GCC into logic its vectoriser refuses.
+  template <int W>
+  struct LaneElement {
+    alignas(64) double hot[W], neck[W], a[W], eta_n[W], r_spring[W], kn[W], fs[W];  // normal_element
+    alignas(64) double fn[W], fe[W], us[W];                                           // the normal step
+  };
+  template <int W, NeckKind K>
+  [[gnu::always_inline]] void lanes_for(PairLanes<W, kLaneState>& b, double dt, const double* T, const double* d_eff) const {
+    LaneElement<W> e;
+    normal_element_lanes<W, K>(b, T, d_eff, e);
+    normal_step_lanes<W>(b, dt, e);
+    tangential_lanes<W>(b, dt, e);
+  }
+  // In the three stages every parameter and input is read into a local before any select (a load
+  // under a condition, a masked load, keeps the loop from vectorising), and every switch of the
+  // parameters becomes a bound or a weight: a condition common to all lanes, in a select or combined
+  // with a lane's condition, turns into control flow the vectoriser refuses. Each bound gives the
+  // scalar test's outcome (a bound of +-inf: never; products by 1 and 0 and sums with 0 are exact).
+
+  /// normal_element on every lane: the neck radius, the flags, the dashpot, the spring, the driving force.
+  template <int W, NeckKind K>
+  [[gnu::always_inline]] void normal_element_lanes(const PairLanes<W, kLaneState>& b, const double* T, const double* d_eff,
+                                                   LaneElement<W>& e) const {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    const double kn_c = 2.0 * e_star_, fs_c = kPi * p_.surface_energy;
+    const double t_start = p_.sintering_start_temperature, min_neck = p_.min_neck_fraction;
+    const double sin_half = sin_half_, cos_half = cos_half_, time_scale = b.time_scale;
+    const double closed_at = p_.stop_flow_at_dense ? 0.5 : inf;                                // gbf >= it: closed
+    const double dense_at = p_.creep_stop_gb_fraction > 0.0 ? p_.creep_stop_gb_fraction : inf;  // gbf >= it: dense
+    const double creep_limit = creep_ ? p_.creep_overlap_limit : -inf;                          // h < it r_min: creeping
+    const double spring_w = neck_spring_ ? 1.0 : 0.0;                                           // spring radius max(hertz, a w)
+    // driving_radius: w_eff r_eff + w_min r_min
+    const double w_eff = radius_kind_ == RadiusKind::Reff ? 1.0 : (radius_kind_ == RadiusKind::TwoReff ? 2.0 : 0.0);
+    const double w_min = radius_kind_ == RadiusKind::Rmin ? 1.0 : 0.0;
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      const double h = b.delta[l], ri = b.ri[l], rj = b.rj[l], r_eff = b.r_eff[l], gbf = b.gbf[l], d = d_eff[l];
+      const bool hot = T[l] >= t_start;
+      const double r_min = rj < ri ? rj : ri;
+      double a = b.s[kNeck][l];
+      const double gn = geometric_neck_lane<K>(ri, rj, r_min, h), mn = min_neck * r_min;
+      double grown = a < gn ? gn : a;  // std::max({a, gn, mn}): the first largest
+      grown = grown < mn ? mn : grown;
+      a = (hot & (h > 0.0)) ? grown : a;
+      a = r_min < a ? r_min : a;
+      const bool neck = a > 0.0;
+      const bool sintering = hot & neck & (a < r_min * sin_half) & (gbf < closed_at);
+      const bool creeping = hot & neck & (h < creep_limit * r_min) & (gbf < closed_at) & (gbf < dense_at);  // after_equilibrium: creep
+      e.eta_n[l] = sintering | creeping ? kPi * a * a * a * a / (8.0 * d) / time_scale : inf;
+      const double hertz_r = std::sqrt(r_eff * std::abs(h - b.s[kViscous][l]));
+      const double r_spring = hertz_r < a * spring_w ? a : hertz_r;
+      e.r_spring[l] = r_spring;
+      e.kn[l] = kn_c * r_spring;
+      const double drive_r = w_eff * r_eff + w_min * r_min;
+      e.fs[l] = sintering ? fs_c * (4.0 * drive_r * (1.0 - cos_half) + a * sin_half) : 0.0;
+      e.a[l] = a;
+      e.hot[l] = hot ? 1.0 : 0.0;
+      e.neck[l] = neck ? 1.0 : 0.0;
+    }
+  }
+
+  /// operator()'s normal force on every lane: the Maxwell step of a neck (maxwell_step) or Hertz
+  /// on the elastic overlap (no neck), the numerical damper and the driving force.
+  template <int W>
+  [[gnu::always_inline]] void normal_step_lanes(PairLanes<W, kLaneState>& b, double dt, LaneElement<W>& e) const {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    const double two_damping = 2.0 * p_.damping_ratio, hertz_c = 4.0 / 3.0 * e_star_;
+    const double cold_floor = cold_contact_ ? 0.0 : -inf;  // a cold neck's F_e below it: 0
+    const double rate_floor = dt > 0.0 ? 0.0 : inf;        // r_i + r_j before > it: its rate
+    const double dt_rate = dt > 0.0 ? dt : inf;            // u_s rate du / dt_rate (0 at dt = 0)
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      const double h = b.delta[l], r_eff = b.r_eff[l], m_eff = b.m_eff[l], eta_n = e.eta_n[l], kn = e.kn[l];
+      const double fe0 = b.s[kElastic][l], us0 = b.s[kViscous][l], rs_old = b.s[kRadiusSum][l];
+      const bool neck = e.neck[l] != 0.0, hot = e.hot[l] != 0.0;
+      const double radius_sum = b.ri[l] + b.rj[l];
+      const double v = -b.vn[l] + (rs_old > rate_floor ? (radius_sum - rs_old) / dt : 0.0);
+      b.s[kRadiusSum][l] = radius_sum;
+      const double vv = v - 0.0;  // v - the creep line's offset (0 without power-law creep)
+      const kernel::MaxwellFactors mf = maxwell_factors_lane(kn, eta_n, dt);
+      const bool elastic = !(eta_n < inf), instant = !(eta_n > 0.0);
+      const double f_visc = fe0 * mf.decay + kn * vv * dt * mf.phi;
+      const double u_visc = dt * (vv * (1.0 - mf.phi) + mf.phi * fe0 / eta_n);
+      const double f_step = elastic ? fe0 + kn * vv * dt : (instant ? 0.0 : f_visc);
+      const double u_step = elastic ? 0.0 : (instant ? vv * dt + (kn > 0.0 ? fe0 / kn : 0.0) : u_visc);
+      const double fe_neck = f_step < (hot ? -inf : cold_floor) ? 0.0 : f_step;
+      const double he_raw = h - us0, he = he_raw < 0.0 ? 0.0 : he_raw;
+      const double fe = neck ? fe_neck : hertz_c * std::sqrt(r_eff * he) * he;
+      const double us_rate = neck ? u_step / dt_rate + 0.0 : 0.0;
+      const double fs = neck ? e.fs[l] : 0.0;
+      const double cn = two_damping * std::sqrt(m_eff * kn);
+      e.fn[l] = fe + cn * (v - us_rate) - fs;
+      e.fe[l] = fe;
+      e.us[l] = neck ? us0 + (u_step + 0.0 * dt) : us0;
+      // An inertia-free pass carries no slip of a pair without a neck (operator()); cleared here, not in
+      // tangential_lanes, where GCC threads the zeros into its later tests and stops vectorising.
+      const bool no_slip_carried = !neck & !(m_eff > 0.0);
+      b.s[kTangential][l] = no_slip_carried ? 0.0 : b.s[kTangential][l];
+      b.s[kTangential + 1][l] = no_slip_carried ? 0.0 : b.s[kTangential + 1][l];
+      b.s[kTangential + 2][l] = no_slip_carried ? 0.0 : b.s[kTangential + 2][l];
+    }
+  }
+
+  /// operator()'s tangential element on every lane (its stored force turned into the tangent plane,
+  /// the Maxwell step, the damper, the Coulomb cap of a pair without a neck), the neck's break,
+  /// the new state and the force on i.
+  template <int W>
+  [[gnu::always_inline]] void tangential_lanes(PairLanes<W, kLaneState>& b, double dt, const LaneElement<W>& e) const {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    const double two_damping = 2.0 * p_.damping_ratio, kt_c = 8.0 * g_star_;
+    const double tangential_factor = p_.tangential_factor, friction = p_.friction;
+    const double strength = p_.neck_strength > 0.0 ? p_.neck_strength : inf;  // -F_n > it pi a^2: broken
+#pragma omp simd
+    for (int l = 0; l < W; ++l) {
+      const double m_eff = b.m_eff[l], a = e.a[l], fn = e.fn[l];
+      const bool neck = e.neck[l] != 0.0, no_neck = e.neck[l] == 0.0;
+      const double kt = kt_c * e.r_spring[l], eta_t = tangential_factor * e.eta_n[l];
+      double fx = b.s[kTangential][l], fy = b.s[kTangential + 1][l], fz = b.s[kTangential + 2][l];
+      const double nx = b.nx[l], ny = b.ny[l], nz = b.nz[l];
+      const double mag = std::sqrt((fx * fx + fy * fy) + fz * fz);
+      const double dot = (fx * nx + fy * ny) + fz * nz;
+      fx = fx - dot * nx;
+      fy = fy - dot * ny;
+      fz = fz - dot * nz;
+      const double proj = std::sqrt((fx * fx + fy * fy) + fz * fz);
+      const double stretch = mag / proj;
+      fx = proj > 0.0 ? fx * stretch : fx;
+      fy = proj > 0.0 ? fy * stretch : fy;
+      fz = proj > 0.0 ? fz * stretch : fz;
+      const double vtx = b.vtx[l], vty = b.vty[l], vtz = b.vtz[l];
+      const double vt = std::sqrt((vtx * vtx + vty * vty) + vtz * vtz);
+      const kernel::MaxwellFactors mt = maxwell_factors_lane(kt, eta_t, dt);
+      const double ck = kt * dt * mt.phi;
+      const bool moving = (vt > 0.0) | (mag > 0.0);
+      fx = moving ? fx * mt.decay - ck * vtx : fx;
+      fy = moving ? fy * mt.decay - ck * vty : fy;
+      fz = moving ? fz * mt.decay - ck * vtz : fz;
+      const double ct = two_damping * std::sqrt(m_eff * kt);
+      double tx = fx - ct * vtx, ty = fy - ct * vty, tz = fz - ct * vtz;
+      // Coulomb cap of a pair without a neck
+      const double cap = friction * std::abs(fn);
+      const double fm = std::sqrt((tx * tx + ty * ty) + tz * tz);
+      const bool capped = no_neck & (fm > cap);
+      const double shrink = fm > 0.0 ? cap / fm : 0.0;
+      tx = capped ? tx * shrink : tx;
+      ty = capped ? ty * shrink : ty;
+      tz = capped ? tz * shrink : tz;
+      fx = capped ? tx + ct * vtx : fx;
+      fy = capped ? ty + ct * vty : fy;
+      fz = capped ? tz + ct * vtz : fz;
+      // a neck broken in tension: its state cleared
+      const bool broken = neck & (-fn > strength * kPi * a * a);
+      b.s[kNeck][l] = neck ? (broken ? 0.0 : a) : 0.0;
+      b.s[kElastic][l] = neck ? (broken ? 0.0 : e.fe[l]) : 0.0;
+      b.s[kViscous][l] = neck ? (broken ? 0.0 : e.us[l]) : 0.0;
+      b.s[kTangential][l] = broken ? 0.0 : fx;
+      b.s[kTangential + 1][l] = broken ? 0.0 : fy;
+      b.s[kTangential + 2][l] = broken ? 0.0 : fz;
+      b.ftx[l] = tx;
+      b.fty[l] = ty;
+      b.ftz[l] = tz;
+      b.fx[l] = fn * nx + tx;
+      b.fy[l] = fn * ny + ty;
+      b.fz[l] = fn * nz + tz;
+    }
+  }
+
+ public:
+
   /// The dashpot of the normal Maxwell element as a line in F over the step: flow rate
   /// du_s/dt = F / eta + offset (mechanical time). Without power-law creep: {eta_n, 0}. With it, the
   /// rates add, du_s/dt = F / eta_n + hdot_pl(F), and hdot_pl is linearised at the step's F_e
@@ -688,8 +935,6 @@ struct Sintering {
   const Params& params() const { return p_; }
 
  private:
-  enum class NeckKind { Kratos, Coble, ConstantVolume, Intersection };
-  enum class RadiusKind { Rmin, Reff, TwoReff };
   Params p_;
   double e_star_, g_star_, sin_half_, cos_half_;
   /// A number no other law object constructed in this process shares (copies share it, with the
