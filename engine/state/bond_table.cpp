@@ -50,11 +50,9 @@ void BondTable::mark_broken(std::size_t r, Step step, const BondBreakRecord& rec
   broken_[r] = 1;
   broken_step_[r] = step;
   record_[r] = record;
-  if (r < force_.size()) {
-    force_[r].setZero();
-    torque_i_[r].setZero();
-    torque_j_[r].setZero();
-  }
+  if (r < force_.size()) force_[r].setZero();
+  if (r < torque_i_.size()) torque_i_[r].setZero();
+  if (r < torque_j_.size()) torque_j_[r].setZero();
   ++version_;
 }
 

@@ -78,6 +78,7 @@ void ContactTable::rebuild(const std::vector<std::array<Index, 2>>& pairs, const
   release(torque_i_);
   release(torque_j_);
   release(inc_row_);
+  inc_built_ = false;  // due again: reset_results at the end marks it for the new rows
   const std::size_t w = state_names_.size(), old_rows = size();
   // 1. Where each new row comes from. Candidates first (pair order): the old row of the same key,
   //    whose state it carries, or kFresh; excluded pairs are skipped. Then the old rows their law

@@ -32,7 +32,7 @@ void PairRows::remap_after_permutation(const std::vector<Id>& ids) {
 void PairRows::keep_rows(const std::vector<char>& keep) {
   split_.threads = 0;
   const std::size_t w = state_names_.size(), n = size();
-  const bool results = force_.size() == n && torque_i_.size() == n && torque_j_.size() == n;
+  const bool results = force_.size() == n, torques = results && torque_i_.size() == n && torque_j_.size() == n;
   std::size_t q = 0;
   for (std::size_t r = 0; r < n; ++r) {
     if (!keep[r]) continue;
@@ -41,8 +41,8 @@ void PairRows::keep_rows(const std::vector<char>& keep) {
     id_i_[q] = id_i_[r];
     id_j_[q] = id_j_[r];
     std::copy_n(state_.begin() + r * w, w, state_.begin() + q * w);
-    if (results) {
-      force_[q] = force_[r];
+    if (results) force_[q] = force_[r];
+    if (torques) {
       torque_i_[q] = torque_i_[r];
       torque_j_[q] = torque_j_[r];
     }
@@ -54,13 +54,9 @@ void PairRows::keep_rows(const std::vector<char>& keep) {
   id_j_.resize(q);
   state_.resize(q * w);
   force_.resize(results ? q : 0);
-  torque_i_.resize(results ? q : 0);
-  torque_j_.resize(results ? q : 0);
-  if (!results) {
-    force_.assign(q, Vec3::Zero());
-    torque_i_.assign(q, Vec3::Zero());
-    torque_j_.assign(q, Vec3::Zero());
-  }
+  if (!results) force_.assign(q, Vec3::Zero());
+  torque_i_.resize(torques ? q : 0);  // unsized torque rows stay so (torque_i(), torque_j())
+  torque_j_.resize(torques ? q : 0);
 }
 
 void PairRows::copy_named_state(std::size_t r, const std::vector<std::string>& from_names, const double* from) {
@@ -73,27 +69,36 @@ void PairRows::copy_named_state(std::size_t r, const std::vector<std::string>& f
 
 void PairRows::reset_results(std::size_t n_particles) {
   force_.assign(size(), Vec3::Zero());
-  torque_i_.assign(size(), Vec3::Zero());
-  torque_j_.assign(size(), Vec3::Zero());
+  std::vector<Vec3>().swap(torque_i_);
+  std::vector<Vec3>().swap(torque_j_);
   build_incidence(n_particles);
 }
 
 void PairRows::build_incidence(std::size_t n) {
   split_.threads = 0;
+  inc_particles_ = n;
+  inc_built_ = false;
+  std::vector<std::int64_t>().swap(inc_row_);
+}
+
+void PairRows::ensure_incidence() const {
+  if (inc_built_) return;
   sparkdem::build_incidence(
-      n, size(), [&](std::size_t r) { return i_[r]; }, [&](std::size_t r) { return j_[r]; }, inc_start_, inc_row_);
+      inc_particles_, size(), [&](std::size_t r) { return i_[r]; }, [&](std::size_t r) { return j_[r]; }, inc_start_, inc_row_);
+  inc_built_ = true;
 }
 
 void PairRows::gather_one(std::int64_t p, std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
   Vec3 f = Vec3::Zero(), t = Vec3::Zero();
+  const bool torques = torque_i_.size() == size() && torque_j_.size() == size();  // unsized: no pass filled them (zero)
   for (std::int64_t k = inc_start_[p]; k < inc_start_[p + 1]; ++k) {
     const std::int64_t code = inc_row_[k];
     if (code >= 0) {
       f += force_[code];
-      t += torque_i_[code];
+      if (torques) t += torque_i_[code];
     } else {
       f -= force_[~code];
-      t += torque_j_[~code];
+      if (torques) t += torque_j_[~code];
     }
   }
   force[p] += f;
@@ -101,17 +106,20 @@ void PairRows::gather_one(std::int64_t p, std::vector<Vec3>& force, std::vector<
 }
 
 void PairRows::gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
+  ensure_incidence();
   const std::int64_t n = static_cast<std::int64_t>(force.size());
   par::for_each(n, par::kLight, [&](std::int64_t p) { gather_one(p, force, torque); });
 }
 
 void PairRows::gather_particles(const std::vector<Index>& which, std::vector<Vec3>& force, std::vector<Vec3>& torque) const {
+  ensure_incidence();
   const std::int64_t n = static_cast<std::int64_t>(which.size());
   par::for_each(n, par::kLight, [&](std::int64_t k) { gather_one(which[k], force, torque); });
 }
 
 const PairRows::RowSplit& PairRows::row_split(int threads, const std::function<bool(std::int64_t)>& heavy, double heavy_cost) const {
   if (split_.threads == threads && split_.heavy_cost == heavy_cost) return split_;
+  ensure_incidence();
   const std::int64_t rows = static_cast<std::int64_t>(size()), n = static_cast<std::int64_t>(inc_start_.size()) - 1;
   split_.row_begin.resize(threads + 1);
   for (int t = 0; t <= threads; ++t) split_.row_begin[t] = rows * t / threads;
@@ -174,8 +182,8 @@ void PairRows::visit_rows(Archive& ar, const std::string& prefix, const std::str
       throw SetupError("checkpoint " + what + " state has " + std::to_string(state_.size()) + " values, expected " +
                        std::to_string(size() * state_names_.size()) + " (different law?)");
     force_.assign(size(), Vec3::Zero());
-    torque_i_.assign(size(), Vec3::Zero());
-    torque_j_.assign(size(), Vec3::Zero());
+    std::vector<Vec3>().swap(torque_i_);
+    std::vector<Vec3>().swap(torque_j_);
   }
 }
 

@@ -71,16 +71,32 @@ class PairRows {
 
   // Per-row results of the last force pass.
   std::vector<Vec3>& force() { return force_; }        ///< force on i (j gets minus) [N]
-  std::vector<Vec3>& torque_i() { return torque_i_; }  ///< [N m]
-  std::vector<Vec3>& torque_j() { return torque_j_; }  ///< [N m]
+  /// Torques on i and j [N m], sized (zeroed) on first use after the rows changed: the one-thread
+  /// contact pass adds every row straight into its particles and never fills them (4 MB a
+  /// 85,000-row table kept free). A pass that fills them asks for them before it starts.
+  std::vector<Vec3>& torque_i() {
+    if (torque_i_.size() != size()) torque_i_.assign(size(), Vec3::Zero());
+    return torque_i_;
+  }
+  std::vector<Vec3>& torque_j() {
+    if (torque_j_.size() != size()) torque_j_.assign(size(), Vec3::Zero());
+    return torque_j_;
+  }
   const std::vector<Vec3>& force() const { return force_; }
 
   /// Recompute local indices after the particles were permuted (`ids` maps local -> global).
   void remap_after_permutation(const std::vector<Id>& ids);
 
   /// Per-particle incidence (CSR): rows touching particle p; code >= 0: side i, ~row: side j.
-  const std::vector<std::int64_t>& incidence_start() const { return inc_start_; }
-  const std::vector<std::int64_t>& incidence_row() const { return inc_row_; }
+  /// Built on first use after the rows changed (the one-thread contact pass never needs it).
+  const std::vector<std::int64_t>& incidence_start() const {
+    ensure_incidence();
+    return inc_start_;
+  }
+  const std::vector<std::int64_t>& incidence_row() const {
+    ensure_incidence();
+    return inc_row_;
+  }
 
   /// Sum per-row forces/torques into particle arrays (adds to force/torque).
   void gather(std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
@@ -125,9 +141,12 @@ class PairRows {
  protected:
   /// Copy same-named columns of `from` (names `from_names`) into row r; others keep their value.
   void copy_named_state(std::size_t r, const std::vector<std::string>& from_names, const double* from);
-  /// Resize the per-row result arrays to the row count (zeroed) and rebuild the incidence.
+  /// Resize the force rows to the row count (zeroed), free the torque rows (sized again by the
+  /// pass that fills them: torque_i(), torque_j()) and mark the incidence due (build_incidence).
   void reset_results(std::size_t n_particles);
+  /// The incidence is due for n_particles particles: built by its first use (ensure_incidence).
   void build_incidence(std::size_t n_particles);
+  void ensure_incidence() const;
   /// The incidence sum of particle p, in increasing row order, added to force[p] and torque[p].
   void gather_one(std::int64_t p, std::vector<Vec3>& force, std::vector<Vec3>& torque) const;
   /// Rows (ids, local indices) and state with their column names.
@@ -138,7 +157,9 @@ class PairRows {
   std::vector<std::string> state_names_;
   std::vector<double> state_;
   std::vector<Vec3> force_, torque_i_, torque_j_;
-  std::vector<std::int64_t> inc_start_, inc_row_;
+  mutable std::vector<std::int64_t> inc_start_, inc_row_;
+  std::size_t inc_particles_ = 0;   ///< the particle count the incidence is due for
+  mutable bool inc_built_ = false;  ///< inc_start_ and inc_row_ hold it
   mutable RowSplit split_;  ///< cache of row_split (threads = 0: stale)
 };
 
