@@ -965,9 +965,13 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
 
   std::vector<std::string> cols;
   std::vector<double> vals;
+  // The step cols and vals were last sampled at by the step's bookkeeping: the `until` check at the
+  // top of the next iteration sees the same state and reuses them (the monitors - a compact's
+  // porosity runs a neighbour search and the lens volumes - were evaluated twice per check).
+  Step sampled_at = -1;
   auto until_holds = [&]() {
     if (cfg.until.empty()) return false;
-    sample(cols, vals);
+    if (sampled_at != s_.step) sample(cols, vals);
     for (const auto& c : cfg.until) {
       auto it = std::find(cols.begin(), cols.end(), c.quantity);
       if (it == cols.end()) throw SetupError("stage '" + cfg.name + "': stop quantity '" + c.quantity + "' is not monitored");
@@ -1037,6 +1041,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
     const bool row = cfg.timeseries_every > 0 && kk % cfg.timeseries_every == 0;
     if (row || (watch_every > 0 && kk % watch_every == 0)) {
       sample(cols, vals);
+      sampled_at = s_.step;
       if (row) obs.timeseries(cols, vals);
       obs.watch(s_, cols, vals);
     }
@@ -1054,6 +1059,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   }
   watchdog_check(s_, wd, wctx, false);
   watchdog_reset(s_);  // the energy samples live only inside the stage (final states carry none)
+  sampled_at = -1;
   for (const PlanItem& it : plan_.items)
     if (it.kind == PlanItem::Kind::Module) it.module->release_caches();
   obs.frame(s_);
