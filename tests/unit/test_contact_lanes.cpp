@@ -91,6 +91,27 @@ Outcome run(const ContactModelT<Law>& model, LaneIsa isa, int kind, std::uint64_
   return {c.p.force, c.p.torque, c.t.force(), c.t.overlap(), states(c.t)};
 }
 
+/// Every lane path the processor has against the scalar path, for the three pass kinds on 1 and 2
+/// threads; `run(isa, kind)` gives one path's outcome.
+template <class Run>
+void check_paths(Run run) {
+  for (int kind = 0; kind < 3; ++kind)
+    for (int threads : {1, 2}) {
+      omp_set_num_threads(threads);
+      const Outcome ref = run(LaneIsa::scalar, kind);
+      for (LaneIsa isa : {LaneIsa::avx2, LaneIsa::avx512}) {
+        if (static_cast<int>(isa) > static_cast<int>(detected_lane_isa())) continue;
+        const Outcome got = run(isa, kind);
+        INFO("lanes " << lane_isa_name(isa) << ", pass kind " << kind << ", threads " << threads);
+        CHECK(same_bits(got.force, ref.force));
+        CHECK(same_bits(got.torque, ref.torque));
+        CHECK(same_bits(got.rows, ref.rows));
+        CHECK(same_bits(got.overlap, ref.overlap));
+        CHECK(same_bits(got.state, ref.state));
+      }
+    }
+}
+
 template <class Law>
 void check_lanes(const typename Law::Params& params) {
   const ContactModelT<Law> model(params);
@@ -122,21 +143,7 @@ void check_lanes(const typename Law::Params& params) {
       REQUIRE(sticking > 0);
       REQUIRE(sliding > 0);
     }
-    for (int kind = 0; kind < 3; ++kind)
-      for (int threads : {1, 2}) {
-        omp_set_num_threads(threads);
-        const Outcome ref = run(model, LaneIsa::scalar, kind, seed);
-        for (LaneIsa isa : {LaneIsa::avx2, LaneIsa::avx512}) {
-          if (static_cast<int>(isa) > static_cast<int>(detected_lane_isa())) continue;
-          const Outcome got = run(model, isa, kind, seed);
-          INFO("lanes " << lane_isa_name(isa) << ", pass kind " << kind << ", threads " << threads);
-          CHECK(same_bits(got.force, ref.force));
-          CHECK(same_bits(got.torque, ref.torque));
-          CHECK(same_bits(got.rows, ref.rows));
-          CHECK(same_bits(got.overlap, ref.overlap));
-          CHECK(same_bits(got.state, ref.state));
-        }
-      }
+    check_paths([&](LaneIsa isa, int kind) { return run(model, isa, kind, seed); });
   }
   omp_set_num_threads(threads_before);
 }
@@ -265,21 +272,7 @@ void check_sintering_lanes(const Sintering::Params& params) {
       REQUIRE(necked > 0);
       REQUIRE(separated_necks > 0);
       if (!uniform) REQUIRE(neckless > 0);
-      for (int kind = 0; kind < 3; ++kind)
-        for (int threads : {1, 2}) {
-          omp_set_num_threads(threads);
-          const Outcome ref = run_sintering(model, LaneIsa::scalar, kind, seed, uniform);
-          for (LaneIsa isa : {LaneIsa::avx2, LaneIsa::avx512}) {
-            if (static_cast<int>(isa) > static_cast<int>(detected_lane_isa())) continue;
-            const Outcome got = run_sintering(model, isa, kind, seed, uniform);
-            INFO("lanes " << lane_isa_name(isa) << ", pass kind " << kind << ", threads " << threads);
-            CHECK(same_bits(got.force, ref.force));
-            CHECK(same_bits(got.torque, ref.torque));
-            CHECK(same_bits(got.rows, ref.rows));
-            CHECK(same_bits(got.overlap, ref.overlap));
-            CHECK(same_bits(got.state, ref.state));
-          }
-        }
+      check_paths([&](LaneIsa isa, int kind) { return run_sintering(model, isa, kind, seed, uniform); });
     }
   }
   omp_set_num_threads(threads_before);

@@ -38,7 +38,8 @@ std::vector<double> arguments() {
   return x;
 }
 
-[[SPARKDEM_TARGET_AVX512]] void over_lanes_avx512(const std::vector<double>& x, std::vector<double>& e, std::vector<double>& m) {
+/// exp_and_expm1 of every argument in a loop over SIMD lanes (compiled per instruction set below).
+[[gnu::always_inline]] inline void over_lanes(const std::vector<double>& x, std::vector<double>& e, std::vector<double>& m) {
   const std::size_t n = x.size();
 #pragma omp simd
   for (std::size_t k = 0; k < n; ++k) {
@@ -47,14 +48,11 @@ std::vector<double> arguments() {
     m[k] = r.expm1;
   }
 }
+[[SPARKDEM_TARGET_AVX512]] void over_lanes_avx512(const std::vector<double>& x, std::vector<double>& e, std::vector<double>& m) {
+  over_lanes(x, e, m);
+}
 [[SPARKDEM_TARGET_AVX2]] void over_lanes_avx2(const std::vector<double>& x, std::vector<double>& e, std::vector<double>& m) {
-  const std::size_t n = x.size();
-#pragma omp simd
-  for (std::size_t k = 0; k < n; ++k) {
-    const lanemath::ExpAndExpm1 r = lanemath::exp_and_expm1(x[k]);
-    e[k] = r.exp;
-    m[k] = r.expm1;
-  }
+  over_lanes(x, e, m);
 }
 
 }  // namespace
