@@ -796,6 +796,21 @@ void Simulation::evaluate_start(double dt_used, double t_area, StageResult& res)
     }
 }
 
+WatchdogContext Simulation::watchdog_context(const StageConfig& cfg, double dt, double stable_dt) const {
+  WatchdogContext c;
+  c.dt = dt;
+  c.stable_dt = stable_dt;
+  c.allow_unstable_dt = cfg.allow_unstable_dt;
+  c.law_overlap_bound = law_.overlap_ratio_bound();
+  c.stage = cfg.name;
+  return c;
+}
+
+void Simulation::release_module_caches() {
+  for (const PlanItem& it : plan_.items)
+    if (it.kind == PlanItem::Kind::Module) it.module->release_caches();
+}
+
 WatchdogConfig Simulation::stage_watchdog(const StageConfig& cfg) const {
   WatchdogConfig wd = cfg.watchdog;
   if (!(wd.max_speed > 0.0)) wd.max_speed = cfg.blowup_speed;
@@ -990,12 +1005,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   // The run watchdog: the state of the stage start must pass it (a scene it refuses stops before
   // step 0), and that state is the first healthy copy.
   const WatchdogConfig wd = stage_watchdog(cfg);
-  WatchdogContext wctx;
-  wctx.dt = dt_used;
-  wctx.stable_dt = res.stable_dt_at_start;
-  wctx.allow_unstable_dt = cfg.allow_unstable_dt;
-  wctx.law_overlap_bound = law_.overlap_ratio_bound();
-  wctx.stage = cfg.name;
+  WatchdogContext wctx = watchdog_context(cfg, dt_used, res.stable_dt_at_start);
   if (!resume) watchdog_reset(s_);
   try {
     // (On resume at a check step the energy samples restart there: they are not in checkpoints.)
@@ -1060,8 +1070,7 @@ StageResult Simulation::run_stage(const StageConfig& cfg, Observer& obs, bool re
   watchdog_check(s_, wd, wctx, false);
   watchdog_reset(s_);  // the energy samples live only inside the stage (final states carry none)
   sampled_at = -1;
-  for (const PlanItem& it : plan_.items)
-    if (it.kind == PlanItem::Kind::Module) it.module->release_caches();
+  release_module_caches();
   obs.frame(s_);
   if (!reached && !cfg.until.empty()) reached = until_holds();
   res.until_reached = cfg.until.empty() || reached;

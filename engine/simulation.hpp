@@ -298,6 +298,10 @@ class Simulation {
   std::vector<ModuleStep> module_steps(double dt_used) const;
   void execute_plan(const StageConfig& cfg, double dt_used, double t_new, double t_area);
   WatchdogConfig stage_watchdog(const StageConfig& cfg) const;
+  /// What the watchdog needs of the stage: its step, the stable step at its start, its name.
+  WatchdogContext watchdog_context(const StageConfig& cfg, double dt, double stable_dt) const;
+  /// Module::release_caches of every module of the plan (the stage's steps are over).
+  void release_module_caches();
   void evaluate_start(double dt_used, double t_area, StageResult& res);
   void check_module_steps(const StageConfig& cfg, double dt_used, bool at_start) const;
   double choose_step(const StageConfig& cfg, bool resume, StageResult& res);

@@ -729,7 +729,7 @@ class ContactModelT final : public ContactModel {
   void row_range(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt, const PassInputs& in,
                  Sink& sink) const {
     if constexpr (kLanes) {
-      if (in.width == lane_state() && law_lanes_enabled()) switch (lane_isa()) {
+      if (lanes_run(t)) switch (lane_isa()) {
         case LaneIsa::avx512: return rows_avx512(p, t, lo, hi, dt, in, sink);
         case LaneIsa::avx2: return rows_avx2(p, t, lo, hi, dt, in, sink);
         case LaneIsa::scalar: break;

@@ -176,14 +176,15 @@ struct MaxwellFactors {
   double decay;  ///< e^-x
   double phi;    ///< (1 - e^-x)/x
 };
-/// e^-x and expm1 come from lanemath (engine/core/lane_math.hpp): the same bits row by row and over
-/// the SIMD lanes of Sintering::lanes.
+/// Branch-free (its cases are selects), so that Sintering::lanes runs it on every lane; e^-x and
+/// expm1 come from lanemath (engine/core/lane_math.hpp): the same bits row by row and over lanes.
 [[gnu::always_inline]] inline MaxwellFactors maxwell_factors(double k, double eta, double dt) {
-  if (!(eta < std::numeric_limits<double>::infinity())) return {1.0, 1.0};
-  if (!(eta > 0.0)) return {0.0, 0.0};  // x = +inf (k > 0) or an instantly relaxing element
   const double x = k * dt / eta;
   const lanemath::ExpAndExpm1 e = lanemath::exp_and_expm1(-x);
-  return {e.exp, x > 1e-8 ? -e.expm1 / x : 1.0 - 0.5 * x};
+  const double phi = x > 1e-8 ? -e.expm1 / x : 1.0 - 0.5 * x;
+  // eta = +inf: elastic {1, 1}; eta <= 0: x = +inf (k > 0) or an instantly relaxing element {0, 0}
+  const bool elastic = !(eta < std::numeric_limits<double>::infinity()), instant = !(eta > 0.0);
+  return {elastic ? 1.0 : (instant ? 0.0 : e.exp), elastic ? 1.0 : (instant ? 0.0 : phi)};
 }
 /// Power-law creep of a contact between two spheres [m/s] (the approach rate in physical time):
 /// Storakers, Biwa & Larsson, Int. J. Solids Struct. 34 (1997) 3061, self-similar indentation of a
@@ -699,14 +700,6 @@ struct Sintering {
     }
     return h > 0.0 ? a : 0.0;
   }
-  /// maxwell_factors on one lane: {e^-x, phi(x)}.
-  [[gnu::always_inline]] static kernel::MaxwellFactors maxwell_factors_lane(double k, double eta, double dt) {
-    const double x = k * dt / eta;
-    const lanemath::ExpAndExpm1 e = lanemath::exp_and_expm1(-x);
-    const double phi = x > 1e-8 ? -e.expm1 / x : 1.0 - 0.5 * x;
-    const bool elastic = !(eta < std::numeric_limits<double>::infinity()), instant = !(eta > 0.0);
-    return {elastic ? 1.0 : (instant ? 0.0 : e.exp), elastic ? 1.0 : (instant ? 0.0 : phi)};
-  }
   /// What the three stages of the lane path pass on, per lane. Flags are 0/1 numbers in memory: a
   /// flag kept in a register across one big loop was folded by GCC into logic its vectoriser refuses.
   template <int W>
@@ -787,7 +780,7 @@ struct Sintering {
       const double v = -b.vn[l] + (rs_old > rate_floor ? (radius_sum - rs_old) / dt : 0.0);
       b.s[kRadiusSum][l] = radius_sum;
       const double vv = v - 0.0;  // v - the creep line's offset (0 without power-law creep)
-      const kernel::MaxwellFactors mf = maxwell_factors_lane(kn, eta_n, dt);
+      const kernel::MaxwellFactors mf = kernel::maxwell_factors(kn, eta_n, dt);
       const bool elastic = !(eta_n < inf), instant = !(eta_n > 0.0);
       const double f_visc = fe0 * mf.decay + kn * vv * dt * mf.phi;
       const double u_visc = dt * (vv * (1.0 - mf.phi) + mf.phi * fe0 / eta_n);
@@ -839,7 +832,7 @@ struct Sintering {
       fz = proj > 0.0 ? fz * stretch : fz;
       const double vtx = b.vtx[l], vty = b.vty[l], vtz = b.vtz[l];
       const double vt = std::sqrt((vtx * vtx + vty * vty) + vtz * vtz);
-      const kernel::MaxwellFactors mt = maxwell_factors_lane(kt, eta_t, dt);
+      const kernel::MaxwellFactors mt = kernel::maxwell_factors(kt, eta_t, dt);
       const double ck = kt * dt * mt.phi;
       const bool moving = (vt > 0.0) | (mag > 0.0);
       fx = moving ? fx * mt.decay - ck * vtx : fx;

@@ -24,6 +24,7 @@
 #include "engine/graph/interaction_graph.hpp"
 #include "engine/neighbor/neighbor_search.hpp"
 #include "tests/extreme/extreme_figures.hpp"
+#include "tests/support/nial_sintering.hpp"
 #include "tests/support/scene.hpp"
 
 namespace test_extreme_sintering {
@@ -34,19 +35,7 @@ namespace kernel = physics::kernel;
 
 namespace {
 /// NiAl (configs/materials/nial_sintering.json).
-Sintering::Params nial() {
-  Sintering::Params p;
-  p.youngs_modulus = 222e9;
-  p.poisson_ratio = 0.31;
-  p.surface_energy = 1.8;
-  p.dihedral_angle = 2.618;
-  p.gb_diffusivity_prefactor = 2.0e-3;
-  p.gb_activation_energy = 195000.0;
-  p.gb_width = 5e-10;
-  p.atomic_volume = 1.203e-29;
-  p.sintering_start_temperature = 973.0;
-  return p;
-}
+Sintering::Params nial() { return test_support::nial_sintering(); }
 constexpr double kTm = 1955.0, kRho = 5900.0;
 /// S3: physical seconds per mechanical second and steps (the late stage, eta ~ a^4, takes ~1 s).
 constexpr double kTimeScale = 2e5;

@@ -16,6 +16,7 @@
 #include "physics/contact/hooke.hpp"
 #include "physics/contact/lammps_granular.hpp"
 #include "physics/contact/sintering.hpp"
+#include "tests/support/nial_sintering.hpp"
 
 namespace test_contact_lanes {
 
@@ -282,15 +283,9 @@ void check_sintering_lanes(const Sintering::Params& params) {
 
 TEST_CASE("Lane paths of the sintering law give the scalar path's bits", "[contact_laws][lanes][sintering]") {
   INFO("this processor's widest lane path: " << lane_isa_name(detected_lane_isa()));
-  Sintering::Params sp;  // NiAl (configs/materials/nial_sintering.json), the main scenario's choices
+  Sintering::Params sp = test_support::nial_sintering();  // NiAl, with the main scenario's choices:
   sp.youngs_modulus = 22.2e9;
-  sp.poisson_ratio = 0.31;
-  sp.surface_energy = 1.8;
   sp.dihedral_angle = 2.6877;
-  sp.gb_diffusivity_prefactor = 2.0e-3;
-  sp.gb_activation_energy = 195000.0;
-  sp.atomic_volume = 1.203e-29;
-  sp.sintering_start_temperature = 973.0;
   sp.damping_ratio = 0.5;
   sp.after_equilibrium = "creep";
   SECTION("kratos neck, creep, bonded cold necks") {
