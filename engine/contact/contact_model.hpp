@@ -757,54 +757,88 @@ class ContactModelT final : public ContactModel {
     lane_rows<4>(p, t, lo, hi, dt, in, sink);
   }
 
-  /// Rows [lo, hi) in blocks of W lanes: gather the rows' inputs, the geometry, the law and the
-  /// torques over the lanes, then write back and call the sink in row order. A row is live as in
-  /// row_forces: touching (or, for a persistent law, kept alive by its state before the step) at a
-  /// distance above zero.
+  /// Rows [lo, hi) over W lanes, in spans of kSpan rows. First every row of a span: its overlap
+  /// (overlap_lanes) and whether it is live as in row_forces - touching (or, for a persistent law,
+  /// kept alive by its state before the step) at a distance above zero; a row that is not has its
+  /// state and force cleared and goes to sink.dead. Then the span's live rows, packed, in blocks
+  /// of W lanes: gather their inputs, the geometry, the law and the torques over the lanes, write
+  /// back and call sink.live in row order. Packing keeps rows of the Verlet skin out of the lanes
+  /// (a row runs the whole law in its lane, masked or not); every lane computes only its own row,
+  /// so the bits are those of row_forces whatever the packing.
   template <int W, class Sink>
   [[gnu::always_inline]] void lane_rows(const ParticleStore& p, ContactTable& t, std::int64_t lo, std::int64_t hi, double dt,
                                         const PassInputs& in, Sink& sink) const {
     constexpr int S = lane_state();
     PairLanes<W, S> b;
     b.time_scale = in.time_scale;
-    double* overlap = t.overlap().data();
+    alignas(64) double dist[kSpan];
+    alignas(64) std::int64_t rows[kSpan];
     Vec3* force = t.force().data();
-    for (std::int64_t r0 = lo; r0 < hi; r0 += W) {
-      const int n = static_cast<int>(std::min<std::int64_t>(W, hi - r0));
-      gather_lanes(p, t, r0, n, in, b);
-      pair_geometry_lanes(b, in.inertia_free);
-      law_.template lanes<W>(b, dt);
-      pair_torque_lanes(b);
-      for (int l = 0; l < n; ++l) {
-        const std::int64_t r = r0 + l;
-        overlap[r] = b.delta[l];
+    for (std::int64_t s0 = lo; s0 < hi; s0 += kSpan) {
+      const int span = static_cast<int>(std::min<std::int64_t>(kSpan, hi - s0));
+      overlap_lanes(p, t, s0, span, dist);
+      const double* overlap = t.overlap().data() + s0;
+      int live_rows = 0;
+      for (int k = 0; k < span; ++k) {
+        const std::int64_t r = s0 + k;
         double* st = t.state(r);
-        bool live = b.live[l] != 0.0;
-        if constexpr (is_persistent<Law>()) live = (b.delta[l] > 0.0 || law_.alive(st)) && !(b.dist[l] <= 0.0);
-        if (!live) {
-          for (int c = 0; c < S; ++c) st[c] = 0.0;
-          force[r].setZero();
-          sink.dead(r);
+        bool live = overlap[k] > 0.0;
+        if constexpr (is_persistent<Law>()) live = live || law_.alive(st);
+        if (live && !(dist[k] <= 0.0)) {
+          rows[live_rows++] = r;
           continue;
         }
-        for (int c = 0; c < S; ++c) st[c] = b.s[c][l];
-        force[r] = Vec3(b.fx[l], b.fy[l], b.fz[l]);
-        sink.live(r, t.i(r), t.j(r), force[r], Vec3(b.tix[l], b.tiy[l], b.tiz[l]), Vec3(b.tjx[l], b.tjy[l], b.tjz[l]));
+        for (int c = 0; c < S; ++c) st[c] = 0.0;
+        force[r].setZero();
+        sink.dead(r);
+      }
+      for (int k0 = 0; k0 < live_rows; k0 += W) {
+        const int n = std::min(W, live_rows - k0);
+        gather_lanes(p, t, rows + k0, n, in, b);
+        pair_geometry_lanes(b, in.inertia_free);
+        law_.template lanes<W>(b, dt);
+        pair_torque_lanes(b);
+        for (int l = 0; l < n; ++l) {
+          const std::int64_t r = rows[k0 + l];
+          double* st = t.state(r);
+          for (int c = 0; c < S; ++c) st[c] = b.s[c][l];
+          force[r] = Vec3(b.fx[l], b.fy[l], b.fz[l]);
+          sink.live(r, t.i(r), t.j(r), force[r], Vec3(b.tix[l], b.tiy[l], b.tiz[l]), Vec3(b.tjx[l], b.tjy[l], b.tjz[l]));
+        }
       }
     }
   }
-  /// The inputs of rows r0 .. r0 + n - 1 into lanes 0 .. n - 1 (lanes n .. W - 1 repeat the last row), as
+  /// Rows a span of lane_rows packs at most.
+  static constexpr int kSpan = 256;
+  /// Centre distance and overlap of rows s0 .. s0 + n - 1, as pair_geometry_lanes computes them
+  /// (dist = |x_i - x_j|, delta = (r_i + r_j) - dist): the overlaps into the table, the distances into dist.
+  [[gnu::always_inline]] static void overlap_lanes(const ParticleStore& p, ContactTable& t, std::int64_t s0, int n, double* dist) {
+    const Index* ii = t.i_list().data() + s0;
+    const Index* jj = t.j_list().data() + s0;
+    const double* x = p.position.data()->data();
+    const double* rad = p.radius.data();
+    double* overlap = t.overlap().data() + s0;
+#pragma omp simd
+    for (int k = 0; k < n; ++k) {
+      const std::int64_t i = ii[k], j = jj[k];
+      const double dx = x[3 * i] - x[3 * j], dy = x[3 * i + 1] - x[3 * j + 1], dz = x[3 * i + 2] - x[3 * j + 2];
+      const double d = std::sqrt((dx * dx + dy * dy) + dz * dz);
+      dist[k] = d;
+      overlap[k] = (rad[i] + rad[j]) - d;
+    }
+  }
+  /// The inputs of rows rows[0 .. n - 1] into lanes 0 .. n - 1 (lanes n .. W - 1 repeat the last row), as
   /// loops over the lanes that the vectoriser turns into gathers; a thermal law's temperature and
   /// grain-boundary fraction as pair_geometry forms them.
   template <int W, int S>
-  [[gnu::always_inline]] static void gather_lanes(const ParticleStore& p, const ContactTable& t, std::int64_t r0, int n,
+  [[gnu::always_inline]] static void gather_lanes(const ParticleStore& p, const ContactTable& t, const std::int64_t* rows, int n,
                                                   const PassInputs& in, PairLanes<W, S>& b) {
     static_assert(sizeof(Vec3) == 3 * sizeof(double), "the particles' vectors are read as arrays of doubles");
     alignas(64) std::int64_t I[W], J[W], SI[W];
     const Index* ii = t.i_list().data();
     const Index* jj = t.j_list().data();
     for (int l = 0; l < W; ++l) {
-      const std::int64_t r = r0 + std::min(l, n - 1);
+      const std::int64_t r = rows[std::min(l, n - 1)];
       I[l] = ii[r];
       J[l] = jj[r];
       SI[l] = S * r;
