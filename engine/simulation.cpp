@@ -168,18 +168,45 @@ void Simulation::sample(std::vector<std::string>& cols, std::vector<double>& val
   }
 }
 
+namespace {
+
+/// Wall history for a law of w state columns (WallHistory): a stage with another law (other
+/// columns) starts with fresh history, like the contact table. A state written before the history
+/// had rows of its own holds it in the per-particle fields "wall_state/<wall>": their nonzero rows
+/// are taken over (by particle id) and the fields dropped. Rows follow the candidate lists when
+/// these are valid, else at the next rebuild.
+void prepare_wall_history(State& s, int w) {
+  WallHistory& h = s.wall_history;
+  if (h.width != w) h.reset(w, s.walls.size());
+  h.ids.resize(s.walls.size());
+  h.rows.resize(s.walls.size());
+  auto& fields = s.particles.fields;
+  for (std::size_t k = 0; k < s.walls.size(); ++k) {
+    const std::string f = "wall_state/" + s.walls[k].name;
+    if (!fields.has(f)) continue;
+    if (w > 0 && fields.info(f).components == w) {
+      const std::vector<double>& v = fields.data(f);
+      h.ids[k].clear();
+      h.rows[k].clear();
+      for (std::size_t i = 0; i < s.particles.size(); ++i) {
+        const auto row = v.begin() + static_cast<std::ptrdiff_t>(i * w);
+        if (std::all_of(row, row + w, [](double x) { return x == 0.0; })) continue;
+        h.ids[k].push_back(s.particles.id[i]);
+        h.rows[k].insert(h.rows[k].end(), row, row + w);
+      }
+    }
+    fields.remove(f);
+  }
+  if (s.wall_candidates.size() == s.walls.size()) h.follow(s.wall_candidates, s.particles.id);
+}
+
+}  // namespace
+
 StepPlan Simulation::prepare(const StageConfig& cfg) {
   // Contact law state columns (history is kept if the law's columns are unchanged).
   if (s_.contacts.state_columns() != law_.state_columns()) s_.contacts.set_state_columns(law_.state_columns());
   alive_rule_ = law_.alive_rule();
-  // Wall history: one row of the law's state per particle and wall; a stage with another law
-  // (other columns) starts with fresh wall history, like the contact table.
-  const int w = static_cast<int>(law_.state_columns().size());
-  for (const auto& wall : s_.walls) {
-    const std::string f = "wall_state/" + wall.name;
-    if (s_.particles.fields.has(f) && s_.particles.fields.info(f).components != w) s_.particles.fields.remove(f);
-    if (w > 0) s_.particles.fields.declare({f, w, "m", 0.0, false}, s_.particles.size());
-  }
+  prepare_wall_history(s_, static_cast<int>(law_.state_columns().size()));
   if (bond_law_ && s_.bonds.state_columns() != bond_law_->state_columns()) {
     if (s_.bonds.size() > 0 && !s_.bonds.state_columns().empty())
       throw SetupError("the bonds carry state columns of another bond law than '" + bond_law_->name() + "'");
@@ -389,6 +416,7 @@ void Simulation::update_neighbors(double skin, Step sort_every) {
   if (s_.bonds.contact_rule == BondTable::ContactRule::Exclude && s_.bonds.intact_count() > 0) rules.excluded = &s_.bonds.intact_keys();
   s_.contacts.rebuild(find_pairs(p.position, p.radius, skin), p.id, p.size(), rules);
   s_.wall_candidates = wall_candidates(s_.walls, p.position, p.radius, skin);
+  s_.wall_history.follow(s_.wall_candidates, p.id);
   s_.verlet.mark_built(p.position, p.radius, wall_u);
   // The rebuild freed the old columns, the candidate pairs and its look-up: their pages go back
   // to the system now (the heap is never trimmed otherwise, engine/core/memory.hpp), so a run's
@@ -445,7 +473,7 @@ void Simulation::bond_forces(double dt, Step step) {
 }
 
 void Simulation::wall_forces(double dt) {
-  const WallLoads loads = law_.wall_pass(s_.particles, s_.walls, s_.wall_candidates, dt, time_scale_, inertia_free_);
+  const WallLoads loads = law_.wall_pass(s_.particles, s_.walls, s_.wall_candidates, s_.wall_history, dt, time_scale_, inertia_free_);
   for (std::size_t k = 0; k < s_.walls.size(); ++k) {
     s_.walls[k].force = loads.force[k];
     s_.walls[k].normal_force = loads.normal[k];

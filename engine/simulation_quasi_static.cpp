@@ -52,7 +52,7 @@ QuasiStaticProblem Simulation::quasi_static_problem(double t_end, double h, doub
   prob.particles = s_.particles.size();
   prob.dt = h;
   prob.step = s_.step + 1;
-  prob.rows = law_.linear_rows(s_.particles, s_.contacts, s_.walls, s_.wall_candidates, h);
+  prob.rows = law_.linear_rows(s_.particles, s_.contacts, s_.walls, s_.wall_candidates, s_.wall_history, h);
   prob.slip_guess.assign(prob.rows.size(), 0.0);
   const auto slip = slip_fields(s_.particles.fields, s_.walls);
   for (std::size_t q = 0; q < prob.rows.size(); ++q) {

@@ -38,6 +38,7 @@
 #include "engine/contact/lanes.hpp"
 #include "engine/state/contact_table.hpp"
 #include "engine/state/particle_store.hpp"
+#include "engine/state/wall_history.hpp"
 #include "engine/walls/wall.hpp"
 #include "engine/core/error.hpp"
 #include "engine/core/numbers.hpp"
@@ -82,8 +83,9 @@ class ContactModel {
   virtual void pair_forces(ParticleStore& p, ContactTable& table, double dt, double time_scale = 1.0, bool inertia_free = false) const = 0;
   /// Particle-wall pass over the candidate particles of each wall (those within r + skin at the
   /// last neighbour rebuild); adds forces and torques to the particles; returns wall loads.
-  /// Wall history lives in the per-particle field "wall_state/<wall name>".
+  /// Wall history: row r of wall k in `history` (WallHistory, one row per candidate) is candidate r's.
   virtual WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& candidates,
+                              WallHistory& history,
                               double dt, double time_scale = 1.0, bool inertia_free = false) const = 0;
   /// Stable step estimate from the current state [s]: min of the law's a-priori step (Rayleigh
   /// for Hertz laws) and 2/omega_max, omega_max^2 the largest eigenvalue of the mass-weighted
@@ -116,8 +118,9 @@ class ContactModel {
   /// The inertia-free rows of the live pairs of the contact table and of the walls' candidate
   /// particles in contact, for a step of dt (state read only). Empty for a law without the form.
   virtual std::vector<LinearRow> linear_rows(const ParticleStore& p, const ContactTable& table, const std::vector<Wall>& walls,
-                                             const std::vector<std::vector<Index>>& candidates, double dt) const {
-    (void)p, (void)table, (void)walls, (void)candidates, (void)dt;
+                                             const std::vector<std::vector<Index>>& candidates, const WallHistory& history,
+                                             double dt) const {
+    (void)p, (void)table, (void)walls, (void)candidates, (void)history, (void)dt;
     return {};
   }
   /// The run watchdog's default bound on overlap / smaller radius (pairs) and overlap / radius
@@ -187,7 +190,7 @@ class ContactModelT final : public ContactModel {
   static constexpr bool kLinear = requires(const Law& l, const ContactGeometry& g, const double* st) { l.linear_contact(g, 0.0, st); };
   bool has_linear_contacts() const override { return kLinear; }
   std::vector<LinearRow> linear_rows(const ParticleStore& p, const ContactTable& t, const std::vector<Wall>& walls,
-                                     const std::vector<std::vector<Index>>& cand, double dt) const override {
+                                     const std::vector<std::vector<Index>>& cand, const WallHistory& history, double dt) const override {
     std::vector<LinearRow> out;
     if constexpr (kLinear) {
       const PassInputs in = pass_inputs(p, t, 1.0);
@@ -205,14 +208,15 @@ class ContactModelT final : public ContactModel {
         out.push_back({i, j, g.n, g.arm_i, g.arm_j, std::min(g.r_i, g.r_j), law_.linear_contact(g, dt, state)});
       }
       for (std::size_t k = 0; k < walls.size(); ++k) {
-        const double* hist = in.width > 0 ? p.fields.data("wall_state/" + walls[k].name).data() : nullptr;
-        for (const Index i : cand[k]) {
+        const double* hist = history_rows(const_cast<WallHistory&>(history), k, walls, cand, in.width);
+        for (std::size_t r = 0; r < cand[k].size(); ++r) {
+          const Index i = cand[k][r];
           Vec3 nrm;
           double dist;
           walls[k].distance(p.position[i], nrm, dist);
           if (p.radius[i] - dist <= 0.0) continue;
           const ContactGeometry g = wall_geometry(p, i, nrm, dist, in.temp, 1.0);
-          const double* st = hist ? hist + static_cast<std::size_t>(i) * in.width : nullptr;
+          const double* st = hist ? hist + r * static_cast<std::size_t>(in.width) : nullptr;
           out.push_back({i, -1 - static_cast<std::int64_t>(k), nrm, dist, 0.0, p.radius[i], law_.linear_contact(g, dt, st)});
         }
       }
@@ -353,8 +357,8 @@ class ContactModelT final : public ContactModel {
   /// its particle, and to the wall's load in fixed blocks of kBlock rows. On a team of threads
   /// (wall_pass_team) each thread takes the rows of its own particles, so results do not depend on
   /// the thread count.
-  WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& cand, double dt,
-                      double time_scale = 1.0, bool inertia_free = false) const override {
+  WallLoads wall_pass(ParticleStore& p, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& cand, WallHistory& history,
+                      double dt, double time_scale = 1.0, bool inertia_free = false) const override {
     const double* temp = nullptr;
     if constexpr (is_thermal<Law>())
       if (p.fields.has("temperature")) temp = p.fields.data("temperature").data();
@@ -362,7 +366,7 @@ class ContactModelT final : public ContactModel {
     std::vector<double*> hist(walls.size(), nullptr);
     std::int64_t rows = 0;
     for (std::size_t k = 0; k < walls.size(); ++k) {
-      if (w > 0) hist[k] = p.fields.data("wall_state/" + walls[k].name).data();
+      hist[k] = history_rows(history, k, walls, cand, w);
       rows += static_cast<std::int64_t>(cand[k].size());
     }
     const WallPassInputs in{walls, cand, hist, w, temp, dt, time_scale, inertia_free};
@@ -446,8 +450,16 @@ class ContactModelT final : public ContactModel {
     double dt, time_scale;
     bool inertia_free;
   };
-  /// Particle i's history row in a wall's state columns (w per particle), or none for a law without state.
-  static double* wall_state(double* columns, Index i, int w) { return w > 0 ? columns + static_cast<std::size_t>(i) * w : nullptr; }
+  /// Candidate row r's history in a wall's rows (w values per candidate), or none for a law without state.
+  static double* wall_state(double* columns, std::size_t r, int w) { return w > 0 ? columns + r * static_cast<std::size_t>(w) : nullptr; }
+  /// Wall k's history rows (one per candidate; nullptr for a law without state).
+  static double* history_rows(WallHistory& h, std::size_t k, const std::vector<Wall>& walls, const std::vector<std::vector<Index>>& cand, int w) {
+    if (w == 0) return nullptr;
+    if (h.width != w || !h.aligned(k, cand[k]))
+      throw SetupError("wall '" + walls[k].name + "': its history does not hold one row of " + std::to_string(w) +
+                       " values per candidate particle (the stage was not prepared for this contact law)");
+    return h.rows[k].data();
+  }
 
   /// One wall row's share of its wall's load.
   struct WallLoadRow {
@@ -496,7 +508,7 @@ class ContactModelT final : public ContactModel {
       const Index i = list[r];
       WallRow row;
       WallLoadRow o{Vec3::Zero(), 0.0, false};
-      o.touching = wall_row(p, in.walls[k], i, wall_state(in.hist[k], i, in.w), in.w, in.temp, in.dt, in.time_scale, in.inertia_free, row);
+      o.touching = wall_row(p, in.walls[k], i, wall_state(in.hist[k], r, in.w), in.w, in.temp, in.dt, in.time_scale, in.inertia_free, row);
       if (o.touching) {
         p.force[i] += row.force;
         p.torque[i] += row.torque;

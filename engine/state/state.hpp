@@ -12,6 +12,7 @@
 #include "engine/state/bond_table.hpp"
 #include "engine/state/contact_table.hpp"
 #include "engine/state/particle_store.hpp"
+#include "engine/state/wall_history.hpp"
 #include "engine/walls/wall.hpp"
 
 namespace sparkdem {
@@ -29,6 +30,7 @@ struct State {
   std::vector<Material> materials;
   VerletTracker verlet;
   std::vector<std::vector<Index>> wall_candidates;  ///< per wall: particles within r + skin at the last rebuild
+  WallHistory wall_history;                         ///< the contact law's history of each wall's candidates
   Step step = 0;                                    ///< global step counter (all stages)
   double time = 0.0;                                ///< [s] = stage_t0 + (step - stage_step0) * dt (adaptive stages: stage_t0 + stage_elapsed)
   Step stage_step0 = 0;                             ///< step at the start of the current stage
@@ -93,6 +95,13 @@ struct State {
               throw SetupError("checkpoint wall candidates of '" + walls[k].name + "' name particle row " + std::to_string(i) + " of " +
                                std::to_string(particles.size()));
       }
+    std::vector<std::string> wall_names;  // as read
+    for (const auto& w : walls) wall_names.push_back(w.name);
+    wall_history.visit(ar, wall_names);
+    if (ar.reading() && have)
+      for (std::size_t k = 0; k < walls.size(); ++k)
+        if (!wall_history.aligned(k, wall_candidates[k]))
+          throw SetupError("checkpoint wall history of '" + walls[k].name + "' does not hold one row per wall candidate");
     if (ar.reading() && (verlet.r0().size() != verlet.x0().size() || (!verlet.x0().empty() && verlet.x0().size() != particles.size())))
       throw SetupError("checkpoint Verlet reference has " + std::to_string(verlet.x0().size()) + " positions and " +
                        std::to_string(verlet.r0().size()) + " radii for " + std::to_string(particles.size()) + " particles");

@@ -180,8 +180,7 @@ class Amnesia final : public Module {
   std::string name() const override { return "amnesia"; }
   void advance(State& s, const StepInfo&) override {
     std::fill(s.contacts.state_data().begin(), s.contacts.state_data().end(), 0.0);
-    auto& w = s.particles.fields.data("wall_state/floor");
-    std::fill(w.begin(), w.end(), 0.0);
+    for (auto& w : s.wall_history.rows) std::fill(w.begin(), w.end(), 0.0);
   }
 };
 
@@ -277,15 +276,20 @@ TEST_CASE("Tangential history survives rebuilds and spatial sorts (end to end)",
     for (std::size_t q = 0; q < 3; ++q) dv_lost = std::max(dv_lost, (ra[k].v[q] - rc[k].v[q]).norm());
   WARN("history: without history the velocities deviate by " << dv_lost / vs << " of their scale");
   CHECK(dv_lost > 1e-3 * vs);
-  // The wall history (per-particle field) followed the particles too: same value per id.
-  const auto& fa = a.particles.fields.data("wall_state/floor");
-  const auto& fb = b.particles.fields.data("wall_state/floor");
-  const auto la = locals(a.particles), lb = locals(b.particles);
+  // The wall history (a row per floor candidate, with its particle's id) followed the particles
+  // too: same value per id, zero for a particle that is no candidate.
+  REQUIRE(a.walls.size() == 1);
+  const auto wall_row = [](const State& s, Id id, int c) {
+    const auto& ids = s.wall_history.ids.at(0);
+    const auto it = std::find(ids.begin(), ids.end(), id);
+    return it == ids.end() ? 0.0 : s.wall_history.rows.at(0)[3 * static_cast<std::size_t>(it - ids.begin()) + c];
+  };
   double wall_hist = 0.0;
   for (Id id = 0; id < 3; ++id)
     for (int c = 0; c < 3; ++c) {
-      wall_hist = std::max(wall_hist, std::abs(fa[3 * la[id] + c]));
-      CHECK(fb[3 * lb[id] + c] == Approx(fa[3 * la[id] + c]).margin(1e-12 * std::max(1e-9, std::abs(fa[3 * la[id] + c]))));
+      const double ha = wall_row(a, id, c), hb = wall_row(b, id, c);
+      wall_hist = std::max(wall_hist, std::abs(ha));
+      CHECK(hb == Approx(ha).margin(1e-12 * std::max(1e-9, std::abs(ha))));
     }
   CHECK(wall_hist > 1e-10);
 }
@@ -328,6 +332,71 @@ TEST_CASE("PairRows::row_split cuts at equal expected work and marks the particl
     for (int k = 0; k < n; ++k)
       if (k != c) CHECK(s.owner[k] == (k < c ? 0 : 1));
   }
+}
+
+}  // namespace test_history
+
+namespace test_history {
+
+TEST_CASE("WallHistory::follow keeps each candidate's row by particle id", "[history]") {
+  WallHistory h;
+  h.reset(2, 2);
+  const std::vector<Id> id0{10, 11, 12, 13};
+  h.follow({{0, 2}, {1}}, id0);  // fresh: zero rows, one per candidate
+  REQUIRE(h.aligned(0, {0, 2}));
+  CHECK(h.rows[0] == std::vector<double>{0, 0, 0, 0});
+  h.rows[0] = {1, 2, 3, 4};  // ids 10, 12
+  h.rows[1] = {5, 6};        // id 11
+  // The particles permuted (ids 12, 13, 10, 11 at rows 0-3); wall 0's candidates now ids 12, 13
+  // and 10 (13 new), id 11 leaves wall 1 for wall 0 and id 13 joins wall 1.
+  const std::vector<Id> id1{12, 13, 10, 11};
+  h.follow({{0, 1, 2, 3}, {1}}, id1);
+  CHECK(h.ids[0] == std::vector<Id>{12, 13, 10, 11});
+  CHECK(h.rows[0] == std::vector<double>{3, 4, 0, 0, 1, 2, 0, 0});
+  CHECK(h.ids[1] == std::vector<Id>{13});
+  CHECK(h.rows[1] == std::vector<double>{0, 0});
+}
+
+/// One sphere pulled sideways on a floor (sticking, then slipping: wall history in use), `steps`
+/// steps from `s` (built when empty).
+void sliding_sphere(State& s, Step steps) {
+  if (s.particles.size() == 0) {
+    test::add_sphere(s, Vec3(0.0, 0.0, 1e-3 - 1e-6), 1e-3, 2500.0);
+    s.walls.push_back(test::plane_wall("floor", Vec3::Zero(), Vec3::UnitZ()));
+  }
+  const ContactModelT<HertzMindlin> law({1e7, 0.3, 0.5, 0.4});
+  Gravity gravity({Vec3(0, 0, -9.81)});
+  Pull pull(0, Vec3(2e-5, 1e-5, 0.0));
+  Simulation sim(s, law);
+  sim.add_module(&gravity);
+  sim.add_module(&pull);
+  test::StepObserver obs([](const State&, Step) {});
+  sim.run_stage(test::stage(2e-6, steps, 2e-4), obs);
+}
+
+TEST_CASE("Wall history kept as per-particle fields (checkpoints before its rows) is taken over", "[history]") {
+  State a;
+  sliding_sphere(a, 300);
+  REQUIRE(a.wall_history.width == 3);
+  REQUIRE(a.wall_history.ids.at(0) == std::vector<Id>{0});
+  REQUIRE(Vec3(a.wall_history.rows[0][0], a.wall_history.rows[0][1], a.wall_history.rows[0][2]).norm() > 0.0);
+  // The same state as an older checkpoint held it: a field of 3 values per particle, no rows.
+  State b = a;
+  b.particles.fields.declare({"wall_state/floor", 3, "m", 0.0, false}, b.particles.size());
+  std::copy_n(a.wall_history.rows[0].begin(), 3, b.particles.fields.data("wall_state/floor").begin());
+  b.wall_history = WallHistory{};
+  sliding_sphere(a, 300);
+  sliding_sphere(b, 300);
+  CHECK_FALSE(b.particles.fields.has("wall_state/floor"));
+  CHECK(b.wall_history.rows == a.wall_history.rows);  // bit for bit
+  CHECK(b.particles.position[0] == a.particles.position[0]);
+  CHECK(b.particles.velocity[0] == a.particles.velocity[0]);
+  // Control: without the taken-over history the sphere moves otherwise.
+  State c = a;
+  c.wall_history = WallHistory{};
+  sliding_sphere(c, 300);
+  sliding_sphere(a, 300);
+  CHECK(c.particles.velocity[0] != a.particles.velocity[0]);
 }
 
 }  // namespace test_history

@@ -3,8 +3,9 @@
 /// history columns, and the step plan holds the core items plus the stage's own modules.
 ///
 /// Invariant checked: the particle FieldRegistry after Simulation::prepare() equals, as a set,
-/// the union of the fields declared by the law (wall history "wall_state/<wall>", one per wall,
-/// when the law keeps per-contact state) and by the active modules' Declarations.
+/// the union of the fields declared by the active modules' Declarations; the law's wall history
+/// (State::wall_history, when the law keeps per-contact state) holds one row per wall candidate,
+/// not one per particle.
 #include <catch2/catch.hpp>
 
 #include "support/scratch.hpp"
@@ -61,11 +62,19 @@ json read_json(const fs::path& f) {
   return json::parse(in);
 }
 
-/// Fields the law and the modules declare for the current walls of `s`.
+/// Fields the modules declare; the law's wall history is not a particle field: its width is the
+/// law's state columns and each wall has at most one row per candidate particle.
 std::set<std::string> declared_fields(const State& s, const ContactModel& law, const std::vector<Module*>& mods) {
   std::set<std::string> f;
-  if (!law.state_columns().empty())
-    for (const auto& w : s.walls) f.insert("wall_state/" + w.name);
+  CHECK(s.wall_history.width == static_cast<int>(law.state_columns().size()));
+  if (s.wall_history.width > 0) {
+    REQUIRE(s.wall_history.ids.size() == s.walls.size());
+    for (std::size_t k = 0; k < s.walls.size(); ++k) {
+      const std::size_t cand = k < s.wall_candidates.size() ? s.wall_candidates[k].size() : 0;
+      CHECK(s.wall_history.ids[k].size() == cand);
+      CHECK(s.wall_history.rows[k].size() == cand * static_cast<std::size_t>(s.wall_history.width));
+    }
+  }
   for (Module* m : mods) {
     Declarations d;
     m->declare(d);
@@ -111,20 +120,14 @@ struct ScratchDir : sparkdem::test::ScratchDir {
 TEST_CASE("pour.json allocates only the law's wall history and plans only gravity", "[pays_nothing][scenario]") {
   io::Scenario sc = load(read_json(fs::path(SPARKDEM_SOURCE_DIR) / "configs/pour.json"));
   REQUIRE(sc.stages.size() == 2);
-  const std::set<std::string> walls = {"wall_state/floor", "wall_state/xhi", "wall_state/xlo", "wall_state/yhi", "wall_state/ylo"};
   int checked = 0;
   prepare_stages(sc, [&](std::size_t k, const State& s, const Simulation& sim, const std::vector<Module*>& mods) {
     INFO("stage " << k);
     const std::set<std::string> fields = field_set(s);
     CHECK(fields == declared_fields(s, sc.law_of(sc.stages[k]), mods));
-    CHECK(fields == walls);
-    CHECK_FALSE(s.particles.fields.has("temperature"));
-    CHECK_FALSE(s.particles.fields.has("electric_potential"));
-    for (const auto& f : fields) {
-      CHECK(s.particles.fields.info(f).components == 3);  // one shear vector per particle and wall
-      CHECK_FALSE(s.particles.fields.info(f).output);     // history, not a result
-      CHECK(s.particles.fields.data(f).size() == 3 * s.particles.size());
-    }
+    CHECK(fields.empty());
+    CHECK(s.wall_history.width == 3);  // one shear vector per wall candidate
+    CHECK(s.wall_history.ids.size() == 5);
     CHECK(s.contacts.state_columns() == std::vector<std::string>{"shear_x", "shear_y", "shear_z"});
     // Stage 0 (lattice) names no module; stage 1 (pour) names gravity only.
     CHECK(sim.plan().names() == (k == 0 ? plan_with({}) : plan_with({"gravity"})));
@@ -145,9 +148,7 @@ TEST_CASE("a fill stage adds exactly the radius-growth fields and module", "[pay
   prepare_stages(sc, [&](std::size_t, const State& s, const Simulation& sim, const std::vector<Module*>& mods) {
     const std::set<std::string> fields = field_set(s);
     CHECK(fields == declared_fields(s, *sc.law, mods));
-    CHECK(fields == std::set<std::string>{"radius_growth/mass_final", "radius_growth/radius_final", "radius_growth/scale",
-                                          "wall_state/bottom", "wall_state/top", "wall_state/xhi", "wall_state/xlo", "wall_state/yhi",
-                                          "wall_state/ylo"});
+    CHECK(fields == std::set<std::string>{"radius_growth/mass_final", "radius_growth/radius_final", "radius_growth/scale"});
     CHECK(s.particles.size() == 40);
     CHECK(sim.plan().names() == plan_with({"radius_growth"}));
   });
@@ -172,7 +173,8 @@ TEST_CASE("a short CLI pour stores and writes no optional field beyond the wall 
   CHECK(summary["stages"][1]["step_plan"] == json(plan_with({"gravity"})));
   CHECK(summary["stages"][2]["step_plan"] == json(plan_with({})));
 
-  // Checkpoint field list: "name|components|unit|output" per line; only the five wall histories.
+  // Checkpoint field list: "name|components|unit|output" per line; none. The wall history: one
+  // shear vector per candidate of each of the five walls, fewer rows than particles.
   const auto fin = io::H5File::open_read(out / "final_state.h5");
   std::set<std::string> stored;
   const std::string list = fin.read_string("/state/particles/fields/_list");
@@ -181,7 +183,14 @@ TEST_CASE("a short CLI pour stores and writes no optional field beyond the wall 
     stored.insert(list.substr(pos, list.find('|', pos) - pos));
     pos = end + 1;
   }
-  CHECK(stored == std::set<std::string>{"wall_state/floor", "wall_state/xhi", "wall_state/xlo", "wall_state/yhi", "wall_state/ylo"});
+  CHECK(stored.empty());
+  const std::size_t particles = fin.shape("/state/particles/id").at(0);
+  for (const char* w : {"floor", "xhi", "xlo", "yhi", "ylo"}) {
+    const std::string g = std::string("/state/wall_history/") + w;
+    CHECK(fin.shape(g + "/rows").at(0) == fin.shape(g + "/ids").at(0));
+    CHECK(fin.shape(g + "/ids").at(0) == fin.shape(std::string("/state/wall_candidates/") + w).at(0));
+    CHECK(fin.shape(g + "/ids").at(0) < particles);
+  }
 
   // Result frames carry only the core particle quantities (the wall history is not an output).
   const auto res = io::H5File::open_read(out / "results.h5");

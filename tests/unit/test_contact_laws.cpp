@@ -232,12 +232,15 @@ TEMPLATE_TEST_CASE("Pair and wall forces: action = reaction, zero net moment", "
   q.velocity[0] = Vec3(0.05, -0.02, -0.03);
   q.omega[0] = Vec3(20.0, 30.0, -5.0);
   std::vector<Wall> walls{test::plane_wall("floor", Vec3::Zero(), Vec3::UnitZ())};
-  q.fields.declare({"wall_state/floor", 3, "m", 0.0, false}, q.size());
+  const std::vector<std::vector<Index>> cand{{0}};
+  WallHistory history;
+  history.reset(3, walls.size());
+  history.follow(cand, q.id);
   WallLoads loads;
   for (int k = 0; k < 5; ++k) {
     q.force[0].setZero();
     q.torque[0].setZero();
-    loads = law.wall_pass(q, walls, {{0}}, 1e-6);
+    loads = law.wall_pass(q, walls, cand, history, 1e-6);
   }
   const double Fw = q.force[0].norm();
   REQUIRE(Fw > 0.0);
