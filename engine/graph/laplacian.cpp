@@ -308,8 +308,8 @@ struct LaplacianSolver::Impl {
   std::vector<std::int32_t> role;  // >= 0: free index; -1 Dirichlet; -2 floating
   // Reduced matrix (both triangles) and the slots each edge / node adds into.
   SpMat A;
-  std::vector<std::int64_t> slot_diag;         // per free unknown
-  std::vector<std::int64_t> slot_ab, slot_ba;  // per edge (-1 unless both ends free)
+  std::vector<SpMat::StorageIndex> slot_diag;         // per free unknown
+  std::vector<SpMat::StorageIndex> slot_ab, slot_ba;  // per edge (-1 unless both ends free)
   std::vector<double> factored_values;         // matrix values of the current factorisation
   bool factor_valid = false;
 
@@ -512,7 +512,7 @@ DirichletNodes dirichlet_nodes(const LaplacianProblem& p) {
 /// searches: O(entries x log(entries per column)).
 struct ReducedPattern {
   SpMat A;
-  std::vector<std::int64_t> slot_diag, slot_ab, slot_ba;
+  std::vector<Eigen::SparseMatrix<double>::StorageIndex> slot_diag, slot_ab, slot_ba;  // the matrix's own index type
 };
 ReducedPattern reduced_pattern(std::size_t m, std::span<const Index> a, std::span<const Index> b, const std::vector<char>& active,
                                const std::vector<std::int32_t>& role) {
@@ -562,7 +562,7 @@ ReducedPattern reduced_pattern(std::size_t m, std::span<const Index> a, std::spa
       for (Entry* j = it; j > lo && *j < *(j - 1); --j) std::swap(*j, *(j - 1));
     for (Entry* it = lo; it != hi; ++it) {
       if (it == lo || it->row != (it - 1)->row) inner[nnz++] = it->row;
-      const std::int64_t slot = nnz - 1;
+      const auto slot = static_cast<Eigen::SparseMatrix<double>::StorageIndex>(nnz - 1);  // nnz fits the matrix's index type
       if (it->edge < 0)
         out.slot_diag[f] = slot;
       else if (role[a[it->edge]] == it->row)

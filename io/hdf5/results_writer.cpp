@@ -259,7 +259,7 @@ void ResultsWriter::check_frame(const FrameContent& frame, std::size_t& particle
       if (!seen.insert(f.name).second) fail(label + ": duplicate field name");
       if (f.components < 1) fail(label + ": components must be at least 1");
       const auto c = static_cast<std::size_t>(f.components);
-      const std::size_t size = f.values().size();
+      const std::size_t size = f.size();
       if (size % c != 0) fail(label + ": " + std::to_string(size) + " values are not a multiple of " + std::to_string(c) + " components");
       if (size / c != expected_rows) fail(label + ": " + std::to_string(size / c) + " rows, expected " + std::to_string(expected_rows));
     }
@@ -269,7 +269,7 @@ void ResultsWriter::check_frame(const FrameContent& frame, std::size_t& particle
     if (f.name == "position") {
       if (f.components != 3) fail("field 'position' of " + name + " must have 3 components");
       has_position = true;
-      particles = f.values().size() / 3;
+      particles = f.size() / 3;
     }
   }
   if (!has_position) fail(name + " has no particle field 'position'");
@@ -324,11 +324,18 @@ std::string ResultsWriter::write_frame(const FrameContent& frame) {
     file.set_attribute("/", "step", frame.step);
     file.set_attribute("/", "time", frame.time);
     file.set_attribute("/", "stage", frame.stage);
+    // A made field's values exist only while it is written.
+    const auto write_field = [&](const std::string& path, const FrameField& f) {
+      const std::vector<double> made = f.make ? f.make() : std::vector<double>();
+      if (f.make && made.size() != f.size())
+        fail("field '" + path + "' of frame " + counter(frames()) + ": made " + std::to_string(made.size()) + " values, expected " +
+             std::to_string(f.size()));
+      file.write(path, f.make ? std::span<const double>(made) : f.values(), f.components);
+      file.set_attribute(path, "unit", f.unit);
+    };
     file.create_group("/particles");
     for (const FrameField& f : frame.particles) {
-      const std::string path = "/particles/" + f.name;
-      file.write(path, f.values(), f.components);
-      file.set_attribute(path, "unit", f.unit);
+      write_field("/particles/" + f.name, f);
       info.fields.emplace_back(f.name, f.components);
     }
     for (std::size_t k = 0; k < sets.size(); ++k) {
@@ -338,8 +345,7 @@ std::string ResultsWriter::write_frame(const FrameContent& frame) {
       FrameInfo::LineSet line{set.name, set.group, set.edges->pairs.size() / 2, {}};
       if (set.lines) file.write(set.group + "/nodes", nodes[k], 2);
       for (const FrameField& f : set.edges->fields) {
-        file.write(set.group + "/" + f.name, f.values(), f.components);
-        file.set_attribute(set.group + "/" + f.name, "unit", f.unit);
+        write_field(set.group + "/" + f.name, f);
         line.fields.emplace_back(f.name, f.components);
       }
       if (set.lines) info.lines.push_back(std::move(line));

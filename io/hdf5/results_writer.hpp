@@ -48,6 +48,7 @@
 /// results.h5 also holds /timeseries/<column>: double, 1-D, one value per row.
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -58,14 +59,19 @@ namespace sparkdem::io {
 
 /// One named per-item quantity: n * components values, row-major, held in `data` or, for arrays
 /// that outlive the frame's writing (the particles' own columns), viewed through `view` (set:
-/// `data` is not read), so a frame does not copy them.
+/// `data` is not read), so a frame does not copy them; or made by `make` (set: `rows` rows) when
+/// the writer comes to it and dropped once written, so a frame holds one gathered column at a time.
 struct FrameField {
   std::string name;
   int components = 1;
   std::vector<double> data;
   std::string unit;
   std::span<const double> view = {};
+  std::function<std::vector<double>()> make = {};
+  std::size_t rows = 0;  ///< with `make`: the rows it makes
   std::span<const double> values() const { return view.data() ? view : std::span<const double>(data); }
+  /// Values for `rows` rows or fewer (a made field reports its rows; its values come at writing).
+  std::size_t size() const { return make ? rows * static_cast<std::size_t>(components) : values().size(); }
 };
 
 /// Contacts of one frame: pairs holds 2 particle ids per contact; fields have one row per contact.

@@ -535,6 +535,33 @@ TEST_CASE("ResultsWriter not finalized keeps its complete frames and leaves no t
   CHECK(same_bits(f1.read_doubles("/contacts/force"), contact_frame(1, 3).fields[0].data));
 }
 
+TEST_CASE("ResultsWriter writes a made field as the same field held in data, and refuses one of the wrong size", "[io][hdf5][results]") {
+  TempDir dir;
+  ResultsWriter w(dir.path);
+  const ContactFrame held = contact_frame(1, 3);
+  ContactFrame made = held;
+  int calls = 0;
+  for (FrameField& f : made.fields) {
+    f.rows = f.data.size() / static_cast<std::size_t>(f.components);
+    f.make = [&calls, v = f.data] {
+      ++calls;
+      return v;
+    };
+    f.data.clear();
+  }
+  w.write_frame(0, 0.0, "s", particle_fields(0, 2), held);
+  w.write_frame(1, 1e-4, "s", particle_fields(0, 2), made);
+  CHECK(calls == 2);  // each made field once, when written
+  const H5File a = H5File::open_read(dir.path / "frames/frame_000000.h5"), b = H5File::open_read(dir.path / "frames/frame_000001.h5");
+  for (const FrameField& f : held.fields) {
+    CHECK(same_bits(b.read_doubles("/contacts/" + f.name), f.data));
+    CHECK(b.shape("/contacts/" + f.name) == a.shape("/contacts/" + f.name));
+  }
+  made.fields[0].rows = 2;  // claims 2 rows, makes 3: the frame is refused
+  CHECK_THROWS_AS(w.write_frame(2, 2e-4, "s", particle_fields(0, 2), made), SetupError);
+  CHECK_FALSE(fs::exists(dir.path / "frames/frame_000002.h5"));
+}
+
 TEST_CASE("ResultsWriter::write_index publishes the frames so far, and a new writer takes the directory over", "[io][hdf5][results]") {
   TempDir dir;
   {
