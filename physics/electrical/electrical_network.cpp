@@ -756,6 +756,9 @@ void open_circuit(State& s, const Params& p, Result& r, EdgeOutput& edges) {
 
 void ElectricalNetwork::advance(State& s, const StepInfo& info) {
   const auto t0 = std::chrono::steady_clock::now();
+  // The last solve's branch results are replaced below; released first, they are not held beside
+  // this solve's graph, matrix and factorisation (40 B per branch at the run's peak).
+  edges_ = EdgeOutput{};
   GraphOptions go;
   go.walls = is_wall_electrode(p_.high) || is_wall_electrode(p_.low);
   go.near_gap = branch_model_near_gap(branch_);
@@ -810,6 +813,7 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
     std::fill(q.begin(), q.end(), 0.0);
     power = 0.0;
   }
+  b = BuiltNet{};  // the net is not read past this point: not held beside the branch output
   edges_ = branch_output(s, g, sol, spans, particle_centred);
   particle_currents(s, edges_, particle_centred, s.particles.fields.data(kParticleCurrentField));
   if (driven && !spans)
