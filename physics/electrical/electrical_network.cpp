@@ -56,13 +56,19 @@ bool spanning(std::size_t nodes, const std::vector<Index>& ea, const std::vector
 }
 
 /// The resistor network actually solved: nodes, resistors and which particle each resistor
-/// heats (its dissipation is split equally between heat_a and heat_b; -1 = not a particle).
+/// heats (its dissipation is split between heat_a and heat_b by `share`; -1 = not a particle).
+/// Empty heat_a and heat_b: each resistor heats its own ends, a node below `particles` being
+/// that particle and any other none (the particle-centred net, whose nodes are the graph's).
 struct ResistorNet {
   std::size_t nodes = 0;
   std::vector<Index> a, b, heat_a, heat_b;
   std::vector<double> g;
   std::vector<double> share;  ///< share of the resistor's dissipation that heats heat_a (the rest heats heat_b)
   std::vector<Index> high, low;
+  std::size_t particles = 0;  ///< with empty heat_a / heat_b: the nodes that are particles
+  Index heated_a(std::size_t e) const { return heat_a.empty() ? own_heat(a[e]) : heat_a[e]; }
+  Index heated_b(std::size_t e) const { return heat_b.empty() ? own_heat(b[e]) : heat_b[e]; }
+  Index own_heat(Index v) const { return static_cast<std::size_t>(v) < particles ? v : Index{-1}; }
   /// Room for `n` resistors (columns grown by doubling hold up to twice their rows, and both
   /// buffers while the last growth copies).
   void reserve(std::size_t n) {
@@ -417,14 +423,19 @@ Index particle_of(const InteractionGraph& g, Index v) { return g.is_wall_node(v)
 /// Particle-centred: a node per graph node, a resistor per branch. Joule split: each side is
 /// heated by the part of the branch resistance on its side (its half-particle and half of any
 /// contact layer; a one-resistance branch half-half).
-BuiltNet particle_centred_net(const InteractionGraph& g, const std::vector<double>& G, const std::vector<double>& share,
-                              const std::vector<Index>& high, const std::vector<Index>& low) {
+/// The graph's end points, conductances and shares move into the net (held once).
+BuiltNet particle_centred_net(InteractionGraph& g, std::vector<double>& G, std::vector<double>& share, const std::vector<Index>& high,
+                              const std::vector<Index>& low) {
   BuiltNet b;
   b.centre.assign(g.nodes(), -1);
   b.net.nodes = g.nodes();
-  b.net.reserve(g.size());
-  for (std::size_t e = 0; e < g.size(); ++e)
-    b.net.add(g.a[e], g.b[e], G[e], particle_of(g, g.a[e]), particle_of(g, g.b[e]), std::isfinite(share[e]) ? share[e] : 0.5);
+  b.net.particles = g.particle_nodes;  // a wall node heats no particle
+  for (double& x : share)
+    if (!std::isfinite(x)) x = 0.5;
+  b.net.a = std::move(g.a);
+  b.net.b = std::move(g.b);
+  b.net.g = std::move(G);
+  b.net.share = std::move(share);
   b.net.high = high;
   b.net.low = low;
   return b;
@@ -601,9 +612,11 @@ NetSolution solve_net(const State& s, const ResistorNet& net, const Params& p, d
   out.edge_g = net.g;
   LaplacianProblem prob;
   prob.nodes = net.nodes;
-  std::vector<Index> ma = net.a, mb = net.b;
+  std::vector<Index> ma, mb;  // driven: the ends with the high electrode merged into one node
   std::vector<double> source;
   if (driven) {
+    ma = net.a;
+    mb = net.b;
     std::vector<char> in_high(net.nodes, 0);
     for (Index v : net.high) in_high[v] = 1;
     for (std::size_t e = 0; e < out.edge_g.size(); ++e) {
@@ -618,8 +631,8 @@ NetSolution solve_net(const State& s, const ResistorNet& net, const Params& p, d
   } else {
     prob.dirichlet = {DirichletGroup{net.high, solved_voltage}, DirichletGroup{net.low, 0.0}};
   }
-  prob.a = ma;
-  prob.b = mb;
+  prob.a = driven ? std::span<const Index>(ma) : std::span<const Index>(net.a);
+  prob.b = driven ? std::span<const Index>(mb) : std::span<const Index>(net.b);
   prob.g = out.edge_g;
   prob.signed_conductances = p.topology == "sphere_element";
   prob.step = step;
@@ -655,8 +668,8 @@ double joule_power(const ResistorNet& net, const NetSolution& sol, std::vector<d
     if (sol.edge_g[e] == 0.0 || sol.res.flux[e] == 0.0) continue;
     const double pe = sol.res.flux[e] * sol.res.flux[e] / sol.edge_g[e];  // I^2 R (< 0 on a sphere element's negative entry)
     power += pe;
-    if (net.heat_a[e] >= 0) q[net.heat_a[e]] += net.share[e] * pe;
-    if (net.heat_b[e] >= 0) q[net.heat_b[e]] += (1.0 - net.share[e]) * pe;
+    if (const Index h = net.heated_a(e); h >= 0) q[h] += net.share[e] * pe;
+    if (const Index h = net.heated_b(e); h >= 0) q[h] += (1.0 - net.share[e]) * pe;
   }
   return power;
 }
@@ -682,24 +695,26 @@ std::size_t particle_potentials(const BuiltNet& b, bool particle_centred, const 
   return floating;
 }
 
-/// Per-branch results of the particle-centred network: ids of the two ends (a wall is
-/// -1 - wall index), current from the first to the second [A], conductance [S], power [W]
-/// (contact-centred: the fields, no branch).
-EdgeOutput branch_output(const State& s, const InteractionGraph& g, const NetSolution& sol, bool spans, bool particle_centred) {
+/// Per-branch results of the particle-centred network (resistor e joins nodes a[e] and b[e]; a
+/// node from `particle_nodes` on is a wall): ids of the two ends (a wall is -1 - wall index),
+/// current from the first to the second [A], conductance [S], power [W] (contact-centred: the
+/// fields, no branch).
+EdgeOutput branch_output(const State& s, std::size_t particle_nodes, const std::vector<Index>& a, const std::vector<Index>& b,
+                         const NetSolution& sol, bool spans, bool particle_centred) {
   EdgeOutput out{"electrical", {}, {{"current", "A", {}}, {"conductance", "S", {}}, {"power", "W", {}}}};
   if (!particle_centred) return out;
   const auto conducting = static_cast<std::size_t>(std::count_if(sol.edge_g.begin(), sol.edge_g.end(), [](double g) { return g > 0.0; }));
   out.pairs.reserve(2 * conducting);
   for (auto& f : out.fields) f.values.reserve(conducting);
   auto id_of = [&](Index v) {
-    return g.is_wall_node(v) ? -1 - static_cast<std::int64_t>(static_cast<std::size_t>(v) - g.particle_nodes)
-                             : static_cast<std::int64_t>(s.particles.id[v]);
+    const auto u = static_cast<std::size_t>(v);
+    return u >= particle_nodes ? -1 - static_cast<std::int64_t>(u - particle_nodes) : static_cast<std::int64_t>(s.particles.id[v]);
   };
-  for (std::size_t e = 0; e < g.size(); ++e) {
+  for (std::size_t e = 0; e < a.size(); ++e) {
     if (!(sol.edge_g[e] > 0.0)) continue;
     const double I_e = spans ? sol.res.flux[e] : 0.0;
-    out.pairs.push_back(id_of(g.a[e]));
-    out.pairs.push_back(id_of(g.b[e]));
+    out.pairs.push_back(id_of(a[e]));
+    out.pairs.push_back(id_of(b[e]));
     out.fields[0].values.push_back(I_e);
     out.fields[1].values.push_back(sol.edge_g[e]);
     out.fields[2].values.push_back(I_e * I_e / sol.edge_g[e]);
@@ -794,10 +809,11 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
                              p_.element_cap == "rim" ? el::CapRule::Rim : el::CapRule::EqualArea, r_.negative_share);
     } catch (const ConfigError& e) { throw PhysicsError(info.step, {}, "sphere element", e.what()); }
   }
-  // The conductances are the net's now; the graph's geometry is not read past this point.
+  // The conductances and end points are the net's now; the graph is not read past this point.
   std::vector<double>().swap(G);
   std::vector<double>().swap(share);
-  g.drop_geometry();
+  const std::size_t particle_nodes = g.particle_nodes;
+  g = InteractionGraph{};
   const ResistorNet& net = b.net;
   const bool driven = p_.current > 0.0;
   const double applied = applied_voltage(s, p_, info.step);
@@ -813,8 +829,11 @@ void ElectricalNetwork::advance(State& s, const StepInfo& info) {
     std::fill(q.begin(), q.end(), 0.0);
     power = 0.0;
   }
-  b = BuiltNet{};  // the net is not read past this point: not held beside the branch output
-  edges_ = branch_output(s, g, sol, spans, particle_centred);
+  // Past this point only the net's end points are read (the branch output's ids): the rest is
+  // not held beside the branch output.
+  const std::vector<Index> ends_a = std::move(b.net.a), ends_b = std::move(b.net.b);
+  b = BuiltNet{};
+  edges_ = branch_output(s, particle_nodes, ends_a, ends_b, sol, spans, particle_centred);
   particle_currents(s, edges_, particle_centred, s.particles.fields.data(kParticleCurrentField));
   if (driven && !spans)
     throw PhysicsError(info.step, {}, "electrical current",
