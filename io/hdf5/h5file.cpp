@@ -229,11 +229,22 @@ H5File H5File::open_read(const fs::path& path, const fs::path& open_as) {
   return H5File(path, id);
 }
 
+namespace {
+/// Closes a file and hands the memory HDF5's free lists kept from its reads and writes back to
+/// the heap (H5garbage_collect): the library keeps freed blocks for reuse otherwise, up to
+/// megabytes after a checkpoint (the main scenario's sweep held 1.7 MB of them at its peak).
+herr_t close_file(hid_t id) {
+  const herr_t rc = H5Fclose(id);
+  H5garbage_collect();
+  return rc;
+}
+}  // namespace
+
 H5File::H5File(H5File&& other) noexcept : path_(std::move(other.path_)), id_(std::exchange(other.id_, -1)) {}
 
 H5File& H5File::operator=(H5File&& other) noexcept {
   if (this != &other) {
-    if (id_ >= 0) H5Fclose(id_);
+    if (id_ >= 0) close_file(id_);
     path_ = std::move(other.path_);
     id_ = std::exchange(other.id_, -1);
   }
@@ -241,13 +252,13 @@ H5File& H5File::operator=(H5File&& other) noexcept {
 }
 
 H5File::~H5File() {
-  if (id_ >= 0) H5Fclose(id_);
+  if (id_ >= 0) close_file(id_);
 }
 
 void H5File::close() {
   if (id_ < 0) return;
   const hid_t id = std::exchange(id_, -1);
-  check(H5Fclose(id), path_, "cannot close the file");
+  check(close_file(id), path_, "cannot close the file");
 }
 
 void H5File::require_open(const std::string& what) const {
