@@ -211,6 +211,11 @@ def cmd_run(a):
         raise ValueError("--quick results are smoke tests: they are never recorded")
     if a.scenes and any(c.id != "mechanics" for c in selected(a.case)):
         raise ValueError("--scenes applies to the case mechanics only")
+    if a.record:  # records come from a binary built on a clean commit (as validate's refuse_dirty)
+        commit, clean = rules.binary_build(a.sparkdem)
+        if not clean:
+            raise ValueError(f"refusing to record: {a.sparkdem} was built from commit {commit} with a dirty work tree "
+                             f"(`sparkdem --version`). Commit, rebuild (cmake --build build), then run; or run without --record.")
     failed, slower = [], 0
     for case in selected(a.case):
         try:
