@@ -771,7 +771,9 @@ class ContactModelT final : public ContactModel {
 
   /// Rows [lo, hi) over W lanes, in spans of kSpan rows. First every row of a span: its overlap
   /// (overlap_lanes) and whether it is live as in row_forces - touching (or, for a persistent law,
-  /// kept alive by its state before the step) at a distance above zero; a row that is not has its
+  /// kept alive by its state before the step) at a distance above zero - written to a live and a
+  /// dead list without a branch per row (in a bed with a Verlet skin, live and dead rows
+  /// interleave at random: the branch was the pass's hottest instruction); a dead row has its
   /// state and force cleared and goes to sink.dead. Then the span's live rows, packed, in blocks
   /// of W lanes: gather their inputs, the geometry, the law and the torques over the lanes, write
   /// back and call sink.live in row order. Packing keeps rows of the Verlet skin out of the lanes
@@ -784,22 +786,26 @@ class ContactModelT final : public ContactModel {
     PairLanes<W, S> b;
     b.time_scale = in.time_scale;
     alignas(64) double dist[kSpan];
-    alignas(64) std::int64_t rows[kSpan];
+    alignas(64) std::int64_t rows[kSpan], dead[kSpan];
     Vec3* force = t.force().data();
     for (std::int64_t s0 = lo; s0 < hi; s0 += kSpan) {
       const int span = static_cast<int>(std::min<std::int64_t>(kSpan, hi - s0));
       overlap_lanes(p, t, s0, span, dist);
       const double* overlap = t.overlap().data() + s0;
-      int live_rows = 0;
-      for (int k = 0; k < span; ++k) {
+      int live_rows = 0, dead_rows = 0;
+      for (int k = 0; k < span; ++k) {  // without a branch per row: live and dead rows interleave at random
         const std::int64_t r = s0 + k;
-        double* st = t.state(r);
         bool live = overlap[k] > 0.0;
-        if constexpr (is_persistent<Law>()) live = live || law_.alive(st);
-        if (live && !(dist[k] <= 0.0)) {
-          rows[live_rows++] = r;
-          continue;
-        }
+        if constexpr (is_persistent<Law>()) live = live | law_.alive(t.state(r));
+        live = live & !(dist[k] <= 0.0);
+        rows[live_rows] = r;
+        dead[dead_rows] = r;
+        live_rows += live;
+        dead_rows += !live;
+      }
+      for (int k = 0; k < dead_rows; ++k) {
+        const std::int64_t r = dead[k];
+        double* st = t.state(r);
         for (int c = 0; c < S; ++c) st[c] = 0.0;
         force[r].setZero();
         sink.dead(r);
