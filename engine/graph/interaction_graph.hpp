@@ -86,15 +86,6 @@ struct InteractionGraph {
   bool is_wall_node(Index v) const { return static_cast<std::size_t>(v) >= particle_nodes; }
   /// Number of edges of a kind.
   std::size_t count(EdgeKind k) const;
-  /// Frees the per-edge geometry (kind, distance, overlap, radius, source_row) once a caller has
-  /// turned it into what it needs; the end points, node counts and topology hash stay.
-  void drop_geometry() {
-    std::vector<EdgeKind>().swap(kind);
-    std::vector<double>().swap(distance);
-    std::vector<double>().swap(overlap);
-    std::vector<double>().swap(radius);
-    std::vector<std::int64_t>().swap(source_row);
-  }
 };
 
 /// Build the graph of the state (cost: one pass over each table, plus one neighbour search when

@@ -69,16 +69,6 @@ struct ResistorNet {
   Index heated_a(std::size_t e) const { return heat_a.empty() ? own_heat(a[e]) : heat_a[e]; }
   Index heated_b(std::size_t e) const { return heat_b.empty() ? own_heat(b[e]) : heat_b[e]; }
   Index own_heat(Index v) const { return static_cast<std::size_t>(v) < particles ? v : Index{-1}; }
-  /// Room for `n` resistors (columns grown by doubling hold up to twice their rows, and both
-  /// buffers while the last growth copies).
-  void reserve(std::size_t n) {
-    a.reserve(n);
-    b.reserve(n);
-    g.reserve(n);
-    heat_a.reserve(n);
-    heat_b.reserve(n);
-    share.reserve(n);
-  }
   void add(Index x, Index y, double gxy, Index ha, Index hb, double share_a = 0.5) {
     a.push_back(x);
     b.push_back(y);
